@@ -1,0 +1,108 @@
+//! One typed error for the whole library. Every variant says what went wrong and where.
+
+use std::path::PathBuf;
+
+/// Result alias used across the library.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Everything that can go wrong in gbuf. Variants name the file (when there is one) and the problem.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// Reading or writing a file failed at the OS level.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The exr crate refused the file.
+    #[error("{path}: not a readable OpenEXR file: {source}")]
+    Exr {
+        /// The file.
+        path: PathBuf,
+        /// The exr crate's error (it carries no path, so we add it).
+        #[source]
+        source: exr::error::Error,
+    },
+    /// A channel needed for an attribute is not in the file.
+    #[error("{path}: missing channel {name}; channels found: {found}")]
+    MissingChannel {
+        /// The file.
+        path: PathBuf,
+        /// The channel (or attribute) that could not be found.
+        name: String,
+        /// Comma-separated list of the channels the file does have.
+        found: String,
+    },
+    /// Two things that must have the same size do not.
+    #[error("{path}: size mismatch: {what}")]
+    SizeMismatch {
+        /// The file.
+        path: PathBuf,
+        /// What did not match.
+        what: String,
+    },
+    /// A channel has a sample type we cannot use for that attribute.
+    #[error("{path}: channel {channel}: unsupported sample type {found}")]
+    UnsupportedSampleType {
+        /// The file.
+        path: PathBuf,
+        /// The channel.
+        channel: String,
+        /// The sample type found.
+        found: String,
+    },
+    /// A file declares more data than the configured memory limit allows.
+    #[error("{path}: declares {bytes} bytes of samples, over the limit of {limit} bytes (raise it with --max-memory)")]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Bytes the file would need.
+        bytes: u64,
+        /// The limit in force.
+        limit: u64,
+    },
+    /// The file is structurally valid but holds something we do not support (deep data, subsampling, ...).
+    #[error("{path}: unsupported: {what}")]
+    Unsupported {
+        /// The file.
+        path: PathBuf,
+        /// What is unsupported.
+        what: String,
+    },
+    /// The file's contents are malformed.
+    #[error("{path}: invalid: {what}")]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        what: String,
+    },
+    /// A JSON/TOML document (sidecar, layout file) does not parse or does not fit.
+    #[error("{path}: {what}")]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// The parser's message.
+        what: String,
+    },
+    /// A parameter given by the caller is out of range or inconsistent (no file involved).
+    #[error("invalid argument: {0}")]
+    Argument(String),
+}
+
+impl Error {
+    /// Shorthand for [`Error::Io`].
+    #[must_use]
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io { path: path.into(), source }
+    }
+    /// Shorthand for [`Error::Invalid`].
+    #[must_use]
+    pub fn invalid(path: impl Into<PathBuf>, what: impl Into<String>) -> Self {
+        Error::Invalid { path: path.into(), what: what.into() }
+    }
+}

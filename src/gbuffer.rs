@@ -1,0 +1,440 @@
+//! The G-buffer in memory: what every stage passes on.
+//!
+//! Structure of arrays: one plane per attribute. Every plane holds `width × height × samples` values in
+//! **pixel-major** order: `index = (y * width + x) * samples + s`, row 0 at the top. The samples of one pixel are
+//! adjacent because every consumer (edge detection, the resolve, the box filter) walks a pixel's samples together.
+//!
+//! View space is the glTF/OpenGL convention: +X right, +Y up, the camera looks along −Z. `depth` is the positive
+//! distance along the view axis (`depth = −position.z`). Normals are unit vectors in view space; a surface facing the
+//! camera has `normal.z > 0`.
+//!
+//! Background (no surface, sky) is recorded in `coverage` (`false` = background). Loaders write 0 into every other
+//! plane at background samples so that planes stay finite; consumers skip background samples.
+//! Absent attributes are `None`, never zero-filled.
+
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use glam::{Vec2, Vec3};
+
+/// One G-buffer attribute. `ALL` lists them in canonical order; `name` is the one spelling used in CLI flags,
+/// JSON output and our canonical EXR channel names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Attribute {
+    /// View-space depth (positive distance along −Z), f32.
+    Depth,
+    /// View-space position, 3 × f32.
+    Position,
+    /// View-space unit normal, 3 × f32.
+    Normal,
+    /// Diffuse albedo, linear RGB.
+    Albedo,
+    /// Specular amount (or scalar F0), f32.
+    Specular,
+    /// Blinn-Phong specular power (exponent), f32.
+    SpecularPower,
+    /// Perceptual roughness in [0, 1], f32.
+    Roughness,
+    /// Metallic in [0, 1], f32.
+    Metallic,
+    /// Material ID, u32.
+    MaterialId,
+    /// Object ID, u32.
+    ObjectId,
+    /// Primitive (triangle) ID, u32.
+    PrimitiveId,
+    /// Screen-space motion in pixels, 2 × f32.
+    Motion,
+}
+
+impl Attribute {
+    /// Every attribute, in canonical order.
+    pub const ALL: [Attribute; 12] = [
+        Attribute::Depth,
+        Attribute::Position,
+        Attribute::Normal,
+        Attribute::Albedo,
+        Attribute::Specular,
+        Attribute::SpecularPower,
+        Attribute::Roughness,
+        Attribute::Metallic,
+        Attribute::MaterialId,
+        Attribute::ObjectId,
+        Attribute::PrimitiveId,
+        Attribute::Motion,
+    ];
+
+    /// The snake_case name used in flags, JSON and canonical channel names.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Attribute::Depth => "depth",
+            Attribute::Position => "position",
+            Attribute::Normal => "normal",
+            Attribute::Albedo => "albedo",
+            Attribute::Specular => "specular",
+            Attribute::SpecularPower => "specular_power",
+            Attribute::Roughness => "roughness",
+            Attribute::Metallic => "metallic",
+            Attribute::MaterialId => "material_id",
+            Attribute::ObjectId => "object_id",
+            Attribute::PrimitiveId => "primitive_id",
+            Attribute::Motion => "motion",
+        }
+    }
+
+    /// Parses a name as written by [`Attribute::name`] (also accepts `-` for `_`).
+    #[must_use]
+    pub fn from_name(s: &str) -> Option<Attribute> {
+        let s = s.replace('-', "_");
+        Attribute::ALL.into_iter().find(|a| a.name() == s)
+    }
+
+    /// Number of components (1, 2 or 3).
+    #[must_use]
+    pub fn components(self) -> usize {
+        match self {
+            Attribute::Position | Attribute::Normal | Attribute::Albedo => 3,
+            Attribute::Motion => 2,
+            _ => 1,
+        }
+    }
+
+    /// True for the integer ID attributes.
+    #[must_use]
+    pub fn is_id(self) -> bool {
+        matches!(self, Attribute::MaterialId | Attribute::ObjectId | Attribute::PrimitiveId)
+    }
+}
+
+/// Standard D3D/Vulkan MSAA sample positions, in 1/16 pixel from the pixel centre (x right, y down as in D3D).
+const D3D_2X: [(i8, i8); 2] = [(4, 4), (-4, -4)];
+const D3D_4X: [(i8, i8); 4] = [(-2, -6), (6, -2), (-6, 2), (2, 6)];
+const D3D_8X: [(i8, i8); 8] = [(1, -3), (-1, 3), (5, 1), (-3, -5), (-5, 5), (-7, -1), (3, 7), (7, -7)];
+const D3D_16X: [(i8, i8); 16] = [
+    (1, 1),
+    (-1, -3),
+    (-3, 2),
+    (4, -1),
+    (-5, -2),
+    (2, 5),
+    (5, 3),
+    (3, -5),
+    (-2, 6),
+    (0, -7),
+    (-4, -6),
+    (-6, 4),
+    (-8, 0),
+    (7, -4),
+    (6, 7),
+    (-7, -8),
+];
+
+/// The standard sample positions for `samples` ∈ {1, 2, 4, 8, 16}, as offsets in pixels from the pixel centre with
+/// +x right and +y **down** (image convention, same as D3D). `None` for other counts.
+#[must_use]
+pub fn standard_sample_positions(samples: u32) -> Option<Vec<Vec2>> {
+    let table: &[(i8, i8)] = match samples {
+        1 => &[(0, 0)],
+        2 => &D3D_2X,
+        4 => &D3D_4X,
+        8 => &D3D_8X,
+        16 => &D3D_16X,
+        _ => return None,
+    };
+    Some(table.iter().map(|&(x, y)| Vec2::new(f32::from(x) / 16.0, f32::from(y) / 16.0)).collect())
+}
+
+/// The ordered-grid positions of a k×k supersampled block folded into one pixel, row-major within the block
+/// (sample `j * k + i` comes from sub-pixel column `i`, row `j`).
+#[must_use]
+pub fn ordered_grid_positions(k: u32) -> Vec<Vec2> {
+    let kf = k as f32;
+    (0..k * k)
+        .map(|s| {
+            let (i, j) = ((s % k) as f32, (s / k) as f32);
+            Vec2::new((i + 0.5) / kf - 0.5, (j + 0.5) / kf - 0.5)
+        })
+        .collect()
+}
+
+/// The largest sample count per pixel we accept (a folded 8×8 block).
+pub const MAX_SAMPLES: u32 = 64;
+
+/// A multisampled G-buffer: per-sample surface attributes in view space, plus the camera when known.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GBuffer {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Samples per pixel.
+    pub samples: u32,
+    /// Sub-pixel sample positions, offsets from the pixel centre in pixels (+x right, +y down); `samples` entries.
+    pub sample_positions: Vec<Vec2>,
+    /// The camera, when the dump or its sidecar gives one (or it was recovered from positions).
+    pub camera: Option<Camera>,
+    /// `true` where a surface was hit; `false` for background (sky). Always present.
+    pub coverage: Vec<bool>,
+    /// View-space depth, positive along −Z.
+    pub depth: Option<Vec<f32>>,
+    /// View-space position.
+    pub position: Option<Vec<Vec3>>,
+    /// View-space unit normal.
+    pub normal: Option<Vec<Vec3>>,
+    /// Linear RGB albedo.
+    pub albedo: Option<Vec<Vec3>>,
+    /// Specular amount / scalar F0.
+    pub specular: Option<Vec<f32>>,
+    /// Blinn-Phong specular power.
+    pub specular_power: Option<Vec<f32>>,
+    /// Perceptual roughness.
+    pub roughness: Option<Vec<f32>>,
+    /// Metallic.
+    pub metallic: Option<Vec<f32>>,
+    /// Material ID.
+    pub material_id: Option<Vec<u32>>,
+    /// Object ID.
+    pub object_id: Option<Vec<u32>>,
+    /// Primitive ID.
+    pub primitive_id: Option<Vec<u32>>,
+    /// Screen-space motion in pixels.
+    pub motion: Option<Vec<Vec2>>,
+}
+
+/// A borrowed view of one attribute plane, for code that walks attributes generically.
+#[derive(Clone, Copy, Debug)]
+pub enum PlaneRef<'a> {
+    /// A scalar f32 plane.
+    F32(&'a [f32]),
+    /// A 2-component plane.
+    Vec2(&'a [Vec2]),
+    /// A 3-component plane.
+    Vec3(&'a [Vec3]),
+    /// An integer ID plane.
+    U32(&'a [u32]),
+}
+
+impl GBuffer {
+    /// An empty G-buffer (all background, no attributes) of the given size with standard (or, for non-standard
+    /// counts that are perfect squares, ordered-grid) sample positions.
+    pub fn new(width: u32, height: u32, samples: u32) -> Result<Self> {
+        let sample_positions = match standard_sample_positions(samples) {
+            Some(p) => p,
+            None => {
+                let k = (samples as f64).sqrt().round() as u32;
+                if k * k != samples || samples == 0 || samples > MAX_SAMPLES {
+                    return Err(Error::Argument(format!(
+                        "unsupported sample count {samples} (use 1, 2, 4, 8, 16 or a square up to {MAX_SAMPLES})"
+                    )));
+                }
+                ordered_grid_positions(k)
+            }
+        };
+        let len = checked_len(width, height, samples)?;
+        Ok(GBuffer { width, height, samples, sample_positions, coverage: vec![false; len], ..Default::default() })
+    }
+
+    /// Number of pixels.
+    #[must_use]
+    pub fn pixel_count(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+
+    /// Number of samples in every plane (`pixels × samples`).
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.pixel_count() * self.samples as usize
+    }
+
+    /// True when the buffer has no samples.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Plane index of sample `s` of pixel (`x`, `y`).
+    #[inline]
+    #[must_use]
+    pub fn index(&self, x: u32, y: u32, s: u32) -> usize {
+        debug_assert!(x < self.width && y < self.height && s < self.samples);
+        (y as usize * self.width as usize + x as usize) * self.samples as usize + s as usize
+    }
+
+    /// Number of background (uncovered) samples.
+    #[must_use]
+    pub fn background_samples(&self) -> usize {
+        self.coverage.iter().filter(|c| !**c).count()
+    }
+
+    /// Is `attr` present?
+    #[must_use]
+    pub fn has(&self, attr: Attribute) -> bool {
+        self.plane(attr).is_some()
+    }
+
+    /// The attributes present, in canonical order.
+    #[must_use]
+    pub fn attributes(&self) -> Vec<Attribute> {
+        Attribute::ALL.into_iter().filter(|a| self.has(*a)).collect()
+    }
+
+    /// A borrowed view of `attr`'s plane, if present.
+    #[must_use]
+    pub fn plane(&self, attr: Attribute) -> Option<PlaneRef<'_>> {
+        Some(match attr {
+            Attribute::Depth => PlaneRef::F32(self.depth.as_deref()?),
+            Attribute::Position => PlaneRef::Vec3(self.position.as_deref()?),
+            Attribute::Normal => PlaneRef::Vec3(self.normal.as_deref()?),
+            Attribute::Albedo => PlaneRef::Vec3(self.albedo.as_deref()?),
+            Attribute::Specular => PlaneRef::F32(self.specular.as_deref()?),
+            Attribute::SpecularPower => PlaneRef::F32(self.specular_power.as_deref()?),
+            Attribute::Roughness => PlaneRef::F32(self.roughness.as_deref()?),
+            Attribute::Metallic => PlaneRef::F32(self.metallic.as_deref()?),
+            Attribute::MaterialId => PlaneRef::U32(self.material_id.as_deref()?),
+            Attribute::ObjectId => PlaneRef::U32(self.object_id.as_deref()?),
+            Attribute::PrimitiveId => PlaneRef::U32(self.primitive_id.as_deref()?),
+            Attribute::Motion => PlaneRef::Vec2(self.motion.as_deref()?),
+        })
+    }
+
+    /// Removes `attr` (makes it absent).
+    pub fn remove(&mut self, attr: Attribute) {
+        match attr {
+            Attribute::Depth => self.depth = None,
+            Attribute::Position => self.position = None,
+            Attribute::Normal => self.normal = None,
+            Attribute::Albedo => self.albedo = None,
+            Attribute::Specular => self.specular = None,
+            Attribute::SpecularPower => self.specular_power = None,
+            Attribute::Roughness => self.roughness = None,
+            Attribute::Metallic => self.metallic = None,
+            Attribute::MaterialId => self.material_id = None,
+            Attribute::ObjectId => self.object_id = None,
+            Attribute::PrimitiveId => self.primitive_id = None,
+            Attribute::Motion => self.motion = None,
+        }
+    }
+
+    /// Checks the invariants every stage relies on: plane lengths, sample count and positions. Loaders call this
+    /// once; after that the invariants are `debug_assert!`ed.
+    pub fn validate(&self) -> Result<()> {
+        if self.samples == 0 || self.samples > MAX_SAMPLES {
+            return Err(Error::Argument(format!("sample count {} outside 1..={MAX_SAMPLES}", self.samples)));
+        }
+        if self.sample_positions.len() != self.samples as usize {
+            return Err(Error::Argument(format!(
+                "{} sample positions for {} samples",
+                self.sample_positions.len(),
+                self.samples
+            )));
+        }
+        let n = checked_len(self.width, self.height, self.samples)?;
+        if self.coverage.len() != n {
+            return Err(Error::Argument(format!("coverage has {} entries, expected {n}", self.coverage.len())));
+        }
+        for attr in self.attributes() {
+            let len = match self.plane(attr).expect("present") {
+                PlaneRef::F32(p) => p.len(),
+                PlaneRef::Vec2(p) => p.len(),
+                PlaneRef::Vec3(p) => p.len(),
+                PlaneRef::U32(p) => p.len(),
+            };
+            if len != n {
+                return Err(Error::Argument(format!("{} plane has {len} entries, expected {n}", attr.name())));
+            }
+        }
+        Ok(())
+    }
+
+    /// Fills `depth` from `position` (depth = −z) or `position` from `depth` and the camera, whichever is missing
+    /// and derivable. Returns the attribute it filled, if any.
+    pub fn derive_depth_or_position(&mut self) -> Option<Attribute> {
+        if self.depth.is_none() {
+            let pos = self.position.as_ref()?;
+            self.depth = Some(pos.iter().zip(&self.coverage).map(|(p, &c)| if c { -p.z } else { 0.0 }).collect());
+            return Some(Attribute::Depth);
+        }
+        if self.position.is_none() {
+            let cam = self.camera.as_ref()?;
+            let depth = self.depth.as_ref()?;
+            let mut pos = vec![Vec3::ZERO; self.len()];
+            for y in 0..self.height {
+                for x in 0..self.width {
+                    for s in 0..self.samples {
+                        let i = self.index(x, y, s);
+                        if self.coverage[i] {
+                            let o = self.sample_positions[s as usize];
+                            let px = Vec2::new(x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y);
+                            pos[i] = cam.view_position(px, depth[i], self.width, self.height);
+                        }
+                    }
+                }
+            }
+            self.position = Some(pos);
+            return Some(Attribute::Position);
+        }
+        None
+    }
+}
+
+/// `width × height × samples` as a usize, refusing overflow and absurd sizes (over 2^32 samples).
+pub fn checked_len(width: u32, height: u32, samples: u32) -> Result<usize> {
+    let n = u64::from(width) * u64::from(height) * u64::from(samples);
+    if n > 1 << 32 {
+        return Err(Error::Argument(format!("{width}×{height}×{samples} samples is too large")));
+    }
+    Ok(n as usize)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn standard_positions_are_inside_the_pixel_and_distinct() {
+        for n in [1, 2, 4, 8, 16] {
+            let p = standard_sample_positions(n).unwrap();
+            assert_eq!(p.len(), n as usize);
+            for (i, a) in p.iter().enumerate() {
+                assert!(a.x.abs() < 0.5 && a.y.abs() <= 0.5, "{n}x sample {i} at {a}");
+                for b in &p[i + 1..] {
+                    assert_ne!(a, b, "{n}x has a repeated position");
+                }
+            }
+        }
+        assert!(standard_sample_positions(3).is_none());
+        assert_eq!(standard_sample_positions(4).unwrap()[0], Vec2::new(-2.0 / 16.0, -6.0 / 16.0));
+    }
+
+    #[test]
+    fn ordered_grid_is_centred() {
+        let p = ordered_grid_positions(2);
+        assert_eq!(
+            p,
+            vec![Vec2::new(-0.25, -0.25), Vec2::new(0.25, -0.25), Vec2::new(-0.25, 0.25), Vec2::new(0.25, 0.25)]
+        );
+        let sum: Vec2 = ordered_grid_positions(3).iter().sum();
+        assert!(sum.length() < 1e-6);
+    }
+
+    #[test]
+    fn new_and_validate() {
+        let mut g = GBuffer::new(3, 2, 4).unwrap();
+        assert_eq!(g.len(), 24);
+        assert_eq!(g.index(2, 1, 3), 23);
+        g.validate().unwrap();
+        g.depth = Some(vec![1.0; 5]);
+        assert!(g.validate().is_err());
+        assert!(GBuffer::new(3, 2, 3).is_err());
+        assert_eq!(GBuffer::new(1, 1, 9).unwrap().sample_positions.len(), 9);
+    }
+
+    #[test]
+    fn attribute_names_round_trip() {
+        for a in Attribute::ALL {
+            assert_eq!(Attribute::from_name(a.name()), Some(a));
+        }
+        assert_eq!(Attribute::from_name("material-id"), Some(Attribute::MaterialId));
+        assert_eq!(Attribute::from_name("nope"), None);
+    }
+}

@@ -1,0 +1,191 @@
+//! The scene sidecar (JSON): camera and glTF-style lights next to a dump (see docs/FORMAT.md).
+
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::light::{Light, LightKind};
+use glam::{Mat4, Vec3};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The camera as written in a sidecar: row-major world→view matrix plus glTF perspective parameters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SidecarCamera {
+    /// World → view, row-major (4 rows of 4).
+    pub world_to_view: [[f32; 4]; 4],
+    /// Vertical field of view, radians.
+    pub yfov: f32,
+    /// Width / height.
+    pub aspect: f32,
+    /// Near plane.
+    pub znear: f32,
+    /// Far plane.
+    pub zfar: f32,
+}
+
+/// A light as written in a sidecar (KHR_lights_punctual fields, plus `begin` for the linear falloff).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SidecarLight {
+    /// "point", "spot" or "directional".
+    #[serde(rename = "type")]
+    pub kind: String,
+    /// Position (point and spot).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<[f32; 3]>,
+    /// Direction the light points / travels (spot and directional).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direction: Option<[f32; 3]>,
+    /// Linear RGB colour (default white).
+    #[serde(default = "white")]
+    pub color: [f32; 3],
+    /// Intensity (default 1).
+    #[serde(default = "one")]
+    pub intensity: f32,
+    /// Range (absent = unbounded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub range: Option<f32>,
+    /// Begin radius of the linear falloff.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub begin: Option<f32>,
+    /// Spot inner cone angle, radians (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inner_cone_angle: Option<f32>,
+    /// Spot outer cone angle, radians (default π/4).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub outer_cone_angle: Option<f32>,
+}
+
+fn white() -> [f32; 3] {
+    [1.0; 3]
+}
+fn one() -> f32 {
+    1.0
+}
+
+/// The whole sidecar document.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Sidecar {
+    /// The camera, if known.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera: Option<SidecarCamera>,
+    /// Supersampling factor k: fold k×k pixel blocks into k² samples.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub supersample: Option<u32>,
+    /// Lights.
+    #[serde(default)]
+    pub lights: Vec<SidecarLight>,
+    /// "world" (default) or "view".
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lights_space: Option<String>,
+}
+
+impl SidecarCamera {
+    /// From a [`Camera`].
+    #[must_use]
+    pub fn from_camera(c: &Camera) -> Self {
+        SidecarCamera {
+            world_to_view: c.world_to_view.transpose().to_cols_array_2d(),
+            yfov: c.yfov,
+            aspect: c.aspect,
+            znear: c.znear,
+            zfar: c.zfar,
+        }
+    }
+    /// To a [`Camera`] (not yet validated).
+    #[must_use]
+    pub fn to_camera(&self) -> Camera {
+        Camera {
+            world_to_view: Mat4::from_cols_array_2d(&self.world_to_view).transpose(),
+            yfov: self.yfov,
+            aspect: self.aspect,
+            znear: self.znear,
+            zfar: self.zfar,
+        }
+    }
+}
+
+impl Sidecar {
+    /// Reads and parses a sidecar file.
+    pub fn load(path: &Path) -> Result<Sidecar> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Sidecar::parse(&text, path)
+    }
+
+    /// Parses sidecar JSON (`path` only names the source in errors).
+    pub fn parse(text: &str, path: &Path) -> Result<Sidecar> {
+        let s: Sidecar = serde_json::from_str(text)
+            .map_err(|e| Error::Parse { path: path.into(), what: format!("sidecar JSON: {e}") })?;
+        if let Some(c) = &s.camera {
+            if !c.to_camera().is_valid() {
+                return Err(Error::Parse {
+                    path: path.into(),
+                    what: "sidecar camera is not usable (need finite invertible matrix, 0 < yfov < π, aspect > 0, 0 < znear < zfar)".into(),
+                });
+            }
+        }
+        if let Some(k) = s.supersample {
+            if !(1..=8).contains(&k) {
+                return Err(Error::Parse { path: path.into(), what: format!("supersample {k} outside 1..=8") });
+            }
+        }
+        match s.lights_space.as_deref() {
+            None | Some("world") | Some("view") => {}
+            Some(other) => {
+                return Err(Error::Parse {
+                    path: path.into(),
+                    what: format!("lights_space {other:?} (expected \"world\" or \"view\")"),
+                })
+            }
+        }
+        Ok(s)
+    }
+
+    /// The lights in view space. World-space lights need the camera (`camera` overrides the sidecar's own).
+    pub fn view_lights(&self, camera: Option<&Camera>, path: &Path) -> Result<Vec<Light>> {
+        let view_space = self.lights_space.as_deref() == Some("view");
+        let cam = camera.copied().or_else(|| self.camera.as_ref().map(SidecarCamera::to_camera));
+        let mut out = Vec::with_capacity(self.lights.len());
+        for (i, l) in self.lights.iter().enumerate() {
+            let bad = |what: &str| Error::Parse { path: path.into(), what: format!("light {i}: {what}") };
+            let pos = Vec3::from(l.position.unwrap_or([0.0; 3]));
+            let dir = Vec3::from(l.direction.unwrap_or([0.0, 0.0, -1.0]));
+            let (pos, dir) = if view_space {
+                (pos, dir.normalize_or_zero())
+            } else {
+                let c = cam.as_ref().ok_or_else(|| bad("world-space lights need a camera"))?;
+                (c.to_view_point(pos), c.to_view_dir(dir))
+            };
+            let kind = match l.kind.as_str() {
+                "point" => LightKind::Point,
+                "spot" => LightKind::Spot {
+                    direction: dir,
+                    inner_cone_angle: l.inner_cone_angle.unwrap_or(0.0),
+                    outer_cone_angle: l.outer_cone_angle.unwrap_or(std::f32::consts::FRAC_PI_4),
+                },
+                "directional" => LightKind::Directional { direction: dir },
+                other => return Err(bad(&format!("unknown type {other:?}"))),
+            };
+            if matches!(kind, LightKind::Spot { .. } | LightKind::Directional { .. }) && dir == Vec3::ZERO {
+                return Err(bad("direction is zero or not finite"));
+            }
+            let light = Light {
+                kind,
+                position: pos,
+                color: Vec3::from(l.color),
+                intensity: l.intensity,
+                range: l.range.unwrap_or(f32::INFINITY),
+                begin: l.begin.unwrap_or(0.0),
+            };
+            if !light.position.is_finite()
+                || !light.color.is_finite()
+                || !light.intensity.is_finite()
+                || light.range.is_nan()
+                || light.range <= 0.0
+                || !light.begin.is_finite()
+            {
+                return Err(bad("non-finite or non-positive value"));
+            }
+            out.push(light);
+        }
+        Ok(out)
+    }
+}

@@ -1,0 +1,65 @@
+//! `gbuf`: the command-line front end. Flags and glue only; every stage is a library call.
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+mod cli;
+
+/// G-buffer encoding and MSAA analysis for deferred shading.
+#[derive(Parser)]
+#[command(name = "gbuf", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run the main job on the embedded default scene (no file needed).
+    Demo(cli::demo::Args),
+    /// Render an analytic scene into a canonical EXR dump plus its sidecar.
+    Scene(cli::scene::Args),
+    /// Describe a dump: size, samples, attributes and their sources, statistics, camera.
+    Info(cli::info::Args),
+    /// Normal codecs: angular error and speed for every scheme and bit count.
+    Codecs(cli::codecs::Args),
+    /// List the built-in G-buffer layouts with their sizes.
+    Layouts(cli::layouts::Args),
+    /// Pack a dump with a layout, unpack it, and report the error per attribute.
+    Roundtrip(cli::roundtrip::Args),
+    /// Run an MSAA edge detector and evaluate it against ground truth.
+    Edges(cli::edges::Args),
+    /// Light a (packed) G-buffer on the CPU and measure its error against the reference.
+    Resolve(cli::resolve::Args),
+    /// Sweep layouts × detectors and write a report.
+    Report(cli::report::Args),
+    /// Find the best layout under a byte budget.
+    Budget(cli::budget::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Demo(a) => cli::demo::run(a),
+        Command::Scene(a) => cli::scene::run(a),
+        Command::Info(a) => cli::info::run(a),
+        Command::Codecs(a) => cli::codecs::run(a),
+        Command::Layouts(a) => cli::layouts::run(a),
+        Command::Roundtrip(a) => cli::roundtrip::run(a),
+        Command::Edges(a) => cli::edges::run(a),
+        Command::Resolve(a) => cli::resolve::run(a),
+        Command::Report(a) => cli::report::run(a),
+        Command::Budget(a) => cli::budget::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) if cli::is_broken_pipe(&err) => ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("gbuf: error: {err}");
+            for cause in err.chain().skip(1) {
+                eprintln!("  caused by: {cause}");
+            }
+            ExitCode::from(1)
+        }
+    }
+}

@@ -1,0 +1,1 @@
+//! Error metrics between G-buffers and between images, and timing.
