@@ -396,7 +396,7 @@ mod tests {
             let p = standard_sample_positions(n).unwrap();
             assert_eq!(p.len(), n as usize);
             for (i, a) in p.iter().enumerate() {
-                assert!(a.x.abs() < 0.5 && a.y.abs() <= 0.5, "{n}x sample {i} at {a}");
+                assert!(a.x.abs() <= 0.5 && a.y.abs() <= 0.5, "{n}x sample {i} at {a}");
                 for b in &p[i + 1..] {
                     assert_ne!(a, b, "{n}x has a repeated position");
                 }

@@ -130,6 +130,14 @@ pub fn read_raw(path: &Path, limits: &ReadLimits) -> Result<RawImage> {
         } else if (w, h) != (out.width, out.height) {
             return Err(Error::Unsupported { path: path.into(), what: "parts of different sizes".into() });
         }
+        if li == 0 {
+            for (k, v) in &layer.attributes.other {
+                if let ::exr::meta::attribute::AttributeValue::Text(t) = v {
+                    out.attributes.push((k.to_string(), t.to_string()));
+                }
+            }
+            out.attributes.sort();
+        }
         let prefix = layer.attributes.layer_name.as_ref().map(|n| format!("{n}.")).unwrap_or_default();
         for ch in &layer.channel_data.list {
             let name = format!("{prefix}{}", ch.name);
@@ -142,4 +150,92 @@ pub fn read_raw(path: &Path, limits: &ReadLimits) -> Result<RawImage> {
         }
     }
     Ok(out)
+}
+
+/// Writes `image` as a single-part, ZIP-compressed (lossless) scan-line EXR, atomically (temporary file + rename).
+/// Channel names must be Latin-1; string attributes are stored as text header attributes.
+pub fn write_raw(path: &Path, image: &RawImage) -> Result<()> {
+    use ::exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
+    use ::exr::meta::attribute::{AttributeValue, Text};
+    use ::exr::meta::header::LayerAttributes;
+    use ::exr::prelude::WritableImage;
+    let n = image.width as usize * image.height as usize;
+    let mut list = ::exr::prelude::SmallVec::new();
+    for ch in &image.channels {
+        if ch.data.len() != n {
+            return Err(Error::SizeMismatch {
+                path: path.into(),
+                what: format!("channel {} has {} samples, expected {n}", ch.name, ch.data.len()),
+            });
+        }
+        let name = Text::new_or_none(ch.name.as_str())
+            .ok_or_else(|| Error::invalid(path, format!("channel name {:?} is not Latin-1", ch.name)))?;
+        let data = match &ch.data {
+            RawData::F16(v) => FlatSamples::F16(v.clone()),
+            RawData::F32(v) => FlatSamples::F32(v.clone()),
+            RawData::U32(v) => FlatSamples::U32(v.clone()),
+        };
+        list.push(AnyChannel::new(name, data));
+    }
+    let mut attributes = LayerAttributes::default();
+    for (k, v) in &image.attributes {
+        let (Some(k), Some(v)) = (Text::new_or_none(k.as_str()), Text::new_or_none(v.as_str())) else {
+            return Err(Error::invalid(path, format!("header attribute {k:?} is not Latin-1")));
+        };
+        attributes.other.insert(k, AttributeValue::Text(v));
+    }
+    let layer = Layer::new(
+        (image.width as usize, image.height as usize),
+        attributes,
+        Encoding::SMALL_FAST_LOSSLESS,
+        AnyChannels::sort(list),
+    );
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    Image::from_layer(layer)
+        .write()
+        .to_buffered(&mut bytes)
+        .map_err(|source| Error::Exr { path: path.into(), source })?;
+    crate::util::write_bytes_atomic(path, &bytes.into_inner())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn raw_round_trip_is_bit_exact() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("t.exr");
+        let img = RawImage {
+            width: 3,
+            height: 2,
+            channels: vec![
+                RawChannel {
+                    name: "a.F".into(),
+                    data: RawData::F32(vec![1.0, -0.0, f32::MIN_POSITIVE / 4.0, 1e30, 0.5, 7.0]),
+                },
+                RawChannel { name: "b.H".into(), data: RawData::F16(vec![half::f16::from_f32(0.25); 6]) },
+                RawChannel { name: "c.U".into(), data: RawData::U32(vec![0, 1, u32::MAX, 3, 4, 5]) },
+            ],
+            compression: String::new(),
+            lossy: false,
+            attributes: vec![("gbuf.version".into(), "1".into())],
+        };
+        write_raw(&p, &img).unwrap();
+        let back = read_raw(&p, &ReadLimits::default()).unwrap();
+        assert_eq!((back.width, back.height), (3, 2));
+        for ch in &img.channels {
+            let b = back.channel(&ch.name).unwrap();
+            match (&ch.data, &b.data) {
+                (RawData::F32(x), RawData::F32(y)) => {
+                    assert_eq!(
+                        x.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                        y.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+                    )
+                }
+                (x, y) => assert_eq!(x, y),
+            }
+        }
+        assert_eq!(back.attributes, img.attributes);
+    }
 }

@@ -1,7 +1,13 @@
 //! Loading G-buffer dumps (canonical EXR, Blender multilayer EXR, Mitsuba AOV EXR, ISPC `deferred` `.bin`) and
 //! writing our canonical EXR. Conversions to the crate's view-space convention happen here and nowhere else.
 
+pub mod blender;
+pub mod camera_fit;
+pub mod canonical;
 pub mod exr;
+pub mod fold;
+pub mod ispc;
+pub mod mitsuba;
 pub mod sidecar;
 
 use crate::error::{Error, Result};

@@ -1,0 +1,1 @@
+//! Blender Cycles multilayer EXR reader (channels `<ViewLayer>.<Pass>.<Chan>`).

@@ -1,0 +1,1 @@
+//! Recovering the camera from a world-space position pass by least squares (positions ↔ pixel rays).

@@ -1,0 +1,1 @@
+//! Our canonical G-buffer EXR (docs/FORMAT.md): lossless, every attribute, any sample count.

@@ -1,0 +1,1 @@
+//! Folding supersampled dumps: each k×k pixel block becomes k² ordered-grid samples of one pixel.

@@ -1,0 +1,1 @@
+//! Reader for the input files of the ISPC `examples/cpu/deferred` sample (`.bin`, little-endian).

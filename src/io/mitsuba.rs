@@ -1,0 +1,1 @@
+//! Mitsuba 3 `aov` integrator EXR reader.
