@@ -1,1 +1,3 @@
 //! Error metrics between G-buffers and between images, and timing.
+
+pub mod gbuffer;
