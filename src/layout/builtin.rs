@@ -154,7 +154,7 @@ fn bevy_deferred() -> LayoutSpec {
                         f("specular", "unorm-8", 64, 8),
                         f("metallic", "unorm-8", 72, 8),
                         reserved(80, 8, "diffuse occlusion"),
-                        reserved(88, 8, "fragment depth (unorm8)"),
+                        reserved(88, 8, "spare (fragment depth on WebGL2)"),
                         f("normal", "oct-24", 96, 24),
                         reserved(120, 8, "mesh/material flags"),
                     ],

@@ -13,11 +13,13 @@ pub mod formats;
 pub mod material;
 pub mod pack;
 pub mod spec;
+pub mod summary;
 
 pub use coder::{CodecKind, Slot};
 pub use formats::{Component, ComponentKind, Format};
 pub use material::MaterialTable;
 pub use pack::{Packed, TargetPlane};
+pub use summary::LayoutSummary;
 pub use spec::{ConstantValue, FieldSpec, IndirectionSpec, LayoutSpec, SpecSyntax, TargetSpec, DEFAULT_DEPTH_RANGE};
 
 use crate::error::{Error, Result};
