@@ -1,1 +1,4 @@
 //! Error metrics between G-buffers and between images, and timing.
+
+pub mod image;
+pub mod timing;
