@@ -10,9 +10,40 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
-/// The names `--detector` accepts: every detector plus `all`.
-fn detector_names() -> Vec<&'static str> {
-    Detector::ALL.iter().map(|d| d.name()).chain(["all"]).collect()
+/// `--detector`: one detector, or `all` of them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DetectorChoice {
+    /// One detector.
+    One(Detector),
+    /// Every detector, one row each.
+    All,
+}
+
+impl DetectorChoice {
+    /// The detectors chosen.
+    pub fn detectors(self) -> Vec<Detector> {
+        match self {
+            DetectorChoice::One(d) => vec![d],
+            DetectorChoice::All => Detector::ALL.to_vec(),
+        }
+    }
+}
+
+/// Parses `--detector` (a detector name or `all`).
+pub fn parse_detector_choice(s: &str) -> Result<DetectorChoice, String> {
+    if s == "all" {
+        return Ok(DetectorChoice::All);
+    }
+    Detector::from_name(s).map(DetectorChoice::One).ok_or_else(|| {
+        let names: Vec<&str> = Detector::ALL.iter().map(|d| d.name()).collect();
+        format!("unknown detector {s:?}; known: {}, all", names.join(", "))
+    })
+}
+
+/// Parses `--ids`.
+fn parse_ids(s: &str) -> Result<IdSource, String> {
+    IdSource::from_name(s)
+        .ok_or_else(|| format!("unknown ID choice {s:?}; known: {}", IdSource::ALL.map(IdSource::name).join(", ")))
 }
 
 /// Detector threshold flags, shared by every command that runs a detector (flatten it into their `Args`).
@@ -33,9 +64,9 @@ pub struct ThresholdArgs {
     /// normal and lauritzen: angle threshold in degrees (default 8.11, i.e. n_i·n_0 < 0.99).
     #[arg(long, value_name = "DEG")]
     pub normal_angle: Option<f32>,
-    /// id and combined: which IDs to compare.
-    #[arg(long, value_name = "IDS", value_parser = clap::builder::PossibleValuesParser::new(IdSource::ALL.map(IdSource::name)))]
-    pub ids: Option<String>,
+    /// id and combined: which IDs to compare: material, object or either (default either).
+    #[arg(long, value_name = "IDS", value_parser = parse_ids)]
+    pub ids: Option<IdSource>,
 }
 
 impl ThresholdArgs {
@@ -48,7 +79,7 @@ impl ThresholdArgs {
             depth_relative: self.depth_relative.unwrap_or(d.depth_relative),
             depth_absolute: self.depth_absolute.unwrap_or(d.depth_absolute),
             normal_angle_deg: self.normal_angle.unwrap_or(d.normal_angle_deg),
-            ids: self.ids.as_deref().and_then(IdSource::from_name).unwrap_or(d.ids),
+            ids: self.ids.unwrap_or(d.ids),
         };
         cfg.validate()?;
         Ok(cfg)
@@ -61,9 +92,9 @@ pub struct Args {
     /// The dump to read.
     #[command(flatten)]
     pub input: InputArgs,
-    /// Edge detector, or `all` for one row per detector.
-    #[arg(long, default_value = "lauritzen", value_parser = clap::builder::PossibleValuesParser::new(detector_names()))]
-    pub detector: String,
+    /// Edge detector: lauritzen, depth, normal, id, combined, forward-msaa, ssaa, none; or `all` for one row each.
+    #[arg(long, value_name = "D", default_value = "lauritzen", value_parser = parse_detector_choice)]
+    pub detector: DetectorChoice,
     /// Detector thresholds.
     #[command(flatten)]
     pub thresholds: ThresholdArgs,
@@ -118,10 +149,7 @@ struct Output {
 /// Runs `gbuf edges`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let cfg = args.thresholds.config()?;
-    let detectors: Vec<Detector> = match args.detector.as_str() {
-        "all" => Detector::ALL.to_vec(),
-        name => vec![Detector::from_name(name).with_context(|| format!("unknown detector {name:?}"))?],
-    };
+    let detectors = args.detector.detectors();
     if args.mask.is_some() && detectors.len() > 1 {
         anyhow::bail!("--mask draws one detector's mask; pick one with --detector instead of `all`");
     }

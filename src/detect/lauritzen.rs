@@ -105,8 +105,9 @@ fn same_surface(
     let n0 = normal[base];
     let l0 = n0.length_squared();
     for i in base + 1..base + samples {
-        // Written so that NaN fails every comparison and lands on "different surface".
-        if !((depth[i] - z0).abs() <= bound) {
+        // NaN (and infinity) land on "different surface".
+        let dz = (depth[i] - z0).abs();
+        if dz.is_nan() || dz > bound {
             return false;
         }
         let ni = normal[i];
