@@ -22,7 +22,9 @@ fn gbuffer() -> GBuffer {
     gb.depth = Some((0..n).map(|_| rng.range_f32(0.2, 150.0)).collect());
     gb.normal = Some(
         (0..n)
-            .map(|_| Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.next_f32()).normalize_or(Vec3::Z))
+            .map(|_| {
+                Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.next_f32()).normalize_or(Vec3::Z)
+            })
             .collect(),
     );
     gb.albedo = Some((0..n).map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32())).collect());

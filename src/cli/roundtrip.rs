@@ -88,12 +88,7 @@ pub fn measure(gb: &gbuf::GBuffer, layout: &Layout, file: &str) -> anyhow::Resul
     let packed = layout.pack(gb).with_context(|| format!("packing with layout {}", layout.name()))?;
     let back = layout.unpack(&packed, gb).with_context(|| format!("unpacking with layout {}", layout.name()))?;
     let e = compare(gb, &back)?;
-    let dropped = gb
-        .attributes()
-        .into_iter()
-        .filter(|a| !back.has(*a))
-        .map(|a| a.name().to_string())
-        .collect();
+    let dropped = gb.attributes().into_iter().filter(|a| !back.has(*a)).map(|a| a.name().to_string()).collect();
     Ok(Row {
         file: file.to_string(),
         layout: layout.name().to_string(),

@@ -50,13 +50,12 @@ fn fat_20() -> LayoutSpec {
             vec![
                 t("depth", "d24s8", vec![f("depth", "unorm24", 0, 24), reserved(24, 8, "stencil")]),
                 lighting,
-                t("normal", "rgba8", vec![f("normal", "xy-f16-32", 0, 32)]),
+                t("normal", "rgba8", vec![f("normal", "xy-hemi-f16-32", 0, 32)]),
                 t(
                     "motion_specular",
                     "rgba8",
                     vec![
-                        f("motion.x", "snorm-8", 0, 8),
-                        f("motion.y", "snorm-8", 8, 8),
+                        reserved(0, 16, "motion vectors, 2 × 8 bits (not modelled: no signed 8-bit codec)"),
                         f("specular_power", "log2-unorm-8", 16, 8),
                         f("specular", "unorm-8", 24, 8),
                     ],
@@ -103,7 +102,7 @@ fn lauritzen_15() -> LayoutSpec {
             ],
             vec![
                 t("depth", "r32f", vec![f("depth", "f32", 0, 32)]),
-                t("normal", "rg16f", vec![f("normal", "spheremap-f16-32", 0, 32)]),
+                t("normal", "rg16f", vec![f("normal", "spheremap-cry-f16-32", 0, 32)]),
                 t("specular", "rg16f", vec![f("specular", "f16", 0, 16), f("specular_power", "f16", 16, 16)]),
                 t("albedo", "rgb8", vec![f("albedo", "unorm8", 0, 24)]),
             ],
@@ -138,10 +137,8 @@ fn bevy_deferred() -> LayoutSpec {
             "bevy-deferred",
             "Bevy deferred: Rgba32Uint (sRGB base colour + roughness; emissive rgb9e5; reflectance, metallic, AO; \
              oct24 normal + flags) over a reversed-Z D32F prepass depth",
-            &[
-                "Bevy 0.12+, crates/bevy_pbr/src/deferred/pbr_deferred_functions.wgsl \
-                 (deferred_gbuffer_from_pbr_input) and DEFERRED_PREPASS_FORMAT = Rgba32Uint",
-            ],
+            &["Bevy 0.12+, crates/bevy_pbr/src/deferred/pbr_deferred_functions.wgsl \
+                 (deferred_gbuffer_from_pbr_input) and DEFERRED_PREPASS_FORMAT = Rgba32Uint"],
             vec![
                 t("depth", "d32f", vec![f("depth", "f32-reversed", 0, 32)]),
                 t(
@@ -174,11 +171,7 @@ fn unreal_like() -> LayoutSpec {
         &["Unreal Engine 4/5, Engine/Shaders/Private/DeferredShadingCommon.ush (EncodeGBuffer)"],
         vec![
             t("depth", "d32f", vec![f("depth", "f32-reversed", 0, 32)]),
-            t(
-                "gbuffer_a",
-                "rgb10a2",
-                vec![f("normal", "xyz-unorm-30", 0, 30), reserved(30, 2, "per-object data")],
-            ),
+            t("gbuffer_a", "rgb10a2", vec![f("normal", "xyz-unorm-30", 0, 30), reserved(30, 2, "per-object data")]),
             t(
                 "gbuffer_b",
                 "rgba8",
@@ -189,7 +182,11 @@ fn unreal_like() -> LayoutSpec {
                     reserved(24, 8, "shading model ID + selective output mask"),
                 ],
             ),
-            t("gbuffer_c", "rgba8-srgb", vec![f("albedo", "srgb8", 0, 24), reserved(24, 8, "indirect irradiance / AO")]),
+            t(
+                "gbuffer_c",
+                "rgba8-srgb",
+                vec![f("albedo", "srgb8", 0, 24), reserved(24, 8, "indirect irradiance / AO")],
+            ),
             t("gbuffer_d", "rgba8", vec![reserved(0, 32, "custom data (subsurface colour, clear coat, ...)")]),
         ],
     )
@@ -205,7 +202,11 @@ fn minimal_8() -> LayoutSpec {
             vec![
                 t("depth", "d16", vec![f("depth", "unorm16", 0, 16)]),
                 t("normal", "rg8", vec![f("normal", "oct-16", 0, 16)]),
-                t("albedo_roughness", "rgba8-srgb", vec![f("albedo", "srgb8", 0, 24), f("roughness", "unorm-8", 24, 8)]),
+                t(
+                    "albedo_roughness",
+                    "rgba8-srgb",
+                    vec![f("albedo", "srgb8", 0, 24), f("roughness", "unorm-8", 24, 8)],
+                ),
             ],
         ),
         &[("specular", 0.5), ("metallic", 0.0)],

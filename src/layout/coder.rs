@@ -142,15 +142,20 @@ impl Coder {
     /// Builds the codec `name` for `slot`; `znear`/`zfar` configure projection-dependent depth codecs.
     pub fn build(slot: Slot, name: &str, znear: f32, zfar: f32) -> Result<Coder, String> {
         let kind = CodecKind::for_slot(slot)?;
-        let unknown = |family: &str| format!("unknown {family} codec {name:?} for {}", slot.name());
+        // The registry's errors list the valid names; keep its message without the "invalid argument" prefix.
+        let msg = |e: crate::Error| match e {
+            crate::Error::Argument(m) => m,
+            other => other.to_string(),
+        };
         Ok(match kind {
-            CodecKind::Normal => Coder::Normal(codec::normal_codec(name).ok_or_else(|| unknown("normal"))?),
-            CodecKind::Depth => Coder::Depth(codec::depth_codec(name, znear, zfar).ok_or_else(|| unknown("depth"))?),
-            CodecKind::Color => Coder::Color(codec::color_codec(name).ok_or_else(|| unknown("colour"))?),
-            CodecKind::Scalar => Coder::Scalar(codec::scalar_codec(name).ok_or_else(|| unknown("scalar"))?),
-            CodecKind::Id => Coder::Id(id_bits(name).ok_or_else(|| {
-                format!("unknown ID codec {name:?} for {} (use uint-N, 1 ≤ N ≤ 32)", slot.name())
-            })?),
+            CodecKind::Normal => Coder::Normal(codec::try_normal_codec(name).map_err(msg)?),
+            CodecKind::Depth => Coder::Depth(codec::try_depth_codec(name, znear, zfar).map_err(msg)?),
+            CodecKind::Color => Coder::Color(codec::try_color_codec(name).map_err(msg)?),
+            CodecKind::Scalar => Coder::Scalar(codec::try_scalar_codec(name).map_err(msg)?),
+            CodecKind::Id => Coder::Id(
+                id_bits(name)
+                    .ok_or_else(|| format!("unknown ID codec {name:?} for {} (use uint-N, 1 ≤ N ≤ 32)", slot.name()))?,
+            ),
             CodecKind::None => {
                 if !name.is_empty() {
                     return Err(format!("{} takes no codec (got {name:?})", slot.name()));

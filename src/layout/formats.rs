@@ -189,8 +189,12 @@ impl Format {
             Format::R8 => &[c!("r", 0, 8, Unorm)],
             Format::Rg8 => &[c!("r", 0, 8, Unorm), c!("g", 8, 8, Unorm)],
             Format::Rgb8 => &[c!("r", 0, 8, Unorm), c!("g", 8, 8, Unorm), c!("b", 16, 8, Unorm)],
-            Format::Rgba8 => &[c!("r", 0, 8, Unorm), c!("g", 8, 8, Unorm), c!("b", 16, 8, Unorm), c!("a", 24, 8, Unorm)],
-            Format::Rgba8Srgb => &[c!("r", 0, 8, Srgb), c!("g", 8, 8, Srgb), c!("b", 16, 8, Srgb), c!("a", 24, 8, Unorm)],
+            Format::Rgba8 => {
+                &[c!("r", 0, 8, Unorm), c!("g", 8, 8, Unorm), c!("b", 16, 8, Unorm), c!("a", 24, 8, Unorm)]
+            }
+            Format::Rgba8Srgb => {
+                &[c!("r", 0, 8, Srgb), c!("g", 8, 8, Srgb), c!("b", 16, 8, Srgb), c!("a", 24, 8, Unorm)]
+            }
             Format::Rgba8Snorm => {
                 &[c!("r", 0, 8, Snorm), c!("g", 8, 8, Snorm), c!("b", 16, 8, Snorm), c!("a", 24, 8, Snorm)]
             }

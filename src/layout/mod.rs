@@ -19,8 +19,8 @@ pub use coder::{CodecKind, Slot};
 pub use formats::{Component, ComponentKind, Format};
 pub use material::MaterialTable;
 pub use pack::{Packed, TargetPlane};
-pub use summary::LayoutSummary;
 pub use spec::{ConstantValue, FieldSpec, IndirectionSpec, LayoutSpec, SpecSyntax, TargetSpec, DEFAULT_DEPTH_RANGE};
+pub use summary::LayoutSummary;
 
 use crate::error::{Error, Result};
 use crate::gbuffer::Attribute;
@@ -97,7 +97,8 @@ impl Layout {
     /// Reads and validates a layout file (TOML or JSON, by extension or content). Errors name the file.
     pub fn load(path: &Path) -> Result<Layout> {
         let spec = LayoutSpec::read(path)?;
-        validate(&spec).map_err(|what| Error::Parse { path: path.into(), what: format!("layout {:?}: {what}", spec.name) })
+        validate(&spec)
+            .map_err(|what| Error::Parse { path: path.into(), what: format!("layout {:?}: {what}", spec.name) })
     }
 
     /// A built-in name, or else a path to a layout file.
@@ -342,7 +343,8 @@ mod tests {
 
     #[test]
     fn builtins_validate_and_have_the_documented_sizes() {
-        let sizes: Vec<(String, usize)> = Layout::builtins().iter().map(|l| (l.name().to_string(), l.bytes_per_sample())).collect();
+        let sizes: Vec<(String, usize)> =
+            Layout::builtins().iter().map(|l| (l.name().to_string(), l.bytes_per_sample())).collect();
         eprintln!("{sizes:?}");
     }
 }

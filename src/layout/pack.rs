@@ -309,15 +309,13 @@ impl Layout {
 
 /// Decodes into `dst` in parallel: `f(dst[i], texel word)` for covered samples; others keep their value.
 fn fill<T: Send>(dst: &mut [T], bytes: &[u8], size: usize, cov: &[bool], f: impl Fn(&mut T, u128) + Sync) {
-    dst.par_chunks_mut(CHUNK).zip(bytes.par_chunks(CHUNK * size)).zip(cov.par_chunks(CHUNK)).for_each(
-        |((d, b), c)| {
-            for ((d, texel), &covered) in d.iter_mut().zip(b.chunks_exact(size)).zip(c) {
-                if covered {
-                    f(d, load_le(texel));
-                }
+    dst.par_chunks_mut(CHUNK).zip(bytes.par_chunks(CHUNK * size)).zip(cov.par_chunks(CHUNK)).for_each(|((d, b), c)| {
+        for ((d, texel), &covered) in d.iter_mut().zip(b.chunks_exact(size)).zip(c) {
+            if covered {
+                f(d, load_le(texel));
             }
-        },
-    );
+        }
+    });
 }
 
 fn scalar_plane(gb: &mut GBuffer, a: Attribute, n: usize) -> Result<&mut Vec<f32>> {

@@ -154,8 +154,12 @@ pub fn compare(reference: &GBuffer, test: &GBuffer) -> Result<AttributeErrors> {
             continue;
         };
         match (attr, r, t) {
-            (Attribute::Normal, PlaneRef::Vec3(r), PlaneRef::Vec3(t)) => out.normal = Some(normals(reference, &covered, r, t)),
-            (Attribute::Depth, PlaneRef::F32(r), PlaneRef::F32(t)) => out.depth = Some(depth(reference, &covered, r, t, &mut out.nonfinite)),
+            (Attribute::Normal, PlaneRef::Vec3(r), PlaneRef::Vec3(t)) => {
+                out.normal = Some(normals(reference, &covered, r, t))
+            }
+            (Attribute::Depth, PlaneRef::F32(r), PlaneRef::F32(t)) => {
+                out.depth = Some(depth(reference, &covered, r, t, &mut out.nonfinite))
+            }
             (_, PlaneRef::U32(r), PlaneRef::U32(t)) => {
                 let mut e = IdErrors { attribute: attr.name().into(), ..Default::default() };
                 for &i in &covered {
