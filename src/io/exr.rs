@@ -244,7 +244,11 @@ fn check_headers(meta: &::exr::meta::MetaData, file_len: u64, path: &Path, limit
         }
     }
     if declared > u128::from(limits.max_bytes) {
-        return Err(Error::TooLarge { path: path.into(), bytes: declared.min(u64::MAX as u128) as u64, limit: limits.max_bytes });
+        return Err(Error::TooLarge {
+            path: path.into(),
+            bytes: declared.min(u64::MAX as u128) as u64,
+            limit: limits.max_bytes,
+        });
     }
     // Every chunk costs at least an 8-byte offset-table entry and an 8-byte chunk header.
     if chunks * 16 > u128::from(file_len) {
@@ -324,7 +328,10 @@ fn read_raw_from<R: std::io::Read + std::io::Seek>(
                 FlatSamples::U32(v) => RawData::U32(v),
             };
             if data.len() != n {
-                return Err(Error::invalid(path, format!("channel {name} decoded to {} samples, expected {n}", data.len())));
+                return Err(Error::invalid(
+                    path,
+                    format!("channel {name} decoded to {} samples, expected {n}", data.len()),
+                ));
             }
             out.channels.push(RawChannel { name, data });
         }
