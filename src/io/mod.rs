@@ -88,8 +88,8 @@ pub struct Loaded {
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     let side = resolve_sidecar(path, opts)?;
     let (head, len) = read_head(path)?;
-    let loaded = if pending::ispc::matches_file(&head, len) {
-        pending::ispc::read(path, side.as_ref().map(|s| &s.0), opts)?
+    let loaded = if ispc::matches_file(&head, len) {
+        ispc::read(path, side.as_ref().map(|s| &s.0), opts)?
     } else if head.starts_with(&EXR_MAGIC) {
         let raw = exr::read_raw(path, &opts.limits)?;
         read_exr(&raw, path, side.as_ref().map(|s| &s.0), opts)?
@@ -235,7 +235,7 @@ fn finish(mut loaded: Loaded, path: &Path, side: Option<(&Sidecar, &Path)>, opts
 /// (16:9 as 1.77 or 1.78), but a real mismatch (a sidecar from another render) is off by far more.
 pub const ASPECT_TOLERANCE: f32 = 0.01;
 
-/// Stand-ins with the exact signatures of the Blender, Mitsuba and ISPC readers until those land (they match
+/// Stand-ins with the exact signatures of the Blender and Mitsuba readers until those land (they match
 /// nothing, so such files fall through to the `--map` reader).
 mod pending {
     pub mod blender {
@@ -250,15 +250,4 @@ mod pending {
         }
     }
     pub use blender as mitsuba;
-    pub mod ispc {
-        use crate::error::Result;
-        use crate::io::{LoadOptions, Loaded, Sidecar};
-        use std::path::Path;
-        pub fn matches_file(_head: &[u8], _file_len: u64) -> bool {
-            false
-        }
-        pub fn read(path: &Path, _: Option<&Sidecar>, _: &LoadOptions) -> Result<Loaded> {
-            Err(crate::Error::Unsupported { path: path.into(), what: "ISPC reader not built".into() })
-        }
-    }
 }
