@@ -167,8 +167,8 @@ fn read_exr(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
         mapped::override_scalars(&mut loaded, raw, path, opts)?;
         return Ok(loaded);
     }
-    let mut loaded = if pending::blender::matches(raw) {
-        pending::blender::read(raw, path, sidecar, opts)?
+    let mut loaded = if blender::matches(raw) {
+        blender::read(raw, path, sidecar, opts)?
     } else if pending::mitsuba::matches(raw) {
         pending::mitsuba::read(raw, path, sidecar, opts)?
     } else {
@@ -235,10 +235,10 @@ fn finish(mut loaded: Loaded, path: &Path, side: Option<(&Sidecar, &Path)>, opts
 /// (16:9 as 1.77 or 1.78), but a real mismatch (a sidecar from another render) is off by far more.
 pub const ASPECT_TOLERANCE: f32 = 0.01;
 
-/// Stand-ins with the exact signatures of the Blender and Mitsuba readers until those land (they match
-/// nothing, so such files fall through to the `--map` reader).
+/// Stand-in with the exact signatures of the Mitsuba reader until it lands (it matches nothing, so such files fall
+/// through to the `--map` reader).
 mod pending {
-    pub mod blender {
+    pub mod mitsuba {
         use crate::error::Result;
         use crate::io::{LoadOptions, Loaded, RawImage, Sidecar};
         use std::path::Path;
@@ -246,8 +246,7 @@ mod pending {
             false
         }
         pub fn read(_: &RawImage, path: &Path, _: Option<&Sidecar>, _: &LoadOptions) -> Result<Loaded> {
-            Err(crate::Error::Unsupported { path: path.into(), what: "Blender reader not built".into() })
+            Err(crate::Error::Unsupported { path: path.into(), what: "Mitsuba reader not built".into() })
         }
     }
-    pub use blender as mitsuba;
 }
