@@ -66,7 +66,7 @@ fn poison(raw: &RawImage, seed: u64) -> RawImage {
     for _ in 0..1 + rng.next_u64() % 6 {
         let k = (rng.next_u64() % r.channels.len() as u64) as usize;
         let n = r.channels[k].data.len() as u64;
-        let count = if rng.next_u64() % 4 == 0 { n } else { 1 + rng.next_u64() % 200 };
+        let count = if rng.next_u64().is_multiple_of(4) { n } else { 1 + rng.next_u64() % 200 };
         for _ in 0..count {
             let i = (rng.next_u64() % n) as usize;
             let v = BAD[(rng.next_u64() % BAD.len() as u64) as usize];
