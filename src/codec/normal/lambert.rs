@@ -72,6 +72,9 @@ mod tests {
 
     /// f32 rounding of the two formulations (see the spheremap agreement test for why this size).
     const AGREE_DEG: f32 = 0.05;
+    /// Mittring's literal `sqrt(n.z·0.5+0.5)` cancels near its centre: an f32 rounding δ ≈ 6e-8 under the
+    /// root is up to √δ ≈ 2.4e-4 in |g|.
+    const PLANE_AGREE: f32 = 3e-4;
 
     #[test]
     fn lambert_is_the_z_mirrored_cry_spheremap() {
@@ -81,7 +84,7 @@ mod tests {
             let mirrored = Vec3::new(n.x, n.y, -n.z);
             let q = Lambert::project(n);
             let g = SpheremapCry::project(mirrored);
-            assert!((q - g).length() < 1e-6, "{n}: lambert {q} vs cry {g}");
+            assert!((q - g).length() < PLANE_AGREE, "{n}: lambert {q} vs cry {g}");
             let a = finish(Lambert::unproject(q));
             let b = finish(SpheremapCry::unproject(q));
             assert!(angle_deg(a, Vec3::new(b.x, b.y, -b.z)) < AGREE_DEG, "{q}: {a} vs mirrored {b}");
