@@ -152,7 +152,7 @@ pub fn read_raw(path: &Path, limits: &ReadLimits) -> Result<RawImage> {
     Ok(out)
 }
 
-/// Writes `image` as a single-part, ZIP-compressed (lossless) scan-line EXR, atomically (temporary file + rename).
+/// Writes `image` as a single-part, ZIP16-compressed (lossless) scan-line EXR, atomically (temporary file + rename).
 /// Channel names must be Latin-1; string attributes are stored as text header attributes.
 pub fn write_raw(path: &Path, image: &RawImage) -> Result<()> {
     use ::exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
@@ -187,7 +187,7 @@ pub fn write_raw(path: &Path, image: &RawImage) -> Result<()> {
     let layer = Layer::new(
         (image.width as usize, image.height as usize),
         attributes,
-        Encoding::SMALL_FAST_LOSSLESS,
+        Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(list),
     );
     let mut bytes = std::io::Cursor::new(Vec::new());

@@ -1,1 +1,132 @@
 //! Folding supersampled dumps: each k×k pixel block becomes k² ordered-grid samples of one pixel.
+//!
+//! A dump rendered at k× resolution with one sample per pixel holds exactly what a k²-sample ordered-grid MSAA
+//! buffer holds: sample `j·k + i` of output pixel (x, y) is input pixel (k·x + i, k·y + j), at offset
+//! ((i + ½)/k − ½, (j + ½)/k − ½) from the output pixel centre ([`ordered_grid_positions`]). The camera is
+//! unchanged: the field of view and the aspect ratio are the same at either resolution.
+
+use crate::error::{Error, Result};
+use crate::gbuffer::{ordered_grid_positions, GBuffer, MAX_SAMPLES};
+
+/// Folds every k×k block of a one-sample G-buffer into k² samples of one pixel.
+///
+/// Errors (as [`Error::Argument`]) when `gb` has more than one sample per pixel, when `k` is 0 or k² exceeds
+/// [`MAX_SAMPLES`], or when the width or height is not a multiple of `k`. `k = 1` returns a copy.
+pub fn fold(gb: &GBuffer, k: u32) -> Result<GBuffer> {
+    if k == 0 || k * k > MAX_SAMPLES {
+        return Err(Error::Argument(format!(
+            "fold factor {k} outside 1..=8 (k² samples must be at most {MAX_SAMPLES})"
+        )));
+    }
+    if gb.samples != 1 {
+        return Err(Error::Argument(format!(
+            "fold needs one sample per pixel; this G-buffer already has {} (fold a supersampled dump, not an MSAA one)",
+            gb.samples
+        )));
+    }
+    if !gb.width.is_multiple_of(k) || !gb.height.is_multiple_of(k) {
+        return Err(Error::Argument(format!(
+            "fold {k}: the image size {}×{} is not a multiple of {k}",
+            gb.width, gb.height
+        )));
+    }
+    gb.validate()?;
+    let (w, h) = (gb.width / k, gb.height / k);
+    let map = FoldMap { src_width: gb.width as usize, w: w as usize, h: h as usize, k: k as usize };
+    Ok(GBuffer {
+        width: w,
+        height: h,
+        samples: k * k,
+        sample_positions: ordered_grid_positions(k),
+        camera: gb.camera,
+        coverage: map.gather(&gb.coverage),
+        depth: gb.depth.as_deref().map(|p| map.gather(p)),
+        position: gb.position.as_deref().map(|p| map.gather(p)),
+        normal: gb.normal.as_deref().map(|p| map.gather(p)),
+        albedo: gb.albedo.as_deref().map(|p| map.gather(p)),
+        specular: gb.specular.as_deref().map(|p| map.gather(p)),
+        specular_power: gb.specular_power.as_deref().map(|p| map.gather(p)),
+        roughness: gb.roughness.as_deref().map(|p| map.gather(p)),
+        metallic: gb.metallic.as_deref().map(|p| map.gather(p)),
+        material_id: gb.material_id.as_deref().map(|p| map.gather(p)),
+        object_id: gb.object_id.as_deref().map(|p| map.gather(p)),
+        primitive_id: gb.primitive_id.as_deref().map(|p| map.gather(p)),
+        motion: gb.motion.as_deref().map(|p| map.gather(p)),
+    })
+}
+
+/// Index mapping from the folded (pixel-major) order back to the source image.
+struct FoldMap {
+    src_width: usize,
+    w: usize,
+    h: usize,
+    k: usize,
+}
+
+impl FoldMap {
+    fn gather<T: Copy>(&self, src: &[T]) -> Vec<T> {
+        let k = self.k;
+        let mut out = Vec::with_capacity(src.len());
+        for y in 0..self.h {
+            for x in 0..self.w {
+                for j in 0..k {
+                    let row = (y * k + j) * self.src_width + x * k;
+                    out.extend_from_slice(&src[row..row + k]);
+                }
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Camera;
+
+    fn indexed(w: u32, h: u32) -> GBuffer {
+        let mut gb = GBuffer::new(w, h, 1).unwrap();
+        gb.coverage = (0..w * h).map(|i| i % 3 != 0).collect();
+        gb.depth = Some((0..w * h).map(|i| i as f32).collect());
+        gb.object_id = Some((0..w * h).collect());
+        gb.camera = Some(Camera::identity(0.7, w as f32 / h as f32, 0.1, 10.0));
+        gb
+    }
+
+    #[test]
+    fn sample_j_k_plus_i_comes_from_sub_pixel_column_i_row_j() {
+        let gb = indexed(6, 4);
+        let f = fold(&gb, 2).unwrap();
+        assert_eq!((f.width, f.height, f.samples), (3, 2, 4));
+        f.validate().unwrap();
+        let ids = f.object_id.as_ref().unwrap();
+        for y in 0..2 {
+            for x in 0..3 {
+                for s in 0..4 {
+                    let (i, j) = (s % 2, s / 2);
+                    let src = (2 * y + j) * 6 + 2 * x + i;
+                    assert_eq!(ids[f.index(x, y, s)], src);
+                    assert_eq!(f.depth.as_ref().unwrap()[f.index(x, y, s)], src as f32);
+                    assert_eq!(f.coverage[f.index(x, y, s)], gb.coverage[src as usize]);
+                }
+            }
+        }
+        // The sample position of sample s sits at the centre of its source pixel.
+        let p = f.sample_positions[3];
+        assert_eq!((p.x, p.y), (0.25, 0.25));
+        let cam = f.camera.unwrap();
+        assert!((cam.aspect - f.width as f32 / f.height as f32).abs() < 1e-6);
+    }
+
+    #[test]
+    fn refuses_bad_sizes_and_multisampled_input() {
+        let gb = indexed(6, 4);
+        let e = fold(&gb, 4).unwrap_err().to_string();
+        assert!(e.contains("6×4") && e.contains("multiple of 4"), "{e}");
+        assert!(fold(&gb, 0).is_err());
+        assert!(fold(&gb, 9).is_err());
+        let twice = fold(&gb, 2).unwrap();
+        assert!(fold(&twice, 1).unwrap_err().to_string().contains("already has 4"));
+        assert_eq!(fold(&gb, 1).unwrap(), gb);
+    }
+}

@@ -1,1 +1,2 @@
 //! Error metrics between G-buffers and between images, and timing.
+pub mod edges;

@@ -1,0 +1,242 @@
+//! What a report holds: one [`Row`] per layout × detector (× culling) run, measured [`Timing`]s, and the
+//! [`Report`] that the writers turn into `report.md`, `report.csv` and `report.json`.
+
+use crate::report::needs::Needs;
+use crate::report::pareto;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+/// A measured duration over several runs: median and spread.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Timing {
+    /// Median over the runs, in milliseconds.
+    pub median_ms: f64,
+    /// Fastest run.
+    pub min_ms: f64,
+    /// Slowest run.
+    pub max_ms: f64,
+    /// Number of runs.
+    pub runs: usize,
+}
+
+impl Timing {
+    /// The timing of a set of run durations in milliseconds (`None` when empty).
+    #[must_use]
+    pub fn from_ms(mut ms: Vec<f64>) -> Option<Timing> {
+        if ms.is_empty() {
+            return None;
+        }
+        ms.sort_by(f64::total_cmp);
+        let n = ms.len();
+        let median = if n % 2 == 1 { ms[n / 2] } else { 0.5 * (ms[n / 2 - 1] + ms[n / 2]) };
+        Some(Timing { median_ms: median, min_ms: ms[0], max_ms: ms[n - 1], runs: n })
+    }
+}
+
+/// Runs `f` `runs` times (at least once), returning the last result and the timing of the runs. Stops at the
+/// first error.
+pub fn time_runs<T, E>(runs: usize, mut f: impl FnMut() -> Result<T, E>) -> Result<(T, Timing), E> {
+    let mut ms = Vec::with_capacity(runs.max(1));
+    let mut last = None;
+    for _ in 0..runs.max(1) {
+        let t = Instant::now();
+        let v = f()?;
+        ms.push(t.elapsed().as_secs_f64() * 1e3);
+        last = Some(v);
+    }
+    let timing = Timing::from_ms(ms).expect("at least one run");
+    Ok((last.expect("at least one run"), timing))
+}
+
+/// Pareto membership of a row.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct ParetoFlags {
+    /// On the front of image RMSE against bytes per sample.
+    pub bytes: bool,
+    /// On the front of image RMSE against total run time (encode + decode + detect + resolve).
+    pub time: bool,
+}
+
+/// One measured combination. Every metric is `None` when it could not be computed; `note` or `error` says why.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Row {
+    /// Layout name.
+    pub layout: String,
+    /// Bytes per sample of the layout.
+    pub bytes_per_sample: u32,
+    /// Bytes the layout's render targets take at this resolution and sample count.
+    pub footprint_bytes: u64,
+    /// Edge detector name.
+    pub detector: String,
+    /// Light culling mode, when the sweep varies it.
+    pub culling: Option<String>,
+    /// Mean angular normal error (degrees) after the roundtrip.
+    pub normal_mean_deg: Option<f64>,
+    /// 95th percentile angular normal error (degrees).
+    pub normal_p95_deg: Option<f64>,
+    /// Maximum angular normal error (degrees).
+    pub normal_max_deg: Option<f64>,
+    /// Mean relative depth error.
+    pub depth_rel_mean: Option<f64>,
+    /// Maximum relative depth error.
+    pub depth_rel_max: Option<f64>,
+    /// Maximum absolute albedo error (any channel).
+    pub albedo_max_abs: Option<f64>,
+    /// Maximum absolute error over the scalar attributes (relative for specular power).
+    pub scalar_max_abs: Option<f64>,
+    /// Image RMSE against the reference.
+    pub rmse: Option<f64>,
+    /// Image PSNR in dB against the reference (peak = reference maximum); infinite when identical.
+    pub psnr_db: Option<f64>,
+    /// Largest absolute pixel error.
+    pub max_abs: Option<f64>,
+    /// Relative MSE (MSE / mean squared reference).
+    pub rel_mse: Option<f64>,
+    /// Shaded samples / all samples.
+    pub shading_fraction: Option<f64>,
+    /// Fraction of pixels flagged as edges.
+    pub edge_fraction: Option<f64>,
+    /// Detector precision against ground truth.
+    pub precision: Option<f64>,
+    /// Detector recall against ground truth.
+    pub recall: Option<f64>,
+    /// Median encode (pack) time in ms.
+    pub encode_ms: Option<f64>,
+    /// Median decode (unpack) time in ms.
+    pub decode_ms: Option<f64>,
+    /// Median edge-detection time in ms.
+    pub detect_ms: Option<f64>,
+    /// Median resolve time in ms.
+    pub resolve_ms: Option<f64>,
+    /// Sum of the four medians.
+    pub total_ms: Option<f64>,
+    /// The full timings (median and spread) per stage.
+    pub timings: BTreeMap<String, Timing>,
+    /// Pareto membership.
+    pub pareto: ParetoFlags,
+    /// Remarks (e.g. why a metric is missing).
+    pub note: Option<String>,
+    /// The error that stopped this row, if any.
+    pub error: Option<String>,
+}
+
+impl Row {
+    /// Adds a stage timing, keeping the flat median field in step.
+    pub fn set_timing(&mut self, stage: &str, t: Timing) {
+        match stage {
+            "encode" => self.encode_ms = Some(t.median_ms),
+            "decode" => self.decode_ms = Some(t.median_ms),
+            "detect" => self.detect_ms = Some(t.median_ms),
+            "resolve" => self.resolve_ms = Some(t.median_ms),
+            _ => {}
+        }
+        self.timings.insert(stage.to_string(), t);
+        self.total_ms = match (self.encode_ms, self.decode_ms, self.detect_ms, self.resolve_ms) {
+            (Some(a), Some(b), Some(c), Some(d)) => Some(a + b + c + d),
+            _ => None,
+        };
+    }
+
+    /// Appends a remark to `note`.
+    pub fn add_note(&mut self, s: impl AsRef<str>) {
+        self.note = Some(match self.note.take() {
+            Some(n) => format!("{n}; {}", s.as_ref()),
+            None => s.as_ref().to_string(),
+        });
+    }
+}
+
+/// Marks the Pareto fronts (RMSE against bytes, RMSE against total time) on `rows`.
+pub fn mark_pareto(rows: &mut [Row]) {
+    let err = |r: &Row| r.rmse.unwrap_or(f64::NAN);
+    let by_bytes: Vec<(f64, f64)> = rows.iter().map(|r| (f64::from(r.bytes_per_sample), err(r))).collect();
+    let by_time: Vec<(f64, f64)> = rows.iter().map(|r| (r.total_ms.unwrap_or(f64::NAN), err(r))).collect();
+    let (fb, ft) = (pareto::front(&by_bytes), pareto::front(&by_time));
+    for (i, r) in rows.iter_mut().enumerate() {
+        r.pareto = ParetoFlags { bytes: fb[i], time: ft[i] };
+    }
+}
+
+/// A figure written next to the report.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Figure {
+    /// File name inside the report folder.
+    pub file: String,
+    /// One-line caption.
+    pub caption: String,
+}
+
+/// Everything a report folder holds.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Report {
+    /// What was analysed (file path or scene name).
+    pub input: String,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Samples per pixel.
+    pub samples: u32,
+    /// Fraction of samples covered by a surface.
+    pub coverage: f64,
+    /// Number of lights.
+    pub lights: usize,
+    /// Where the lights came from.
+    pub lights_source: String,
+    /// Timing runs per stage.
+    pub runs: usize,
+    /// Time of the reference resolve (every sample shaded, f64 accumulation).
+    pub reference: Option<Timing>,
+    /// Wall time of the whole sweep in seconds.
+    pub sweep_seconds: f64,
+    /// The scene-needs analysis.
+    pub needs: Needs,
+    /// One row per combination.
+    pub rows: Vec<Row>,
+    /// Plots and pictures.
+    pub figures: Vec<Figure>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn timing_median_and_spread() {
+        let t = Timing::from_ms(vec![5.0, 1.0, 3.0]).unwrap();
+        assert_eq!((t.median_ms, t.min_ms, t.max_ms, t.runs), (3.0, 1.0, 5.0, 3));
+        let t = Timing::from_ms(vec![4.0, 1.0, 3.0, 2.0]).unwrap();
+        assert_eq!(t.median_ms, 2.5);
+        assert!(Timing::from_ms(vec![]).is_none());
+    }
+
+    #[test]
+    fn time_runs_counts_and_propagates_errors() {
+        let mut n = 0;
+        let (v, t) = time_runs(3, || -> Result<i32, ()> {
+            n += 1;
+            Ok(n)
+        })
+        .unwrap();
+        assert_eq!((v, t.runs), (3, 3));
+        assert!(t.min_ms <= t.median_ms && t.median_ms <= t.max_ms);
+        assert!(time_runs(3, || -> Result<(), &str> { Err("boom") }).is_err());
+    }
+
+    #[test]
+    fn pareto_marks_rows_without_numbers_as_off_the_front() {
+        let mk = |b, e: Option<f64>, t| {
+            let mut r = Row { bytes_per_sample: b, rmse: e, ..Default::default() };
+            for s in ["encode", "decode", "detect", "resolve"] {
+                r.set_timing(s, Timing::from_ms(vec![t / 4.0]).unwrap());
+            }
+            r
+        };
+        let mut rows = vec![mk(8, Some(0.5), 10.0), mk(12, Some(0.1), 40.0), mk(16, Some(0.2), 5.0), mk(4, None, 1.0)];
+        mark_pareto(&mut rows);
+        let flags: Vec<(bool, bool)> = rows.iter().map(|r| (r.pareto.bytes, r.pareto.time)).collect();
+        assert_eq!(flags, vec![(true, false), (true, true), (false, true), (false, false)]);
+        assert_eq!(rows[0].total_ms, Some(10.0));
+    }
+}

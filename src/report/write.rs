@@ -1,0 +1,95 @@
+//! Writes a report folder: `report.md`, `report.csv`, `report.json` and the figures. Every file is written
+//! atomically; the folder is created if missing; files that are not ours are left untouched.
+
+use crate::error::{Error, Result};
+use crate::report::row::Report;
+use crate::report::{csv, markdown};
+use crate::util::write_bytes_atomic;
+use std::path::{Path, PathBuf};
+
+/// A file to put in the report folder besides the three reports (a figure, a layout file).
+#[derive(Clone, Debug)]
+pub struct Attachment {
+    /// File name inside the folder (no directories).
+    pub name: String,
+    /// Contents.
+    pub bytes: Vec<u8>,
+}
+
+/// The JSON text of a report. Non-finite numbers become `null` (an infinite PSNR, i.e. an image identical to the
+/// reference, shows as `null` with `rmse` 0).
+pub fn to_json(rep: &Report) -> Result<String> {
+    serde_json::to_string_pretty(rep).map_err(json_err)
+}
+
+fn json_err(e: serde_json::Error) -> Error {
+    Error::Argument(format!("cannot serialize the report: {e}"))
+}
+
+/// Writes the report folder `dir` and returns the paths written.
+pub fn write_folder(dir: &Path, rep: &Report, attachments: &[Attachment]) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let mut written = Vec::new();
+    let mut put = |name: &str, bytes: &[u8]| -> Result<()> {
+        if name.contains(['/', '\\']) || name.is_empty() || name.starts_with('.') {
+            return Err(Error::Argument(format!("bad report file name {name:?}")));
+        }
+        let p = dir.join(name);
+        write_bytes_atomic(&p, bytes)?;
+        written.push(p);
+        Ok(())
+    };
+    for a in attachments {
+        put(&a.name, &a.bytes)?;
+    }
+    put("report.csv", csv::to_csv(&rep.rows).as_bytes())?;
+    put("report.json", to_json(rep)?.as_bytes())?;
+    put("report.md", markdown::to_markdown(rep).as_bytes())?;
+    Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::needs::analyze;
+    use crate::report::row::Row;
+
+    fn rep() -> Report {
+        Report {
+            input: "t".into(),
+            width: 2,
+            height: 2,
+            samples: 1,
+            coverage: 1.0,
+            lights: 1,
+            lights_source: "test".into(),
+            runs: 1,
+            reference: None,
+            sweep_seconds: 0.0,
+            needs: analyze(&crate::GBuffer::new(2, 2, 1).unwrap()),
+            rows: vec![Row { layout: "x".into(), psnr_db: Some(f64::INFINITY), rmse: Some(0.0), ..Default::default() }],
+            figures: vec![],
+        }
+    }
+
+    #[test]
+    fn folder_is_created_and_unrelated_files_survive() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("a/b");
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("mine.txt"), "keep").unwrap();
+        let att = [Attachment { name: "p.svg".into(), bytes: b"<svg/>".to_vec() }];
+        let w = write_folder(&dir, &rep(), &att).unwrap();
+        assert_eq!(w.len(), 4);
+        assert_eq!(std::fs::read_to_string(dir.join("mine.txt")).unwrap(), "keep");
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+        assert_eq!(json["rows"][0]["layout"], "x");
+        assert_eq!(json["rows"][0]["rmse"], 0.0);
+        assert!(json["needs"]["absent"].as_array().unwrap().len() == 12);
+        let names: Vec<String> =
+            std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+        assert_eq!(names.len(), 5, "no temporary files left: {names:?}");
+        assert!(write_folder(&dir, &rep(), &[Attachment { name: "../x".into(), bytes: vec![] }]).is_err());
+    }
+}
