@@ -337,8 +337,12 @@ mod tests {
     #[test]
     fn shared_edge_never_leaks() {
         // A quad split along its diagonal; rays exactly on the diagonal must hit.
-        let (a, b, c, d) =
-            (Vec3::new(-1.0, -1.0, -3.0), Vec3::new(1.0, -1.0, -3.0), Vec3::new(1.0, 1.0, -3.0), Vec3::new(-1.0, 1.0, -3.0));
+        let (a, b, c, d) = (
+            Vec3::new(-1.0, -1.0, -3.0),
+            Vec3::new(1.0, -1.0, -3.0),
+            Vec3::new(1.0, 1.0, -3.0),
+            Vec3::new(-1.0, 1.0, -3.0),
+        );
         let mk = |v| Triangle { v, n: [Vec3::Z; 3], smooth: false, object: 0, prim: 0 };
         let bvh = Bvh::build(&[mk([a, b, c]), mk([a, c, d])]);
         for k in 0..=100 {

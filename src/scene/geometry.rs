@@ -69,10 +69,9 @@ impl Mesh {
         self.add_triangle(obj, [a, c, d], [normal; 3], false);
     }
 
-    /// Adds an axis-aligned rectangle in the plane through `centre` spanned by the unit vectors `u` and `v`
-    /// (half extents `hu`, `hv`), with normal `normal`.
-    pub fn add_rect(&mut self, obj: u32, centre: Vec3, u: Vec3, v: Vec3, hu: f32, hv: f32, normal: Vec3) {
-        let (du, dv) = (u * hu, v * hv);
+    /// Adds a rectangle centred at `centre` with half-edge vectors `du` and `dv` (perpendicular), as two flat
+    /// triangles with the exact normal `normal`.
+    pub fn add_rect(&mut self, obj: u32, centre: Vec3, du: Vec3, dv: Vec3, normal: Vec3) {
         self.add_quad(obj, [centre - du - dv, centre + du - dv, centre + du + dv, centre - du + dv], normal);
     }
 

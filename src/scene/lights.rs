@@ -7,6 +7,7 @@
 use super::SceneName;
 use crate::camera::Camera;
 use crate::gbuffer::GBuffer;
+use crate::io::sidecar::{Sidecar, SidecarCamera, SidecarLight};
 use crate::light::{Light, LightKind};
 use crate::util::SplitMix64;
 use glam::Vec3;
@@ -25,7 +26,14 @@ fn point(position: Vec3, color: Vec3, range: f32) -> Light {
 }
 
 fn directional(direction: Vec3, color: Vec3, intensity: f32) -> Light {
-    Light { kind: LightKind::Directional { direction }, position: Vec3::ZERO, color, intensity, range: f32::INFINITY, begin: 0.0 }
+    Light {
+        kind: LightKind::Directional { direction },
+        position: Vec3::ZERO,
+        color,
+        intensity,
+        range: f32::INFINITY,
+        begin: 0.0,
+    }
 }
 
 /// A saturated colour from a hue in [0, 1).
@@ -50,7 +58,11 @@ pub fn default_lights(name: SceneName, gb: &GBuffer) -> Vec<Light> {
             let mut out = Vec::with_capacity(25);
             for j in 0..6 {
                 for i in 0..4 {
-                    let world = Vec3::new(-4.5 + 3.0 * i as f32, if (i + j) % 2 == 0 { 0.8 } else { 2.6 }, -11.0 + 3.0 * j as f32);
+                    let world = Vec3::new(
+                        -4.5 + 3.0 * i as f32,
+                        if (i + j) % 2 == 0 { 0.8 } else { 2.6 },
+                        -11.0 + 3.0 * j as f32,
+                    );
                     let color = hue(((i * 6 + j) as f32 * 0.382).fract());
                     out.push(point(cam.to_view_point(world), color, 4.0));
                 }
@@ -132,9 +144,7 @@ pub fn scatter_lights(gb: &GBuffer, n: usize, seed: u64) -> Vec<Light> {
         let size = (hi - lo).max(Vec3::splat(1e-3 * (hi - lo).max_element().max(1e-3)));
         volume = size.x * size.y * size.z;
         extent = size.length();
-        sample = Box::new(move |r: &mut SplitMix64| {
-            lo + Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * size
-        });
+        sample = Box::new(move |r: &mut SplitMix64| lo + Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * size);
     }
     let range = (3.0 * SCATTER_OVERLAP * volume / (4.0 * std::f32::consts::PI * n as f32)).cbrt();
     let range = if range.is_finite() && range > 0.0 { range.clamp(1e-6 * extent, extent) } else { 1.0 };
@@ -146,4 +156,38 @@ pub fn scatter_lights(gb: &GBuffer, n: usize, seed: u64) -> Vec<Light> {
             point(p, color, range * rng.range_f32(0.75, 1.25))
         })
         .collect()
+}
+
+/// One light as a sidecar entry (KHR_lights_punctual fields; an unbounded range and a zero begin are omitted).
+#[must_use]
+pub fn sidecar_light(l: &Light) -> SidecarLight {
+    let (kind, position, direction, cones) = match l.kind {
+        LightKind::Point => ("point", Some(l.position), None, None),
+        LightKind::Spot { direction, inner_cone_angle, outer_cone_angle } => {
+            ("spot", Some(l.position), Some(direction), Some((inner_cone_angle, outer_cone_angle)))
+        }
+        LightKind::Directional { direction } => ("directional", None, Some(direction), None),
+    };
+    SidecarLight {
+        kind: kind.into(),
+        position: position.map(|v: Vec3| v.to_array()),
+        direction: direction.map(|v: Vec3| v.to_array()),
+        color: l.color.to_array(),
+        intensity: l.intensity,
+        range: l.range.is_finite().then_some(l.range),
+        begin: (l.begin > 0.0).then_some(l.begin),
+        inner_cone_angle: cones.map(|c| c.0),
+        outer_cone_angle: cones.map(|c| c.1),
+    }
+}
+
+/// The sidecar for a rendered scene: `gb`'s camera and `lights` (view space, so `lights_space` is "view").
+#[must_use]
+pub fn scene_sidecar(gb: &GBuffer, lights: &[Light]) -> Sidecar {
+    Sidecar {
+        camera: gb.camera.as_ref().map(SidecarCamera::from_camera),
+        supersample: None,
+        lights: lights.iter().map(sidecar_light).collect(),
+        lights_space: Some("view".into()),
+    }
 }

@@ -75,7 +75,7 @@ impl Builder {
         let c = (a + b) * 0.5;
         let d = (b - a).abs() * 0.5;
         let (u, hu) = if d.x > 0.0 { (Vec3::X, d.x) } else { (Vec3::Z, d.z) };
-        self.mesh.add_rect(o, c, u, Vec3::Y, hu, d.y, normal);
+        self.mesh.add_rect(o, c, u * hu, Vec3::Y * d.y, normal);
     }
 }
 
@@ -89,7 +89,7 @@ pub fn world_mesh() -> Mesh {
         for (i, x) in (-6..6).step_by(2).enumerate() {
             let o = b.object("floor-tile", if (i + j) % 2 == 0 { TILE_LIGHT } else { TILE_DARK });
             let c = Vec3::new(x as f32 + 1.0, 0.0, z as f32 + 1.0);
-            b.mesh.add_rect(o, c, Vec3::X, Vec3::Z, 1.0, 1.0, Vec3::Y);
+            b.mesh.add_rect(o, c, Vec3::X, Vec3::Z, Vec3::Y);
         }
     }
 

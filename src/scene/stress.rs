@@ -42,23 +42,11 @@ const DEPTH: f32 = 5.0;
 const HALF: f32 = 0.06;
 
 /// The extreme material: every value at its upper bound.
-const MAX_MATERIAL: Material = Material {
-    name: "max",
-    albedo: Vec3::ONE,
-    specular: 1.0,
-    specular_power: 1.0e4,
-    roughness: 0.0,
-    metallic: 1.0,
-};
+const MAX_MATERIAL: Material =
+    Material { name: "max", albedo: Vec3::ONE, specular: 1.0, specular_power: 1.0e4, roughness: 0.0, metallic: 1.0 };
 /// Every value at its lower bound.
-const MIN_MATERIAL: Material = Material {
-    name: "min",
-    albedo: Vec3::ZERO,
-    specular: 0.0,
-    specular_power: 0.0,
-    roughness: 1.0,
-    metallic: 0.0,
-};
+const MIN_MATERIAL: Material =
+    Material { name: "min", albedo: Vec3::ZERO, specular: 0.0, specular_power: 0.0, roughness: 1.0, metallic: 0.0 };
 /// A mid-range material for the geometric cases.
 const MID_MATERIAL: Material = Material {
     name: "mid",
@@ -111,13 +99,13 @@ impl Builder {
         let h = HALF * self.cam.tan_half_fov() * d;
         let a1 = Vec3::Y.cross(n).normalize();
         let a2 = n.cross(a1);
-        self.mesh.add_rect(o, centre, a1, a2, h, h, n);
+        self.mesh.add_rect(o, centre, a1 * h, a2 * h, n);
     }
     /// A pixel-aligned rectangle facing the camera: centre at pixel centre (px, py), size in pixels.
     fn pixel_rect(&mut self, o: u32, px: f32, py: f32, w_px: f32, h_px: f32, d: f32) {
         let c = self.cam.view_position(Vec2::new(px, py), d, self.width, self.height);
         let p = self.pixel(d);
-        self.mesh.add_rect(o, c, Vec3::X, Vec3::Y, 0.5 * w_px * p, 0.5 * h_px * p, Vec3::Z);
+        self.mesh.add_rect(o, c, Vec3::X * (0.5 * w_px * p), Vec3::Y * (0.5 * h_px * p), Vec3::Z);
     }
     /// The pixel centre nearest to NDC `ndc`.
     fn pixel_centre(&self, ndc: Vec2) -> (f32, f32) {
@@ -155,7 +143,7 @@ pub fn build(width: u32, height: u32) -> ViewScene {
         ("axis--y", Vec3::new(0.0, 1.2, -5.5), Vec3::NEG_Y, Vec3::Z, Vec3::X),
     ] {
         let o = b.object(name, 2, MID_MATERIAL);
-        b.mesh.add_rect(o, centre, u, v, 0.5, 0.1, n);
+        b.mesh.add_rect(o, centre, u * 0.5, v * 0.1, n);
     }
 
     let bottom = -0.8;
@@ -169,7 +157,7 @@ pub fn build(width: u32, height: u32) -> ViewScene {
     let side = view.cross(Vec3::Y).normalize();
     let n = (side + view * 0.05).normalize();
     let along = n.cross(Vec3::Y).normalize();
-    b.mesh.add_rect(o, c, along, Vec3::Y, 1.0, HALF * b.cam.tan_half_fov() * 8.0, n);
+    b.mesh.add_rect(o, c, along, Vec3::Y * (HALF * b.cam.tan_half_fov() * 8.0), n);
 
     let (px, py) = b.pixel_centre(Vec2::new(0.0, bottom));
     let o = b.object("subpixel-bar", 2, MID_MATERIAL);
