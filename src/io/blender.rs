@@ -385,7 +385,7 @@ pub(super) fn resolve_camera(
         let camera = c.to_camera();
         let mut detail = "sidecar camera".to_string();
         if let Some(err) = world_pos.and_then(|p| median_reprojection_px(&camera, p, coverage, w, h)) {
-            if !(err <= SIDECAR_MAX_MEDIAN_REPROJECTION_PX) {
+            if err.is_nan() || err > SIDECAR_MAX_MEDIAN_REPROJECTION_PX {
                 return Err(Error::invalid(
                     path,
                     format!(
