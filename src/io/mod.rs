@@ -99,14 +99,18 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     finish(loaded, path, side.as_ref().map(|(s, p)| (s, p.as_path())), opts)
 }
 
-/// Loads an EXR dump held in memory (`path` names it in errors and locates the default sidecar beside it).
-pub fn load_exr_bytes(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<Loaded> {
+/// Loads a dump (EXR or ISPC `.bin`) held in memory, exactly as [`load`] would from a file (`path` names it in
+/// errors and locates the default sidecar beside it).
+pub fn load_bytes(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     let side = resolve_sidecar(path, opts)?;
-    if !bytes.starts_with(&EXR_MAGIC) {
+    let loaded = if ispc::matches_file(bytes, bytes.len() as u64) {
+        ispc::read_bytes(bytes, path, side.as_ref().map(|s| &s.0), opts)?
+    } else if bytes.starts_with(&EXR_MAGIC) {
+        let raw = exr::read_raw_bytes(bytes, path, &opts.limits)?;
+        read_exr(&raw, path, side.as_ref().map(|s| &s.0), opts)?
+    } else {
         return Err(not_a_dump(path, bytes));
-    }
-    let raw = exr::read_raw_bytes(bytes, path, &opts.limits)?;
-    let loaded = read_exr(&raw, path, side.as_ref().map(|s| &s.0), opts)?;
+    };
     finish(loaded, path, side.as_ref().map(|(s, p)| (s, p.as_path())), opts)
 }
 
