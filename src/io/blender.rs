@@ -9,7 +9,8 @@
 //! Z-up world space and are brought into our view space with the camera — from the sidecar, else recovered from the
 //! `Position` pass by [`super::camera_fit`]. Without either, depth is still view depth, normals stay in world space
 //! (flagged in their source note) and positions are dropped. `IndexMA`/`IndexOB` are float-coded integers;
-//! `GlossCol` becomes the scalar specular (mean of RGB).
+//! `GlossCol` becomes the scalar specular (mean of RGB); `Vector.XY` becomes the motion since the previous frame
+//! in pixels (+y down).
 
 use super::exr::{RawData, RawImage};
 use super::sidecar::Sidecar;
@@ -103,7 +104,7 @@ pub fn read(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
     let albedo_ch = ch.pick(Attribute::Albedo, find(Role::Albedo), 3)?;
     let mat_ch = ch.pick(Attribute::MaterialId, find(Role::MaterialId), 1)?;
     let obj_ch = ch.pick(Attribute::ObjectId, find(Role::ObjectId), 1)?;
-    let motion_ch = ch.pick(Attribute::Motion, find(Role::Motion).map(|v| v[2..4].to_vec()), 2)?;
+    let motion_ch = ch.pick(Attribute::Motion, find(Role::Motion).map(|v| v[0..2].to_vec()), 2)?;
     let aov = |names: &[&str]| -> Option<Vec<String>> {
         raw.channels.iter().find_map(|c| {
             let (l, pass, _) = split(&c.name)?;
@@ -217,15 +218,15 @@ pub fn read(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
         }
     }
     if let Some(c) = &motion_ch {
-        let (zx, wy) = (ch.floats(&c[0])?, ch.floats(&c[1])?);
-        let mv: Vec<Vec2> = zx.iter().zip(&wy).map(|(x, y)| Vec2::new(*x, -*y)).collect();
+        // Measured with Blender 3.4 (a cube moving right and up across frames): Vector.XY is the offset to the
+        // previous frame's position in pixels with +y up, i.e. −(motion since the previous frame). Ours is the
+        // motion since the previous frame with +y down: (−X, +Y).
+        let (x, y) = (ch.floats(&c[0])?, ch.floats(&c[1])?);
+        let mv: Vec<Vec2> = x.iter().zip(&y).map(|(x, y)| Vec2::new(-*x, *y)).collect();
         gb.motion = Some(mask(&gb.coverage, mv, Vec2::ZERO));
-        sources.push(src(
-            "motion",
-            c,
-            ch.type_of(&c[0]),
-            Some("Vector.Z/W (towards the next frame), y flipped to point down"),
-        ));
+        let note =
+            "Vector.X/Y (offset to the previous frame, +y up) → motion since the previous frame (−X, +Y), +y down";
+        sources.push(src("motion", c, ch.type_of(&c[0]), Some(note)));
     }
     gb.validate()?;
     let lights = sidecar_lights(sidecar, gb.camera.as_ref(), path)?;
