@@ -173,8 +173,8 @@ fn read_exr(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
     }
     let mut loaded = if blender::matches(raw) {
         blender::read(raw, path, sidecar, opts)?
-    } else if pending::mitsuba::matches(raw) {
-        pending::mitsuba::read(raw, path, sidecar, opts)?
+    } else if mitsuba::matches(raw) {
+        mitsuba::read(raw, path, sidecar, opts)?
     } else {
         return mapped::read(raw, path, opts);
     };
@@ -238,19 +238,3 @@ fn finish(mut loaded: Loaded, path: &Path, side: Option<(&Sidecar, &Path)>, opts
 /// A sidecar camera's aspect may differ from the image's by this fraction: engines round the aspect they export
 /// (16:9 as 1.77 or 1.78), but a real mismatch (a sidecar from another render) is off by far more.
 pub const ASPECT_TOLERANCE: f32 = 0.01;
-
-/// Stand-in with the exact signatures of the Mitsuba reader until it lands (it matches nothing, so such files fall
-/// through to the `--map` reader).
-mod pending {
-    pub mod mitsuba {
-        use crate::error::Result;
-        use crate::io::{LoadOptions, Loaded, RawImage, Sidecar};
-        use std::path::Path;
-        pub fn matches(_raw: &RawImage) -> bool {
-            false
-        }
-        pub fn read(_: &RawImage, path: &Path, _: Option<&Sidecar>, _: &LoadOptions) -> Result<Loaded> {
-            Err(crate::Error::Unsupported { path: path.into(), what: "Mitsuba reader not built".into() })
-        }
-    }
-}
