@@ -131,28 +131,28 @@ fn nan_and_inf_are_counted_and_replaced() {
 
 #[test]
 fn unknown_naming_lists_channels_and_suggests_map() {
-    let bytes = generic_exr(4, 3, &["Z", "N.X", "N.Y", "N.Z"], |c, i| if c == 0 { 1.0 + i as f32 } else { 0.5 });
+    let bytes = generic_exr(4, 3, &["Z", "Nrm.X", "Nrm.Y", "Nrm.Z"], |c, i| if c == 0 { 1.0 + i as f32 } else { 0.5 });
     let e = load_bytes(&bytes, Path::new("eng.exr"), &LoadOptions::default()).unwrap_err();
     let Error::MissingChannel { found, .. } = &e else { panic!("{e:?}") };
-    assert_eq!(found, "N.X, N.Y, N.Z, Z");
+    assert_eq!(found, "Nrm.X, Nrm.Y, Nrm.Z, Z");
     let msg = e.to_string();
     assert!(msg.contains("eng.exr") && msg.contains("--map"), "{msg}");
 
     let map = vec![
         (Attribute::Depth, vec!["Z".to_string()]),
-        (Attribute::Normal, vec!["N.X".into(), "N.Y".into(), "N.Z".into()]),
+        (Attribute::Normal, vec!["Nrm.X".into(), "Nrm.Y".into(), "Nrm.Z".into()]),
     ];
     let opts = LoadOptions { map, ..Default::default() };
     let l = load_bytes(&bytes, Path::new("eng.exr"), &opts).unwrap();
     assert_eq!(l.format, SourceFormat::Mapped);
     assert_eq!(l.gbuffer.depth.as_ref().unwrap()[5], 6.0);
     assert_eq!(l.gbuffer.background_samples(), 0);
-    assert_eq!(l.sources[1].channels, vec!["N.X", "N.Y", "N.Z"]);
+    assert_eq!(l.sources[1].channels, vec!["Nrm.X", "Nrm.Y", "Nrm.Z"]);
 
     // A mapped channel that does not exist is named, with the channels found.
     let opts = LoadOptions { map: vec![(Attribute::Depth, vec!["depth.V".into()])], ..Default::default() };
     let e = load_bytes(&bytes, Path::new("eng.exr"), &opts).unwrap_err().to_string();
-    assert!(e.contains("missing channel depth.V") && e.contains("N.X, N.Y, N.Z, Z"), "{e}");
+    assert!(e.contains("missing channel depth.V") && e.contains("Nrm.X, Nrm.Y, Nrm.Z, Z"), "{e}");
 }
 
 #[test]

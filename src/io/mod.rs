@@ -153,7 +153,9 @@ fn resolve_sidecar(path: &Path, opts: &LoadOptions) -> Result<Option<(Sidecar, P
     Ok(Some((Sidecar::load(&p)?, p)))
 }
 
-/// Picks the EXR reader: canonical, Blender, Mitsuba, else the `--map` reader.
+/// Picks the EXR reader: canonical; the `--map` reader when the map names depth or position; Blender; Mitsuba;
+/// else the `--map` reader (which explains what is missing). Other `--map` entries override scalar and ID
+/// attributes of the format-specific readers.
 fn read_exr(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadOptions) -> Result<Loaded> {
     if canonical::matches(raw) {
         let gbuffer = canonical::from_raw(raw, path)?;
@@ -171,7 +173,11 @@ fn read_exr(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
         mapped::override_scalars(&mut loaded, raw, path, opts)?;
         return Ok(loaded);
     }
-    let mut loaded = if blender::matches(raw) {
+    // A map naming the geometry (depth or position) describes the whole file: read it as view space as mapped.
+    let geometry_mapped = opts.map.iter().any(|(a, _)| matches!(a, Attribute::Depth | Attribute::Position));
+    let mut loaded = if geometry_mapped {
+        return mapped::read(raw, path, opts);
+    } else if blender::matches(raw) {
         blender::read(raw, path, sidecar, opts)?
     } else if mitsuba::matches(raw) {
         mitsuba::read(raw, path, sidecar, opts)?
