@@ -149,8 +149,13 @@ fn bad_sizes_are_errors_not_panics() {
     assert!(render(SceneName::Room, 10, 0, 4).is_err());
     assert!(render(SceneName::Room, 10, 10, 3).is_err());
     assert!(render(SceneName::Room, 100_000, 100_000, 16).is_err());
-    let tiny = render(SceneName::Room, 1, 1, 1).unwrap();
-    assert_eq!(tiny.len(), 1);
+    for name in SceneName::ALL {
+        for (w, h, s) in [(1, 1, 1), (1, 1, 16), (3, 200, 4), (200, 3, 2)] {
+            let gb = render(name, w, h, s).unwrap();
+            assert_eq!(gb.len(), (w * h * s) as usize);
+            gb.validate().unwrap();
+        }
+    }
 }
 
 #[test]
