@@ -1,15 +1,261 @@
-//! `gbuf edges`.
+//! `gbuf edges FILE [--detector D|all] [threshold flags] [--mask OUT.png] [--json]`: run edge detectors and score
+//! them against the ID ground truth.
+
+use crate::cli::common::{print_json, InputArgs};
+use anyhow::Context;
+use gbuf::detect::{self, truth, Detector, DetectorConfig, EdgeMask, IdSource};
+use gbuf::measure::edges::{evaluate_against, EdgeStats};
+use gbuf::GBuffer;
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// `--detector`: one detector, or `all` of them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DetectorChoice {
+    /// One detector.
+    One(Detector),
+    /// Every detector, one row each.
+    All,
+}
+
+impl DetectorChoice {
+    /// The detectors chosen.
+    pub fn detectors(self) -> Vec<Detector> {
+        match self {
+            DetectorChoice::One(d) => vec![d],
+            DetectorChoice::All => Detector::ALL.to_vec(),
+        }
+    }
+}
+
+/// Parses `--detector` (a detector name or `all`).
+pub fn parse_detector_choice(s: &str) -> Result<DetectorChoice, String> {
+    if s == "all" {
+        return Ok(DetectorChoice::All);
+    }
+    Detector::from_name(s).map(DetectorChoice::One).ok_or_else(|| {
+        let names: Vec<&str> = Detector::ALL.iter().map(|d| d.name()).collect();
+        format!("unknown detector {s:?}; known: {}, all", names.join(", "))
+    })
+}
+
+/// Parses `--ids`.
+fn parse_ids(s: &str) -> Result<IdSource, String> {
+    IdSource::from_name(s)
+        .ok_or_else(|| format!("unknown ID choice {s:?}; known: {}", IdSource::ALL.map(IdSource::name).join(", ")))
+}
+
+/// Detector threshold flags, shared by every command that runs a detector (flatten it into their `Args`).
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct ThresholdArgs {
+    /// lauritzen: multiplier on |∂z/∂x| + |∂z/∂y| (default 1).
+    #[arg(long, value_name = "X")]
+    pub gradient_scale: Option<f32>,
+    /// lauritzen: relative depth slack added to the derivative bound (default 1e-4).
+    #[arg(long, value_name = "X")]
+    pub depth_slack: Option<f32>,
+    /// depth: relative threshold, a fraction of the view depth (default 0.02).
+    #[arg(long, value_name = "X")]
+    pub depth_relative: Option<f32>,
+    /// depth: absolute threshold in view-space units (default 0).
+    #[arg(long, value_name = "X")]
+    pub depth_absolute: Option<f32>,
+    /// normal and lauritzen: angle threshold in degrees (default 8.11, i.e. n_i·n_0 < 0.99).
+    #[arg(long, value_name = "DEG")]
+    pub normal_angle: Option<f32>,
+    /// id and combined: which IDs to compare: material, object or either (default either).
+    #[arg(long, value_name = "IDS", value_parser = parse_ids)]
+    pub ids: Option<IdSource>,
+}
+
+impl ThresholdArgs {
+    /// The library configuration: defaults overridden by the flags given, validated.
+    pub fn config(&self) -> anyhow::Result<DetectorConfig> {
+        let d = DetectorConfig::default();
+        let cfg = DetectorConfig {
+            gradient_scale: self.gradient_scale.unwrap_or(d.gradient_scale),
+            depth_slack: self.depth_slack.unwrap_or(d.depth_slack),
+            depth_relative: self.depth_relative.unwrap_or(d.depth_relative),
+            depth_absolute: self.depth_absolute.unwrap_or(d.depth_absolute),
+            normal_angle_deg: self.normal_angle.unwrap_or(d.normal_angle_deg),
+            ids: self.ids.unwrap_or(d.ids),
+        };
+        cfg.validate()?;
+        Ok(cfg)
+    }
+}
 
 /// Flags of `gbuf edges`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
+    /// The dump to read.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Edge detector: lauritzen, depth, normal, id, combined, forward-msaa, ssaa, none; or `all` for one row each.
+    #[arg(long, value_name = "D", default_value = "lauritzen", value_parser = parse_detector_choice)]
+    pub detector: DetectorChoice,
+    /// Detector thresholds.
+    #[command(flatten)]
+    pub thresholds: ThresholdArgs,
+    /// Write a PNG of the scene with per-sample pixels in red, misses in yellow, false alarms in cyan.
+    #[arg(long, value_name = "OUT.png")]
+    pub mask: Option<PathBuf>,
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
 }
 
+/// One detector's row.
+#[derive(Debug, serde::Serialize)]
+struct Row {
+    detector: Detector,
+    /// `None` when the detector could not run on this G-buffer (the reason is in `skipped`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    skipped: Option<String>,
+    edge_fraction: f64,
+    shading_fraction: f64,
+    /// Scores against the truth; `None` without object IDs.
+    #[serde(flatten)]
+    stats: Option<Scores>,
+    ms: f64,
+}
+
+/// The truth-dependent part of a row.
+#[derive(Debug, serde::Serialize)]
+struct Scores {
+    precision: f64,
+    recall: f64,
+    tp: u64,
+    fp: u64,
+    #[serde(rename = "fn")]
+    fn_: u64,
+}
+
+/// The whole output.
+#[derive(Debug, serde::Serialize)]
+struct Output {
+    file: PathBuf,
+    width: u32,
+    height: u32,
+    samples: u32,
+    /// "object" when object IDs give a ground truth, else null.
+    truth: Option<&'static str>,
+    true_edge_fraction: Option<f64>,
+    thresholds: DetectorConfig,
+    results: Vec<Row>,
+}
+
 /// Runs `gbuf edges`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let _ = args.json;
-    anyhow::bail!("gbuf edges is not available yet")
+    let cfg = args.thresholds.config()?;
+    let detectors = args.detector.detectors();
+    if args.mask.is_some() && detectors.len() > 1 {
+        anyhow::bail!("--mask draws one detector's mask; pick one with --detector instead of `all`");
+    }
+    let loaded = args.input.load()?;
+    let gb = &loaded.gbuffer;
+    let truth = truth::object_truth(gb);
+    let mut rows = Vec::new();
+    let mut last_mask = None;
+    for &d in &detectors {
+        let t0 = Instant::now();
+        let result = detect::detect(gb, d, &cfg);
+        let ms = t0.elapsed().as_secs_f64() * 1e3;
+        match result {
+            Ok(mask) => {
+                rows.push(row(d, &mask, truth.as_deref(), ms));
+                last_mask = Some(mask);
+            }
+            // A single detector that cannot run is an error; in `all` mode it is a skipped row.
+            Err(e) if detectors.len() == 1 => {
+                return Err(e).with_context(|| format!("{}: detector {d}", args.input.file.display()))
+            }
+            Err(e) => rows.push(Row {
+                detector: d,
+                skipped: Some(e.to_string()),
+                edge_fraction: 0.0,
+                shading_fraction: 0.0,
+                stats: None,
+                ms,
+            }),
+        }
+    }
+    if let (Some(path), Some(mask)) = (&args.mask, &last_mask) {
+        detect::picture::write_png(path, gb, mask, truth.as_deref())
+            .with_context(|| format!("writing the mask picture {}", path.display()))?;
+    }
+    let out = Output {
+        file: args.input.file.clone(),
+        width: gb.width,
+        height: gb.height,
+        samples: gb.samples,
+        truth: truth.as_ref().map(|_| "object"),
+        true_edge_fraction: truth.as_deref().map(|t| fraction(t.iter().filter(|&&e| e).count(), t.len())),
+        thresholds: cfg,
+        results: rows,
+    };
+    if args.json {
+        print_json(&out)
+    } else {
+        print_table(&out, gb)
+    }
+}
+
+fn fraction(n: usize, d: usize) -> f64 {
+    if d == 0 {
+        0.0
+    } else {
+        n as f64 / d as f64
+    }
+}
+
+fn row(detector: Detector, mask: &EdgeMask, truth: Option<&[bool]>, ms: f64) -> Row {
+    let stats = truth.map(|t| {
+        let s: EdgeStats = evaluate_against(mask, t);
+        Scores { precision: s.precision, recall: s.recall, tp: s.tp, fp: s.fp, fn_: s.fn_ }
+    });
+    Row {
+        detector,
+        skipped: None,
+        edge_fraction: mask.edge_fraction(),
+        shading_fraction: mask.shading_fraction(),
+        stats,
+        ms,
+    }
+}
+
+fn print_table(out: &Output, gb: &GBuffer) -> anyhow::Result<()> {
+    let mut w = std::io::stdout().lock();
+    let truth = match out.true_edge_fraction {
+        Some(f) => format!("truth: object IDs, {:.2} % true edge pixels", 100.0 * f),
+        None => "no object IDs: no ground truth".to_string(),
+    };
+    writeln!(w, "{}: {}×{}, {} samples/pixel; {truth}", out.file.display(), gb.width, gb.height, gb.samples)?;
+    writeln!(
+        w,
+        "{:<13} {:>7} {:>10} {:>9} {:>7} {:>9} {:>9} {:>9} {:>8}",
+        "detector", "edge %", "shading %", "precision", "recall", "tp", "fp", "fn", "ms"
+    )?;
+    for r in &out.results {
+        if let Some(why) = &r.skipped {
+            writeln!(w, "{:<13} skipped: {why}", r.detector.name())?;
+            continue;
+        }
+        let scores = match &r.stats {
+            Some(s) => {
+                format!("{:>9.4} {:>7.4} {:>9} {:>9} {:>9}", s.precision, s.recall, s.tp, s.fp, s.fn_)
+            }
+            None => format!("{:>9} {:>7} {:>9} {:>9} {:>9}", "-", "-", "-", "-", "-"),
+        };
+        writeln!(
+            w,
+            "{:<13} {:>7.3} {:>10.3} {scores} {:>8.2}",
+            r.detector.name(),
+            100.0 * r.edge_fraction,
+            100.0 * r.shading_fraction,
+            r.ms
+        )?;
+    }
+    Ok(())
 }

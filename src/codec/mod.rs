@@ -2,9 +2,36 @@
 //! bits of a `u64`) and back. Layouts place those codes into render-target words.
 //!
 //! Every codec documents its source, its error bound, its domain, and what it does with zero, NaN and infinite
-//! input. No codec ever returns NaN.
+//! input. No codec ever returns NaN. Decoders ignore the bits of a code above `bits()`.
+//!
+//! Codecs are found by name through the registry: [`normal_codec`] (`oct-16`, `oct-precise-24`,
+//! `spheremap-cry-16`, `lambert-20`, `xyz-snorm-30`, …; see [`NormalScheme`]), [`scalar_codec`] (`unorm-8`,
+//! `f16`, `log2-unorm-8`, …), [`color_codec`] (`unorm8`, `srgb8`, `r11g11b10f`, `rgb9e5`, `f16`, …) and
+//! [`depth_codec`] (`f32`, `unorm24`, `unorm24-reversed`, `f32-reversed`, …). The `try_*` variants return an
+//! error that lists the valid names.
+//!
+//! ```
+//! let oct = gbuf::codec::normal_codec("oct-precise-16").unwrap();
+//! let n = glam::Vec3::new(0.48, -0.6, 0.64).normalize();
+//! let back = oct.decode(oct.encode(n));
+//! assert!(gbuf::codec::angle_deg(n, back) <= oct.max_error_deg());
+//! ```
 
+use crate::error::{Error, Result};
 use glam::Vec3;
+
+pub mod color;
+pub mod depth;
+pub mod eval;
+pub mod normal;
+pub mod scalar;
+#[cfg(test)]
+pub mod strategies;
+
+pub use color::color_codec;
+pub use depth::depth_codec;
+pub use normal::{angle_deg, normal_codec, NormalScheme};
+pub use scalar::scalar_codec;
 
 /// A unit-normal encoding.
 pub trait NormalCodec: Send + Sync {
@@ -16,6 +43,37 @@ pub trait NormalCodec: Send + Sync {
     fn encode(&self, n: Vec3) -> u64;
     /// Decodes a code; always a finite unit vector.
     fn decode(&self, code: u64) -> Vec3;
+    /// Documented upper bound, in degrees, on the angle between a unit input inside [`Self::in_domain`] and its
+    /// decoded code. Tests hold every codec to it.
+    fn max_error_deg(&self) -> f32 {
+        180.0
+    }
+    /// Is this unit vector inside the region where [`Self::max_error_deg`] holds? (Hemisphere-only and clamped
+    /// schemes say no for part of the sphere; the rest of the sphere still encodes to a defined, finite result.)
+    fn in_domain(&self, n: Vec3) -> bool {
+        let _ = n;
+        true
+    }
+    /// Does `decode(encode(decode(c))) == decode(c)` hold exactly for every code? False for schemes whose decoder
+    /// renormalises a quantized vector (xyz), where re-encoding may move to a neighbouring code within the bound.
+    fn is_idempotent(&self) -> bool {
+        true
+    }
+    /// Encodes a slice (`out.len()` must equal `input.len()`); statically dispatched inside, so one virtual
+    /// call per slice rather than per normal.
+    fn encode_slice(&self, input: &[Vec3], out: &mut [u64]) {
+        debug_assert_eq!(input.len(), out.len());
+        for (o, &n) in out.iter_mut().zip(input) {
+            *o = self.encode(n);
+        }
+    }
+    /// Decodes a slice (`out.len()` must equal `codes.len()`).
+    fn decode_slice(&self, codes: &[u64], out: &mut [Vec3]) {
+        debug_assert_eq!(codes.len(), out.len());
+        for (o, &c) in out.iter_mut().zip(codes) {
+            *o = self.decode(c);
+        }
+    }
 }
 
 /// A scalar encoding (specular, roughness, metallic, AO, specular power).
@@ -28,6 +86,15 @@ pub trait ScalarCodec: Send + Sync {
     fn encode(&self, v: f32) -> u64;
     /// Decodes a code; always finite.
     fn decode(&self, code: u64) -> f32;
+    /// The closed interval of values this codec represents; inputs outside are clamped into it.
+    fn domain(&self) -> (f32, f32) {
+        (f32::MIN, f32::MAX)
+    }
+    /// Documented bound on `|decode(encode(v)) − v|` for a finite `v` inside [`Self::domain`].
+    fn error_bound(&self, v: f32) -> f32 {
+        let _ = v;
+        f32::INFINITY
+    }
 }
 
 /// An RGB colour encoding.
@@ -40,6 +107,25 @@ pub trait ColorCodec: Send + Sync {
     fn encode(&self, c: Vec3) -> u64;
     /// Decodes a code to linear RGB; always finite.
     fn decode(&self, code: u64) -> Vec3;
+    /// The closed interval every channel is clamped into before encoding.
+    fn domain(&self) -> (f32, f32) {
+        (f32::MIN, f32::MAX)
+    }
+    /// Documented per-channel bound on `|decode_wide(encode_wide(c)) − c|` for a finite `c` inside
+    /// [`Self::domain`].
+    fn error_bound(&self, c: Vec3) -> Vec3 {
+        let _ = c;
+        Vec3::INFINITY
+    }
+    /// Encodes into a code of up to 128 bits. Codecs wider than 64 bits (`f32`, 96 bits) must be used through
+    /// this pair; for the others it equals [`Self::encode`].
+    fn encode_wide(&self, c: Vec3) -> u128 {
+        u128::from(self.encode(c))
+    }
+    /// Decodes a code of up to 128 bits (see [`Self::encode_wide`]).
+    fn decode_wide(&self, code: u128) -> Vec3 {
+        self.decode(code as u64)
+    }
 }
 
 /// A view-depth encoding. Codecs that depend on the projection are built with the near/far planes.
@@ -52,4 +138,95 @@ pub trait DepthCodec: Send + Sync {
     fn encode(&self, depth: f32) -> u64;
     /// Decodes a code to view depth; always finite and positive.
     fn decode(&self, code: u64) -> f32;
+    /// The closed interval of depths this codec represents; inputs outside are clamped into it.
+    fn domain(&self) -> (f32, f32) {
+        (f32::MIN_POSITIVE, f32::MAX)
+    }
+    /// Documented bound on `|decode(encode(d)) − d|` for a depth `d` inside [`Self::domain`].
+    fn error_bound(&self, depth: f32) -> f32 {
+        let _ = depth;
+        f32::INFINITY
+    }
+}
+
+/// Like [`normal_codec`], but an unknown name is an error listing the valid ones.
+pub fn try_normal_codec(name: &str) -> Result<Box<dyn NormalCodec>> {
+    normal_codec(name).ok_or_else(|| {
+        let valid: Vec<String> =
+            NormalScheme::ALL.iter().map(|s| format!("{}-{{{}}}", s.name(), join(&s.valid_bits()))).collect();
+        Error::Argument(format!("unknown normal codec {name:?}; valid: {}", valid.join(", ")))
+    })
+}
+
+/// Like [`scalar_codec`], but an unknown name is an error listing the valid ones.
+pub fn try_scalar_codec(name: &str) -> Result<Box<dyn ScalarCodec>> {
+    scalar_codec(name).ok_or_else(|| {
+        Error::Argument(format!("unknown scalar codec {name:?}; valid: {}", scalar::VALID_NAMES.join(", ")))
+    })
+}
+
+/// Like [`color_codec`], but an unknown name is an error listing the valid ones.
+pub fn try_color_codec(name: &str) -> Result<Box<dyn ColorCodec>> {
+    color_codec(name).ok_or_else(|| {
+        Error::Argument(format!("unknown colour codec {name:?}; valid: {}", color::VALID_NAMES.join(", ")))
+    })
+}
+
+/// Like [`depth_codec`], but an unknown name or invalid planes give an error saying which.
+pub fn try_depth_codec(name: &str, znear: f32, zfar: f32) -> Result<Box<dyn DepthCodec>> {
+    if !(znear.is_finite() && zfar.is_finite() && znear > 0.0 && zfar > znear) {
+        return Err(Error::Argument(format!(
+            "depth codec {name:?}: need finite planes with 0 < znear < zfar, got znear={znear}, zfar={zfar}"
+        )));
+    }
+    depth_codec(name, znear, zfar).ok_or_else(|| {
+        Error::Argument(format!("unknown depth codec {name:?}; valid: {}", depth::VALID_NAMES.join(", ")))
+    })
+}
+
+fn join(bits: &[u32]) -> String {
+    bits.iter().map(u32::to_string).collect::<Vec<_>>().join(",")
+}
+
+/// Splits `scheme-N` into (`scheme`, N) at the last `-`.
+pub(crate) fn split_bits(name: &str) -> Option<(&str, u32)> {
+    let (prefix, bits) = name.rsplit_once('-')?;
+    if bits.is_empty() || !bits.bytes().all(|b| b.is_ascii_digit()) || bits.len() > 3 {
+        return None;
+    }
+    Some((prefix, bits.parse().ok()?))
+}
+
+/// All-ones mask of the low `bits` bits.
+#[must_use]
+pub(crate) const fn mask(bits: u32) -> u64 {
+    if bits >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << bits) - 1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unknown_names_are_errors_listing_valid_names() {
+        let e = try_normal_codec("oct-17").err().unwrap().to_string();
+        assert!(e.contains("oct-{") && e.contains("oct-precise-{"), "{e}");
+        assert!(try_scalar_codec("unorm-99").is_err());
+        assert!(try_color_codec("srgb9").is_err());
+        assert!(try_depth_codec("unorm24", 1.0, 0.5).err().unwrap().to_string().contains("znear < zfar"));
+        assert!(try_depth_codec("unorm23", 0.1, 100.0).err().unwrap().to_string().contains("unorm24-reversed"));
+    }
+
+    #[test]
+    fn split_bits_parses_the_last_number() {
+        assert_eq!(split_bits("xyz-f16-48"), Some(("xyz-f16", 48)));
+        assert_eq!(split_bits("oct-16"), Some(("oct", 16)));
+        assert_eq!(split_bits("oct"), None);
+        assert_eq!(split_bits("oct-"), None);
+        assert_eq!(split_bits("oct-+1"), None);
+    }
 }

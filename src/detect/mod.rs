@@ -1,4 +1,41 @@
-//! Edge detectors for MSAA deferred shading: which pixels need per-sample shading.
+//! Edge detectors for MSAA deferred shading: G-buffer → [`EdgeMask`] (which pixels need per-sample shading).
+//!
+//! A deferred renderer with MSAA shades most pixels once and only the pixels whose samples lie on different
+//! surfaces once per sample (Lauritzen 2010, "Deferred Rendering for Current and Future Rendering Pipelines").
+//! The detectors here decide which pixels those are, from what a G-buffer holds:
+//!
+//! | detector       | a pixel is per-sample when …                                                         |
+//! |----------------|---------------------------------------------------------------------------------------|
+//! | `lauritzen`    | some `|z_i − z_0| > |∂z/∂x| + |∂z/∂y|` or `n_i · n_0 < 0.99` ([`lauritzen`])          |
+//! | `depth`        | some `|z_i − z_0| > absolute + relative · z_0` ([`geometric`])                        |
+//! | `normal`       | some normal is more than the angle threshold away from `n_0` ([`geometric`])          |
+//! | `id`           | some material / object ID differs from sample 0's ([`id`])                            |
+//! | `combined`     | `lauritzen` or `id` (IDs when present)                                                |
+//! | `forward-msaa` | baseline: shades once per distinct primitive covering the pixel ([`baselines`])       |
+//! | `ssaa`         | baseline: every sample                                                               |
+//! | `none`         | baseline: once per covered pixel                                                     |
+//!
+//! Conventions shared by every detector: a pixel with no covered sample has `shade_count` 0; a pixel mixing
+//! background and surface samples is an edge for the geometric detectors (its background samples must not take
+//! the surface's shading); any NaN or infinity among a covered pixel's samples makes it an edge (conservative).
+//! Ground truth from IDs lives in [`truth`]; precision and recall in [`crate::measure::edges`].
+//!
+//! Work is parallel over rows with rayon.
+
+pub mod baselines;
+pub mod geometric;
+pub mod id;
+pub mod lauritzen;
+pub mod picture;
+pub mod thresholds;
+pub mod truth;
+
+pub use thresholds::{DetectorConfig, IdSource};
+
+use crate::error::{Error, Result};
+use crate::gbuffer::{Attribute, GBuffer};
+use rayon::prelude::*;
+use std::borrow::Cow;
 
 /// The result of an edge detector: per pixel, how many shading evaluations it asks for.
 ///
@@ -18,11 +55,35 @@ pub struct EdgeMask {
 }
 
 impl EdgeMask {
+    /// A mask of the given size with every pixel at `count` evaluations.
+    #[must_use]
+    pub fn filled(width: u32, height: u32, samples: u32, count: u8) -> Self {
+        EdgeMask { width, height, samples, shade_count: vec![count; width as usize * height as usize] }
+    }
+
     /// Does pixel `p` (row-major index) need per-sample shading?
     #[inline]
     #[must_use]
     pub fn is_edge(&self, p: usize) -> bool {
         self.shade_count[p] > 1
+    }
+
+    /// Number of pixels flagged as edges.
+    #[must_use]
+    pub fn edge_pixels(&self) -> usize {
+        self.shade_count.iter().filter(|&&c| c > 1).count()
+    }
+
+    /// Total shading evaluations asked for (the numerator of [`EdgeMask::shading_fraction`]).
+    #[must_use]
+    pub fn shaded_samples(&self) -> u64 {
+        self.shade_count.iter().map(|&c| u64::from(c)).sum()
+    }
+
+    /// Per-pixel edge flags, row-major.
+    #[must_use]
+    pub fn edges(&self) -> Vec<bool> {
+        self.shade_count.iter().map(|&c| c > 1).collect()
     }
 
     /// Fraction of pixels flagged as edges.
@@ -31,7 +92,7 @@ impl EdgeMask {
         if self.shade_count.is_empty() {
             return 0.0;
         }
-        self.shade_count.iter().filter(|&&c| c > 1).count() as f64 / self.shade_count.len() as f64
+        self.edge_pixels() as f64 / self.shade_count.len() as f64
     }
 
     /// Shaded samples / (pixels × samples).
@@ -41,6 +102,209 @@ impl EdgeMask {
         if total == 0.0 {
             return 0.0;
         }
-        self.shade_count.iter().map(|&c| f64::from(c)).sum::<f64>() / total
+        self.shaded_samples() as f64 / total
+    }
+}
+
+/// Every edge detector and baseline. `ALL` lists them in report order; `name` is the one CLI/JSON spelling.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Detector {
+    /// Lauritzen 2010: depth against the screen-space depth derivatives, normals against 0.99.
+    Lauritzen,
+    /// Relative (plus optional absolute) depth difference.
+    Depth,
+    /// Normal angle.
+    Normal,
+    /// Material / object ID differs.
+    Id,
+    /// `lauritzen` or `id`.
+    Combined,
+    /// Baseline: what hardware forward MSAA shades (one evaluation per distinct primitive in the pixel).
+    ForwardMsaa,
+    /// Baseline: every sample shaded.
+    Ssaa,
+    /// Baseline: every covered pixel shaded once.
+    None,
+}
+
+impl Detector {
+    /// Every detector, in report order.
+    pub const ALL: [Detector; 8] = [
+        Detector::Lauritzen,
+        Detector::Depth,
+        Detector::Normal,
+        Detector::Id,
+        Detector::Combined,
+        Detector::ForwardMsaa,
+        Detector::Ssaa,
+        Detector::None,
+    ];
+
+    /// The kebab-case name used by the CLI and JSON.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Detector::Lauritzen => "lauritzen",
+            Detector::Depth => "depth",
+            Detector::Normal => "normal",
+            Detector::Id => "id",
+            Detector::Combined => "combined",
+            Detector::ForwardMsaa => "forward-msaa",
+            Detector::Ssaa => "ssaa",
+            Detector::None => "none",
+        }
+    }
+
+    /// Parses a name written by [`Detector::name`].
+    #[must_use]
+    pub fn from_name(s: &str) -> Option<Detector> {
+        Detector::ALL.into_iter().find(|d| d.name() == s)
+    }
+
+    /// Is this one of the baselines (`forward-msaa`, `ssaa`, `none`) rather than a G-buffer edge detector?
+    #[must_use]
+    pub fn is_baseline(self) -> bool {
+        matches!(self, Detector::ForwardMsaa | Detector::Ssaa | Detector::None)
+    }
+}
+
+impl std::fmt::Display for Detector {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Runs `detector` on `gb` with thresholds `cfg`.
+///
+/// Errors when the thresholds are invalid, the G-buffer is inconsistent (plane lengths), or the detector needs an
+/// attribute the G-buffer lacks (`lauritzen`/`combined`: depth or position, and normals; `depth`: depth or
+/// position; `normal`: normals; `id`: material or object IDs as `cfg.ids` asks; `forward-msaa`: primitive IDs).
+pub fn detect(gb: &GBuffer, detector: Detector, cfg: &DetectorConfig) -> Result<EdgeMask> {
+    cfg.validate()?;
+    gb.validate()?;
+    match detector {
+        Detector::Lauritzen => lauritzen::detect(gb, cfg, false),
+        Detector::Combined => lauritzen::detect(gb, cfg, true),
+        Detector::Depth => geometric::detect_depth(gb, cfg),
+        Detector::Normal => geometric::detect_normal(gb, cfg),
+        Detector::Id => id::detect(gb, cfg),
+        Detector::ForwardMsaa => baselines::forward_msaa(gb),
+        Detector::Ssaa => Ok(baselines::ssaa(gb)),
+        Detector::None => Ok(baselines::none(gb)),
+    }
+}
+
+/// The error for a detector that needs an attribute the G-buffer lacks; lists what the G-buffer has.
+pub(crate) fn missing(gb: &GBuffer, detector: Detector, needs: &str) -> Error {
+    let have: Vec<&str> = gb.attributes().iter().map(|a| a.name()).collect();
+    let have = if have.is_empty() { "none".to_string() } else { have.join(", ") };
+    Error::Argument(format!("detector {detector} needs {needs}; the G-buffer has: {have}"))
+}
+
+/// The view-depth plane: `depth`, else `−position.z` (0 at background samples).
+pub(crate) fn depth_plane<'a>(gb: &'a GBuffer, detector: Detector) -> Result<Cow<'a, [f32]>> {
+    if let Some(d) = gb.depth.as_deref() {
+        return Ok(Cow::Borrowed(d));
+    }
+    if let Some(p) = gb.position.as_deref() {
+        return Ok(Cow::Owned(p.iter().zip(&gb.coverage).map(|(p, &c)| if c { -p.z } else { 0.0 }).collect()));
+    }
+    Err(missing(gb, detector, Attribute::Depth.name()))
+}
+
+/// How many of a pixel's samples are covered.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum PixelCoverage {
+    /// No surface at all.
+    Empty,
+    /// Some background, some surface.
+    Mixed,
+    /// Every sample on a surface.
+    Full,
+}
+
+/// Coverage of the pixel whose samples start at plane index `base`.
+#[inline]
+pub(crate) fn pixel_coverage(coverage: &[bool], base: usize, samples: usize) -> PixelCoverage {
+    let n = coverage[base..base + samples].iter().filter(|&&c| c).count();
+    match n {
+        0 => PixelCoverage::Empty,
+        n if n == samples => PixelCoverage::Full,
+        _ => PixelCoverage::Mixed,
+    }
+}
+
+/// Runs `count(x, y, base)` for every pixel, parallel over rows, and collects an [`EdgeMask`].
+pub(crate) fn per_pixel(gb: &GBuffer, count: impl Fn(u32, u32, usize) -> u8 + Sync) -> EdgeMask {
+    let mut mask = EdgeMask::filled(gb.width, gb.height, gb.samples, 0);
+    let (w, s) = (gb.width as usize, gb.samples as usize);
+    if w == 0 {
+        return mask;
+    }
+    mask.shade_count.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for (x, c) in row.iter_mut().enumerate() {
+            *c = count(x as u32, y as u32, (y * w + x) * s);
+        }
+    });
+    mask
+}
+
+/// The driver of the geometric detectors: empty pixels get 0, mixed pixels `samples`, fully covered pixels 1 when
+/// `same_surface(x, y, base)` holds and `samples` otherwise.
+pub(crate) fn geometric_mask(gb: &GBuffer, same_surface: impl Fn(u32, u32, usize) -> bool + Sync) -> EdgeMask {
+    let s = gb.samples as usize;
+    let per_sample = gb.samples.min(u32::from(u8::MAX)) as u8;
+    per_pixel(gb, |x, y, base| match pixel_coverage(&gb.coverage, base, s) {
+        PixelCoverage::Empty => 0,
+        PixelCoverage::Mixed => per_sample,
+        PixelCoverage::Full if s == 1 || same_surface(x, y, base) => 1,
+        PixelCoverage::Full => per_sample,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn detector_names_round_trip() {
+        for d in Detector::ALL {
+            assert_eq!(Detector::from_name(d.name()), Some(d));
+            assert_eq!(serde_json::to_string(&d).unwrap(), format!("\"{}\"", d.name()));
+        }
+        assert_eq!(Detector::from_name("forward_msaa"), None);
+        assert!(Detector::ForwardMsaa.is_baseline() && !Detector::Lauritzen.is_baseline());
+    }
+
+    #[test]
+    fn mask_fractions() {
+        let m = EdgeMask { width: 2, height: 2, samples: 4, shade_count: vec![0, 1, 4, 2] };
+        assert_eq!(m.edge_pixels(), 2);
+        assert_eq!(m.shaded_samples(), 7);
+        assert!((m.edge_fraction() - 0.5).abs() < 1e-12);
+        assert!((m.shading_fraction() - 7.0 / 16.0).abs() < 1e-12);
+        assert_eq!(m.edges(), vec![false, false, true, true]);
+        let empty = EdgeMask::filled(0, 0, 4, 0);
+        assert_eq!((empty.edge_fraction(), empty.shading_fraction()), (0.0, 0.0));
+    }
+
+    #[test]
+    fn missing_attribute_error_names_detector_and_contents() {
+        let gb = GBuffer::new(2, 2, 4).unwrap();
+        for d in [Detector::Lauritzen, Detector::Depth, Detector::Normal, Detector::Id, Detector::ForwardMsaa] {
+            let e = detect(&gb, d, &DetectorConfig::default()).unwrap_err().to_string();
+            assert!(e.contains(d.name()) && e.contains("has: none"), "{e}");
+        }
+        for d in [Detector::Ssaa, Detector::None] {
+            assert!(detect(&gb, d, &DetectorConfig::default()).is_ok());
+        }
+    }
+
+    #[test]
+    fn inconsistent_gbuffer_is_an_error_not_a_panic() {
+        let mut gb = GBuffer::new(2, 2, 4).unwrap();
+        gb.depth = Some(vec![1.0; 3]);
+        assert!(detect(&gb, Detector::Depth, &DetectorConfig::default()).is_err());
     }
 }

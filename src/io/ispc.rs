@@ -1,1 +1,508 @@
-//! Reader for the input files of the ISPC `examples/cpu/deferred` sample (`.bin`, little-endian).
+//! Reader (and writer) for the input files of the ISPC `examples/cpu/deferred` sample (`.bin`, little-endian), a
+//! port of Intel's 2010 tiled-deferred demo. One real G-buffer dump format that carries its own lights.
+//!
+//! Layout: a 152-byte header — `cameraProj` (4×4 f32, D3D left-handed, row-vector form: `[0][0]` x-scale,
+//! `[1][1]` y-scale, `[2][2] = far/(far−near)`, `[2][3] = 1`, `[3][2] = −near·far/(far−near)`), near and far (f32),
+//! width, height, numLights and the chunk size (i32), then 16 i32 byte offsets into the chunk that follows, for:
+//! zBuffer (f32 post-projection depth, 1 = sky), normal x and y (f16, spheremap-encoded), specular amount and power
+//! (f16), albedo r, g, b (unorm8 planes), and per light: view-space position x, y, z, attenuation begin, colour r,
+//! g, b, attenuation end (f32 arrays, 1024 slots). Pixel row 0 is at the top.
+//!
+//! Conversion to our view space (right-handed, looking along −Z): the file's view space is left-handed with +Z
+//! forward, so z is negated for positions, normals and light positions. View depth = `P[3][2] / (z − P[2][2])`.
+//!
+//! Every offset and length is checked against the file size before anything is read or allocated.
+
+use super::{AttributeSource, LoadOptions, Loaded, SourceFormat};
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::gbuffer::GBuffer;
+use crate::io::sidecar::Sidecar;
+use crate::light::{Light, LightKind};
+use glam::Vec3;
+use half::f16;
+use std::io::Read;
+use std::path::Path;
+
+/// Size of the file header in bytes.
+pub const HEADER_BYTES: usize = 152;
+/// Light slots the sample allocates (`MAX_LIGHTS` in its `deferred.h`); files hold this many even when fewer are used.
+pub const LIGHT_SLOTS: usize = 1024;
+/// Largest width or height we accept in a header (the sample's own inputs are 1920×1080 at most).
+pub const MAX_DIMENSION: i32 = 1 << 15;
+/// Bytes per pixel of the G-buffer we build (depth, position, normal, albedo, specular, power, coverage), used to
+/// check a declared size against the memory limit before allocating.
+const GBUFFER_BYTES_PER_PIXEL: u64 = 4 + 12 + 12 + 12 + 4 + 4 + 1;
+/// Alignment of the arrays our writer lays out in the chunk (the sample allocates 64-byte aligned memory).
+const WRITE_ALIGN: usize = 64;
+
+/// The 16 arrays of the chunk, in header order, with their element size and whether they are per pixel.
+const ARRAYS: [(&str, u64, bool); 16] = [
+    ("zBuffer", 4, true),
+    ("normalEncoded_x", 2, true),
+    ("normalEncoded_y", 2, true),
+    ("specularAmount", 2, true),
+    ("specularPower", 2, true),
+    ("albedo_x", 1, true),
+    ("albedo_y", 1, true),
+    ("albedo_z", 1, true),
+    ("lightPositionView_x", 4, false),
+    ("lightPositionView_y", 4, false),
+    ("lightPositionView_z", 4, false),
+    ("lightAttenuationBegin", 4, false),
+    ("lightColor_x", 4, false),
+    ("lightColor_y", 4, false),
+    ("lightColor_z", 4, false),
+    ("lightAttenuationEnd", 4, false),
+];
+
+/// The decoded header.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Header {
+    /// `cameraProj[row][col]`, D3D row-vector form.
+    pub proj: [[f32; 4]; 4],
+    /// Near plane.
+    pub near: f32,
+    /// Far plane.
+    pub far: f32,
+    /// Width in pixels.
+    pub width: i32,
+    /// Height in pixels.
+    pub height: i32,
+    /// Lights in use (≤ 1024).
+    pub num_lights: i32,
+    /// Bytes in the chunk after the header.
+    pub chunk_size: i32,
+    /// Byte offsets of the 16 arrays inside the chunk.
+    pub offsets: [i32; 16],
+}
+
+fn f32_at(b: &[u8], i: usize) -> f32 {
+    f32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]])
+}
+fn i32_at(b: &[u8], i: usize) -> i32 {
+    i32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]])
+}
+fn f16_at(b: &[u8], i: usize) -> f32 {
+    f16::from_bits(u16::from_le_bytes([b[i], b[i + 1]])).to_f32()
+}
+
+impl Header {
+    /// Parses the first 152 bytes (no validation). `None` when `b` is shorter than the header.
+    #[must_use]
+    pub fn parse(b: &[u8]) -> Option<Header> {
+        if b.len() < HEADER_BYTES {
+            return None;
+        }
+        let mut proj = [[0.0; 4]; 4];
+        for (r, row) in proj.iter_mut().enumerate() {
+            for (c, v) in row.iter_mut().enumerate() {
+                *v = f32_at(b, (r * 4 + c) * 4);
+            }
+        }
+        let mut offsets = [0; 16];
+        for (k, o) in offsets.iter_mut().enumerate() {
+            *o = i32_at(b, 88 + 4 * k);
+        }
+        Some(Header {
+            proj,
+            near: f32_at(b, 64),
+            far: f32_at(b, 68),
+            width: i32_at(b, 72),
+            height: i32_at(b, 76),
+            num_lights: i32_at(b, 80),
+            chunk_size: i32_at(b, 84),
+            offsets,
+        })
+    }
+
+    /// Encodes the header.
+    #[must_use]
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(HEADER_BYTES);
+        for row in &self.proj {
+            for v in row {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        for v in [self.near, self.far] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        for v in [self.width, self.height, self.num_lights, self.chunk_size].iter().chain(&self.offsets) {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        out
+    }
+
+    /// Checks everything that does not need the file length: sizes, light count, camera, projection.
+    /// Returns the problem as text.
+    fn check_fields(&self) -> std::result::Result<(), String> {
+        if !(1..=MAX_DIMENSION).contains(&self.width) || !(1..=MAX_DIMENSION).contains(&self.height) {
+            return Err(format!("width×height {}×{} outside 1..={MAX_DIMENSION}", self.width, self.height));
+        }
+        if !(0..=LIGHT_SLOTS as i32).contains(&self.num_lights) {
+            return Err(format!("numLights {} outside 0..={LIGHT_SLOTS}", self.num_lights));
+        }
+        if self.chunk_size < 0 {
+            return Err(format!("negative chunk size {}", self.chunk_size));
+        }
+        if !(self.near.is_finite() && self.far.is_finite() && self.near > 0.0 && self.far > self.near) {
+            return Err(format!("camera near/far {} / {} (need 0 < near < far)", self.near, self.far));
+        }
+        let p = &self.proj;
+        if p.iter().flatten().any(|v| !v.is_finite()) {
+            return Err("cameraProj has a non-finite entry".into());
+        }
+        if p[0][0] <= 0.0 || p[1][1] <= 0.0 || p[3][2] == 0.0 || p[2][3] != 1.0 {
+            return Err(format!(
+                "cameraProj is not a D3D perspective projection ([0][0] = {}, [1][1] = {}, [2][3] = {}, [3][2] = {})",
+                p[0][0], p[1][1], p[2][3], p[3][2]
+            ));
+        }
+        Ok(())
+    }
+
+    /// Checks every array's byte range against the chunk size.
+    fn check_arrays(&self) -> std::result::Result<(), String> {
+        let pixels = self.width as u64 * self.height as u64;
+        for (k, &(name, elem, per_pixel)) in ARRAYS.iter().enumerate() {
+            let off = self.offsets[k];
+            let count = if per_pixel { pixels } else { self.num_lights as u64 };
+            let fits = u64::try_from(off).is_ok_and(|o| o + count * elem <= self.chunk_size as u64);
+            if !fits {
+                return Err(format!(
+                    "array {name} at offset {off} with {count} × {elem} bytes ends past the {}-byte chunk",
+                    self.chunk_size
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The camera the projection describes (view space = the file's, converted to right-handed: identity
+    /// world→view, since the file has no world space).
+    #[must_use]
+    pub fn camera(&self) -> Camera {
+        let p = &self.proj;
+        Camera::identity(2.0 * (1.0 / p[1][1]).atan(), p[1][1] / p[0][0], self.near, self.far)
+    }
+}
+
+/// Is this (by its first bytes and length) an ISPC `deferred` input file? Checks the header's plausibility: sizes,
+/// light count, camera and that every array fits in the declared chunk. A file shorter than its declared chunk
+/// still matches, so that the reader can say it is truncated.
+#[must_use]
+pub fn matches_file(head: &[u8], file_len: u64) -> bool {
+    let Some(h) = Header::parse(head) else { return false };
+    file_len >= HEADER_BYTES as u64 && h.check_fields().is_ok() && h.check_arrays().is_ok()
+}
+
+/// Reads an ISPC `deferred` input file into a single-sample G-buffer with its lights. Only the header and the
+/// declared chunk are read, after the chunk size has been checked against the file length and the memory limit.
+pub fn read(path: &Path, sidecar: Option<&Sidecar>, opts: &LoadOptions) -> Result<Loaded> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let file_len = file.metadata().map_err(|e| Error::io(path, e))?.len();
+    let mut head = Vec::with_capacity(HEADER_BYTES);
+    let mut reader = std::io::BufReader::new(file);
+    (&mut reader).take(HEADER_BYTES as u64).read_to_end(&mut head).map_err(|e| Error::io(path, e))?;
+    let h = check_header(&head, file_len, path, opts)?;
+    let mut bytes = head;
+    bytes.resize(HEADER_BYTES + h.chunk_size as usize, 0);
+    reader.read_exact(&mut bytes[HEADER_BYTES..]).map_err(|e| Error::io(path, e))?;
+    read_bytes(&bytes, path, sidecar, opts)
+}
+
+/// Decodes an ISPC `deferred` input file held in memory (`path` only names it in errors). Same checks as
+/// [`read`]; bytes past the declared chunk are ignored.
+pub fn read_bytes(bytes: &[u8], path: &Path, sidecar: Option<&Sidecar>, opts: &LoadOptions) -> Result<Loaded> {
+    let h = check_header(bytes, bytes.len() as u64, path, opts)?;
+    let chunk = &bytes[HEADER_BYTES..HEADER_BYTES + h.chunk_size as usize];
+    let mut loaded = decode(&h, chunk, path)?;
+    if let Some(sc) = sidecar.filter(|s| !s.lights.is_empty()) {
+        // Lights the user supplied beside the file win over the file's own; they are given in the file's view
+        // space unless the sidecar says otherwise (its camera, if any, is the file's world→view).
+        loaded.lights = Some(sc.view_lights(loaded.gbuffer.camera.as_ref(), path)?);
+    }
+    Ok(loaded)
+}
+
+/// Parses and validates the header against the file length and the memory limit.
+fn check_header(head: &[u8], file_len: u64, path: &Path, opts: &LoadOptions) -> Result<Header> {
+    let invalid = |what: String| Error::invalid(path, format!("ISPC deferred .bin: {what}"));
+    let Some(h) = Header::parse(head) else {
+        return Err(invalid(format!("file is {file_len} bytes, shorter than the {HEADER_BYTES}-byte header")));
+    };
+    h.check_fields().map_err(|w| invalid(format!("header: {w}")))?;
+    let need = h.width as u64 * h.height as u64 * GBUFFER_BYTES_PER_PIXEL;
+    if need > opts.limits.max_bytes || h.chunk_size as u64 > opts.limits.max_bytes {
+        return Err(Error::TooLarge {
+            path: path.into(),
+            bytes: need.max(h.chunk_size as u64),
+            limit: opts.limits.max_bytes,
+        });
+    }
+    if HEADER_BYTES as u64 + h.chunk_size as u64 > file_len {
+        return Err(invalid(format!(
+            "truncated: the header declares a {}-byte chunk but only {} bytes follow it",
+            h.chunk_size,
+            file_len - HEADER_BYTES as u64
+        )));
+    }
+    h.check_arrays().map_err(invalid)?;
+    Ok(h)
+}
+
+fn decode(h: &Header, chunk: &[u8], path: &Path) -> Result<Loaded> {
+    let (w, ht) = (h.width as u32, h.height as u32);
+    let camera = h.camera();
+    let mut gb = GBuffer::new(w, ht, 1)?;
+    gb.camera = Some(camera);
+    let n = gb.len();
+    let off = |k: usize| h.offsets[k] as usize;
+    let p = &h.proj;
+    let (mut depth, mut position, mut normal) = (vec![0.0; n], vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+    let (mut albedo, mut spec, mut power) = (vec![Vec3::ZERO; n], vec![0.0; n], vec![0.0; n]);
+    let mut out_of_range = 0u64;
+    for y in 0..ht as usize {
+        let sy = -(((y as f32 + 0.5) * 2.0 / ht as f32) - 1.0);
+        for x in 0..w as usize {
+            let i = y * w as usize + x;
+            let z = f32_at(chunk, off(0) + 4 * i);
+            // z = 1 is the cleared depth buffer (sky); anything outside [0, 1) has no surface in front of the camera.
+            if !(0.0..1.0).contains(&z) {
+                if z != 1.0 {
+                    out_of_range += 1;
+                }
+                continue;
+            }
+            let view_z = p[3][2] / (z - p[2][2]);
+            if !(view_z.is_finite() && view_z > 0.0) {
+                out_of_range += 1;
+                continue;
+            }
+            gb.coverage[i] = true;
+            depth[i] = view_z;
+            let sx = (x as f32 + 0.5) * 2.0 / w as f32 - 1.0;
+            position[i] = Vec3::new(sx * view_z / p[0][0], sy * view_z / p[1][1], -view_z);
+            let (ex, ey) = (f16_at(chunk, off(1) + 2 * i), f16_at(chunk, off(2) + 2 * i));
+            normal[i] = decode_spheremap(ex, ey);
+            spec[i] = f16_at(chunk, off(3) + 2 * i);
+            power[i] = f16_at(chunk, off(4) + 2 * i);
+            albedo[i] =
+                Vec3::new(f32::from(chunk[off(5) + i]), f32::from(chunk[off(6) + i]), f32::from(chunk[off(7) + i]))
+                    / 255.0;
+        }
+    }
+    gb.depth = Some(depth);
+    gb.position = Some(position);
+    gb.normal = Some(normal);
+    gb.albedo = Some(albedo);
+    gb.specular = Some(spec);
+    gb.specular_power = Some(power);
+    gb.validate()?;
+
+    let mut lights = Vec::with_capacity(h.num_lights as usize);
+    for l in 0..h.num_lights as usize {
+        let at = |k: usize| f32_at(chunk, off(k) + 4 * l);
+        let pos = Vec3::new(at(8), at(9), -at(10));
+        let (begin, end) = (at(11), at(15));
+        let color = Vec3::new(at(12), at(13), at(14));
+        if !(pos.is_finite() && color.is_finite() && begin.is_finite() && end.is_finite() && end > 0.0) {
+            return Err(Error::invalid(
+                path,
+                format!("ISPC deferred .bin: light {l} has a non-finite value or attenuation end {end} ≤ 0"),
+            ));
+        }
+        lights.push(Light { kind: LightKind::Point, position: pos, color, intensity: 1.0, range: end, begin });
+    }
+
+    let src = |attribute: &'static str, arrays: &[&str], file_type: &str, note: Option<String>| AttributeSource {
+        attribute,
+        channels: arrays.iter().map(|s| (*s).to_string()).collect(),
+        file_type: file_type.into(),
+        note,
+    };
+    let mut depth_note = "view z = P[3][2] / (z − P[2][2]); z = 1 is background".to_string();
+    if out_of_range > 0 {
+        depth_note.push_str(&format!("; {out_of_range} pixels with z outside [0, 1) treated as background"));
+    }
+    let sources = vec![
+        src("depth", &["zBuffer"], "float", Some(depth_note)),
+        src(
+            "position",
+            &[],
+            "float",
+            Some("derived from zBuffer and cameraProj; z negated (left→right-handed)".into()),
+        ),
+        src(
+            "normal",
+            &["normalEncoded_x", "normalEncoded_y"],
+            "half",
+            Some("spheremap-decoded, renormalised, z negated (left→right-handed)".into()),
+        ),
+        src("albedo", &["albedo_x", "albedo_y", "albedo_z"], "unorm8", None),
+        src("specular", &["specularAmount"], "half", None),
+        src("specular_power", &["specularPower"], "half", None),
+    ];
+    Ok(Loaded {
+        gbuffer: gb,
+        format: SourceFormat::IspcBin,
+        sources,
+        lights: Some(lights),
+        camera_source: "file".into(),
+        compression: None,
+        sanitized: Vec::new(),
+    })
+}
+
+/// Decodes the sample's spheremap normal (`f = (x−x²)+(y−y²)`, `m = √(4f−1)`, `n = (m(4x−2), m(4y−2), 3−8f)`, in
+/// the file's left-handed view space) and returns it in ours (z negated), renormalised. Encodings outside the disc
+/// (4f − 1 < 0) clamp to the rim.
+#[must_use]
+pub fn decode_spheremap(x: f32, y: f32) -> Vec3 {
+    let f = (x - x * x) + (y - y * y);
+    let m = (4.0 * f - 1.0).max(0.0).sqrt();
+    let n = Vec3::new(m * (4.0 * x - 2.0), m * (4.0 * y - 2.0), -(3.0 - 8.0 * f));
+    n.normalize_or_zero()
+}
+
+/// Encodes a unit normal in our view space into the sample's spheremap pair (inverse of [`decode_spheremap`]).
+/// The one direction it cannot represent, facing straight away from the camera (z = −1), maps to the rim.
+#[must_use]
+pub fn encode_spheremap(n: Vec3) -> (f32, f32) {
+    let d = (8.0 + 8.0 * n.z).max(1e-12).sqrt();
+    (n.x / d + 0.5, n.y / d + 0.5)
+}
+
+fn align(v: usize) -> usize {
+    v.div_ceil(WRITE_ALIGN) * WRITE_ALIGN
+}
+
+/// Writes `gb` (1 sample per pixel, with a camera, depth and normal; absent albedo/specular default to 0 and the
+/// specular power to 1) and up to 1024 point lights (view space) as an ISPC `deferred` input file, atomically.
+/// The camera's world→view transform is ignored: the file is in view space.
+pub fn write(path: &Path, gb: &GBuffer, lights: &[Light]) -> Result<()> {
+    let arg = |what: &str| Error::Argument(format!("{}: cannot write ISPC .bin: {what}", path.display()));
+    gb.validate()?;
+    if gb.samples != 1 {
+        return Err(arg(&format!("{} samples per pixel (the format has 1)", gb.samples)));
+    }
+    let cam = gb.camera.as_ref().ok_or_else(|| arg("no camera"))?;
+    let depth = gb.depth.as_ref().ok_or_else(|| arg("no depth"))?;
+    let normal = gb.normal.as_ref().ok_or_else(|| arg("no normal"))?;
+    if lights.len() > LIGHT_SLOTS {
+        return Err(arg(&format!("{} lights (at most {LIGHT_SLOTS})", lights.len())));
+    }
+    if let Some(l) = lights.iter().find(|l| !matches!(l.kind, LightKind::Point) || !l.range.is_finite()) {
+        return Err(arg(&format!("only point lights with a finite range are representable (found {:?})", l.kind)));
+    }
+    if gb.width as i32 > MAX_DIMENSION || gb.height as i32 > MAX_DIMENSION {
+        return Err(arg("image too large"));
+    }
+    let (n_near, f_far) = (cam.znear, cam.zfar);
+    let t = cam.tan_half_fov();
+    let mut proj = [[0.0f32; 4]; 4];
+    proj[0][0] = 1.0 / (t * cam.aspect);
+    proj[1][1] = 1.0 / t;
+    proj[2][2] = f_far / (f_far - n_near);
+    proj[2][3] = 1.0;
+    proj[3][2] = -n_near * f_far / (f_far - n_near);
+
+    let n = gb.len();
+    let mut offsets = [0i32; 16];
+    let mut size = 0usize;
+    for (k, &(_, elem, per_pixel)) in ARRAYS.iter().enumerate() {
+        offsets[k] = i32::try_from(size).map_err(|_| arg("chunk over 2 GiB"))?;
+        size = align(size + elem as usize * if per_pixel { n } else { LIGHT_SLOTS });
+    }
+    let chunk_size = i32::try_from(size).map_err(|_| arg("chunk over 2 GiB"))?;
+    let mut chunk = vec![0u8; size];
+    let put = |chunk: &mut Vec<u8>, at: usize, bytes: &[u8]| chunk[at..at + bytes.len()].copy_from_slice(bytes);
+    let o = |k: usize| offsets[k] as usize;
+    for i in 0..n {
+        let covered = gb.coverage[i];
+        let z = if covered { proj[2][2] + proj[3][2] / depth[i] } else { 1.0 };
+        put(&mut chunk, o(0) + 4 * i, &z.to_le_bytes());
+        let (ex, ey) = if covered { encode_spheremap(normal[i]) } else { (0.5, 0.5) };
+        let spec = gb.specular.as_ref().map_or(0.0, |v| v[i]);
+        let power = gb.specular_power.as_ref().map_or(1.0, |v| v[i]);
+        for (k, v) in [(1, ex), (2, ey), (3, spec), (4, power)] {
+            put(&mut chunk, o(k) + 2 * i, &f16::from_f32(if covered { v } else { 0.0 }).to_bits().to_le_bytes());
+        }
+        let a = gb.albedo.as_ref().map_or(Vec3::ZERO, |v| v[i]);
+        for (k, c) in [(5, a.x), (6, a.y), (7, a.z)] {
+            chunk[o(k) + i] = if covered { (c.clamp(0.0, 1.0) * 255.0).round() as u8 } else { 0 };
+        }
+    }
+    for (l, light) in lights.iter().enumerate() {
+        let vals = [light.position.x, light.position.y, -light.position.z, light.begin, light.color.x, light.color.y];
+        for (k, v) in vals.into_iter().enumerate() {
+            put(&mut chunk, o(8 + k) + 4 * l, &v.to_le_bytes());
+        }
+        put(&mut chunk, o(14) + 4 * l, &light.color.z.to_le_bytes());
+        put(&mut chunk, o(15) + 4 * l, &light.range.to_le_bytes());
+    }
+    let header = Header {
+        proj,
+        near: n_near,
+        far: f_far,
+        width: gb.width as i32,
+        height: gb.height as i32,
+        num_lights: lights.len() as i32,
+        chunk_size,
+        offsets,
+    };
+    let mut bytes = header.to_bytes();
+    bytes.extend_from_slice(&chunk);
+    crate::util::write_bytes_atomic(path, &bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// f16 carries 11 significant bits; a spheremap pair decoded from f16 is within this of the unit normal.
+    const F16_NORMAL_TOL: f32 = 4e-3;
+
+    #[test]
+    fn spheremap_round_trips_over_the_front_hemisphere() {
+        for i in 0..40 {
+            for j in 0..80 {
+                let theta = (i as f32 + 0.5) / 40.0 * 1.5; // up to ~86° from +Z
+                let phi = j as f32 / 80.0 * std::f32::consts::TAU;
+                let n = Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+                let (x, y) = encode_spheremap(n);
+                let back = decode_spheremap(x, y);
+                assert!((back - n).length() < 1e-5, "{n} -> ({x}, {y}) -> {back}");
+                let (hx, hy) = (f16::from_f32(x).to_f32(), f16::from_f32(y).to_f32());
+                assert!((decode_spheremap(hx, hy) - n).length() < F16_NORMAL_TOL);
+            }
+        }
+        // The centre of the map is the normal facing the camera.
+        assert_eq!(decode_spheremap(0.5, 0.5), Vec3::Z);
+    }
+
+    #[test]
+    fn header_round_trips_and_camera_matches_projection() {
+        let cam = Camera::identity(0.9, 1.5, 0.5, 80.0);
+        let mut gb = GBuffer::new(4, 3, 1).unwrap();
+        gb.camera = Some(cam);
+        gb.depth = Some(vec![0.0; 12]);
+        gb.normal = Some(vec![Vec3::Z; 12]);
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("h.bin");
+        write(&p, &gb, &[]).unwrap();
+        let bytes = std::fs::read(&p).unwrap();
+        let h = Header::parse(&bytes).unwrap();
+        assert_eq!(Header::parse(&h.to_bytes()).unwrap(), h);
+        assert!(matches_file(&bytes[..HEADER_BYTES], bytes.len() as u64));
+        let c = h.camera();
+        assert!((c.yfov - 0.9).abs() < 1e-6 && (c.aspect - 1.5).abs() < 1e-6);
+        assert_eq!((c.znear, c.zfar), (0.5, 80.0));
+        // Post-projection depth from the matrix agrees with the camera's D3D depth.
+        let d = 7.0;
+        let z = h.proj[2][2] + h.proj[3][2] / d;
+        assert!((z - cam.post_projection_depth(d)).abs() < 1e-6);
+        assert!(!matches_file(&bytes[..100], bytes.len() as u64));
+    }
+}

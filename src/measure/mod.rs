@@ -1,1 +1,5 @@
 //! Error metrics between G-buffers and between images, and timing.
+
+pub mod edges;
+pub mod image;
+pub mod timing;

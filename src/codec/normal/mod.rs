@@ -1,0 +1,508 @@
+//! Unit-normal codecs: every scheme a G-buffer designer weighs, at any sensible bit count.
+//!
+//! Most schemes are a *projection* of the sphere onto a square (octahedral, spheremap, Lambert, stereographic,
+//! spherical angles, xy-with-reconstructed-z) followed by a *quantizer* of the two plane coordinates
+//! ([`Quant`]: snorm or unorm with k bits each, or IEEE half floats). [`Planar`] glues the two; each projection
+//! lives in its own file with its source, its error bound and its domain. `xyz` stores all three components.
+//!
+//! Input handling shared by every scheme ([`sanitize`]): any finite non-zero vector is normalised first (scaling
+//! by its largest component, so 1e-30, denormals and 1e30 are fine); the zero vector (±0.0) and any vector with a
+//! NaN component encode as +Z (facing the camera); a vector with infinite components encodes as the direction of
+//! its infinite components (`(∞, 1, 0)` → +X). No decoder returns NaN: every code decodes to a finite unit vector.
+//!
+//! Codes: component 0 sits in the low `k` bits, component 1 in the next `k`, and so on.
+
+use super::{mask, split_bits, NormalCodec};
+use glam::{DVec3, Vec2, Vec3};
+
+mod hemi;
+mod lambert;
+mod oct;
+mod spheremap;
+mod spherical;
+mod stereo;
+mod xyz;
+
+pub use hemi::XyHemi;
+pub use lambert::Lambert;
+pub use oct::{Oct, OctPrecise};
+pub use spheremap::{ispc_spheremap_decode, ispc_spheremap_encode, SpheremapCry, SpheremapIspc};
+pub use spherical::Spherical;
+pub use stereo::Stereo;
+pub use xyz::{Xyz, XyzStorage};
+
+/// Slack added to every analytic error bound for f32 rounding in the projection, the normalisation and the
+/// measurement itself (a few ulp of a unit vector is ~3e-7 rad; this leaves a 10× margin).
+pub const FLOAT_SLACK_RAD: f32 = 4e-6;
+
+/// Every normal scheme, named without its bit count. `name()-bits` is the registry name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum NormalScheme {
+    /// xyz, three snorm components, renormalised on decode (Cigolle et al. 2014 "snorm").
+    XyzSnorm,
+    /// xyz, three unorm components storing `n·0.5+0.5` (the classic RGB normal map).
+    XyzUnorm,
+    /// xyz, three IEEE half floats (48 bits).
+    XyzF16,
+    /// xy snorm with z = +√(1−x²−y²): **hemisphere z ≥ 0 only**.
+    XyHemi,
+    /// xy in half floats with reconstructed z (32 bits): **hemisphere only**.
+    XyHemiF16,
+    /// Spherical angles (θ, φ), unorm.
+    Spherical,
+    /// CryEngine 3 spheremap transform (Mittring 2009), snorm.
+    SpheremapCry,
+    /// CryEngine 3 spheremap in half floats (32 bits).
+    SpheremapCryF16,
+    /// The same spheremap stored as unorm `g·0.5+0.5` and decoded as in Intel's ISPC deferred sample.
+    SpheremapIspc,
+    /// Lambert azimuthal equal-area projection centred on +Z, snorm.
+    Lambert,
+    /// Lambert azimuthal equal-area in half floats (32 bits).
+    LambertF16,
+    /// Stereographic projection from −Z, scaled by 1.7777 (Pranckevičius), snorm.
+    Stereo,
+    /// Stereographic projection in half floats, unscaled and unclamped (32 bits).
+    StereoF16,
+    /// Octahedral (Meyer et al. 2010, Cigolle et al. 2014), snorm, rounding to the nearest code.
+    Oct,
+    /// Precise octahedral: the best of the four neighbouring codes (Cigolle et al. 2014, "octP").
+    OctPrecise,
+    /// Octahedral in half floats (32 bits).
+    OctF16,
+}
+
+impl NormalScheme {
+    /// Every scheme.
+    pub const ALL: [NormalScheme; 16] = [
+        NormalScheme::XyzSnorm,
+        NormalScheme::XyzUnorm,
+        NormalScheme::XyzF16,
+        NormalScheme::XyHemi,
+        NormalScheme::XyHemiF16,
+        NormalScheme::Spherical,
+        NormalScheme::SpheremapCry,
+        NormalScheme::SpheremapCryF16,
+        NormalScheme::SpheremapIspc,
+        NormalScheme::Lambert,
+        NormalScheme::LambertF16,
+        NormalScheme::Stereo,
+        NormalScheme::StereoF16,
+        NormalScheme::Oct,
+        NormalScheme::OctPrecise,
+        NormalScheme::OctF16,
+    ];
+
+    /// The registry name without the bit count, e.g. `oct-precise`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            NormalScheme::XyzSnorm => "xyz-snorm",
+            NormalScheme::XyzUnorm => "xyz-unorm",
+            NormalScheme::XyzF16 => "xyz-f16",
+            NormalScheme::XyHemi => "xy-hemi",
+            NormalScheme::XyHemiF16 => "xy-hemi-f16",
+            NormalScheme::Spherical => "spherical",
+            NormalScheme::SpheremapCry => "spheremap-cry",
+            NormalScheme::SpheremapCryF16 => "spheremap-cry-f16",
+            NormalScheme::SpheremapIspc => "spheremap-ispc",
+            NormalScheme::Lambert => "lambert",
+            NormalScheme::LambertF16 => "lambert-f16",
+            NormalScheme::Stereo => "stereo",
+            NormalScheme::StereoF16 => "stereo-f16",
+            NormalScheme::Oct => "oct",
+            NormalScheme::OctPrecise => "oct-precise",
+            NormalScheme::OctF16 => "oct-f16",
+        }
+    }
+
+    /// The scheme with this registry prefix.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<NormalScheme> {
+        NormalScheme::ALL.into_iter().find(|s| s.name() == name)
+    }
+
+    /// Stored components (2 or 3).
+    #[must_use]
+    pub fn components(self) -> u32 {
+        match self {
+            NormalScheme::XyzSnorm | NormalScheme::XyzUnorm | NormalScheme::XyzF16 => 3,
+            _ => 2,
+        }
+    }
+
+    /// Half-float storage (a single valid bit count)?
+    #[must_use]
+    pub fn is_f16(self) -> bool {
+        matches!(
+            self,
+            NormalScheme::XyzF16
+                | NormalScheme::XyHemiF16
+                | NormalScheme::SpheremapCryF16
+                | NormalScheme::LambertF16
+                | NormalScheme::StereoF16
+                | NormalScheme::OctF16
+        )
+    }
+
+    /// Only meaningful on the hemisphere z ≥ 0?
+    #[must_use]
+    pub fn hemisphere_only(self) -> bool {
+        matches!(self, NormalScheme::XyHemi | NormalScheme::XyHemiF16)
+    }
+
+    /// Every valid total bit count: `components × k` for k = 4..=16 bits per component, or the single f16 size.
+    #[must_use]
+    pub fn valid_bits(self) -> Vec<u32> {
+        if self.is_f16() {
+            return vec![16 * self.components()];
+        }
+        (MIN_COMPONENT_BITS..=MAX_COMPONENT_BITS).map(|k| k * self.components()).collect()
+    }
+
+    /// The bit counts a default sweep evaluates: 8, 10, 12 and 16 bits per component (or the f16 size).
+    #[must_use]
+    pub fn sweep_bits(self) -> Vec<u32> {
+        if self.is_f16() {
+            return self.valid_bits();
+        }
+        [8, 10, 12, 16].iter().map(|k| k * self.components()).collect()
+    }
+
+    /// The codec at `bits` total bits, if that count is valid for this scheme.
+    #[must_use]
+    pub fn codec(self, bits: u32) -> Option<Box<dyn NormalCodec>> {
+        if !self.valid_bits().contains(&bits) {
+            return None;
+        }
+        let k = bits / self.components();
+        let q = if self.is_f16() { Quant::F16 } else { Quant::Snorm(k) };
+        let qu = if self.is_f16() { Quant::F16 } else { Quant::Unorm(k) };
+        Some(match self {
+            NormalScheme::XyzSnorm => Box::new(Xyz::new(XyzStorage::Snorm(k))),
+            NormalScheme::XyzUnorm => Box::new(Xyz::new(XyzStorage::Unorm(k))),
+            NormalScheme::XyzF16 => Box::new(Xyz::new(XyzStorage::F16)),
+            NormalScheme::XyHemi | NormalScheme::XyHemiF16 => Box::new(Planar::new(XyHemi, q)),
+            NormalScheme::Spherical => Box::new(Planar::new(Spherical, qu)),
+            NormalScheme::SpheremapCry | NormalScheme::SpheremapCryF16 => Box::new(Planar::new(SpheremapCry, q)),
+            NormalScheme::SpheremapIspc => Box::new(Planar::new(SpheremapIspc, qu)),
+            NormalScheme::Lambert | NormalScheme::LambertF16 => Box::new(Planar::new(Lambert, q)),
+            NormalScheme::Stereo => Box::new(Planar::new(Stereo::SCALED, q)),
+            NormalScheme::StereoF16 => Box::new(Planar::new(Stereo::UNSCALED, q)),
+            NormalScheme::Oct | NormalScheme::OctF16 => Box::new(Planar::new(Oct, q)),
+            NormalScheme::OctPrecise => Box::new(OctPrecise::new(k)),
+        })
+    }
+}
+
+/// Fewest bits per component a scheme accepts.
+pub const MIN_COMPONENT_BITS: u32 = 4;
+/// Most bits per component: beyond 16 the f32 arithmetic of the projections, not the code, limits precision.
+pub const MAX_COMPONENT_BITS: u32 = 16;
+
+/// Looks a normal codec up by its registry name, `scheme-bits` (e.g. `oct-16`, `xyz-f16-48`); `None` when the
+/// scheme is unknown or the bit count is not one of [`NormalScheme::valid_bits`].
+#[must_use]
+pub fn normal_codec(name: &str) -> Option<Box<dyn NormalCodec>> {
+    let (prefix, bits) = split_bits(name)?;
+    NormalScheme::from_name(prefix)?.codec(bits)
+}
+
+/// Angle between two vectors in degrees, computed in f64 as atan2(|a×b|, a·b) (accurate for tiny angles, where
+/// acos of the dot product is not). Zero or non-finite input gives 180.
+#[must_use]
+pub fn angle_deg(a: Vec3, b: Vec3) -> f32 {
+    let (a, b) = (a.as_dvec3(), b.as_dvec3());
+    if !(a.is_finite() && b.is_finite()) || a == DVec3::ZERO || b == DVec3::ZERO {
+        return 180.0;
+    }
+    a.cross(b).length().atan2(a.dot(b)).to_degrees() as f32
+}
+
+/// Cleans an input normal (see the module doc): a finite unit vector for any input.
+#[must_use]
+pub fn sanitize(n: Vec3) -> Vec3 {
+    if n.is_nan() {
+        return Vec3::Z;
+    }
+    let n = if n.is_finite() {
+        n
+    } else {
+        // Only the infinite components carry direction.
+        Vec3::from_array(n.to_array().map(|c| if c.is_infinite() { c.signum() } else { 0.0 }))
+    };
+    let m = n.abs().max_element();
+    if m == 0.0 {
+        return Vec3::Z;
+    }
+    // Dividing by the largest magnitude first keeps the squared length away from overflow and underflow.
+    let v = n / m;
+    v / v.length()
+}
+
+/// Robust 2D normalisation; the zero vector gives +X (the documented choice where a direction is undefined).
+#[must_use]
+pub fn normalize2_or_x(v: Vec2) -> Vec2 {
+    let m = v.abs().max_element();
+    if m.is_nan() || m <= 0.0 || !m.is_finite() {
+        return Vec2::X;
+    }
+    let v = v / m;
+    v / v.length()
+}
+
+/// `+1` for `v ≥ 0` including −0.0, else `−1` (Cigolle et al.'s `signNotZero`).
+#[inline]
+#[must_use]
+pub fn sign_not_zero(v: f32) -> f32 {
+    if v >= 0.0 {
+        1.0
+    } else {
+        -1.0
+    }
+}
+
+/// Final step of every decoder: a finite unit vector, +Z if the arithmetic degenerated.
+#[inline]
+#[must_use]
+pub(crate) fn finish(v: Vec3) -> Vec3 {
+    let l2 = v.length_squared();
+    if l2 > 0.0 && l2.is_finite() {
+        v / l2.sqrt()
+    } else {
+        Vec3::Z
+    }
+}
+
+/// How the plane coordinates of a projection are stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Quant {
+    /// Signed normalized integer of k bits, D3D/Vulkan SNORM semantics: two's complement `s`, value
+    /// `max(s / (2^(k−1)−1), −1)`; 0 and ±1 are exact. For plane coordinates in [−1, 1].
+    Snorm(u32),
+    /// Unsigned normalized integer of k bits: value `u / (2^k − 1)`. For plane coordinates in [0, 1].
+    Unorm(u32),
+    /// IEEE 754 binary16 (the `half` crate), 16 bits per coordinate; magnitudes clamp to 65504.
+    F16,
+}
+
+impl Quant {
+    /// Bits per coordinate.
+    #[must_use]
+    pub fn bits(self) -> u32 {
+        match self {
+            Quant::Snorm(k) | Quant::Unorm(k) => k,
+            Quant::F16 => 16,
+        }
+    }
+
+    /// Largest error of one stored coordinate of magnitude ≤ `mag` (half a step; for f16 half an ulp).
+    #[must_use]
+    pub fn half_step(self, mag: f32) -> f32 {
+        match self {
+            Quant::Snorm(k) => 0.5 / ((1u32 << (k - 1)) - 1) as f32,
+            Quant::Unorm(k) => 0.5 / ((1u64 << k) - 1) as f32,
+            // Rounding to nearest: relative error ≤ 2^-11, plus half the smallest subnormal.
+            Quant::F16 => mag * 2f32.powi(-11) + 2f32.powi(-25),
+        }
+    }
+
+    /// Quantizes one coordinate (NaN → 0; out-of-range values clamp).
+    #[inline]
+    #[must_use]
+    pub fn encode(self, v: f32) -> u64 {
+        let v = if v.is_nan() { 0.0 } else { v };
+        match self {
+            Quant::Snorm(k) => {
+                let m = ((1u32 << (k - 1)) - 1) as f32;
+                let s = (v.clamp(-1.0, 1.0) * m).round() as i64;
+                (s as u64) & mask(k)
+            }
+            Quant::Unorm(k) => {
+                let m = ((1u64 << k) - 1) as f32;
+                (v.clamp(0.0, 1.0) * m).round() as u64
+            }
+            Quant::F16 => u64::from(half::f16::from_f32(v.clamp(-F16_MAX, F16_MAX)).to_bits()),
+        }
+    }
+
+    /// Dequantizes one coordinate (only the low `bits()` bits of `c` are read). Always finite.
+    #[inline]
+    #[must_use]
+    pub fn decode(self, c: u64) -> f32 {
+        match self {
+            Quant::Snorm(k) => {
+                let c = c & mask(k);
+                // Sign-extend k bits.
+                let s = ((c << (64 - k)) as i64) >> (64 - k);
+                let m = ((1u32 << (k - 1)) - 1) as f32;
+                (s as f32 / m).max(-1.0)
+            }
+            Quant::Unorm(k) => (c & mask(k)) as f32 / ((1u64 << k) - 1) as f32,
+            Quant::F16 => f16_to_finite((c & 0xffff) as u16),
+        }
+    }
+}
+
+/// Largest finite half float.
+pub const F16_MAX: f32 = 65504.0;
+
+/// Decodes half-float bits to a finite f32: NaN → 0, ±Inf → ±65504.
+#[inline]
+#[must_use]
+pub fn f16_to_finite(bits: u16) -> f32 {
+    let v = half::f16::from_bits(bits).to_f32();
+    if v.is_nan() {
+        0.0
+    } else {
+        v.clamp(-F16_MAX, F16_MAX)
+    }
+}
+
+/// A map from the unit sphere to a square of plane coordinates and back.
+pub trait Projection: Send + Sync + Copy + 'static {
+    /// Registry prefix for a quantizer (e.g. `oct` / `oct-f16`).
+    fn scheme_name(&self, q: Quant) -> &'static str;
+    /// Plane coordinates of a unit vector (already [`sanitize`]d).
+    fn encode_plane(&self, n: Vec3) -> Vec2;
+    /// Unit vector of any plane point (finite input; coordinates outside the square are clamped/handled).
+    fn decode_plane(&self, p: Vec2) -> Vec3;
+    /// Angular error bound in radians when each plane coordinate is off by at most `hx`, `hy`, for inputs in
+    /// [`Self::in_domain`]; `q` is passed for projections whose bound depends on the storage.
+    fn bound_rad(&self, hx: f32, hy: f32, q: Quant) -> f32;
+    /// Largest magnitude of a plane coordinate (sets the f16 rounding error).
+    fn plane_extent(&self) -> f32 {
+        1.0
+    }
+    /// Where the bound holds.
+    fn in_domain(&self, n: Vec3) -> bool {
+        let _ = n;
+        true
+    }
+    /// See [`NormalCodec::is_idempotent`] (`q` is the storage). Default: exact for snorm/unorm storage; not for
+    /// f16, whose resolution near 0 (down to 2^-24) is finer than the absolute f32 rounding of the projection
+    /// arithmetic, so re-encoding a decoded normal can move a tiny coordinate by an f16 ulp (within the bound).
+    fn is_idempotent(&self, q: Quant) -> bool {
+        q != Quant::F16
+    }
+}
+
+/// A projection followed by a quantizer: the shape of every two-component normal codec.
+#[derive(Clone, Copy, Debug)]
+pub struct Planar<P: Projection> {
+    proj: P,
+    quant: Quant,
+}
+
+impl<P: Projection> Planar<P> {
+    /// The codec for a projection and a quantizer.
+    #[must_use]
+    pub fn new(proj: P, quant: Quant) -> Self {
+        Planar { proj, quant }
+    }
+
+    /// The two stored plane coordinates of a code.
+    #[inline]
+    #[must_use]
+    pub fn plane_of(&self, code: u64) -> Vec2 {
+        let k = self.quant.bits();
+        Vec2::new(self.quant.decode(code), self.quant.decode(code >> k))
+    }
+}
+
+impl<P: Projection + std::fmt::Debug> NormalCodec for Planar<P> {
+    fn name(&self) -> String {
+        format!("{}-{}", self.proj.scheme_name(self.quant), self.bits())
+    }
+    fn bits(&self) -> u32 {
+        2 * self.quant.bits()
+    }
+    #[inline]
+    fn encode(&self, n: Vec3) -> u64 {
+        let p = self.proj.encode_plane(sanitize(n));
+        let k = self.quant.bits();
+        self.quant.encode(p.x) | (self.quant.encode(p.y) << k)
+    }
+    #[inline]
+    fn decode(&self, code: u64) -> Vec3 {
+        finish(self.proj.decode_plane(self.plane_of(code)))
+    }
+    fn max_error_deg(&self) -> f32 {
+        let h = self.quant.half_step(self.proj.plane_extent());
+        (self.proj.bound_rad(h, h, self.quant) + FLOAT_SLACK_RAD).to_degrees().min(180.0)
+    }
+    fn in_domain(&self, n: Vec3) -> bool {
+        self.proj.in_domain(n)
+    }
+    fn is_idempotent(&self) -> bool {
+        self.proj.is_idempotent(self.quant)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn registry_round_trips_every_scheme_and_bit_count() {
+        for s in NormalScheme::ALL {
+            assert_eq!(NormalScheme::from_name(s.name()), Some(s));
+            for b in s.valid_bits() {
+                let name = format!("{}-{b}", s.name());
+                let c = normal_codec(&name).unwrap_or_else(|| panic!("{name} missing"));
+                assert_eq!(c.name(), name);
+                assert_eq!(c.bits(), b);
+            }
+            assert!(s.codec(s.valid_bits()[0] + 1).is_none() || s.components() == 1);
+        }
+        for name in ["oct-16", "oct-precise-24", "spheremap-cry-16", "lambert-20", "spherical-16", "stereo-16"] {
+            assert!(normal_codec(name).is_some(), "{name}");
+        }
+        for name in ["xyz-snorm-30", "xy-hemi-16", "xyz-f16-48", "oct-f16-32", "spheremap-ispc-32"] {
+            assert!(normal_codec(name).is_some(), "{name}");
+        }
+        for name in ["oct-15", "oct-f16-16", "oct", "xyz-snorm-32", "nope-16", "oct-0", "oct-99999999999"] {
+            assert!(normal_codec(name).is_none(), "{name}");
+        }
+    }
+
+    #[test]
+    fn sanitize_handles_degenerate_input() {
+        assert_eq!(sanitize(Vec3::ZERO), Vec3::Z);
+        assert_eq!(sanitize(Vec3::new(-0.0, -0.0, -0.0)), Vec3::Z);
+        assert_eq!(sanitize(Vec3::new(f32::NAN, 1.0, 0.0)), Vec3::Z);
+        assert_eq!(sanitize(Vec3::new(f32::INFINITY, 1.0, 0.0)), Vec3::X);
+        assert_eq!(sanitize(Vec3::new(0.0, f32::NEG_INFINITY, 5.0)), Vec3::NEG_Y);
+        let big = sanitize(Vec3::new(1e30, 1e30, 0.0));
+        assert!((big - Vec3::new(1.0, 1.0, 0.0).normalize()).length() < 1e-6, "{big}");
+        let tiny = sanitize(Vec3::new(0.0, 1e-40, -1e-40));
+        assert!((tiny - Vec3::new(0.0, 1.0, -1.0).normalize()).length() < 1e-6, "{tiny}");
+    }
+
+    #[test]
+    fn snorm_quantizer_matches_d3d_semantics() {
+        let q = Quant::Snorm(8);
+        assert_eq!(q.encode(1.0), 127);
+        assert_eq!(q.encode(-1.0), 0x81);
+        assert_eq!(q.encode(0.0), 0);
+        assert_eq!(q.encode(-0.0), 0);
+        assert_eq!(q.decode(0x80), -1.0); // −128 clamps to −1
+        assert_eq!(q.decode(0x81), -1.0);
+        assert_eq!(q.decode(0x17f), 1.0); // high bits ignored
+        let u = Quant::Unorm(10);
+        assert_eq!(u.encode(2.0), 1023);
+        assert_eq!(u.decode(1023), 1.0);
+        assert_eq!(Quant::F16.encode(1e9), u64::from(half::f16::MAX.to_bits()));
+        assert_eq!(Quant::F16.decode(0x7c00), F16_MAX); // +Inf bits
+        assert_eq!(Quant::F16.decode(0x7e00), 0.0); // NaN bits
+    }
+
+    #[test]
+    fn angle_is_accurate_for_tiny_angles() {
+        let a = Vec3::Z;
+        let b = Vec3::new(1e-6, 0.0, 1.0).normalize();
+        let d = angle_deg(a, b);
+        assert!((d - 1e-6f32.to_degrees()).abs() < 1e-9, "{d}");
+        assert_eq!(angle_deg(Vec3::ZERO, a), 180.0);
+    }
+}

@@ -1,0 +1,219 @@
+//! Scalar codecs: specular amount, roughness, metallic, AO, specular power.
+//!
+//! | name | bits | domain | error bound | source |
+//! |---|---|---|---|---|
+//! | `unorm-N` (N = 1..=24) | N | [0, 1] | 0.5/(2^N−1) | D3D/Vulkan UNORM conversion rules |
+//! | `f16` | 16 | [−65504, 65504] | |v|·2^-11 + 2^-25 | IEEE 754 binary16 (`half` crate) |
+//! | `f32` | 32 | all finite f32 | 0 | IEEE 754 binary32 |
+//! | `log2-unorm-N` (N = 2..=24) | N | specular power [1, 4096] | v·(2^(6/(2^N−1)) − 1) | power as log2 (Killzone 2 / Valient 2007 style) |
+//! | `specpow-unorm-N` (N = 2..=24) | N | specular power [0, 4096] | 2048/(2^N−1) | power stored directly, scaled |
+//!
+//! Defined results outside the domain: NaN encodes as the domain's lower end (0, or 1 for log2), +Inf as the
+//! upper end, −Inf as the lower end; finite values clamp. f16: magnitudes above 65504 clamp to ±65504 (never Inf),
+//! magnitudes below 2^-25 flush to ±0. Decoders only ever return finite values (f16 Inf/NaN codes decode to
+//! ±65504 / 0).
+
+use super::normal::f16_to_finite;
+use super::{mask, split_bits, ScalarCodec};
+
+/// Every valid name pattern (for error messages).
+pub const VALID_NAMES: &[&str] =
+    &["unorm-N (1..=24)", "f16", "f32", "log2-unorm-N (2..=24)", "specpow-unorm-N (2..=24)"];
+
+/// Largest specular power the log2 and direct power codecs represent (2^12).
+pub const MAX_SPECULAR_POWER: f32 = 4096.0;
+const LOG2_MAX_POWER: f32 = 12.0;
+
+/// Looks a scalar codec up by name (see the module table); `None` for unknown names or bit counts.
+#[must_use]
+pub fn scalar_codec(name: &str) -> Option<Box<dyn ScalarCodec>> {
+    match name {
+        "f16" => return Some(Box::new(ScalarF16)),
+        "f32" => return Some(Box::new(ScalarF32)),
+        _ => {}
+    }
+    let (prefix, n) = split_bits(name)?;
+    match prefix {
+        "unorm" if (1..=24).contains(&n) => Some(Box::new(Unorm::new(n, 0.0, 1.0, "unorm"))),
+        "specpow-unorm" if (2..=24).contains(&n) => {
+            Some(Box::new(Unorm::new(n, 0.0, MAX_SPECULAR_POWER, "specpow-unorm")))
+        }
+        "log2-unorm" if (2..=24).contains(&n) => Some(Box::new(Log2Unorm { inner: Unorm::new(n, 0.0, 1.0, "") })),
+        _ => None,
+    }
+}
+
+/// Unsigned normalized integer of `bits` bits over [lo, hi]: `u = round((v−lo)/(hi−lo)·(2^N−1))`.
+#[derive(Clone, Copy, Debug)]
+pub struct Unorm {
+    bits: u32,
+    lo: f32,
+    hi: f32,
+    prefix: &'static str,
+}
+
+impl Unorm {
+    /// A unorm codec over [lo, hi].
+    #[must_use]
+    pub fn new(bits: u32, lo: f32, hi: f32, prefix: &'static str) -> Self {
+        Unorm { bits, lo, hi, prefix }
+    }
+    fn max_code(&self) -> f64 {
+        mask(self.bits) as f64
+    }
+}
+
+impl ScalarCodec for Unorm {
+    fn name(&self) -> String {
+        format!("{}-{}", self.prefix, self.bits)
+    }
+    fn bits(&self) -> u32 {
+        self.bits
+    }
+    #[inline]
+    fn encode(&self, v: f32) -> u64 {
+        let t = if v.is_nan() { 0.0 } else { ((v - self.lo) / (self.hi - self.lo)).clamp(0.0, 1.0) };
+        // f64 so that 24-bit codes round exactly.
+        (f64::from(t) * self.max_code()).round() as u64
+    }
+    #[inline]
+    fn decode(&self, code: u64) -> f32 {
+        let t = (code & mask(self.bits)) as f64 / self.max_code();
+        (f64::from(self.lo) + t * f64::from(self.hi - self.lo)) as f32
+    }
+    fn domain(&self) -> (f32, f32) {
+        (self.lo, self.hi)
+    }
+    fn error_bound(&self, _v: f32) -> f32 {
+        // Half a step, plus f32 rounding of the result (relative 2^-24 of the range).
+        ((0.5 / self.max_code()) * f64::from(self.hi - self.lo)) as f32 + (self.hi - self.lo).abs() * 2f32.powi(-23)
+    }
+}
+
+/// Specular power stored as `log2(p)/12` in unorm N: constant relative precision over [1, 4096].
+#[derive(Clone, Copy, Debug)]
+pub struct Log2Unorm {
+    inner: Unorm,
+}
+
+impl ScalarCodec for Log2Unorm {
+    fn name(&self) -> String {
+        format!("log2-unorm-{}", self.inner.bits)
+    }
+    fn bits(&self) -> u32 {
+        self.inner.bits
+    }
+    #[inline]
+    fn encode(&self, v: f32) -> u64 {
+        // NaN and anything below 1 (including 0, negatives, −Inf) map to power 1; +Inf to the top.
+        let v = if v.is_nan() { 1.0 } else { v.clamp(1.0, MAX_SPECULAR_POWER) };
+        self.inner.encode(v.log2() / LOG2_MAX_POWER)
+    }
+    #[inline]
+    fn decode(&self, code: u64) -> f32 {
+        (self.inner.decode(code) * LOG2_MAX_POWER).exp2().clamp(1.0, MAX_SPECULAR_POWER)
+    }
+    fn domain(&self) -> (f32, f32) {
+        (1.0, MAX_SPECULAR_POWER)
+    }
+    fn error_bound(&self, v: f32) -> f32 {
+        let half = 0.5 / self.inner.max_code() as f32 * LOG2_MAX_POWER;
+        v * (half.exp2() - 1.0) + v * 2f32.powi(-20)
+    }
+}
+
+/// IEEE half float (see the module table for clamping).
+#[derive(Clone, Copy, Debug)]
+pub struct ScalarF16;
+
+impl ScalarCodec for ScalarF16 {
+    fn name(&self) -> String {
+        "f16".into()
+    }
+    fn bits(&self) -> u32 {
+        16
+    }
+    #[inline]
+    fn encode(&self, v: f32) -> u64 {
+        let v = if v.is_nan() { 0.0 } else { v.clamp(-super::normal::F16_MAX, super::normal::F16_MAX) };
+        u64::from(half::f16::from_f32(v).to_bits())
+    }
+    #[inline]
+    fn decode(&self, code: u64) -> f32 {
+        f16_to_finite((code & 0xffff) as u16)
+    }
+    fn domain(&self) -> (f32, f32) {
+        (-super::normal::F16_MAX, super::normal::F16_MAX)
+    }
+    fn error_bound(&self, v: f32) -> f32 {
+        v.abs() * 2f32.powi(-11) + 2f32.powi(-25)
+    }
+}
+
+/// IEEE single float: exact for finite input; NaN → 0, ±Inf → ±f32::MAX.
+#[derive(Clone, Copy, Debug)]
+pub struct ScalarF32;
+
+impl ScalarCodec for ScalarF32 {
+    fn name(&self) -> String {
+        "f32".into()
+    }
+    fn bits(&self) -> u32 {
+        32
+    }
+    #[inline]
+    fn encode(&self, v: f32) -> u64 {
+        let v = if v.is_nan() { 0.0 } else { v.clamp(f32::MIN, f32::MAX) };
+        u64::from(v.to_bits())
+    }
+    #[inline]
+    fn decode(&self, code: u64) -> f32 {
+        let v = f32::from_bits(code as u32);
+        if v.is_nan() {
+            0.0
+        } else {
+            v.clamp(f32::MIN, f32::MAX)
+        }
+    }
+    fn error_bound(&self, _v: f32) -> f32 {
+        0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_and_known_values() {
+        let u8c = scalar_codec("unorm-8").unwrap();
+        assert_eq!(u8c.name(), "unorm-8");
+        assert_eq!(u8c.encode(1.0), 255);
+        assert_eq!(u8c.encode(0.5), 128);
+        assert_eq!(u8c.encode(f32::NAN), 0);
+        assert_eq!(u8c.encode(f32::INFINITY), 255);
+        assert_eq!(u8c.decode(255), 1.0);
+        let lg = scalar_codec("log2-unorm-8").unwrap();
+        assert_eq!(lg.decode(lg.encode(1.0)), 1.0);
+        assert_eq!(lg.decode(lg.encode(4096.0)), 4096.0);
+        assert_eq!(lg.decode(lg.encode(f32::NAN)), 1.0);
+        let h = scalar_codec("f16").unwrap();
+        assert_eq!(h.decode(h.encode(1e6)), 65504.0);
+        assert_eq!(h.decode(h.encode(-1e6)), -65504.0);
+        assert_eq!(h.decode(h.encode(1e-9)), 0.0);
+        assert_eq!(h.decode(0x7c00), 65504.0);
+        for bad in ["unorm-0", "unorm-25", "log2-unorm-1", "f64", "unorm", "unorm-x"] {
+            assert!(scalar_codec(bad).is_none(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn log2_is_relatively_precise_where_direct_is_not() {
+        let lg = scalar_codec("log2-unorm-8").unwrap();
+        let direct = scalar_codec("specpow-unorm-8").unwrap();
+        let p = 4.0;
+        let e_log = (lg.decode(lg.encode(p)) - p).abs();
+        let e_direct = (direct.decode(direct.encode(p)) - p).abs();
+        assert!(e_log < 0.1 && e_direct > 1.0, "log2 {e_log}, direct {e_direct}");
+    }
+}

@@ -1,0 +1,138 @@
+//! Image error metrics: a test image against the reference.
+//!
+//! PSNR's peak is stated explicitly: `psnr_db = 10·log10(peak² / mse)` with `peak` = the reference's largest
+//! channel value (HDR images have no fixed white; 1 when the reference is black). Identical images report
+//! [`PSNR_CAP_DB`] rather than infinity, so the JSON stays a number.
+
+use crate::image::HdrImage;
+use serde::Serialize;
+
+/// How far `test` is from `reference`, per channel value (3 per pixel), in f64.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct ImageError {
+    /// Root mean square error.
+    pub rmse: f64,
+    /// `10·log10(peak² / mse)` with `peak` = [`ImageError::peak`]; capped at [`PSNR_CAP_DB`] for identical
+    /// images (so the value stays finite in JSON).
+    pub psnr_db: f64,
+    /// Largest absolute difference.
+    pub max_abs: f64,
+    /// Mean absolute difference.
+    pub mean_abs: f64,
+    /// Relative MSE: `Σ (t − r)² / Σ r²` (0 when both are black; 1 when the test is black).
+    pub rel_mse: f64,
+    /// The PSNR peak: the reference's largest channel value (1 when the reference is black).
+    pub peak: f64,
+    /// Pixels whose largest channel difference exceeds 1% of the peak.
+    pub pixels_over_1pct: u64,
+}
+
+/// PSNR reported for identical images (and the upper bound of any PSNR we report), in dB.
+pub const PSNR_CAP_DB: f64 = 200.0;
+
+/// Compares `test` against `reference`; `None` when their sizes differ.
+#[must_use]
+pub fn try_compare(reference: &HdrImage, test: &HdrImage) -> Option<ImageError> {
+    if reference.width != test.width || reference.height != test.height || reference.rgb.len() != test.rgb.len() {
+        return None;
+    }
+    let mut se = 0.0f64;
+    let mut sr = 0.0f64;
+    let mut sa = 0.0f64;
+    let mut max_abs = 0.0f64;
+    let mut peak = 0.0f64;
+    for r in &reference.rgb {
+        peak = peak.max(f64::from(r.max_element()));
+    }
+    if peak.is_nan() || peak <= 0.0 || !peak.is_finite() {
+        peak = 1.0;
+    }
+    let mut over = 0u64;
+    for (r, t) in reference.rgb.iter().zip(&test.rgb) {
+        let mut pix_max = 0.0f64;
+        for k in 0..3 {
+            let (a, b) = (f64::from(r[k]), f64::from(t[k]));
+            let d = (b - a).abs();
+            let d = if d.is_finite() { d } else { f64::MAX.sqrt() };
+            se += d * d;
+            sa += d;
+            sr += a * a;
+            max_abs = max_abs.max(d);
+            pix_max = pix_max.max(d);
+        }
+        over += u64::from(pix_max > 0.01 * peak);
+    }
+    let n = (reference.rgb.len() * 3).max(1) as f64;
+    let mse = se / n;
+    let psnr = if mse > 0.0 { (10.0 * (peak * peak / mse).log10()).min(PSNR_CAP_DB) } else { PSNR_CAP_DB };
+    let rel_mse = if sr > 0.0 {
+        se / sr
+    } else if se > 0.0 {
+        1.0
+    } else {
+        0.0
+    };
+    Some(ImageError {
+        rmse: mse.sqrt(),
+        psnr_db: psnr,
+        max_abs,
+        mean_abs: sa / n,
+        rel_mse,
+        peak,
+        pixels_over_1pct: over,
+    })
+}
+
+/// Compares `test` against `reference`; images of different sizes compare as completely wrong (`rmse`,
+/// `max_abs` and `mean_abs` = ∞, `psnr_db` = −∞, `rel_mse` = ∞) — use [`try_compare`] to detect that case.
+#[must_use]
+pub fn compare(reference: &HdrImage, test: &HdrImage) -> ImageError {
+    try_compare(reference, test).unwrap_or(ImageError {
+        rmse: f64::INFINITY,
+        psnr_db: f64::NEG_INFINITY,
+        max_abs: f64::INFINITY,
+        mean_abs: f64::INFINITY,
+        rel_mse: f64::INFINITY,
+        peak: 1.0,
+        pixels_over_1pct: reference.rgb.len().max(test.rgb.len()) as u64,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn identical_images_have_zero_error_and_capped_psnr() {
+        let mut a = HdrImage::new(2, 2);
+        a.rgb[1] = Vec3::new(2.0, 1.0, 0.5);
+        let e = compare(&a, &a);
+        assert_eq!((e.rmse, e.max_abs, e.rel_mse, e.pixels_over_1pct), (0.0, 0.0, 0.0, 0));
+        assert_eq!(e.psnr_db, PSNR_CAP_DB);
+        assert_eq!(e.peak, 2.0);
+    }
+
+    #[test]
+    fn known_difference_gives_known_numbers() {
+        let mut a = HdrImage::new(2, 1);
+        a.rgb = vec![Vec3::splat(1.0), Vec3::ZERO];
+        let mut b = a.clone();
+        b.rgb[1] = Vec3::new(0.5, 0.0, 0.0);
+        let e = compare(&a, &b);
+        // mse = 0.25 / 6; peak 1.
+        assert!((e.rmse - (0.25f64 / 6.0).sqrt()).abs() < 1e-12);
+        assert!((e.psnr_db - 10.0 * (6.0f64 / 0.25).log10()).abs() < 1e-9);
+        assert_eq!(e.max_abs, 0.5);
+        assert!((e.rel_mse - 0.25 / 3.0).abs() < 1e-12);
+        assert_eq!(e.pixels_over_1pct, 1);
+        let black = HdrImage::new(2, 1);
+        assert_eq!(compare(&a, &black).rel_mse, 1.0);
+    }
+
+    #[test]
+    fn size_mismatch_is_reported() {
+        assert!(try_compare(&HdrImage::new(2, 1), &HdrImage::new(1, 2)).is_none());
+        assert_eq!(compare(&HdrImage::new(2, 1), &HdrImage::new(1, 1)).rmse, f64::INFINITY);
+    }
+}

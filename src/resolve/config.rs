@@ -1,0 +1,191 @@
+//! The closed choices of the resolve (culling, BRDF, falloff, schedule) and the configuration that bundles them.
+//!
+//! Every enum has `ALL`, a kebab-case `name()` (the one CLI / JSON spelling) and `from_name()`.
+
+use serde::{Deserialize, Serialize};
+
+macro_rules! named_enum {
+    ($(#[$doc:meta])* $name:ident { $($(#[$vdoc:meta])* $variant:ident => $text:literal),+ $(,)? }) => {
+        $(#[$doc])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+        #[serde(rename_all = "kebab-case")]
+        pub enum $name {
+            $($(#[$vdoc])* $variant),+
+        }
+
+        impl $name {
+            /// Every variant, in the order the CLI lists them.
+            pub const ALL: &'static [$name] = &[$($name::$variant),+];
+
+            /// The kebab-case spelling used by flags and JSON.
+            #[must_use]
+            pub fn name(self) -> &'static str {
+                match self {
+                    $($name::$variant => $text),+
+                }
+            }
+
+            /// Parses a spelling written by [`Self::name`] (case-insensitive, `_` accepted for `-`).
+            #[must_use]
+            pub fn from_name(s: &str) -> Option<Self> {
+                let s = s.trim().to_ascii_lowercase().replace('_', "-");
+                Self::ALL.iter().copied().find(|v| v.name() == s)
+            }
+
+            /// All spellings, comma-separated, for error messages.
+            #[must_use]
+            pub fn names() -> String {
+                Self::ALL.iter().map(|v| v.name()).collect::<Vec<_>>().join(", ")
+            }
+        }
+
+        impl std::fmt::Display for $name {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(self.name())
+            }
+        }
+    };
+}
+
+named_enum! {
+    /// How lights are matched to samples before shading. Every method is conservative: it only drops lights whose
+    /// contribution is exactly zero, so the image does not depend on the choice (see `tests/resolve_props.rs`).
+    Culling {
+        /// Every light against every shaded sample.
+        None => "none",
+        /// Each light's screen-space bounding rectangle plus a per-sample depth-bounds test (the 2010 demo's
+        /// "quad" method: a screen-aligned quad per light with depth bounds).
+        Quad => "quad",
+        /// Per tile: four side planes and the min/max depth slab of the tile's shaded samples.
+        Tiled => "tiled",
+        /// Tiles × depth slices: each slice of a tile gets its own planes and depth slab.
+        Clustered => "clustered",
+    }
+}
+
+named_enum! {
+    /// The surface response.
+    Brdf {
+        /// `albedo / π · N·L`.
+        Lambert => "lambert",
+        /// The 2010 tiled-deferred demo / ISPC `deferred` model:
+        /// `k = atten · N·L · (1 + specAmount · (p + 2)/8 · max(N·H, 0)^p)`, colour += albedo ⊙ lightColour · k.
+        BlinnPhong => "blinn-phong",
+        /// glTF 2.0 metallic-roughness: GGX distribution, Smith height-correlated visibility, Schlick Fresnel.
+        Ggx => "ggx",
+    }
+}
+
+named_enum! {
+    /// Distance attenuation of point and spot lights (directional lights are not attenuated).
+    Falloff {
+        /// KHR_lights_punctual: `clamp(1 − (d/range)⁴, 0, 1)² / d²`.
+        Gltf => "gltf",
+        /// The 2010 demo: `clamp((end − d)/(end − begin), 0, 1)`, zero beyond `end` (= the light's range).
+        Linear => "linear",
+    }
+}
+
+named_enum! {
+    /// How the shading work is organised.
+    Schedule {
+        /// Full deferred shading: every shaded sample evaluates the whole BRDF per light.
+        Deferred => "deferred",
+        /// Deferred lighting (light pre-pass): lights accumulate RGB diffuse light and a monochromatic specular
+        /// term, which a second pass combines with the albedo. Exact for white lights, approximate otherwise.
+        LightPrepass => "light-prepass",
+    }
+}
+
+/// Default tile edge in pixels (the 2010 demo and the ISPC sample use 16×16 tiles).
+pub const DEFAULT_TILE_SIZE: u32 = 16;
+/// Default number of depth slices per tile for clustered culling.
+pub const DEFAULT_DEPTH_SLICES: u32 = 16;
+/// Largest tile edge accepted (a tile's work list must stay cache-sized).
+pub const MAX_TILE_SIZE: u32 = 256;
+/// Largest number of depth slices accepted.
+pub const MAX_DEPTH_SLICES: u32 = 256;
+
+/// Everything that selects how [`crate::resolve::resolve`] lights a G-buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ResolveConfig {
+    /// Light culling method.
+    pub culling: Culling,
+    /// Surface BRDF.
+    pub brdf: Brdf,
+    /// Distance falloff.
+    pub falloff: Falloff,
+    /// Shading schedule.
+    pub schedule: Schedule,
+    /// Tile edge in pixels (1..=[`MAX_TILE_SIZE`]).
+    pub tile_size: u32,
+    /// Depth slices per tile for [`Culling::Clustered`] (1..=[`MAX_DEPTH_SLICES`]).
+    pub depth_slices: u32,
+}
+
+impl Default for ResolveConfig {
+    /// Tiled culling, the demo's Blinn-Phong with its linear falloff, full deferred shading, 16×16 tiles.
+    fn default() -> Self {
+        ResolveConfig {
+            culling: Culling::Tiled,
+            brdf: Brdf::BlinnPhong,
+            falloff: Falloff::Linear,
+            schedule: Schedule::Deferred,
+            tile_size: DEFAULT_TILE_SIZE,
+            depth_slices: DEFAULT_DEPTH_SLICES,
+        }
+    }
+}
+
+impl ResolveConfig {
+    /// Checks the numeric fields.
+    pub fn validate(&self) -> crate::Result<()> {
+        if !(1..=MAX_TILE_SIZE).contains(&self.tile_size) {
+            return Err(crate::Error::Argument(format!("tile size {} outside 1..={MAX_TILE_SIZE}", self.tile_size)));
+        }
+        if !(1..=MAX_DEPTH_SLICES).contains(&self.depth_slices) {
+            return Err(crate::Error::Argument(format!(
+                "depth slices {} outside 1..={MAX_DEPTH_SLICES}",
+                self.depth_slices
+            )));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip_for_every_variant() {
+        for c in Culling::ALL {
+            assert_eq!(Culling::from_name(c.name()), Some(*c));
+        }
+        for b in Brdf::ALL {
+            assert_eq!(Brdf::from_name(b.name()), Some(*b));
+        }
+        for f in Falloff::ALL {
+            assert_eq!(Falloff::from_name(f.name()), Some(*f));
+        }
+        for s in Schedule::ALL {
+            assert_eq!(Schedule::from_name(s.name()), Some(*s));
+        }
+        assert_eq!(Brdf::from_name("Blinn_Phong"), Some(Brdf::BlinnPhong));
+        assert_eq!(Culling::from_name("octree"), None);
+        assert_eq!(serde_json::to_string(&Schedule::LightPrepass).unwrap(), "\"light-prepass\"");
+    }
+
+    #[test]
+    fn validate_rejects_zero_and_huge_tiles() {
+        let mut c = ResolveConfig::default();
+        c.validate().unwrap();
+        c.tile_size = 0;
+        assert!(c.validate().is_err());
+        c.tile_size = MAX_TILE_SIZE + 1;
+        assert!(c.validate().is_err());
+        c.tile_size = 7;
+        c.depth_slices = 0;
+        assert!(c.validate().is_err());
+    }
+}

@@ -1,0 +1,190 @@
+//! Conservative light culling geometry: bounding volumes of a group of samples (a tile or a cluster) and of a
+//! light's sphere of influence, and the tests between them.
+//!
+//! A group of samples is bounded by four planes through the eye and a depth slab. The planes are fitted to the
+//! samples themselves (min/max of `x/d` and `y/d`, `d` = view depth), not to the tile's pixel rectangle, so the
+//! test is conservative for any positions (a dump's own position plane, a fitted camera) and needs no camera.
+//! For a pinhole camera, `x/d` is an affine function of the pixel column, so this *is* the tile frustum tightened
+//! to the covered samples.
+//!
+//! A light's influence is the sphere of radius `range` (∞ for directional and unbounded lights: never culled).
+//! Both falloffs are exactly 0 at and beyond `range`; the sphere is grown by [`CULL_MARGIN`] so f32 rounding in
+//! the tests cannot drop a light whose rounded contribution is not exactly 0.
+
+use super::kernel::{Items, QuadSoa};
+use crate::light::Light;
+use glam::Vec3;
+
+/// Relative growth of light radii and of screen rectangles before culling tests (f32 rounding headroom).
+pub const CULL_MARGIN: f32 = 1e-4;
+
+/// Bounds of a group of samples: tangent-space rectangle (`x/d`, `y/d`) and depth range.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounds {
+    /// min x/d.
+    pub tx0: f32,
+    /// max x/d.
+    pub tx1: f32,
+    /// min y/d.
+    pub ty0: f32,
+    /// max y/d.
+    pub ty1: f32,
+    /// min view depth.
+    pub d0: f32,
+    /// max view depth.
+    pub d1: f32,
+    planes: [Vec3; 4],
+}
+
+impl Bounds {
+    /// Bounds of `items[range]`; `None` when the range is empty.
+    #[must_use]
+    pub fn of_items(it: &Items, range: std::ops::Range<usize>) -> Option<Bounds> {
+        if range.is_empty() {
+            return None;
+        }
+        let mut b = [f32::INFINITY, f32::NEG_INFINITY, f32::INFINITY, f32::NEG_INFINITY, f32::INFINITY, 0.0];
+        for j in range {
+            b[0] = b[0].min(it.tx[j]);
+            b[1] = b[1].max(it.tx[j]);
+            b[2] = b[2].min(it.ty[j]);
+            b[3] = b[3].max(it.ty[j]);
+            b[4] = b[4].min(it.dep[j]);
+            b[5] = b[5].max(it.dep[j]);
+        }
+        Some(Bounds::new(b[0], b[1], b[2], b[3], b[4], b[5]))
+    }
+
+    /// Bounds from explicit extents.
+    #[must_use]
+    pub fn new(tx0: f32, tx1: f32, ty0: f32, ty1: f32, d0: f32, d1: f32) -> Bounds {
+        // Inside ⇔ n · p ≥ 0 for each (unit) normal; with d = −z: x ≥ tx0·d ⇔ x + tx0·z ≥ 0, and so on.
+        let planes = [
+            Vec3::new(1.0, 0.0, tx0).normalize(),
+            Vec3::new(-1.0, 0.0, -tx1).normalize(),
+            Vec3::new(0.0, 1.0, ty0).normalize(),
+            Vec3::new(0.0, -1.0, -ty1).normalize(),
+        ];
+        Bounds { tx0, tx1, ty0, ty1, d0, d1, planes }
+    }
+
+    /// Can a sphere at `c` with radius `r` (already grown by the margin) reach a point inside the bounds?
+    #[inline]
+    #[must_use]
+    pub fn may_touch(&self, c: Vec3, r: f32) -> bool {
+        let depth = -c.z;
+        if depth + r < self.d0 || depth - r > self.d1 {
+            return false;
+        }
+        self.planes.iter().all(|n| n.dot(c) >= -r)
+    }
+
+    /// Does a quad rectangle (light `i` of `q`) overlap these bounds (rectangle and depth)?
+    #[inline]
+    #[must_use]
+    pub fn overlaps_quad(&self, q: &QuadSoa, i: usize) -> bool {
+        q.x0[i] <= self.tx1
+            && q.x1[i] >= self.tx0
+            && q.y0[i] <= self.ty1
+            && q.y1[i] >= self.ty0
+            && q.z0[i] <= self.d1
+            && q.z1[i] >= self.d0
+    }
+}
+
+/// Culling sphere of a (sanitised) light: centre and grown radius (∞ for directional / unbounded lights).
+#[must_use]
+pub fn light_sphere(l: &Light) -> (Vec3, f32) {
+    if l.is_directional() || !l.range.is_finite() {
+        return (l.position, f32::INFINITY);
+    }
+    let r = l.range * (1.0 + CULL_MARGIN) + CULL_MARGIN * l.position.abs().max_element();
+    (l.position, r)
+}
+
+/// Tangent-space interval `[m0, m1]` covering a circle of radius `r` centred at lateral offset `c` and depth
+/// `d`, seen from the eye; the whole line when the circle reaches the eye plane.
+fn tangent_interval(c: f32, d: f32, r: f32) -> (f32, f32) {
+    let den = d * d - r * r;
+    if d.is_nan() || d <= r || den.is_nan() || den <= 0.0 || !r.is_finite() {
+        return (f32::NEG_INFINITY, f32::INFINITY);
+    }
+    let root = (c * c + den).sqrt();
+    let (m0, m1) = ((c * d - r * root) / den, (c * d + r * root) / den);
+    let grow = |m: f32| CULL_MARGIN * (1.0 + m.abs());
+    (m0 - grow(m0), m1 + grow(m1))
+}
+
+/// Quad-culling rectangles and depth bounds of every light (screen rectangle in tangent units `x/d`, `y/d`).
+#[must_use]
+pub fn quad_rects(lights: &[Light]) -> QuadSoa {
+    let mut q = QuadSoa::default();
+    for l in lights {
+        let (c, r) = light_sphere(l);
+        let d = -c.z;
+        let (x0, x1) = tangent_interval(c.x, d, r);
+        let (y0, y1) = tangent_interval(c.y, d, r);
+        let (z0, z1) = if r.is_finite() { (d - r, d + r) } else { (f32::NEG_INFINITY, f32::INFINITY) };
+        q.x0.push(x0);
+        q.x1.push(x1);
+        q.y0.push(y0);
+        q.y1.push(y1);
+        q.z0.push(z0);
+        q.z1.push(z1);
+    }
+    q
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::util::SplitMix64;
+
+    #[test]
+    fn sphere_touching_a_sample_is_never_culled() {
+        let mut rng = SplitMix64::new(3);
+        for _ in 0..2000 {
+            let p = Vec3::new(rng.range_f32(-5.0, 5.0), rng.range_f32(-5.0, 5.0), rng.range_f32(-20.0, -0.5));
+            let q = p + Vec3::new(rng.range_f32(-0.3, 0.3), rng.range_f32(-0.3, 0.3), rng.range_f32(-0.3, 0.0));
+            let (d0, d1) = (-p.z, -q.z);
+            let b = Bounds::new(
+                (p.x / d0).min(q.x / d1),
+                (p.x / d0).max(q.x / d1),
+                (p.y / d0).min(q.y / d1),
+                (p.y / d0).max(q.y / d1),
+                d0.min(d1),
+                d0.max(d1),
+            );
+            let c = p + Vec3::new(rng.range_f32(-3.0, 3.0), rng.range_f32(-3.0, 3.0), rng.range_f32(-3.0, 3.0));
+            let (c, r) = light_sphere(&Light::point(c, Vec3::ONE, 1.0, (c - p).length()));
+            assert!(b.may_touch(c, r), "sphere {c} r {r} contains {p} but was culled by {b:?}");
+        }
+    }
+
+    #[test]
+    fn far_spheres_are_culled() {
+        let b = Bounds::new(-0.1, 0.1, -0.1, 0.1, 9.0, 10.0);
+        assert!(b.may_touch(Vec3::new(0.0, 0.0, -9.5), 0.1));
+        assert!(!b.may_touch(Vec3::new(0.0, 0.0, -5.0), 1.0)); // in front of the slab
+        assert!(!b.may_touch(Vec3::new(5.0, 0.0, -9.5), 1.0)); // right of the frustum
+        assert!(!b.may_touch(Vec3::new(0.0, -5.0, -9.5), 1.0)); // below
+        assert!(b.may_touch(Vec3::new(5.0, 0.0, -9.5), f32::INFINITY));
+    }
+
+    #[test]
+    fn quad_rectangle_contains_the_projected_sphere() {
+        let l = Light::point(Vec3::new(1.0, -2.0, -10.0), Vec3::ONE, 1.0, 3.0);
+        let q = quad_rects(&[l]);
+        let mut rng = SplitMix64::new(9);
+        for _ in 0..5000 {
+            let dir = Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0));
+            let p = l.position + dir.normalize_or_zero() * 3.0;
+            let (tx, ty) = (p.x / -p.z, p.y / -p.z);
+            assert!(tx >= q.x0[0] && tx <= q.x1[0] && ty >= q.y0[0] && ty <= q.y1[0], "{p}");
+            assert!(-p.z >= q.z0[0] && -p.z <= q.z1[0]);
+        }
+        // A sphere around the eye covers the whole screen.
+        let q = quad_rects(&[Light::point(Vec3::new(0.0, 0.0, -1.0), Vec3::ONE, 1.0, 3.0)]);
+        assert_eq!((q.x0[0], q.x1[0]), (f32::NEG_INFINITY, f32::INFINITY));
+    }
+}

@@ -1,0 +1,148 @@
+//! A small analytic G-buffer built in code (ground plane + spheres under a pinhole camera, sky above the
+//! horizon) and light scatterers, for the resolve's tests and benches. Deterministic for a given seed.
+//!
+//! Not a scene generator for users (that is [`crate::scene`]); it exists so the resolve can be tested and timed
+//! without files and without depending on other stages.
+
+use crate::camera::Camera;
+use crate::error::Result;
+use crate::gbuffer::GBuffer;
+use crate::light::Light;
+use crate::util::SplitMix64;
+use glam::{Vec2, Vec3};
+
+/// One sphere of the fixture: centre (view space), radius, albedo, specular power, roughness, metallic.
+type Ball = (Vec3, f32, Vec3, f32, f32, f32);
+
+const BALLS: [Ball; 6] = [
+    (Vec3::new(-2.5, 0.0, -8.0), 1.0, Vec3::new(0.9, 0.2, 0.2), 16.0, 0.4, 0.0),
+    (Vec3::new(0.0, 0.5, -10.0), 1.5, Vec3::new(0.2, 0.8, 0.3), 64.0, 0.25, 1.0),
+    (Vec3::new(2.8, -0.3, -7.0), 0.7, Vec3::new(0.3, 0.4, 0.9), 256.0, 0.1, 0.0),
+    (Vec3::new(1.2, -0.6, -5.0), 0.4, Vec3::new(0.9, 0.9, 0.2), 4.0, 0.8, 0.0),
+    (Vec3::new(-0.8, 2.2, -14.0), 2.0, Vec3::new(0.7, 0.7, 0.7), 1000.0, 0.05, 1.0),
+    (Vec3::new(-4.0, 1.5, -18.0), 1.2, Vec3::new(0.5, 0.3, 0.8), 32.0, 0.5, 0.0),
+];
+const GROUND_Y: f32 = -1.0;
+
+/// Ground plane at `y = −1` and six spheres seen by a camera at the origin (60° vertical field of view), with
+/// `samples` per pixel at the standard positions. Every attribute is filled (IDs: 0 = ground, 1.. = spheres).
+pub fn spheres(width: u32, height: u32, samples: u32) -> Result<GBuffer> {
+    let mut gb = GBuffer::new(width, height, samples)?;
+    let aspect = width.max(1) as f32 / height.max(1) as f32;
+    let cam = Camera::identity(60f32.to_radians(), aspect, 0.1, 1000.0);
+    gb.camera = Some(cam);
+    let n = gb.len();
+    let mut depth = vec![0.0; n];
+    let mut position = vec![Vec3::ZERO; n];
+    let mut normal = vec![Vec3::ZERO; n];
+    let mut albedo = vec![Vec3::ZERO; n];
+    let mut specular = vec![0.0; n];
+    let mut power = vec![0.0; n];
+    let mut roughness = vec![0.0; n];
+    let mut metallic = vec![0.0; n];
+    let mut object = vec![0u32; n];
+    for y in 0..height {
+        for x in 0..width {
+            for s in 0..samples {
+                let i = gb.index(x, y, s);
+                let o = gb.sample_positions[s as usize];
+                let ray = cam.view_ray(Vec2::new(x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y), width, height);
+                let Some((t, id)) = intersect(ray) else { continue };
+                let p = ray * t;
+                let (n_, a, pw, r, m) = if id == 0 {
+                    let check = ((p.x.floor() + p.z.floor()) as i32 & 1) as f32;
+                    (Vec3::Y, Vec3::splat(0.35 + 0.4 * check), 8.0, 0.7, 0.0)
+                } else {
+                    let (c, _, a, pw, r, m) = BALLS[id as usize - 1];
+                    ((p - c).normalize(), a, pw, r, m)
+                };
+                gb.coverage[i] = true;
+                depth[i] = -p.z;
+                position[i] = p;
+                normal[i] = n_;
+                albedo[i] = a;
+                specular[i] = 0.5;
+                power[i] = pw;
+                roughness[i] = r;
+                metallic[i] = m;
+                object[i] = id;
+            }
+        }
+    }
+    gb.depth = Some(depth);
+    gb.position = Some(position);
+    gb.normal = Some(normal);
+    gb.albedo = Some(albedo);
+    gb.specular = Some(specular);
+    gb.specular_power = Some(power);
+    gb.roughness = Some(roughness);
+    gb.metallic = Some(metallic);
+    gb.material_id = Some(object.clone());
+    gb.object_id = Some(object);
+    Ok(gb)
+}
+
+/// Nearest hit along `ray` (ray = direction with z = −1, point = ray · t, t = view depth): (t, object id).
+fn intersect(ray: Vec3) -> Option<(f32, u32)> {
+    let mut best: Option<(f32, u32)> = None;
+    if ray.y < 0.0 {
+        let t = GROUND_Y / ray.y;
+        if t > 0.0 && t < 200.0 {
+            best = Some((t, 0));
+        }
+    }
+    for (k, &(c, r, ..)) in BALLS.iter().enumerate() {
+        // |ray·t − c|² = r²  →  a t² − 2 b t + (|c|² − r²) = 0.
+        let a = ray.length_squared();
+        let b = ray.dot(c);
+        let disc = b * b - a * (c.length_squared() - r * r);
+        if disc < 0.0 {
+            continue;
+        }
+        let t = (b - disc.sqrt()) / a;
+        if t > 0.0 && best.is_none_or(|(bt, _)| t < bt) {
+            best = Some((t, k as u32 + 1));
+        }
+    }
+    best
+}
+
+/// `n` point lights hovering just above random covered samples of `gb` (offset along the normal), with the
+/// given `range`, `begin = range / 4` and random colours. Deterministic for `seed`; empty when nothing is covered.
+#[must_use]
+pub fn lights_on_surfaces(gb: &GBuffer, n: usize, range: f32, seed: u64) -> Vec<Light> {
+    let covered: Vec<usize> = (0..gb.len()).filter(|&i| gb.coverage[i]).collect();
+    let (Some(pos), false) = (&gb.position, covered.is_empty()) else { return Vec::new() };
+    let mut rng = SplitMix64::new(seed);
+    (0..n)
+        .map(|_| {
+            let i = covered[(rng.next_u64() % covered.len() as u64) as usize];
+            let nrm = gb.normal.as_ref().map_or(Vec3::Z, |v| v[i]);
+            let p = pos[i] + nrm * rng.range_f32(0.05, 0.3) * range;
+            let color = Vec3::new(rng.range_f32(0.2, 1.0), rng.range_f32(0.2, 1.0), rng.range_f32(0.2, 1.0));
+            let mut l = Light::point(p, color, 1.0, range);
+            l.begin = 0.25 * range;
+            l
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fixture_has_sky_ground_and_spheres() {
+        let gb = spheres(64, 36, 4).unwrap();
+        gb.validate().unwrap();
+        let ids = gb.object_id.as_ref().unwrap();
+        let covered = gb.coverage.iter().filter(|&&c| c).count();
+        assert!(covered > gb.len() / 3 && covered < gb.len(), "{covered} of {}", gb.len());
+        for id in 0..=BALLS.len() as u32 {
+            assert!(ids.iter().zip(&gb.coverage).any(|(&i, &c)| c && i == id), "object {id} not visible");
+        }
+        let lights = lights_on_surfaces(&gb, 10, 2.0, 1);
+        assert_eq!(lights.len(), 10);
+        assert!(lights.iter().all(|l| l.position.is_finite() && l.position.z < 0.0));
+    }
+}

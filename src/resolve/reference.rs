@@ -1,0 +1,64 @@
+//! The reference image: the unpacked, unquantized G-buffer, every covered sample shaded against every light in
+//! f64 (the formulas of `brdf.rs`, exact `powf`), box-filtered into pixels with background samples contributing 0.
+//! No culling and no schedule: the configuration's BRDF and falloff are used, its culling, tile size and schedule
+//! are ignored. (A light whose distance is at or beyond its range is skipped; both falloffs are exactly 0 there.)
+
+use super::brdf;
+use super::config::ResolveConfig;
+use super::lights::sanitize;
+use super::surface::{SanitizedCounts, SurfaceReader};
+use crate::error::Result;
+use crate::gbuffer::GBuffer;
+use crate::image::HdrImage;
+use crate::light::Light;
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+
+/// Radiance of every sample in f64, plane-indexed like the G-buffer (`(y·width + x)·samples + s`); background
+/// samples are 0.
+fn per_sample_f64(gb: &GBuffer, lights: &[Light], cfg: &ResolveConfig) -> Result<Vec<DVec3>> {
+    cfg.validate()?;
+    let reader = SurfaceReader::new(gb)?;
+    let clean = sanitize(lights);
+    let (w, s) = (gb.width as usize, gb.samples as usize);
+    let mut out = vec![DVec3::ZERO; gb.len()];
+    if w == 0 || s == 0 {
+        return Ok(out);
+    }
+    out.par_chunks_mut(w * s).enumerate().for_each(|(y, row)| {
+        let mut counts = SanitizedCounts::default();
+        for x in 0..w {
+            for k in 0..s {
+                if let Some(surf) = reader.read(x as u32, y as u32, k as u32, &mut counts) {
+                    let mut sum = DVec3::ZERO;
+                    for l in &clean.lights {
+                        sum += brdf::shade(&surf, l, cfg.brdf, cfg.falloff);
+                    }
+                    row[x * s + k] = if sum.is_finite() { sum } else { DVec3::ZERO };
+                }
+            }
+        }
+    });
+    Ok(out)
+}
+
+/// The radiance of every sample (f32 from f64 accumulation), plane-indexed like the G-buffer; background samples
+/// are 0. What the edge detectors' shading ground truth compares against.
+pub fn reference_per_sample(gb: &GBuffer, lights: &[Light], cfg: &ResolveConfig) -> Result<Vec<Vec3>> {
+    Ok(per_sample_f64(gb, lights, cfg)?.into_iter().map(|c| c.as_vec3()).collect())
+}
+
+/// The reference image: every sample shaded in f64 and box-filtered (background = 0).
+pub fn reference(gb: &GBuffer, lights: &[Light], cfg: &ResolveConfig) -> Result<HdrImage> {
+    let samples = per_sample_f64(gb, lights, cfg)?;
+    let mut img = HdrImage::new(gb.width, gb.height);
+    let s = gb.samples as usize;
+    if s == 0 {
+        return Ok(img);
+    }
+    for (p, px) in img.rgb.iter_mut().enumerate() {
+        let sum: DVec3 = samples[p * s..(p + 1) * s].iter().sum();
+        *px = (sum / s as f64).as_vec3();
+    }
+    Ok(img)
+}

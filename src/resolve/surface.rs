@@ -1,0 +1,291 @@
+//! Reading one G-buffer sample as a shadable surface: attribute defaults, sanitisation and counting.
+//!
+//! The resolve and the reference read samples through the same [`SurfaceReader`], so a sanitised value is never
+//! counted as error: it is reported in [`SanitizedCounts`] instead.
+//!
+//! Position: the `position` plane when present, else `depth` along the camera ray through the sample's sub-pixel
+//! position. A covered sample whose position is not finite or not in front of the camera (depth ≤
+//! [`MIN_VIEW_DEPTH`]) is treated as background and counted.
+//!
+//! Defaults for absent attributes: normal facing the camera (`+Z` in view space), albedo [`DEFAULT_ALBEDO`] grey,
+//! specular amount [`DEFAULT_SPECULAR`], specular power [`DEFAULT_SPECULAR_POWER`], metallic 0; roughness, when
+//! absent, is mapped from the specular power (see [`roughness_from_power`]).
+
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::gbuffer::GBuffer;
+use glam::{Vec2, Vec3};
+use serde::Serialize;
+
+/// Albedo of samples whose dump has no albedo plane (linear grey).
+pub const DEFAULT_ALBEDO: f32 = 0.8;
+/// Specular amount when the dump has none (pure diffuse).
+pub const DEFAULT_SPECULAR: f32 = 0.0;
+/// Blinn-Phong specular power when the dump has none.
+pub const DEFAULT_SPECULAR_POWER: f32 = 32.0;
+/// Largest specular power kept (larger values are clamped and counted): beyond this the lobe is narrower than
+/// f32 normals can resolve.
+pub const MAX_SPECULAR_POWER: f32 = 1e6;
+/// Samples closer to the eye plane than this (view units) cannot be projected and are treated as background.
+pub const MIN_VIEW_DEPTH: f32 = 1e-6;
+
+/// Perceptual roughness equivalent to a Blinn-Phong power: Beckmann-matched `α² = 2 / (p + 2)`, and glTF's
+/// `α = roughness²`, so `roughness = (2 / (p + 2))^¼`. Power 0 gives roughness ≈ 1; power 10⁴ about 0.12.
+#[must_use]
+pub fn roughness_from_power(p: f32) -> f32 {
+    (2.0 / (p.max(0.0) + 2.0)).sqrt().sqrt()
+}
+
+/// How many values were replaced because they were NaN, infinite or out of range (per attribute), plus lights
+/// dropped and output pixels that had to be zeroed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct SanitizedCounts {
+    /// Covered samples treated as background: position NaN/Inf or not in front of the camera.
+    pub position: u64,
+    /// Normals NaN/Inf or zero-length (replaced by the default).
+    pub normal: u64,
+    /// Albedo samples with a NaN/Inf or negative component.
+    pub albedo: u64,
+    /// Specular amounts NaN/Inf or negative.
+    pub specular: u64,
+    /// Specular powers NaN/Inf, negative or above [`MAX_SPECULAR_POWER`].
+    pub specular_power: u64,
+    /// Roughness NaN/Inf or outside [0, 1].
+    pub roughness: u64,
+    /// Metallic NaN/Inf or outside [0, 1].
+    pub metallic: u64,
+    /// Lights dropped (non-finite or negative fields, range ≤ 0, zero direction).
+    pub lights: u64,
+    /// Output pixels that were not finite and were written as 0 (should stay 0: a nonzero value is a bug).
+    pub output: u64,
+}
+
+impl SanitizedCounts {
+    /// Adds `o` into `self`.
+    pub fn add(&mut self, o: &SanitizedCounts) {
+        self.position += o.position;
+        self.normal += o.normal;
+        self.albedo += o.albedo;
+        self.specular += o.specular;
+        self.specular_power += o.specular_power;
+        self.roughness += o.roughness;
+        self.metallic += o.metallic;
+        self.lights += o.lights;
+        self.output += o.output;
+    }
+
+    /// Sum of all counts.
+    #[must_use]
+    pub fn total(&self) -> u64 {
+        self.position
+            + self.normal
+            + self.albedo
+            + self.specular
+            + self.specular_power
+            + self.roughness
+            + self.metallic
+            + self.lights
+            + self.output
+    }
+}
+
+/// One sample, ready to shade: every field finite, normal unit length, depth > [`MIN_VIEW_DEPTH`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surface {
+    /// View-space position.
+    pub p: Vec3,
+    /// Unit view-space normal.
+    pub n: Vec3,
+    /// Linear albedo, components ≥ 0.
+    pub albedo: Vec3,
+    /// Specular amount ≥ 0.
+    pub specular: f32,
+    /// Specular power in [0, [`MAX_SPECULAR_POWER`]].
+    pub power: f32,
+    /// Perceptual roughness in [0, 1].
+    pub roughness: f32,
+    /// Metallic in [0, 1].
+    pub metallic: f32,
+}
+
+/// Reads samples of one G-buffer (attribute planes resolved once).
+pub struct SurfaceReader<'a> {
+    gb: &'a GBuffer,
+    camera: Option<Camera>,
+}
+
+impl<'a> SurfaceReader<'a> {
+    /// Prepares to read `gb`. Fails when covered samples exist but no position can be formed (no position plane,
+    /// and not both depth and a camera).
+    pub fn new(gb: &'a GBuffer) -> Result<Self> {
+        gb.validate()?;
+        let derivable = gb.depth.is_some() && gb.camera.is_some();
+        if gb.position.is_none() && !derivable && gb.coverage.iter().any(|&c| c) {
+            return Err(Error::Argument(
+                "the resolve needs view-space positions: the G-buffer has no position plane, and no depth plane \
+                 with a camera to derive one"
+                    .into(),
+            ));
+        }
+        Ok(SurfaceReader { gb, camera: gb.camera })
+    }
+
+    /// The G-buffer being read.
+    #[must_use]
+    pub fn gbuffer(&self) -> &'a GBuffer {
+        self.gb
+    }
+
+    /// Sample `s` of pixel (`x`, `y`); `None` for background (or an unusable position, counted).
+    #[inline]
+    pub fn read(&self, x: u32, y: u32, s: u32, counts: &mut SanitizedCounts) -> Option<Surface> {
+        let gb = self.gb;
+        let i = gb.index(x, y, s);
+        if !gb.coverage[i] {
+            return None;
+        }
+        let p = match (&gb.position, &gb.depth, &self.camera) {
+            (Some(pos), _, _) => pos[i],
+            (None, Some(depth), Some(cam)) => {
+                let o = gb.sample_positions[s as usize];
+                let px = Vec2::new(x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y);
+                cam.view_position(px, depth[i], gb.width, gb.height)
+            }
+            _ => Vec3::NAN,
+        };
+        if !p.is_finite() || -p.z <= MIN_VIEW_DEPTH {
+            counts.position += 1;
+            return None;
+        }
+        let n = match &gb.normal {
+            Some(nn) => match nn[i].try_normalize() {
+                Some(n) => n,
+                None => {
+                    counts.normal += 1;
+                    Vec3::Z
+                }
+            },
+            None => Vec3::Z,
+        };
+        let albedo = match &gb.albedo {
+            Some(a) => {
+                let a = a[i];
+                if a.is_finite() && a.min_element() >= 0.0 {
+                    a
+                } else {
+                    counts.albedo += 1;
+                    Vec3::new(clean(a.x, 0.0), clean(a.y, 0.0), clean(a.z, 0.0)).max(Vec3::ZERO)
+                }
+            }
+            None => Vec3::splat(DEFAULT_ALBEDO),
+        };
+        let specular = scalar(gb.specular.as_deref(), i, DEFAULT_SPECULAR, 0.0, f32::MAX, &mut counts.specular);
+        let power = scalar(
+            gb.specular_power.as_deref(),
+            i,
+            DEFAULT_SPECULAR_POWER,
+            0.0,
+            MAX_SPECULAR_POWER,
+            &mut counts.specular_power,
+        );
+        let roughness = match &gb.roughness {
+            Some(_) => scalar(gb.roughness.as_deref(), i, roughness_from_power(power), 0.0, 1.0, &mut counts.roughness),
+            None => roughness_from_power(power),
+        };
+        let metallic = scalar(gb.metallic.as_deref(), i, 0.0, 0.0, 1.0, &mut counts.metallic);
+        Some(Surface { p, n, albedo, specular, power, roughness, metallic })
+    }
+}
+
+fn clean(v: f32, default: f32) -> f32 {
+    if v.is_finite() {
+        v
+    } else {
+        default
+    }
+}
+
+/// Value `i` of an optional plane: the default when absent; NaN/Inf → default and out-of-range → clamped, both
+/// counted.
+fn scalar(plane: Option<&[f32]>, i: usize, default: f32, lo: f32, hi: f32, count: &mut u64) -> f32 {
+    let Some(plane) = plane else { return default };
+    let v = plane[i];
+    if !v.is_finite() {
+        *count += 1;
+        return default;
+    }
+    if v < lo || v > hi {
+        *count += 1;
+        return v.clamp(lo, hi);
+    }
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn one_pixel() -> GBuffer {
+        let mut g = GBuffer::new(1, 1, 1).unwrap();
+        g.coverage[0] = true;
+        g.position = Some(vec![Vec3::new(0.0, 0.0, -2.0)]);
+        g
+    }
+
+    #[test]
+    fn defaults_fill_absent_attributes() {
+        let g = one_pixel();
+        let r = SurfaceReader::new(&g).unwrap();
+        let mut c = SanitizedCounts::default();
+        let s = r.read(0, 0, 0, &mut c).unwrap();
+        assert_eq!(s.n, Vec3::Z);
+        assert_eq!(s.albedo, Vec3::splat(DEFAULT_ALBEDO));
+        assert_eq!(s.power, DEFAULT_SPECULAR_POWER);
+        assert_eq!(s.roughness, roughness_from_power(DEFAULT_SPECULAR_POWER));
+        assert_eq!(c.total(), 0);
+    }
+
+    #[test]
+    fn nan_and_inf_are_replaced_and_counted() {
+        let mut g = one_pixel();
+        g.normal = Some(vec![Vec3::new(f32::NAN, 0.0, 1.0)]);
+        g.albedo = Some(vec![Vec3::new(f32::INFINITY, -1.0, 0.5)]);
+        g.specular_power = Some(vec![f32::NAN]);
+        g.roughness = Some(vec![7.0]);
+        let r = SurfaceReader::new(&g).unwrap();
+        let mut c = SanitizedCounts::default();
+        let s = r.read(0, 0, 0, &mut c).unwrap();
+        assert_eq!(s.n, Vec3::Z);
+        assert_eq!(s.albedo, Vec3::new(0.0, 0.0, 0.5));
+        assert_eq!(s.power, DEFAULT_SPECULAR_POWER);
+        assert_eq!(s.roughness, 1.0);
+        assert_eq!((c.normal, c.albedo, c.specular_power, c.roughness), (1, 1, 1, 1));
+        g.position = Some(vec![Vec3::new(0.0, f32::NAN, -1.0)]);
+        let r = SurfaceReader::new(&g).unwrap();
+        assert!(r.read(0, 0, 0, &mut c).is_none());
+        assert_eq!(c.position, 1);
+    }
+
+    #[test]
+    fn position_is_derived_from_depth_and_camera_or_refused() {
+        let mut g = GBuffer::new(2, 2, 1).unwrap();
+        g.coverage = vec![true; 4];
+        g.depth = Some(vec![3.0; 4]);
+        assert!(SurfaceReader::new(&g).is_err());
+        g.camera = Some(Camera::identity(1.0, 1.0, 0.1, 100.0));
+        let r = SurfaceReader::new(&g).unwrap();
+        let s = r.read(1, 0, 0, &mut SanitizedCounts::default()).unwrap();
+        assert!((s.p.z + 3.0).abs() < 1e-6 && s.p.x > 0.0 && s.p.y > 0.0, "{}", s.p);
+    }
+
+    #[test]
+    fn roughness_mapping_is_monotonic_and_bounded() {
+        assert!((roughness_from_power(0.0) - 1.0).abs() < 1e-6);
+        let mut last = 1.0;
+        for p in [1.0, 8.0, 64.0, 1e3, 1e4] {
+            let r = roughness_from_power(p);
+            assert!(r < last && r > 0.0, "{p} -> {r}");
+            last = r;
+        }
+    }
+}
