@@ -113,6 +113,50 @@ pub fn pruned_layout(input: &ReportInput<'_>, needs: &Needs, cfg: &SweepConfig, 
     Some((p, layout))
 }
 
+/// The needs analysis with a pruned layout chosen without lighting (for `gbuf info`): among the built-ins, the one
+/// whose pruning saves the most bytes (the lossless baseline only when nothing else can be pruned). Its error is
+/// left unmeasured (`gbuf report` measures it).
+#[must_use]
+pub fn needs_with_pruned_layout(gb: &GBuffer) -> Needs {
+    let mut needs = needs::analyze(gb);
+    let mut best: Option<(Layout, Layout, Vec<String>)> = None;
+    for l in Layout::builtins() {
+        let (spec, changes) = prune::prune_spec(l.spec(), &needs);
+        let Ok(p) = Layout::from_spec(spec) else { continue };
+        let saved = l.bytes_per_sample().saturating_sub(p.bytes_per_sample());
+        let rank = |saved: usize, name: &str| (saved == 0, name == LOSSLESS_BASELINE, std::cmp::Reverse(saved));
+        let better = match &best {
+            None => true,
+            Some((b, bp, _)) => {
+                rank(saved, l.name()) < rank(b.bytes_per_sample().saturating_sub(bp.bytes_per_sample()), b.name())
+            }
+        };
+        if better {
+            best = Some((l, p, changes));
+        }
+    }
+    if let Some((base, p, changes)) = best {
+        let saved = base.bytes_per_sample().saturating_sub(p.bytes_per_sample()) as u32;
+        needs.pruned_layout = Some(PrunedLayout {
+            name: p.name().to_string(),
+            base: base.name().to_string(),
+            bytes_per_sample: p.bytes_per_sample() as u32,
+            base_bytes_per_sample: base.bytes_per_sample() as u32,
+            bytes_saved: saved,
+            note: Some(if changes.is_empty() {
+                "the scene uses everything every layout stores: nothing to leave out".into()
+            } else {
+                "error not measured here: `gbuf report` lights the scene and measures it".into()
+            }),
+            changes,
+            base_rmse: None,
+            rmse: None,
+            psnr_db: None,
+        });
+    }
+    needs
+}
+
 /// Runs the needs analysis and the sweep, prunes, and builds the figures: everything a report folder holds.
 pub fn run(
     input: &ReportInput<'_>,

@@ -187,13 +187,49 @@ mod tests {
     }
 
     #[test]
-    fn fat_20_loses_motion_and_its_target_shrinks() {
-        let needs = analyze(&scene(false));
-        let fat = Layout::by_name("fat-20").unwrap();
-        let (spec, changes) = prune_spec(fat.spec(), &needs);
-        let p = Layout::from_spec(spec).unwrap();
-        assert!(changes.iter().any(|c| c.contains("motion.x")), "{changes:?}");
-        assert_eq!(p.bytes_per_sample(), fat.bytes_per_sample() - 2, "rgba8 → rg8 for specular + power");
+    fn constant_fields_leave_and_their_target_shrinks() {
+        use crate::layout::{FieldSpec, TargetSpec};
+        let f = |a: &str, c: &str, offset| FieldSpec { attribute: a.into(), codec: c.into(), offset, bits: 8, note: String::new() };
+        let spec = LayoutSpec {
+            name: "test".into(),
+            description: String::new(),
+            sources: vec![],
+            depth_range: None,
+            constants: Default::default(),
+            material_indirection: None,
+            targets: vec![
+                TargetSpec {
+                    name: "depth".into(),
+                    format: "d32f".into(),
+                    note: String::new(),
+                    fields: vec![FieldSpec { attribute: "depth".into(), codec: "f32".into(), offset: 0, bits: 32, note: String::new() }],
+                },
+                TargetSpec {
+                    name: "params".into(),
+                    format: "rgba8".into(),
+                    note: String::new(),
+                    fields: vec![
+                        f("metallic", "unorm-8", 0),
+                        f("roughness", "unorm-8", 8),
+                        f("specular", "unorm-8", 16),
+                        f("specular_power", "log2-unorm-8", 24),
+                    ],
+                },
+            ],
+        };
+        let base = Layout::from_spec(spec.clone()).unwrap();
+        let mut g = scene(true);
+        g.specular = Some(vec![0.5; g.len()]);
+        let needs = analyze(&g);
+        let (pruned, changes) = prune_spec(&spec, &needs);
+        let p = Layout::from_spec(pruned).unwrap();
+        assert!(changes.iter().any(|c| c.contains("dropped metallic")), "{changes:?}");
+        assert!(changes.iter().any(|c| c.contains("rgba8 → rg8")), "{changes:?}");
+        assert_eq!(p.bytes_per_sample(), base.bytes_per_sample() - 2);
+        // The constants the lighting pass now assumes are the scene's values, so the roundtrip keeps them.
+        let back = p.roundtrip(&g).unwrap();
+        assert!(back.specular.as_deref().unwrap().iter().all(|&s| s == 0.5));
+        assert!(back.metallic.as_deref().unwrap().iter().all(|&m| m == 0.0));
     }
 
     #[test]
