@@ -28,11 +28,31 @@ fn demo_writes_the_report_folder() {
     let json: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is JSON");
     assert_eq!(json["width"], 64);
     assert_eq!(json["rows"].as_array().unwrap().len(), 9);
-    for key in ["layout", "bytes_per_sample", "detector", "normal_mean_deg", "normal_max_deg", "psnr_db", "rmse",
-        "shading_fraction", "encode_ms", "decode_ms", "resolve_ms", "pareto"] {
+    for key in [
+        "layout",
+        "bytes_per_sample",
+        "detector",
+        "normal_mean_deg",
+        "normal_max_deg",
+        "psnr_db",
+        "rmse",
+        "shading_fraction",
+        "encode_ms",
+        "decode_ms",
+        "resolve_ms",
+        "pareto",
+    ] {
         assert!(json["rows"][0].get(key).is_some(), "row lacks {key}");
     }
-    for key in ["constant", "absent", "material_count", "material_id_bits", "normals_face_camera", "depth_range", "pruned_layout"] {
+    for key in [
+        "constant",
+        "absent",
+        "material_count",
+        "material_id_bits",
+        "normals_face_camera",
+        "depth_range",
+        "pruned_layout",
+    ] {
         assert!(json["needs"].get(key).is_some(), "needs lacks {key}");
     }
     for f in ["report.md", "report.csv", "report.json", "error_vs_bytes.svg"] {
@@ -58,7 +78,11 @@ fn demo_writes_the_report_folder() {
 fn report_on_a_canonical_dump_and_bad_input() {
     let dir = tempfile::tempdir().unwrap();
     let exr = dir.path().join("room.exr");
-    let o = gbuf().args(["scene", "room", "--width", "48", "--height", "27", "--msaa", "2", "-o"]).arg(&exr).output().unwrap();
+    let o = gbuf()
+        .args(["scene", "room", "--width", "48", "--height", "27", "--msaa", "2", "-o"])
+        .arg(&exr)
+        .output()
+        .unwrap();
     assert!(o.status.success(), "scene: {}", String::from_utf8_lossy(&o.stderr));
     let out = dir.path().join("rep");
     let o = gbuf()
@@ -94,7 +118,11 @@ fn report_on_a_canonical_dump_and_bad_input() {
 fn budget_writes_a_layout_that_loads() {
     let dir = tempfile::tempdir().unwrap();
     let exr = dir.path().join("room.exr");
-    let o = gbuf().args(["scene", "room", "--width", "48", "--height", "27", "--msaa", "2", "-o"]).arg(&exr).output().unwrap();
+    let o = gbuf()
+        .args(["scene", "room", "--width", "48", "--height", "27", "--msaa", "2", "-o"])
+        .arg(&exr)
+        .output()
+        .unwrap();
     assert!(o.status.success(), "scene: {}", String::from_utf8_lossy(&o.stderr));
     let toml = dir.path().join("best.toml");
     let o = gbuf().arg("budget").arg(&exr).args(["--max-bytes", "12", "--json", "-o"]).arg(&toml).output().unwrap();

@@ -48,7 +48,8 @@ pub struct Args {
 }
 
 fn parse_resolution(s: &str) -> anyhow::Result<(u32, u32)> {
-    let (w, h) = s.split_once(['x', 'X', '×']).with_context(|| format!("--resolution {s:?}: expected WxH, e.g. 1920x1080"))?;
+    let (w, h) =
+        s.split_once(['x', 'X', '×']).with_context(|| format!("--resolution {s:?}: expected WxH, e.g. 1920x1080"))?;
     let w: u32 = w.trim().parse().with_context(|| format!("--resolution {s:?}: bad width"))?;
     let h: u32 = h.trim().parse().with_context(|| format!("--resolution {s:?}: bad height"))?;
     anyhow::ensure!(w > 0 && h > 0 && w <= 65536 && h <= 65536, "--resolution {s:?}: out of range");
@@ -68,7 +69,11 @@ struct Output<'a> {
 /// Runs `gbuf budget`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let detector = Detector::from_name(&args.detector).with_context(|| {
-        format!("--detector: unknown detector {:?}; known: {}", args.detector, Detector::ALL.map(|d| d.name()).join(", "))
+        format!(
+            "--detector: unknown detector {:?}; known: {}",
+            args.detector,
+            Detector::ALL.map(|d| d.name()).join(", ")
+        )
     })?;
     if let Some(e) = args.max_error {
         anyhow::ensure!(e.is_finite() && e >= 0.0, "--max-error must be a finite number ≥ 0, got {e}");

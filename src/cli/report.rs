@@ -56,13 +56,19 @@ impl SweepArgs {
         anyhow::ensure!(!layouts.is_empty(), "--layouts: no layout given");
         let known = || Detector::ALL.map(|d| d.name()).join(", ");
         let detectors = split(&self.detectors)
-            .map(|n| Detector::from_name(n).with_context(|| format!("--detectors: unknown detector {n:?}; known: {}", known())))
+            .map(|n| {
+                Detector::from_name(n)
+                    .with_context(|| format!("--detectors: unknown detector {n:?}; known: {}", known()))
+            })
             .collect::<anyhow::Result<Vec<_>>>()?;
         anyhow::ensure!(!detectors.is_empty(), "--detectors: no detector given");
         let culling = match &self.culling {
             None => vec![],
             Some(list) => split(list)
-                .map(|n| Culling::from_name(n).with_context(|| format!("--culling: unknown mode {n:?}; known: {}", Culling::names())))
+                .map(|n| {
+                    Culling::from_name(n)
+                        .with_context(|| format!("--culling: unknown mode {n:?}; known: {}", Culling::names()))
+                })
                 .collect::<anyhow::Result<Vec<_>>>()?,
         };
         Ok(SweepConfig {
@@ -120,7 +126,10 @@ pub fn print_summary(rep: &Report, dir: &Path) {
             fmt_opt(p.base_rmse, 5)
         );
     }
-    println!("{:<22} {:>7} {:<13} {:>9} {:>9} {:>8} {:>9} {:>10}  pareto", "layout", "B/samp", "detector", "normal°", "PSNR dB", "shaded", "rmse", "total ms");
+    println!(
+        "{:<22} {:>7} {:<13} {:>9} {:>9} {:>8} {:>9} {:>10}  pareto",
+        "layout", "B/samp", "detector", "normal°", "PSNR dB", "shaded", "rmse", "total ms"
+    );
     for r in &rep.rows {
         if let Some(e) = &r.error {
             println!("{:<22} {:>7} {:<13} error: {e}", r.layout, r.bytes_per_sample, r.detector);
@@ -144,7 +153,12 @@ pub fn print_summary(rep: &Report, dir: &Path) {
             fmt_opt(r.total_ms, 1)
         );
     }
-    println!("sweep: {} rows in {:.1} s; report written to {}", rep.rows.len(), rep.sweep_seconds, dir.join("report.md").display());
+    println!(
+        "sweep: {} rows in {:.1} s; report written to {}",
+        rep.rows.len(),
+        rep.sweep_seconds,
+        dir.join("report.md").display()
+    );
 }
 
 /// Sweeps, writes the folder, prints the summary (or the JSON report).
@@ -163,10 +177,16 @@ pub fn run_and_write(
         pb.set_position(done as u64);
         pb.set_message(what.to_string());
     };
-    let input = gbuf::report::ReportInput { name: name.to_string(), gbuffer: gb, lights, lights_source: lights_source.to_string() };
+    let input = gbuf::report::ReportInput {
+        name: name.to_string(),
+        gbuffer: gb,
+        lights,
+        lights_source: lights_source.to_string(),
+    };
     let (rep, files) = gbuf::report::run(&input, cfg, &mut progress)?;
     pb.finish_and_clear();
-    gbuf::report::write::write_folder(out, &rep, &files).with_context(|| format!("writing the report to {}", out.display()))?;
+    gbuf::report::write::write_folder(out, &rep, &files)
+        .with_context(|| format!("writing the report to {}", out.display()))?;
     if json {
         print_json(&rep)?;
     } else {

@@ -184,7 +184,13 @@ fn pack_fields(fields: &[(String, String, u32)], sets: &[Vec<usize>]) -> Option<
         for &i in &order {
             let (a, c, b) = &fields[i];
             let Some(k) = (0..tg.len()).find(|&k| used[k] + b <= UINT_TARGETS[tg[k]].1) else { continue 'sets };
-            placed[k].push(FieldSpec { attribute: a.clone(), codec: c.clone(), offset: used[k], bits: *b, note: String::new() });
+            placed[k].push(FieldSpec {
+                attribute: a.clone(),
+                codec: c.clone(),
+                offset: used[k],
+                bits: *b,
+                note: String::new(),
+            });
             used[k] += b;
         }
         return Some(
@@ -303,7 +309,10 @@ fn normal_candidates(gb: &GBuffer, needs: &Needs) -> Vec<String> {
         }
         for bits in s.valid_bits().into_iter().filter(|b| (16..=48).contains(b) && (b % 4 == 0)) {
             let Some(c) = s.codec(bits) else { continue };
-            let err: f64 = idx.iter().map(|&i| f64::from(codec::angle_deg(normals[i], c.decode(c.encode(normals[i]))))).sum::<f64>()
+            let err: f64 = idx
+                .iter()
+                .map(|&i| f64::from(codec::angle_deg(normals[i], c.decode(c.encode(normals[i])))))
+                .sum::<f64>()
                 / idx.len().max(1) as f64;
             let name = format!("{}-{bits}", s.name());
             if best.get(&bits).is_none_or(|(e, _)| err < *e) {
@@ -392,7 +401,11 @@ fn build_space(pricer: &Pricer<'_>, needs: &Needs) -> Result<Space> {
         }
         depth = keep_front(depth, |&(k, m)| (f64::from(DEPTH_OPTIONS[k].2), m));
     }
-    let normal = if needed(Attribute::Normal) { price(pricer, Attribute::Normal, &normal_candidates(gb, needs))? } else { vec![] };
+    let normal = if needed(Attribute::Normal) {
+        price(pricer, Attribute::Normal, &normal_candidates(gb, needs))?
+    } else {
+        vec![]
+    };
     let colors: Vec<String> = COLOR_OPTIONS.iter().map(|s| s.to_string()).collect();
     let albedo = if needed(Attribute::Albedo) { price(pricer, Attribute::Albedo, &colors)? } else { vec![] };
     let mut scalars = Vec::new();
@@ -410,7 +423,11 @@ fn build_space(pricer: &Pricer<'_>, needs: &Needs) -> Result<Space> {
         if a.is_id() || a == Attribute::Position || a == Attribute::Motion {
             continue;
         }
-        let c = if v.len() == 1 { ConstantValue::Scalar(v[0] as f32) } else { ConstantValue::Vector(v.iter().map(|&x| x as f32).collect()) };
+        let c = if v.len() == 1 {
+            ConstantValue::Scalar(v[0] as f32)
+        } else {
+            ConstantValue::Vector(v.iter().map(|&x| x as f32).collect())
+        };
         constants.insert(name.clone(), c);
     }
     let index_bits = needs.material_id_bits.filter(|&b| (1..=16).contains(&b) && scalars.len() >= 2);
@@ -483,9 +500,27 @@ impl Space {
         let mut targets = Vec::new();
         if let Some(k) = c.depth {
             let (fmt, codec, _) = DEPTH_OPTIONS[self.depth[k].0];
-            let mut f = vec![FieldSpec { attribute: "depth".into(), codec: codec.into(), offset: 0, bits: if fmt == "d16" { 16 } else if fmt == "d24s8" { 24 } else { 32 }, note: String::new() }];
+            let mut f = vec![FieldSpec {
+                attribute: "depth".into(),
+                codec: codec.into(),
+                offset: 0,
+                bits: if fmt == "d16" {
+                    16
+                } else if fmt == "d24s8" {
+                    24
+                } else {
+                    32
+                },
+                note: String::new(),
+            }];
             if fmt == "d24s8" {
-                f.push(FieldSpec { attribute: "reserved".into(), codec: String::new(), offset: 24, bits: 8, note: "stencil".into() });
+                f.push(FieldSpec {
+                    attribute: "reserved".into(),
+                    codec: String::new(),
+                    offset: 24,
+                    bits: 8,
+                    note: "stencil".into(),
+                });
             }
             targets.push(TargetSpec { name: "depth".into(), format: fmt.into(), note: String::new(), fields: f });
             name.push_str(&format!("-d{codec}"));
@@ -511,10 +546,19 @@ impl Space {
 
     /// Every combination (cartesian product; indirection doubles it when possible).
     fn combos(&self) -> Vec<Combo> {
-        let opt = |n: usize| -> Vec<Option<usize>> { if n == 0 { vec![None] } else { (0..n).map(Some).collect() } };
+        let opt = |n: usize| -> Vec<Option<usize>> {
+            if n == 0 {
+                vec![None]
+            } else {
+                (0..n).map(Some).collect()
+            }
+        };
         let mut scalar_sets: Vec<Vec<usize>> = vec![vec![]];
         for (_, o) in &self.scalars {
-            scalar_sets = scalar_sets.into_iter().flat_map(|s| (0..o.len()).map(move |k| [s.clone(), vec![k]].concat())).collect();
+            scalar_sets = scalar_sets
+                .into_iter()
+                .flat_map(|s| (0..o.len()).map(move |k| [s.clone(), vec![k]].concat()))
+                .collect();
         }
         let mut out = Vec::new();
         for d in opt(self.depth.len()) {
@@ -543,7 +587,13 @@ fn summary(spec: &LayoutSpec) -> String {
                 .fields
                 .iter()
                 .filter(|f| f.attribute != "reserved")
-                .map(|f| if f.codec.is_empty() { format!("{}:{}", f.attribute, f.bits) } else { format!("{} {}", f.attribute, f.codec) })
+                .map(|f| {
+                    if f.codec.is_empty() {
+                        format!("{}:{}", f.attribute, f.bits)
+                    } else {
+                        format!("{} {}", f.attribute, f.codec)
+                    }
+                })
                 .collect();
             format!("{}[{}]", t.format, f.join(", "))
         })
@@ -651,11 +701,13 @@ pub fn search(gb: &GBuffer, lights: &[Light], cfg: &BudgetConfig) -> Result<Budg
             ((key(a) > e), a.bytes_per_sample).cmp(&((key(b) > e), b.bytes_per_sample)).then(key(a).total_cmp(&key(b)))
         }),
     }
-    let winner = cands
-        .iter()
-        .find(|c| c.rmse.is_some() && c.bytes_per_sample <= cfg.max_bytes)
-        .cloned()
-        .ok_or_else(|| Error::Argument(format!("no layout of at most {} bytes per sample could be measured on this scene", cfg.max_bytes)))?;
+    let winner =
+        cands.iter().find(|c| c.rmse.is_some() && c.bytes_per_sample <= cfg.max_bytes).cloned().ok_or_else(|| {
+            Error::Argument(format!(
+                "no layout of at most {} bytes per sample could be measured on this scene",
+                cfg.max_bytes
+            ))
+        })?;
     if let Some(e) = cfg.max_error {
         if winner.rmse.is_some_and(|r| r > e) {
             return Err(Error::Argument(format!(
@@ -686,7 +738,13 @@ fn option_costs(space: &Space) -> BTreeMap<String, Vec<(String, u32, f64)>> {
     let rows = |o: &[Opt]| o.iter().map(|o| (o.codec.clone(), o.bits, o.mse.sqrt())).collect::<Vec<_>>();
     m.insert(
         "depth".into(),
-        space.depth.iter().map(|&(k, mse)| (format!("{} {}", DEPTH_OPTIONS[k].0, DEPTH_OPTIONS[k].1), DEPTH_OPTIONS[k].2 * 8, mse.sqrt())).collect(),
+        space
+            .depth
+            .iter()
+            .map(|&(k, mse)| {
+                (format!("{} {}", DEPTH_OPTIONS[k].0, DEPTH_OPTIONS[k].1), DEPTH_OPTIONS[k].2 * 8, mse.sqrt())
+            })
+            .collect(),
     );
     m.insert("normal".into(), rows(&space.normal));
     m.insert("albedo".into(), rows(&space.albedo));

@@ -71,12 +71,10 @@ fn percentile_max(v: &[Option<f32>]) -> f32 {
 /// An edge-mask picture: per-sample pixels white, once-shaded pixels dim grey, background black.
 #[must_use]
 pub fn mask_picture(mask: &EdgeMask) -> RgbImage {
-    RgbImage::from_fn(mask.width, mask.height, |x, y| {
-        match mask.shade_count[(y * mask.width + x) as usize] {
-            0 => Rgb([0, 0, 0]),
-            1 => Rgb([70, 70, 70]),
-            _ => Rgb([255, 255, 255]),
-        }
+    RgbImage::from_fn(mask.width, mask.height, |x, y| match mask.shade_count[(y * mask.width + x) as usize] {
+        0 => Rgb([0, 0, 0]),
+        1 => Rgb([70, 70, 70]),
+        _ => Rgb([255, 255, 255]),
     })
 }
 
@@ -104,14 +102,22 @@ pub fn figures(gb: &GBuffer, out: &SweepOutput) -> Result<(Vec<Attachment>, Vec<
         Ok(())
     };
     let (w, h) = PLOT_SIZE;
-    let by_bytes =
-        scatter(&out.rows, "Image error vs bytes per sample", "bytes per sample", |r| Some(f64::from(r.bytes_per_sample)));
-    let by_time = scatter(&out.rows, "Image error vs run time", "encode + decode + detect + resolve (ms)", |r| r.total_ms);
-    for (stem, p, what) in [("error_vs_bytes", &by_bytes, "bytes per sample"), ("error_vs_time", &by_time, "run time")] {
+    let by_bytes = scatter(&out.rows, "Image error vs bytes per sample", "bytes per sample", |r| {
+        Some(f64::from(r.bytes_per_sample))
+    });
+    let by_time =
+        scatter(&out.rows, "Image error vs run time", "encode + decode + detect + resolve (ms)", |r| r.total_ms);
+    for (stem, p, what) in [("error_vs_bytes", &by_bytes, "bytes per sample"), ("error_vs_time", &by_time, "run time")]
+    {
         png(&format!("{stem}.png"), p.to_png_image(w, h), format!("Image RMSE against {what}, one point per layout (its best detector); the Pareto front in red (SVG: {stem}.svg)"), &mut files)?;
         files.push(Attachment { name: format!("{stem}.svg"), bytes: p.to_svg(w, h).into_bytes() });
     }
-    png("reference.png", image_picture(&out.reference), "The reference image (every sample shaded, unquantized G-buffer), tone-mapped".into(), &mut files)?;
+    png(
+        "reference.png",
+        image_picture(&out.reference),
+        "The reference image (every sample shaded, unquantized G-buffer), tone-mapped".into(),
+        &mut files,
+    )?;
 
     // The worst layouts by their best image error.
     let mut worst: Vec<(&str, f64)> = Vec::new();

@@ -63,7 +63,12 @@ pub const LOSSLESS_BASELINE: &str = "reference-f32";
 /// Picks the layout to prune — among the swept layouts whose pruning saves bytes, the one with the least image
 /// error in the sweep (ties → the larger saving; the lossless baseline only when nothing else can be pruned) —
 /// prunes it and measures the pruned layout's error.
-pub fn pruned_layout(input: &ReportInput<'_>, needs: &Needs, cfg: &SweepConfig, out: &SweepOutput) -> Option<(PrunedLayout, Layout)> {
+pub fn pruned_layout(
+    input: &ReportInput<'_>,
+    needs: &Needs,
+    cfg: &SweepConfig,
+    out: &SweepOutput,
+) -> Option<(PrunedLayout, Layout)> {
     let first_det = cfg.detectors.first()?.name();
     let base_rmse = |name: &str| {
         out.rows.iter().find(|r| r.layout == name && r.detector == first_det && r.error.is_none()).and_then(|r| r.rmse)
@@ -75,7 +80,8 @@ pub fn pruned_layout(input: &ReportInput<'_>, needs: &Needs, cfg: &SweepConfig, 
         let saved = (l.bytes_per_sample() - p.bytes_per_sample().min(l.bytes_per_sample())) as u32;
         let err = base_rmse(l.name()).unwrap_or(f64::INFINITY);
         // Rank: saves something, is not the lossless baseline, least error, largest saving.
-        let rank = |saved: u32, err: f64, name: &str| (saved == 0, name == LOSSLESS_BASELINE, err, std::cmp::Reverse(saved));
+        let rank =
+            |saved: u32, err: f64, name: &str| (saved == 0, name == LOSSLESS_BASELINE, err, std::cmp::Reverse(saved));
         let better = match &best {
             None => true,
             Some((s, e, bl, ..)) => {

@@ -180,7 +180,10 @@ mod tests {
             let (spec, changes) = prune_spec(l.spec(), &needs);
             let p = Layout::from_spec(spec).unwrap_or_else(|e| panic!("{}: {e}; changes {changes:?}", l.name()));
             assert!(p.bytes_per_sample() <= l.bytes_per_sample(), "{}", l.name());
-            assert_eq!(changes.is_empty(), p.spec().targets == l.spec().targets && p.spec().constants == l.spec().constants);
+            assert_eq!(
+                changes.is_empty(),
+                p.spec().targets == l.spec().targets && p.spec().constants == l.spec().constants
+            );
             assert!(!p.stores(Attribute::Motion), "{}: constant motion dropped", l.name());
             assert!(!p.stores(Attribute::Metallic), "{}: constant metallic dropped", l.name());
         }
@@ -189,7 +192,13 @@ mod tests {
     #[test]
     fn constant_fields_leave_and_their_target_shrinks() {
         use crate::layout::{FieldSpec, TargetSpec};
-        let f = |a: &str, c: &str, offset| FieldSpec { attribute: a.into(), codec: c.into(), offset, bits: 8, note: String::new() };
+        let f = |a: &str, c: &str, offset| FieldSpec {
+            attribute: a.into(),
+            codec: c.into(),
+            offset,
+            bits: 8,
+            note: String::new(),
+        };
         let spec = LayoutSpec {
             name: "test".into(),
             description: String::new(),
@@ -202,7 +211,13 @@ mod tests {
                     name: "depth".into(),
                     format: "d32f".into(),
                     note: String::new(),
-                    fields: vec![FieldSpec { attribute: "depth".into(), codec: "f32".into(), offset: 0, bits: 32, note: String::new() }],
+                    fields: vec![FieldSpec {
+                        attribute: "depth".into(),
+                        codec: "f32".into(),
+                        offset: 0,
+                        bits: 32,
+                        note: String::new(),
+                    }],
                 },
                 TargetSpec {
                     name: "params".into(),

@@ -77,7 +77,10 @@ fn per_pixel(gb: &GBuffer, f: impl Fn(usize) -> f32) -> Vec<Option<f32>> {
     let s = gb.samples as usize;
     (0..gb.pixel_count())
         .map(|p| {
-            (p * s..(p + 1) * s).filter(|&i| gb.coverage[i]).map(&f).fold(None, |a: Option<f32>, v| Some(a.map_or(v, |a| a.max(v))))
+            (p * s..(p + 1) * s)
+                .filter(|&i| gb.coverage[i])
+                .map(&f)
+                .fold(None, |a: Option<f32>, v| Some(a.map_or(v, |a| a.max(v))))
         })
         .collect()
 }
@@ -139,7 +142,8 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, progress: Progre
         };
         progress(done, total, &format!("{}: pack/unpack", layout.name()));
         let packed = time_runs(cfg.runs, || layout.pack(gb));
-        let decoded = packed.and_then(|(p, te)| time_runs(cfg.runs, || layout.unpack(&p, gb)).map(|(d, td)| (d, te, td)));
+        let decoded =
+            packed.and_then(|(p, te)| time_runs(cfg.runs, || layout.unpack(&p, gb)).map(|(d, td)| (d, te, td)));
         done += 1;
         let (decoded, te, td) = match decoded {
             Ok(v) => v,
