@@ -289,6 +289,7 @@ fn a_minimal_layout_in_code_reads() {
     assert!(blender::matches(&raw));
     let l = blender::read(&raw, Path::new("mini.exr"), None, &LoadOptions::default()).unwrap();
     let g = &l.gbuffer;
+    assert!(g.motion.is_none());
     assert_eq!(g.background_samples(), n / 4);
     assert_eq!(g.depth.as_ref().unwrap()[1], depth[1]);
     assert_eq!(g.normal.as_ref().unwrap()[1], Vec3::Z, "renormalised, left in world space");
@@ -330,5 +331,46 @@ for name in ["ViewLayer.Depth.Z", "ViewLayer.Position.X", "ViewLayer.Normal.Y", 
         assert!((sum - py_sum).abs() <= 1e-9 * py_sum.abs().max(1.0), "{}: {sum} vs {py_sum}", f[0]);
         let px = f64::from(c.data.f32_at(40 * raw.width as usize + 70));
         assert_eq!(px, f[4].parse::<f64>().unwrap(), "{} at (70, 40)", f[0]);
+    }
+}
+
+#[test]
+fn vector_pass_becomes_motion_since_the_previous_frame() {
+    // Values as Blender 3.4 wrote them for a cube moving right and up by (3.95, 1.98) px per frame
+    // (measured on a throw-away render; the fixture itself is static).
+    let n = 4;
+    let ch = |name: &str, v: f32| RawChannel { name: name.into(), data: RawData::F32(vec![v; n]) };
+    let raw = RawImage {
+        width: 2,
+        height: 2,
+        channels: vec![
+            ch("ViewLayer.Depth.Z", 3.0),
+            ch("ViewLayer.Vector.X", -3.95),
+            ch("ViewLayer.Vector.Y", -1.98),
+            ch("ViewLayer.Vector.Z", -3.95),
+            ch("ViewLayer.Vector.W", -1.98),
+        ],
+        ..Default::default()
+    };
+    let l = blender::read(&raw, Path::new("moving.exr"), None, &LoadOptions::default()).unwrap();
+    // Moved right (+x) and up (−y in image rows) since the previous frame.
+    assert_eq!(l.gbuffer.motion.unwrap()[0], Vec2::new(3.95, -1.98));
+}
+
+#[test]
+fn a_sidecar_camera_from_another_render_is_refused() {
+    let raw = raw();
+    let good = sidecar();
+    let l = read(&raw, Some(&good)).unwrap();
+    let note = l.sources.iter().find(|s| s.attribute == "position").unwrap().note.clone().unwrap();
+    assert!(note.contains("median reprojection error"), "{note}");
+    // A wider field of view, and a camera moved sideways: both move the reprojected positions by many pixels.
+    let mut wide = good.clone();
+    wide.camera.as_mut().unwrap().yfov *= 1.2;
+    let mut moved = good.clone();
+    moved.camera.as_mut().unwrap().world_to_view[0][3] += 0.5;
+    for bad in [wide, moved] {
+        let e = read(&raw, Some(&bad)).unwrap_err().to_string();
+        assert!(e.contains("sidecar camera does not match") && e.contains("blender_gbuffer.exr"), "{e}");
     }
 }

@@ -4,7 +4,7 @@
 //! |---|---|---|---|---|
 //! | `unorm8`, `unorm-N` (N = 1..=16) | 3N | [0, 1] | 0.5/(2^N−1) | D3D/Vulkan UNORM |
 //! | `srgb8` | 24 | [0, 1] | 0.5/255 × the sRGB decode slope (≤ 0.0047) | IEC 61966-2-1 transfer function |
-//! | `r11g11b10f` | 32 | [0, 65024] (b: 64512) | c·2^-7 (b: 2^-6) + 2^-21 | D3D `DXGI_FORMAT_R11G11B10_FLOAT`, Vulkan `B10G11R11_UFLOAT_PACK32` |
+//! | `r11g11b10f` | 32 | [0, 65024] (b: 64512) | c·2^-7 + 2^-21 (b: c·2^-6 + 2^-20) | D3D `DXGI_FORMAT_R11G11B10_FLOAT`, Vulkan `B10G11R11_UFLOAT_PACK32` |
 //! | `rgb9e5` | 32 | [0, 65408] | max(r,g,b)·2^-9 + 2^-25 | `EXT_texture_shared_exponent` (GL), D3D `R9G9B9E5_SHAREDEXP` |
 //! | `f16` | 48 | [−65504, 65504] | |c|·2^-11 + 2^-25 | IEEE binary16 |
 //! | `f32` | 96 | finite f32 | 0 | IEEE binary32 |
@@ -185,7 +185,8 @@ impl ColorCodec for R11G11B10F {
         (0.0, ufloat_max(6))
     }
     fn error_bound(&self, c: Vec3) -> Vec3 {
-        let b = |v: f32, m: i32| clean(v, 0.0, ufloat_max(m as u32)) * 2f32.powi(-m - 1) + 2f32.powi(-21);
+        // Relative half-ulp for normals, half the denormal step 2^(−14−m) near zero.
+        let b = |v: f32, m: i32| clean(v, 0.0, ufloat_max(m as u32)) * 2f32.powi(-m - 1) + 2f32.powi(-15 - m);
         Vec3::new(b(c.x, 6), b(c.y, 6), b(c.z, 5))
     }
 }

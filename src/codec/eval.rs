@@ -82,6 +82,8 @@ pub struct ErrorStats {
     pub max_hemi_deg: f64,
     /// Largest error among vectors inside the codec's domain, degrees (compare with the bound).
     pub max_domain_deg: f64,
+    /// Mean error among vectors inside the codec's domain, degrees (for hemisphere codecs the useful mean).
+    pub mean_domain_deg: f64,
     /// The input with the largest error.
     pub worst_input: [f32; 3],
 }
@@ -94,7 +96,7 @@ pub fn measure_error(codec: &dyn NormalCodec, inputs: &[Vec3]) -> ErrorStats {
         .map(|&n| (f64::from(angle_deg(n, codec.decode(codec.encode(n)))), n.z >= 0.0, codec.in_domain(n)))
         .collect();
     let mut s = ErrorStats { samples: inputs.len(), ..ErrorStats::default() };
-    let mut sum = 0.0;
+    let (mut sum, mut sum_dom, mut n_dom) = (0.0, 0.0, 0usize);
     for (i, &(e, hemi, dom)) in per.iter().enumerate() {
         sum += e;
         if e > s.max_deg {
@@ -106,9 +108,12 @@ pub fn measure_error(codec: &dyn NormalCodec, inputs: &[Vec3]) -> ErrorStats {
         }
         if dom {
             s.max_domain_deg = s.max_domain_deg.max(e);
+            sum_dom += e;
+            n_dom += 1;
         }
     }
     s.mean_deg = if per.is_empty() { 0.0 } else { sum / per.len() as f64 };
+    s.mean_domain_deg = if n_dom == 0 { 0.0 } else { sum_dom / n_dom as f64 };
     s
 }
 
@@ -202,6 +207,8 @@ pub struct CodecRow {
     pub max_hemi_deg: f64,
     /// Largest error inside the codec's domain, degrees.
     pub max_domain_deg: f64,
+    /// Mean error inside the codec's domain, degrees.
+    pub mean_domain_deg: f64,
     /// The documented bound (inside the domain), degrees.
     pub bound_deg: f64,
     /// Vectors in the evaluation set.
@@ -251,6 +258,7 @@ pub fn evaluate(codec: &dyn NormalCodec, scheme: &str, inputs: &[Vec3], opts: &E
         max_deg: err.max_deg,
         max_hemi_deg: err.max_hemi_deg,
         max_domain_deg: err.max_domain_deg,
+        mean_domain_deg: err.mean_domain_deg,
         bound_deg: f64::from(codec.max_error_deg()),
         samples: err.samples,
         exhaustive: ex,

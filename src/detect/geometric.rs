@@ -18,8 +18,13 @@ pub(crate) fn detect_depth(gb: &GBuffer, cfg: &DetectorConfig) -> Result<EdgeMas
     Ok(geometric_mask(gb, |_, _, base| {
         let z0 = depth[base];
         let bound = cfg.depth_absolute + cfg.depth_relative * z0.abs();
-        // NaN fails the comparison: an edge.
-        bound.is_finite() && depth[base + 1..base + s].iter().all(|&z| (z - z0).abs() <= bound)
+        // Non-finite depths (and differences that overflow) are edges whatever the threshold; a bound that
+        // overflows to +∞ accepts every finite difference, which keeps the test monotone.
+        z0.is_finite()
+            && depth[base + 1..base + s].iter().all(|&z| {
+                let dz = (z - z0).abs();
+                dz.is_finite() && dz <= bound
+            })
     }))
 }
 
@@ -34,7 +39,7 @@ pub(crate) fn detect_normal(gb: &GBuffer, cfg: &DetectorConfig) -> Result<EdgeMa
         let l0 = n0.length_squared();
         normal[base + 1..base + s].iter().all(|&n| {
             let norms = (l0 * n.length_squared()).sqrt();
-            norms > 0.0 && n0.dot(n) >= min_dot * norms
+            norms > 0.0 && norms.is_finite() && n0.dot(n) >= min_dot * norms
         })
     }))
 }

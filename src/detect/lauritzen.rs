@@ -98,21 +98,23 @@ fn same_surface(
     min_dot: f32,
 ) -> bool {
     let z0 = depth[base];
+    // A bound that overflows to +∞ from finite inputs accepts everything (monotone in the thresholds); a NaN bound
+    // (from a non-finite depth or gradient) is an edge.
     let bound = cfg.gradient_scale * (gradient.x.abs() + gradient.y.abs()) + cfg.depth_slack * z0.abs();
-    if !bound.is_finite() {
+    if !z0.is_finite() || bound.is_nan() {
         return false;
     }
     let n0 = normal[base];
     let l0 = n0.length_squared();
     for i in base + 1..base + samples {
-        // NaN (and infinity) land on "different surface".
+        // NaN and infinity land on "different surface", whatever the threshold.
         let dz = (depth[i] - z0).abs();
-        if dz.is_nan() || dz > bound {
+        if !dz.is_finite() || dz > bound {
             return false;
         }
         let ni = normal[i];
         let norms = (l0 * ni.length_squared()).sqrt();
-        if !(norms > 0.0 && n0.dot(ni) >= min_dot * norms) {
+        if !(norms > 0.0 && norms.is_finite() && n0.dot(ni) >= min_dot * norms) {
             return false;
         }
     }

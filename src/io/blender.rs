@@ -9,7 +9,8 @@
 //! Z-up world space and are brought into our view space with the camera — from the sidecar, else recovered from the
 //! `Position` pass by [`super::camera_fit`]. Without either, depth is still view depth, normals stay in world space
 //! (flagged in their source note) and positions are dropped. `IndexMA`/`IndexOB` are float-coded integers;
-//! `GlossCol` becomes the scalar specular (mean of RGB).
+//! `GlossCol` becomes the scalar specular (mean of RGB); `Vector.XY` becomes the motion since the previous frame
+//! in pixels (+y down).
 
 use super::exr::{RawData, RawImage};
 use super::sidecar::Sidecar;
@@ -103,7 +104,7 @@ pub fn read(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
     let albedo_ch = ch.pick(Attribute::Albedo, find(Role::Albedo), 3)?;
     let mat_ch = ch.pick(Attribute::MaterialId, find(Role::MaterialId), 1)?;
     let obj_ch = ch.pick(Attribute::ObjectId, find(Role::ObjectId), 1)?;
-    let motion_ch = ch.pick(Attribute::Motion, find(Role::Motion).map(|v| v[2..4].to_vec()), 2)?;
+    let motion_ch = ch.pick(Attribute::Motion, find(Role::Motion).map(|v| v[0..2].to_vec()), 2)?;
     let aov = |names: &[&str]| -> Option<Vec<String>> {
         raw.channels.iter().find_map(|c| {
             let (l, pass, _) = split(&c.name)?;
@@ -142,7 +143,7 @@ pub fn read(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
             (None, None, None) => unreachable!("checked above"),
         };
     }
-    let cam = resolve_camera(sidecar, pos_world.as_deref(), &gb.coverage, w, h);
+    let cam = resolve_camera(sidecar, pos_world.as_deref(), &gb.coverage, w, h, path)?;
     gb.camera = cam.camera;
 
     if let (Some(d), Some(c)) = (depth_raw, &depth_ch) {
@@ -217,15 +218,15 @@ pub fn read(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
         }
     }
     if let Some(c) = &motion_ch {
-        let (zx, wy) = (ch.floats(&c[0])?, ch.floats(&c[1])?);
-        let mv: Vec<Vec2> = zx.iter().zip(&wy).map(|(x, y)| Vec2::new(*x, -*y)).collect();
+        // Measured with Blender 3.4 (a cube moving right and up across frames): Vector.XY is the offset to the
+        // previous frame's position in pixels with +y up, i.e. −(motion since the previous frame). Ours is the
+        // motion since the previous frame with +y down: (−X, +Y).
+        let (x, y) = (ch.floats(&c[0])?, ch.floats(&c[1])?);
+        let mv: Vec<Vec2> = x.iter().zip(&y).map(|(x, y)| Vec2::new(-*x, *y)).collect();
         gb.motion = Some(mask(&gb.coverage, mv, Vec2::ZERO));
-        sources.push(src(
-            "motion",
-            c,
-            ch.type_of(&c[0]),
-            Some("Vector.Z/W (towards the next frame), y flipped to point down"),
-        ));
+        let note =
+            "Vector.X/Y (offset to the previous frame, +y up) → motion since the previous frame (−X, +Y), +y down";
+        sources.push(src("motion", c, ch.type_of(&c[0]), Some(note)));
     }
     gb.validate()?;
     let lights = sidecar_lights(sidecar, gb.camera.as_ref(), path)?;
@@ -365,15 +366,37 @@ pub(super) struct CameraChoice {
 
 /// The sidecar's camera, else one fitted to the world positions of the covered samples (pixel centres of this
 /// unfolded image), else none.
+/// A sidecar camera is checked against the position pass (when there is one): it must reproject the covered
+/// samples' world positions to their pixel centres within this median error, else the sidecar belongs to another
+/// render (or another frame) and the load fails instead of silently producing wrong view-space data.
+pub const SIDECAR_MAX_MEDIAN_REPROJECTION_PX: f32 = 2.0;
+/// Samples used for that check (a fixed stride over the covered samples).
+const CHECK_SAMPLES: usize = 2048;
+
 pub(super) fn resolve_camera(
     sidecar: Option<&Sidecar>,
     world_pos: Option<&[Vec3]>,
     coverage: &[bool],
     w: u32,
     h: u32,
-) -> CameraChoice {
+    path: &Path,
+) -> Result<CameraChoice> {
     if let Some(c) = sidecar.and_then(|s| s.camera.as_ref()) {
-        return CameraChoice { camera: Some(c.to_camera()), source: "sidecar".into(), detail: "sidecar camera".into() };
+        let camera = c.to_camera();
+        let mut detail = "sidecar camera".to_string();
+        if let Some(err) = world_pos.and_then(|p| median_reprojection_px(&camera, p, coverage, w, h)) {
+            if err.is_nan() || err > SIDECAR_MAX_MEDIAN_REPROJECTION_PX {
+                return Err(Error::invalid(
+                    path,
+                    format!(
+                        "the sidecar camera does not match this image: it reprojects the position pass {err:.1} px \
+                         (median) away from the pixels (limit {SIDECAR_MAX_MEDIAN_REPROJECTION_PX} px)"
+                    ),
+                ));
+            }
+            detail.push_str(&format!(", median reprojection error of the position pass {err:.3} px"));
+        }
+        return Ok(CameraChoice { camera: Some(camera), source: "sidecar".into(), detail });
     }
     if let Some(p) = world_pos {
         let (mut ps, mut qs) = (Vec::new(), Vec::new());
@@ -386,19 +409,40 @@ pub(super) fn resolve_camera(
         match super::camera_fit::fit_camera(&ps, &qs, w, h) {
             Some((camera, rms)) if rms <= FIT_MAX_RMS_PX => {
                 let detail = format!("camera fitted to {} positions, RMS reprojection error {rms:.3} px", ps.len());
-                return CameraChoice { camera: Some(camera), source: "fit".into(), detail };
+                return Ok(CameraChoice { camera: Some(camera), source: "fit".into(), detail });
             }
             Some((_, rms)) => {
                 let detail = format!("camera fit rejected: RMS reprojection error {rms:.2} px > {FIT_MAX_RMS_PX} px");
-                return CameraChoice { camera: None, source: "unknown".into(), detail };
+                return Ok(CameraChoice { camera: None, source: "unknown".into(), detail });
             }
             None => {
                 let detail = "camera fit failed: positions too few or degenerate (coplanar or collinear)".into();
-                return CameraChoice { camera: None, source: "unknown".into(), detail };
+                return Ok(CameraChoice { camera: None, source: "unknown".into(), detail });
             }
         }
     }
-    CameraChoice { camera: None, source: "unknown".into(), detail: "no sidecar camera and no position pass".into() }
+    Ok(CameraChoice { camera: None, source: "unknown".into(), detail: "no sidecar camera and no position pass".into() })
+}
+
+/// Median distance in pixels between the projection of covered world positions and their pixel centres (over a
+/// fixed-stride subsample); `None` without covered finite positions. Points behind the camera count as infinitely
+/// far off.
+fn median_reprojection_px(camera: &Camera, world_pos: &[Vec3], coverage: &[bool], w: u32, h: u32) -> Option<f32> {
+    let covered: Vec<usize> = (0..world_pos.len()).filter(|&i| coverage[i] && world_pos[i].is_finite()).collect();
+    let stride = covered.len().div_ceil(CHECK_SAMPLES).max(1);
+    let mut errs: Vec<f32> = covered
+        .iter()
+        .step_by(stride)
+        .map(|&i| {
+            let centre = Vec2::new((i % w as usize) as f32 + 0.5, (i / w as usize) as f32 + 0.5);
+            camera.project(camera.to_view_point(world_pos[i]), w, h).map_or(f32::INFINITY, |q| (q - centre).length())
+        })
+        .collect();
+    if errs.is_empty() {
+        return None;
+    }
+    let mid = errs.len() / 2;
+    Some(*errs.select_nth_unstable_by(mid, f32::total_cmp).1)
 }
 
 /// World-space normals → view space (inverse transpose of the world→view rotation part), renormalised. Without a

@@ -318,3 +318,30 @@ pub fn read(path: &Path, opts: &LoadOptions) -> Result<GBuffer> {
     }
     from_raw(&raw, path)
 }
+
+/// Where each attribute of a canonical G-buffer came from: its sample-0 channel names with `s*` standing for
+/// every sample when there are several.
+#[must_use]
+pub fn sources(raw: &RawImage, gb: &GBuffer) -> Vec<crate::io::AttributeSource> {
+    gb.attributes()
+        .into_iter()
+        .map(|attr| {
+            let names: Vec<String> =
+                components(attr)
+                    .iter()
+                    .map(|c| {
+                        if gb.samples == 1 {
+                            channel_name(0, attr.name(), c)
+                        } else {
+                            format!("s*.{}.{c}", attr.name())
+                        }
+                    })
+                    .collect();
+            let file_type = raw
+                .channel(&channel_name(0, attr.name(), components(attr)[0]))
+                .map_or("unknown", |c| c.data.type_name())
+                .to_string();
+            crate::io::AttributeSource { attribute: attr.name(), channels: names, file_type, note: None }
+        })
+        .collect()
+}

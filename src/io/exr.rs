@@ -108,44 +108,231 @@ impl RawImage {
     }
 }
 
-/// Reads all flat channels of the EXR at `path`.
+/// Reads all flat channels of the EXR at `path` (headers are checked against `limits` before any pixel is read).
 pub fn read_raw(path: &Path, limits: &ReadLimits) -> Result<RawImage> {
-    let _ = limits;
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
+    read_raw_from(std::io::BufReader::new(file), len, path, limits)
+}
+
+/// Reads all flat channels of an EXR held in memory (`path` only names it in errors).
+pub fn read_raw_bytes(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<RawImage> {
+    read_raw_from(std::io::Cursor::new(bytes), bytes.len() as u64, path, limits)
+}
+
+/// Largest factor by which a compression method can expand its input, for the methods where one is known:
+/// a file declaring more decoded bytes than `factor × file size` cannot hold them and is refused before the exr
+/// crate allocates its buffers. `None` for methods without a useful bound (PIZ, DWA, HTJ2K).
+fn max_expansion(c: ::exr::compression::Compression) -> Option<u64> {
+    use ::exr::compression::Compression as C;
+    match c {
+        C::Uncompressed => Some(1),
+        // A run of at most 128 bytes costs 2 bytes.
+        C::RLE => Some(64),
+        // Deflate cannot exceed 1032:1.
+        C::ZIP1 | C::ZIP16 => Some(1032),
+        // Deflate of 24-bit floats re-expanded to 32 bits.
+        C::PXR24 => Some(1376),
+        // A flat 4×4 half block (32 bytes) costs at least 3 bytes; other types are stored raw.
+        C::B44 | C::B44A => Some(11),
+        _ => None,
+    }
+}
+
+/// The OpenEXR name of a compression method.
+fn compression_name(c: ::exr::compression::Compression) -> &'static str {
+    use ::exr::compression::Compression as C;
+    match c {
+        C::Uncompressed => "NONE",
+        C::RLE => "RLE",
+        C::ZIP1 => "ZIPS",
+        C::ZIP16 => "ZIP",
+        C::PIZ => "PIZ",
+        C::PXR24 => "PXR24",
+        C::B44 => "B44",
+        C::B44A => "B44A",
+        C::DWAA(_) => "DWAA",
+        C::DWAB(_) => "DWAB",
+        _ => "HTJ2K",
+    }
+}
+
+/// A channel or layer name as a string: UTF-8 when the bytes are valid UTF-8 (what current OpenEXR writes), else
+/// Latin-1 (what the format originally specified). Control characters are refused.
+fn decode_name(bytes: &[u8], path: &Path, what: &str) -> Result<String> {
+    let s = match std::str::from_utf8(bytes) {
+        Ok(s) => s.to_string(),
+        Err(_) => bytes.iter().map(|&b| char::from(b)).collect(),
+    };
+    if s.is_empty() || s.chars().any(char::is_control) {
+        return Err(Error::invalid(path, format!("{what} name {s:?} is empty or contains control characters")));
+    }
+    Ok(s)
+}
+
+/// Checks the full names (`layer.channel` for named parts) of every channel of every part: decodable, unique.
+fn check_channel_names(meta: &::exr::meta::MetaData, path: &Path) -> Result<()> {
+    let mut seen = std::collections::HashSet::new();
+    for header in meta.headers.iter() {
+        let prefix = match &header.own_attributes.layer_name {
+            Some(n) => format!("{}.", decode_name(n.bytes(), path, "part")?),
+            None => String::new(),
+        };
+        for ch in &header.channels.list {
+            let name = format!("{prefix}{}", decode_name(ch.name.bytes(), path, "channel")?);
+            if !seen.insert(name.clone()) {
+                return Err(Error::invalid(path, format!("duplicate channel name {name:?}")));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// What the header check learned: compression, whether decoding in parallel is worth a thread pool.
+struct Plan {
+    compression: String,
+    lossy: bool,
+    parallel: bool,
+}
+
+/// Refuses, from the headers alone, files that are unsupported or would allocate more than the limits allow.
+fn check_headers(meta: &::exr::meta::MetaData, file_len: u64, path: &Path, limits: &ReadLimits) -> Result<Plan> {
+    use ::exr::compression::Compression as C;
+    if meta.headers.is_empty() {
+        return Err(Error::invalid(path, "no parts"));
+    }
+    let mut declared: u128 = 0;
+    let mut chunks: u128 = 0;
+    let mut bounded: u128 = 0; // decoded bytes of parts whose compression has a known expansion bound
+    let mut lossy = false;
+    for (i, h) in meta.headers.iter().enumerate() {
+        if h.deep {
+            return Err(Error::Unsupported { path: path.into(), what: format!("part {i} holds deep data") });
+        }
+        if h.channels.list.is_empty() {
+            return Err(Error::invalid(path, format!("part {i} has no channels")));
+        }
+        for ch in &h.channels.list {
+            if ch.sampling.0 != 1 || ch.sampling.1 != 1 {
+                return Err(Error::Unsupported {
+                    path: path.into(),
+                    what: format!(
+                        "channel {:?} is subsampled ({}×{}); only full-resolution channels are supported",
+                        ch.name.to_string(),
+                        ch.sampling.0,
+                        ch.sampling.1
+                    ),
+                });
+            }
+            lossy |= !h.compression.is_lossless_for(ch.sample_type);
+        }
+        if matches!(h.compression, C::DWAA(_) | C::DWAB(_)) && !limits.allow_dwa {
+            return Err(Error::Unsupported {
+                path: path.into(),
+                what: format!(
+                    "{} compression (lossy, and its decoder is not hardened against damaged files); pass --allow-dwa to decode it",
+                    compression_name(h.compression)
+                ),
+            });
+        }
+        let pixel_bytes: u128 = h.channels.list.iter().map(|c| c.sample_type.bytes_per_sample() as u128).sum();
+        let bytes = h.layer_size.0 as u128 * h.layer_size.1 as u128 * pixel_bytes;
+        declared += bytes;
+        chunks += h.chunk_count as u128;
+        if let Some(f) = max_expansion(h.compression) {
+            bounded += bytes / u128::from(f);
+        }
+    }
+    if declared > u128::from(limits.max_bytes) {
+        return Err(Error::TooLarge {
+            path: path.into(),
+            bytes: declared.min(u64::MAX as u128) as u64,
+            limit: limits.max_bytes,
+        });
+    }
+    // Every chunk costs at least an 8-byte offset-table entry and an 8-byte chunk header.
+    if chunks * 16 > u128::from(file_len) {
+        return Err(Error::invalid(
+            path,
+            format!("declares {chunks} chunks, more than a {file_len}-byte file can hold (truncated or damaged)"),
+        ));
+    }
+    if bounded > u128::from(file_len) {
+        return Err(Error::invalid(
+            path,
+            format!("declares {declared} bytes of samples, more than its compression can store in {file_len} bytes (truncated or damaged)"),
+        ));
+    }
+    check_channel_names(meta, path)?;
+    let first = meta.headers[0].compression;
+    Ok(Plan { compression: compression_name(first).to_string(), lossy, parallel: declared > 4 << 20 })
+}
+
+/// Runs `f`, turning a panic inside the exr crate into an error (a last line of defence: the header checks above
+/// exist so that this does not happen).
+fn guarded<T>(path: &Path, f: impl FnOnce() -> ::exr::error::Result<T>) -> Result<T> {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)) {
+        Ok(Ok(v)) => Ok(v),
+        Ok(Err(source)) => Err(Error::Exr { path: path.into(), source }),
+        Err(_) => Err(Error::invalid(path, "the EXR decoder failed on damaged data")),
+    }
+}
+
+fn read_raw_from<R: std::io::Read + std::io::Seek>(
+    mut reader: R,
+    file_len: u64,
+    path: &Path,
+    limits: &ReadLimits,
+) -> Result<RawImage> {
     use ::exr::prelude::{read, FlatSamples, ReadChannels, ReadLayers};
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .all_layers()
-        .all_attributes()
-        .from_file(path)
-        .map_err(|source| Error::Exr { path: path.into(), source })?;
-    let mut out = RawImage::default();
-    for (li, layer) in image.layer_data.iter().enumerate() {
+    let meta = guarded(path, || ::exr::meta::MetaData::read_from_buffered(&mut reader, false))?;
+    let plan = check_headers(&meta, file_len, path, limits)?;
+    drop(meta);
+    reader.seek(std::io::SeekFrom::Start(0)).map_err(|e| Error::io(path, e))?;
+    let image = guarded(path, || {
+        let r = read().no_deep_data().largest_resolution_level().all_channels().all_layers().all_attributes();
+        if plan.parallel {
+            r.from_buffered(reader)
+        } else {
+            r.non_parallel().from_buffered(reader)
+        }
+    })?;
+    let mut out = RawImage { compression: plan.compression, lossy: plan.lossy, ..RawImage::default() };
+    for (li, layer) in image.layer_data.into_iter().enumerate() {
         let (w, h) = (layer.size.width() as u32, layer.size.height() as u32);
         if li == 0 {
             out.width = w;
             out.height = h;
-            out.compression = format!("{:?}", layer.encoding.compression);
-        } else if (w, h) != (out.width, out.height) {
-            return Err(Error::Unsupported { path: path.into(), what: "parts of different sizes".into() });
-        }
-        if li == 0 {
             for (k, v) in &layer.attributes.other {
                 if let ::exr::meta::attribute::AttributeValue::Text(t) = v {
                     out.attributes.push((k.to_string(), t.to_string()));
                 }
             }
             out.attributes.sort();
+        } else if (w, h) != (out.width, out.height) {
+            return Err(Error::Unsupported {
+                path: path.into(),
+                what: format!("parts of different sizes ({}×{} and {w}×{h})", out.width, out.height),
+            });
         }
-        let prefix = layer.attributes.layer_name.as_ref().map(|n| format!("{n}.")).unwrap_or_default();
-        for ch in &layer.channel_data.list {
-            let name = format!("{prefix}{}", ch.name);
-            let data = match &ch.sample_data {
-                FlatSamples::F16(v) => RawData::F16(v.clone()),
-                FlatSamples::F32(v) => RawData::F32(v.clone()),
-                FlatSamples::U32(v) => RawData::U32(v.clone()),
+        let prefix = match &layer.attributes.layer_name {
+            Some(n) => format!("{}.", decode_name(n.bytes(), path, "part")?),
+            None => String::new(),
+        };
+        let n = w as usize * h as usize;
+        for ch in layer.channel_data.list {
+            let name = format!("{prefix}{}", decode_name(ch.name.bytes(), path, "channel")?);
+            let data = match ch.sample_data {
+                FlatSamples::F16(v) => RawData::F16(v),
+                FlatSamples::F32(v) => RawData::F32(v),
+                FlatSamples::U32(v) => RawData::U32(v),
             };
+            if data.len() != n {
+                return Err(Error::invalid(
+                    path,
+                    format!("channel {name} decoded to {} samples, expected {n}", data.len()),
+                ));
+            }
             out.channels.push(RawChannel { name, data });
         }
     }

@@ -7,15 +7,19 @@ pub mod canonical;
 pub mod exr;
 pub mod fold;
 pub mod ispc;
+pub mod mapped;
 pub mod mitsuba;
+pub mod sanitize;
 pub mod sidecar;
+pub mod stats;
 
 use crate::error::{Error, Result};
 use crate::gbuffer::{Attribute, GBuffer};
 use crate::light::Light;
 use std::path::{Path, PathBuf};
 
-pub use self::exr::ReadLimits;
+pub use self::exr::{RawImage, ReadLimits};
+pub use self::sidecar::Sidecar;
 
 /// Which reader produced a G-buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -78,8 +82,171 @@ pub struct Loaded {
     pub sanitized: Vec<(&'static str, u64, u64)>,
 }
 
-/// Loads a dump from `path`, whatever its format.
+/// Loads a dump from `path`, whatever its format: resolves the sidecar, detects the format by content, reads,
+/// folds (`opts.fold`, else the sidecar's `supersample`), attaches the sidecar's camera and lights, replaces NaN/±Inf
+/// by finite values (counted in [`Loaded::sanitized`]) and validates the result.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
-    let _ = opts;
-    Err(Error::Unsupported { path: path.into(), what: "no reader yet".into() })
+    let side = resolve_sidecar(path, opts)?;
+    let (head, len) = read_head(path)?;
+    let loaded = if ispc::matches_file(&head, len) {
+        ispc::read(path, side.as_ref().map(|s| &s.0), opts)?
+    } else if head.starts_with(&EXR_MAGIC) {
+        let raw = exr::read_raw(path, &opts.limits)?;
+        read_exr(&raw, path, side.as_ref().map(|s| &s.0), opts)?
+    } else {
+        return Err(not_a_dump(path, &head));
+    };
+    finish(loaded, path, side.as_ref().map(|(s, p)| (s, p.as_path())), opts)
+}
+
+/// Loads an EXR dump held in memory (`path` names it in errors and locates the default sidecar beside it).
+pub fn load_exr_bytes(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<Loaded> {
+    let side = resolve_sidecar(path, opts)?;
+    if !bytes.starts_with(&EXR_MAGIC) {
+        return Err(not_a_dump(path, bytes));
+    }
+    let raw = exr::read_raw_bytes(bytes, path, &opts.limits)?;
+    let loaded = read_exr(&raw, path, side.as_ref().map(|s| &s.0), opts)?;
+    finish(loaded, path, side.as_ref().map(|(s, p)| (s, p.as_path())), opts)
+}
+
+/// The OpenEXR magic number.
+const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+
+fn not_a_dump(path: &Path, head: &[u8]) -> Error {
+    let shown: Vec<String> = head.iter().take(8).map(|b| format!("{b:02x}")).collect();
+    Error::invalid(
+        path,
+        format!(
+            "neither an OpenEXR file nor an ISPC `deferred` .bin (first bytes: {})",
+            if shown.is_empty() { "none, the file is empty".to_string() } else { shown.join(" ") }
+        ),
+    )
+}
+
+/// The first 4 KiB of the file and its length.
+fn read_head(path: &Path) -> Result<(Vec<u8>, u64)> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
+    let mut head = Vec::with_capacity(4096);
+    file.take(4096).read_to_end(&mut head).map_err(|e| Error::io(path, e))?;
+    Ok((head, len))
+}
+
+/// The sidecar to use and its path: `opts.sidecar`, else `<stem>.json` beside the dump when it exists.
+fn resolve_sidecar(path: &Path, opts: &LoadOptions) -> Result<Option<(Sidecar, PathBuf)>> {
+    let p = match &opts.sidecar {
+        Some(p) => p.clone(),
+        None => {
+            let p = path.with_extension("json");
+            if p == path || !p.is_file() {
+                return Ok(None);
+            }
+            p
+        }
+    };
+    Ok(Some((Sidecar::load(&p)?, p)))
+}
+
+/// Picks the EXR reader: canonical, Blender, Mitsuba, else the `--map` reader.
+fn read_exr(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadOptions) -> Result<Loaded> {
+    if canonical::matches(raw) {
+        let gbuffer = canonical::from_raw(raw, path)?;
+        let sources = canonical::sources(raw, &gbuffer);
+        let camera_source = if gbuffer.camera.is_some() { "file" } else { "unknown" };
+        let mut loaded = Loaded {
+            gbuffer,
+            format: SourceFormat::Canonical,
+            sources,
+            lights: None,
+            camera_source: camera_source.into(),
+            compression: Some((raw.compression.clone(), raw.lossy)),
+            sanitized: Vec::new(),
+        };
+        mapped::override_scalars(&mut loaded, raw, path, opts)?;
+        return Ok(loaded);
+    }
+    let mut loaded = if blender::matches(raw) {
+        blender::read(raw, path, sidecar, opts)?
+    } else if pending::mitsuba::matches(raw) {
+        pending::mitsuba::read(raw, path, sidecar, opts)?
+    } else {
+        return mapped::read(raw, path, opts);
+    };
+    mapped::override_scalars(&mut loaded, raw, path, opts)?;
+    Ok(loaded)
+}
+
+/// After any reader: fold, camera and lights from the sidecar, derived depth, sanitizing, validation.
+fn finish(mut loaded: Loaded, path: &Path, side: Option<(&Sidecar, &Path)>, opts: &LoadOptions) -> Result<Loaded> {
+    let fold_k = opts.fold.or(side.and_then(|(s, _)| s.supersample));
+    if let Some(k) = fold_k.filter(|&k| k > 1) {
+        let from = match (opts.fold, side) {
+            (Some(_), _) => "--fold".to_string(),
+            (None, Some((_, sp))) => format!("sidecar {} (supersample)", sp.display()),
+            (None, None) => unreachable!("fold factor comes from --fold or the sidecar"),
+        };
+        let gb = &loaded.gbuffer;
+        loaded.gbuffer = fold::fold(gb, k).map_err(|e| match (opts.fold, side) {
+            (None, Some((_, sp))) => {
+                Error::Parse { path: sp.into(), what: format!("does not match {}: {e}", path.display()) }
+            }
+            _ => Error::SizeMismatch { path: path.into(), what: format!("{from}: {e}") },
+        })?;
+    }
+    if let Some((s, sp)) = side {
+        if let Some(c) = &s.camera {
+            let (w, h) = (loaded.gbuffer.width, loaded.gbuffer.height);
+            let image_aspect = w as f32 / h.max(1) as f32;
+            if (c.aspect / image_aspect - 1.0).abs() > ASPECT_TOLERANCE {
+                return Err(Error::Parse {
+                    path: sp.into(),
+                    what: format!(
+                        "camera aspect {} does not match the image {} ({w}×{h} pixels, aspect {image_aspect:.4})",
+                        c.aspect,
+                        path.display()
+                    ),
+                });
+            }
+            if loaded.gbuffer.camera.is_none() {
+                loaded.gbuffer.camera = Some(c.to_camera());
+                loaded.camera_source = "sidecar".into();
+            }
+        }
+        if loaded.lights.is_none() && !s.lights.is_empty() {
+            loaded.lights = Some(s.view_lights(loaded.gbuffer.camera.as_ref(), sp)?);
+        }
+    }
+    if loaded.gbuffer.depth.is_none() && loaded.gbuffer.derive_depth_or_position() == Some(Attribute::Depth) {
+        loaded.sources.push(AttributeSource {
+            attribute: Attribute::Depth.name(),
+            channels: Vec::new(),
+            file_type: "derived".into(),
+            note: Some("derived from position (depth = −z)".into()),
+        });
+    }
+    loaded.sanitized = sanitize::sanitize(&mut loaded.gbuffer);
+    loaded.gbuffer.validate().map_err(|e| Error::invalid(path, e.to_string()))?;
+    Ok(loaded)
+}
+
+/// A sidecar camera's aspect may differ from the image's by this fraction: engines round the aspect they export
+/// (16:9 as 1.77 or 1.78), but a real mismatch (a sidecar from another render) is off by far more.
+pub const ASPECT_TOLERANCE: f32 = 0.01;
+
+/// Stand-in with the exact signatures of the Mitsuba reader until it lands (it matches nothing, so such files fall
+/// through to the `--map` reader).
+mod pending {
+    pub mod mitsuba {
+        use crate::error::Result;
+        use crate::io::{LoadOptions, Loaded, RawImage, Sidecar};
+        use std::path::Path;
+        pub fn matches(_raw: &RawImage) -> bool {
+            false
+        }
+        pub fn read(_: &RawImage, path: &Path, _: Option<&Sidecar>, _: &LoadOptions) -> Result<Loaded> {
+            Err(crate::Error::Unsupported { path: path.into(), what: "Mitsuba reader not built".into() })
+        }
+    }
 }

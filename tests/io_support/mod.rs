@@ -114,3 +114,98 @@ pub fn assert_bit_exact(a: &GBuffer, b: &GBuffer) {
         (x, y) => assert_eq!(x.is_some(), y.is_some(), "camera presence"),
     }
 }
+
+/// One header attribute of a single-part EXR.
+#[derive(Clone, Debug)]
+pub struct HeaderAttr {
+    /// Attribute name.
+    pub name: String,
+    /// Attribute type name.
+    pub kind: String,
+    /// Raw value bytes.
+    pub value: Vec<u8>,
+}
+
+/// Parses the header of a single-part EXR: (attributes, offset of the byte after the header's terminating 0).
+pub fn parse_header(bytes: &[u8]) -> (Vec<HeaderAttr>, usize) {
+    let mut i = 8;
+    let mut out = Vec::new();
+    let cstr = |i: &mut usize| {
+        let end = bytes[*i..].iter().position(|&b| b == 0).unwrap() + *i;
+        let s = String::from_utf8_lossy(&bytes[*i..end]).into_owned();
+        *i = end + 1;
+        s
+    };
+    loop {
+        if bytes[i] == 0 {
+            return (out, i + 1);
+        }
+        let name = cstr(&mut i);
+        let kind = cstr(&mut i);
+        let size = i32::from_le_bytes(bytes[i..i + 4].try_into().unwrap()) as usize;
+        i += 4;
+        out.push(HeaderAttr { name, kind, value: bytes[i..i + size].to_vec() });
+        i += size;
+    }
+}
+
+/// Rebuilds a single-part scan-line EXR with edited header attributes, shifting the offset table so the chunks
+/// stay addressable. `version_flags` are OR-ed into the version field.
+pub fn rebuild(bytes: &[u8], attrs: &[HeaderAttr], version_flags: u32) -> Vec<u8> {
+    let (_, end) = parse_header(bytes);
+    let mut out = bytes[..8].to_vec();
+    let v = u32::from_le_bytes(out[4..8].try_into().unwrap()) | version_flags;
+    out[4..8].copy_from_slice(&v.to_le_bytes());
+    for a in attrs {
+        out.extend_from_slice(a.name.as_bytes());
+        out.push(0);
+        out.extend_from_slice(a.kind.as_bytes());
+        out.push(0);
+        out.extend_from_slice(&(a.value.len() as i32).to_le_bytes());
+        out.extend_from_slice(&a.value);
+    }
+    out.push(0);
+    let delta = out.len() as i64 - end as i64;
+    // The offset table: one u64 per chunk up to the first chunk's offset.
+    let first = u64::from_le_bytes(bytes[end..end + 8].try_into().unwrap()) as usize;
+    let mut i = end;
+    while i < first {
+        let o = u64::from_le_bytes(bytes[i..i + 8].try_into().unwrap()) as i64 + delta;
+        out.extend_from_slice(&(o as u64).to_le_bytes());
+        i += 8;
+    }
+    out.extend_from_slice(&bytes[first..]);
+    out
+}
+
+/// A small generic (non-canonical) single-part EXR with float channels `names`, `w`×`h`, values from `f(channel,
+/// sample)`.
+pub fn generic_exr(w: u32, h: u32, names: &[&str], f: impl Fn(usize, usize) -> f32) -> Vec<u8> {
+    use gbuf::io::exr::{RawChannel, RawData, RawImage};
+    let n = (w * h) as usize;
+    let raw = RawImage {
+        width: w,
+        height: h,
+        channels: names
+            .iter()
+            .enumerate()
+            .map(|(c, name)| RawChannel {
+                name: name.to_string(),
+                data: RawData::F32((0..n).map(|i| f(c, i)).collect()),
+            })
+            .collect(),
+        ..Default::default()
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("g.exr");
+    gbuf::io::exr::write_raw(&p, &raw).unwrap();
+    std::fs::read(&p).unwrap()
+}
+
+/// Bytes of a canonical file of `gb`.
+pub fn canonical_bytes(gb: &GBuffer) -> Vec<u8> {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("c.exr");
+    gbuf::io::canonical::write(&p, gb).unwrap();
+    std::fs::read(&p).unwrap()
+}

@@ -43,7 +43,7 @@ impl Projection for XyHemi {
     fn in_domain(&self, n: Vec3) -> bool {
         n.z >= 0.0
     }
-    fn is_idempotent(&self) -> bool {
+    fn is_idempotent(&self, _q: Quant) -> bool {
         false
     }
 }

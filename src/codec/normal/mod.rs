@@ -379,9 +379,11 @@ pub trait Projection: Send + Sync + Copy + 'static {
         let _ = n;
         true
     }
-    /// See [`NormalCodec::is_idempotent`].
-    fn is_idempotent(&self) -> bool {
-        true
+    /// See [`NormalCodec::is_idempotent`] (`q` is the storage). Default: exact for snorm/unorm storage; not for
+    /// f16, whose resolution near 0 (down to 2^-24) is finer than the absolute f32 rounding of the projection
+    /// arithmetic, so re-encoding a decoded normal can move a tiny coordinate by an f16 ulp (within the bound).
+    fn is_idempotent(&self, q: Quant) -> bool {
+        q != Quant::F16
     }
 }
 
@@ -433,7 +435,7 @@ impl<P: Projection + std::fmt::Debug> NormalCodec for Planar<P> {
         self.proj.in_domain(n)
     }
     fn is_idempotent(&self) -> bool {
-        self.proj.is_idempotent()
+        self.proj.is_idempotent(self.quant)
     }
 }
 

@@ -8,6 +8,10 @@
 //! SIGGRAPH 2010, `deferred` sample, `ComputeNormal`) stores `e = g·0.5+0.5` as unorm and decodes
 //! `f = (x−x²)+(y−y²)`, `m = √(4f−1)`, `n = (m(4x−2), m(4y−2), 3−8f)` — algebraically the same map.
 //!
+//! We keep Mittring's formulas literally; in f32 they cancel near −Z (`n.z·0.5+0.5`, `1−n.z²`): a decoded
+//! (3e-4, 0, −0.99999994) re-encodes to exactly −Z. Snorm codes never get that close to the centre; the f16
+//! storage does, and is therefore not exactly idempotent there (within the bound).
+//!
 //! Singularities and defined results: `normalize(n.xy)` is undefined at both poles; we use +X there (so +Z
 //! encodes to g = (1, 0) and decodes exactly, and −Z to g = 0). The decoder at g = 0 returns exactly −Z.
 //!

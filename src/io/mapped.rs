@@ -1,0 +1,206 @@
+//! The generic reader for EXRs with unknown channel naming, driven by `--map attr=channel,…`.
+//!
+//! Every mapped channel is taken as-is in the crate's view space (+X right, +Y up, looking along −Z), one sample
+//! per pixel. Depth is the positive distance along the view axis; a depth channel holding mostly negative values
+//! is taken to be view-space z and negated. Coverage: a sample is background when its depth is 0 or its magnitude is at least
+//! [`BACKGROUND_DEPTH`] (renderers write 0, 1e10 or +Inf for sky), or, without depth, when its position is
+//! exactly zero. Float-coded IDs are rounded; negative or non-finite ones become 0.
+
+use crate::error::{Error, Result};
+use crate::gbuffer::{Attribute, GBuffer};
+use crate::io::exr::{RawChannel, RawData, RawImage};
+use crate::io::{AttributeSource, LoadOptions, Loaded, SourceFormat};
+use glam::{Vec2, Vec3};
+use std::path::Path;
+
+/// Depths at or beyond this are background (Blender writes 1e10 for sky).
+pub const BACKGROUND_DEPTH: f32 = 1e9;
+
+/// The `--map` hint appended to errors about unknown naming.
+pub const MAP_HINT: &str = "name the channels with --map attr=channel,… (components separated by `;`), e.g. \
+                            --map 'depth=Z,normal=N.X;N.Y;N.Z,albedo=C.R;C.G;C.B'";
+
+/// Looks up channel `name`, or says which channels exist.
+pub fn channel<'a>(raw: &'a RawImage, path: &Path, name: &str) -> Result<&'a RawChannel> {
+    raw.channel(name).ok_or_else(|| Error::MissingChannel {
+        path: path.into(),
+        name: name.to_string(),
+        found: raw.channel_list(),
+    })
+}
+
+/// A channel's samples as IDs: uint channels as they are, float channels rounded (negative/non-finite → 0).
+#[must_use]
+pub fn ids(ch: &RawChannel) -> Vec<u32> {
+    match &ch.data {
+        RawData::U32(v) => v.clone(),
+        other => (0..other.len())
+            .map(|i| {
+                let f = other.f32_at(i);
+                if f.is_finite() && f > 0.0 {
+                    f.round() as u32
+                } else {
+                    0
+                }
+            })
+            .collect(),
+    }
+}
+
+fn floats(ch: &RawChannel) -> Vec<f32> {
+    match &ch.data {
+        RawData::F32(v) => v.clone(),
+        other => (0..other.len()).map(|i| other.f32_at(i)).collect(),
+    }
+}
+
+/// Reads `raw` with the explicit mapping `opts.map` (see the module docs). Needs depth or position.
+pub fn read(raw: &RawImage, path: &Path, opts: &LoadOptions) -> Result<Loaded> {
+    let has = |a: Attribute| opts.map.iter().any(|(m, _)| *m == a);
+    if !has(Attribute::Depth) && !has(Attribute::Position) {
+        let what = if opts.map.is_empty() {
+            "depth or position: unknown channel naming (not a gbuf canonical, Blender or Mitsuba file)"
+        } else {
+            "depth or position: --map names neither"
+        };
+        return Err(Error::MissingChannel {
+            path: path.into(),
+            name: format!("{what}; {MAP_HINT}"),
+            found: raw.channel_list(),
+        });
+    }
+    let mut gb = GBuffer::new(raw.width, raw.height, 1).map_err(|e| Error::invalid(path, e.to_string()))?;
+    let mut sources = Vec::new();
+    for (attr, names) in &opts.map {
+        if names.len() != attr.components() {
+            return Err(Error::Argument(format!(
+                "--map: {} needs {} channel(s), got {}",
+                attr.name(),
+                attr.components(),
+                names.len()
+            )));
+        }
+        let chans = names.iter().map(|n| channel(raw, path, n)).collect::<Result<Vec<_>>>()?;
+        let file_type = chans.iter().map(|c| c.data.type_name()).collect::<Vec<_>>().join("/");
+        let mut note = Some("mapped with --map; assumed view space".to_string());
+        set_plane(&mut gb, *attr, &chans);
+        if *attr == Attribute::Depth {
+            let d = gb.depth.as_mut().expect("just set");
+            let negative = d.iter().filter(|v| **v < 0.0).count();
+            let positive = d.iter().filter(|v| **v > 0.0 && **v < BACKGROUND_DEPTH).count();
+            if negative > positive {
+                d.iter_mut().for_each(|v| *v = -*v);
+                note = Some("mapped with --map; negated (the channel holds view-space z)".into());
+            }
+        }
+        sources.push(AttributeSource { attribute: attr.name(), channels: names.clone(), file_type, note });
+    }
+    gb.coverage = match (&gb.depth, &gb.position) {
+        (Some(d), _) => d.iter().map(|&v| !(v == 0.0 || v.abs() >= BACKGROUND_DEPTH)).collect(),
+        (None, Some(p)) => p.iter().map(|&v| v != Vec3::ZERO).collect(),
+        (None, None) => unreachable!("checked above"),
+    };
+    zero_background(&mut gb);
+    Ok(Loaded {
+        gbuffer: gb,
+        format: SourceFormat::Mapped,
+        sources,
+        lights: None,
+        camera_source: "unknown".into(),
+        compression: Some((raw.compression.clone(), raw.lossy)),
+        sanitized: Vec::new(),
+    })
+}
+
+/// Sets `attr`'s plane of a one-sample G-buffer from its component channels.
+pub fn set_plane(gb: &mut GBuffer, attr: Attribute, chans: &[&RawChannel]) {
+    let f = |i: usize| floats(chans[i]);
+    match attr {
+        Attribute::Depth => gb.depth = Some(f(0)),
+        Attribute::Specular => gb.specular = Some(f(0)),
+        Attribute::SpecularPower => gb.specular_power = Some(f(0)),
+        Attribute::Roughness => gb.roughness = Some(f(0)),
+        Attribute::Metallic => gb.metallic = Some(f(0)),
+        Attribute::MaterialId => gb.material_id = Some(ids(chans[0])),
+        Attribute::ObjectId => gb.object_id = Some(ids(chans[0])),
+        Attribute::PrimitiveId => gb.primitive_id = Some(ids(chans[0])),
+        Attribute::Motion => {
+            let (x, y) = (f(0), f(1));
+            gb.motion = Some(x.iter().zip(&y).map(|(&a, &b)| Vec2::new(a, b)).collect());
+        }
+        Attribute::Position | Attribute::Normal | Attribute::Albedo => {
+            let (x, y, z) = (f(0), f(1), f(2));
+            let v: Vec<Vec3> = (0..x.len()).map(|i| Vec3::new(x[i], y[i], z[i])).collect();
+            match attr {
+                Attribute::Position => gb.position = Some(v),
+                Attribute::Normal => gb.normal = Some(v),
+                _ => gb.albedo = Some(v),
+            }
+        }
+    }
+}
+
+/// Writes 0 into every plane at background samples (the G-buffer convention).
+pub fn zero_background(gb: &mut GBuffer) {
+    let cov = std::mem::take(&mut gb.coverage);
+    fn zero<T: Copy + Default>(plane: &mut Option<Vec<T>>, cov: &[bool]) {
+        if let Some(p) = plane {
+            p.iter_mut().zip(cov).filter(|(_, c)| !**c).for_each(|(v, _)| *v = T::default());
+        }
+    }
+    zero(&mut gb.depth, &cov);
+    zero(&mut gb.position, &cov);
+    zero(&mut gb.normal, &cov);
+    zero(&mut gb.albedo, &cov);
+    zero(&mut gb.specular, &cov);
+    zero(&mut gb.specular_power, &cov);
+    zero(&mut gb.roughness, &cov);
+    zero(&mut gb.metallic, &cov);
+    zero(&mut gb.material_id, &cov);
+    zero(&mut gb.object_id, &cov);
+    zero(&mut gb.primitive_id, &cov);
+    zero(&mut gb.motion, &cov);
+    gb.coverage = cov;
+}
+
+/// Replaces scalar and ID attributes of a one-sample G-buffer read by a format-specific reader with the channels
+/// `opts.map` names for them (vectors need the reader's space conversion and are left to it). Returns the
+/// attributes replaced.
+pub fn override_scalars(
+    loaded: &mut Loaded,
+    raw: &RawImage,
+    path: &Path,
+    opts: &LoadOptions,
+) -> Result<Vec<Attribute>> {
+    let mut done = Vec::new();
+    for (attr, names) in &opts.map {
+        if attr.components() != 1 || *attr == Attribute::Depth || loaded.gbuffer.samples != 1 {
+            continue;
+        }
+        let ch = channel(raw, path, &names[0])?;
+        if ch.data.len() != loaded.gbuffer.len() {
+            return Err(Error::SizeMismatch {
+                path: path.into(),
+                what: format!(
+                    "--map channel {} has {} samples, expected {}",
+                    ch.name,
+                    ch.data.len(),
+                    loaded.gbuffer.len()
+                ),
+            });
+        }
+        set_plane(&mut loaded.gbuffer, *attr, &[ch]);
+        loaded.sources.retain(|s| s.attribute != attr.name());
+        loaded.sources.push(AttributeSource {
+            attribute: attr.name(),
+            channels: names.clone(),
+            file_type: ch.data.type_name().into(),
+            note: Some("mapped with --map".into()),
+        });
+        done.push(*attr);
+    }
+    if !done.is_empty() {
+        zero_background(&mut loaded.gbuffer);
+    }
+    Ok(done)
+}

@@ -1,0 +1,86 @@
+//! The sanitize pass every loader ends with: NaN and ±Inf are counted per attribute and replaced by finite values,
+//! so that no stage downstream sees them and no user is left unaware of them.
+//!
+//! Replacements: NaN → 0, +Inf → `f32::MAX`, −Inf → `−f32::MAX` (the sign and "huge" survive, the arithmetic stays
+//! finite). Background samples are included: a loader that wants sky to carry +Inf depth must mark it uncovered and
+//! zero it first (they all do).
+
+use crate::gbuffer::{Attribute, GBuffer};
+use glam::{Vec2, Vec3};
+
+fn fix(v: &mut f32, nan: &mut u64, inf: &mut u64) {
+    if v.is_nan() {
+        *nan += 1;
+        *v = 0.0;
+    } else if v.is_infinite() {
+        *inf += 1;
+        *v = if *v > 0.0 { f32::MAX } else { -f32::MAX };
+    }
+}
+
+fn scalars(p: &mut [f32]) -> (u64, u64) {
+    let (mut nan, mut inf) = (0, 0);
+    p.iter_mut().for_each(|v| fix(v, &mut nan, &mut inf));
+    (nan, inf)
+}
+
+fn vec2s(p: &mut [Vec2]) -> (u64, u64) {
+    let (mut nan, mut inf) = (0, 0);
+    p.iter_mut().for_each(|v| {
+        fix(&mut v.x, &mut nan, &mut inf);
+        fix(&mut v.y, &mut nan, &mut inf);
+    });
+    (nan, inf)
+}
+
+fn vec3s(p: &mut [Vec3]) -> (u64, u64) {
+    let (mut nan, mut inf) = (0, 0);
+    p.iter_mut().for_each(|v| {
+        fix(&mut v.x, &mut nan, &mut inf);
+        fix(&mut v.y, &mut nan, &mut inf);
+        fix(&mut v.z, &mut nan, &mut inf);
+    });
+    (nan, inf)
+}
+
+/// Replaces every NaN and ±Inf value (per component) in the float attributes of `gb` and returns, for each
+/// attribute that had any, `(name, NaN count, Inf count)` in canonical attribute order.
+pub fn sanitize(gb: &mut GBuffer) -> Vec<(&'static str, u64, u64)> {
+    let mut out = Vec::new();
+    for attr in Attribute::ALL {
+        let counts = match attr {
+            Attribute::Depth => gb.depth.as_deref_mut().map(scalars),
+            Attribute::Position => gb.position.as_deref_mut().map(vec3s),
+            Attribute::Normal => gb.normal.as_deref_mut().map(vec3s),
+            Attribute::Albedo => gb.albedo.as_deref_mut().map(vec3s),
+            Attribute::Specular => gb.specular.as_deref_mut().map(scalars),
+            Attribute::SpecularPower => gb.specular_power.as_deref_mut().map(scalars),
+            Attribute::Roughness => gb.roughness.as_deref_mut().map(scalars),
+            Attribute::Metallic => gb.metallic.as_deref_mut().map(scalars),
+            Attribute::Motion => gb.motion.as_deref_mut().map(vec2s),
+            Attribute::MaterialId | Attribute::ObjectId | Attribute::PrimitiveId => None,
+        };
+        if let Some((nan, inf)) = counts.filter(|c| c.0 + c.1 > 0) {
+            out.push((attr.name(), nan, inf));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_and_replaces_per_component() {
+        let mut gb = GBuffer::new(2, 1, 2).unwrap();
+        gb.depth = Some(vec![1.0, f32::NAN, f32::INFINITY, 2.0]);
+        gb.normal = Some(vec![Vec3::new(f32::NAN, f32::NEG_INFINITY, f32::NAN), Vec3::Z, Vec3::Z, Vec3::Z]);
+        gb.albedo = Some(vec![Vec3::ONE; 4]);
+        let s = sanitize(&mut gb);
+        assert_eq!(s, vec![("depth", 1, 1), ("normal", 2, 1)]);
+        assert_eq!(gb.depth.as_ref().unwrap(), &vec![1.0, 0.0, f32::MAX, 2.0]);
+        assert_eq!(gb.normal.as_ref().unwrap()[0], Vec3::new(0.0, -f32::MAX, 0.0));
+        assert!(sanitize(&mut gb).is_empty(), "a second pass finds nothing");
+    }
+}

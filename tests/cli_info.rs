@@ -1,0 +1,125 @@
+//! `gbuf info` through the built binary, in a fresh temporary directory.
+
+mod io_support;
+
+use io_support::*;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn gbuf(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_gbuf")).current_dir(dir).args(args).output().expect("run gbuf")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn json(o: &Output) -> serde_json::Value {
+    assert!(o.status.success(), "gbuf failed: {}", stderr(o));
+    serde_json::from_slice(&o.stdout).expect("JSON on stdout")
+}
+
+#[test]
+fn json_has_the_documented_fields_and_matches_the_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let gb = plausible(8, 6, 4, 11);
+    std::fs::write(dir.path().join("d.exr"), canonical_bytes(&gb)).unwrap();
+    let v = json(&gbuf(dir.path(), &["info", "d.exr", "--json"]));
+    assert_eq!((v["width"].as_u64(), v["height"].as_u64(), v["samples"].as_u64()), (Some(8), Some(6), Some(4)));
+    assert_eq!(v["sample_positions"].as_array().unwrap().len(), 4);
+    assert_eq!(v["sample_positions"][0][0].as_f64(), Some(-2.0 / 16.0));
+    assert_eq!(v["background_samples"].as_u64(), Some(gb.background_samples() as u64));
+    assert_eq!(v["camera"]["source"], "file");
+    assert!(v["camera"]["yfov"].as_f64().unwrap() > 0.0);
+    assert_eq!(v["compression"]["lossy"], false);
+    let depth = &v["attributes"]["depth"];
+    assert_eq!(depth["channels"][0], "s*.depth.Z");
+    let d = gb.depth.as_ref().unwrap();
+    let covered: Vec<f32> = d.iter().zip(&gb.coverage).filter(|(_, c)| **c).map(|(v, _)| *v).collect();
+    let min = covered.iter().copied().fold(f32::INFINITY, f32::min);
+    assert_eq!(depth["min"].as_f64(), Some(f64::from(min)));
+    assert_eq!(depth["nan"].as_u64(), Some(0));
+    assert_eq!(v["attributes"]["normal"]["max"].as_array().unwrap().len(), 3);
+    for name in ["depth", "position", "normal", "albedo", "roughness", "material_id"] {
+        assert!(v["attributes"][name].is_object(), "{name} missing");
+    }
+}
+
+#[test]
+fn fold_flag_and_text_output() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("ss.exr"), canonical_bytes(&plausible(8, 4, 1, 12))).unwrap();
+    let v = json(&gbuf(dir.path(), &["info", "ss.exr", "--fold", "2", "--json"]));
+    assert_eq!((v["width"].as_u64(), v["samples"].as_u64()), (Some(4), Some(4)));
+    let o = gbuf(dir.path(), &["info", "ss.exr"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert!(text.contains("8×4 pixels, 1 samples per pixel") && text.contains("lossless"), "{text}");
+}
+
+#[test]
+fn nan_and_inf_are_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut gb = plausible(4, 4, 1, 13);
+    gb.albedo.as_mut().unwrap()[2].x = f32::NAN;
+    gb.albedo.as_mut().unwrap()[3].y = f32::INFINITY;
+    std::fs::write(dir.path().join("n.exr"), canonical_bytes(&gb)).unwrap();
+    let v = json(&gbuf(dir.path(), &["info", "n.exr", "--json"]));
+    assert_eq!(
+        (v["attributes"]["albedo"]["nan"].as_u64(), v["attributes"]["albedo"]["inf"].as_u64()),
+        (Some(1), Some(1))
+    );
+    let text = String::from_utf8(gbuf(dir.path(), &["info", "n.exr"]).stdout).unwrap();
+    assert!(text.contains("1 NaN and 1 ±Inf"), "{text}");
+}
+
+/// Every bad input exits with 1 and names the offending file.
+#[test]
+fn bad_inputs_exit_1_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let good = canonical_bytes(&plausible(8, 8, 1, 14));
+    std::fs::write(d.join("trunc.exr"), &good[..good.len() / 2]).unwrap();
+    std::fs::write(d.join("garbage.exr"), b"\x76\x2f\x31\x01garbage garbage garbage").unwrap();
+    std::fs::write(d.join("eng.exr"), generic_exr(2, 2, &["Z", "N.X"], |_, _| 1.0)).unwrap();
+    std::fs::write(d.join("ok.exr"), &good).unwrap();
+    std::fs::write(d.join("bad.json"), b"{ not json").unwrap();
+    std::fs::write(d.join("wrong.json"), br#"{"supersample": 3}"#).unwrap();
+    let cases: &[(&[&str], &str, &str)] = &[
+        (&["info", "trunc.exr"], "trunc.exr", ""),
+        (&["info", "garbage.exr"], "garbage.exr", ""),
+        (&["info", "absent.exr"], "absent.exr", ""),
+        (&["info", "eng.exr"], "eng.exr", "--map"),
+        (&["info", "eng.exr", "--map", "depth=nope"], "eng.exr", "N.X, Z"),
+        (&["info", "ok.exr", "--scene", "bad.json"], "bad.json", "sidecar JSON"),
+        (&["info", "ok.exr", "--scene", "wrong.json"], "wrong.json", "multiple of 3"),
+        (&["info", "ok.exr", "--fold", "3"], "ok.exr", "multiple of 3"),
+    ];
+    for (args, file, hint) in cases {
+        let o = gbuf(d, args);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {e}");
+        assert!(e.contains(file) && e.contains(hint), "{args:?}: {e}");
+        assert!(!e.contains("panicked"), "{args:?}: {e}");
+    }
+    // Usage errors are 2 (clap).
+    assert_eq!(gbuf(d, &["info"]).status.code(), Some(2));
+}
+
+#[test]
+fn map_flag_reads_unknown_naming() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = generic_exr(3, 2, &["N.X", "N.Y", "N.Z", "Z", "mat"], |c, i| match c {
+        3 => 1.0 + i as f32,
+        4 => 7.0,
+        2 => 1.0,
+        _ => 0.0,
+    });
+    std::fs::write(dir.path().join("e.exr"), bytes).unwrap();
+    let v =
+        json(&gbuf(dir.path(), &["info", "e.exr", "--map", "depth=Z,normal=N.X;N.Y;N.Z,material-id=mat", "--json"]));
+    assert_eq!(v["format"], "mapped");
+    assert_eq!(v["attributes"]["depth"]["max"].as_f64(), Some(6.0));
+    assert_eq!(v["attributes"]["material_id"]["mean"].as_f64(), Some(7.0));
+    assert_eq!(v["attributes"]["normal"]["channels"][2], "N.Z");
+}
