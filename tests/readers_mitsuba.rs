@@ -270,3 +270,21 @@ for name in ["depth.T", "position.Z", "sh_normal.X", "shape_index.I"]:
         assert_eq!(f64::from(c.data.f32_at(60 * raw.width as usize + 50)), f[4].parse::<f64>().unwrap(), "{}", f[0]);
     }
 }
+
+#[test]
+fn a_sidecar_camera_from_another_render_is_refused() {
+    let raw = raw();
+    let good = sidecar();
+    let l = read(&raw, Some(&good)).unwrap();
+    let note = l.sources.iter().find(|s| s.attribute == "position").unwrap().note.clone().unwrap();
+    assert!(note.contains("median reprojection error"), "{note}");
+    // A wider field of view, and a camera moved sideways: both move the reprojected positions by many pixels.
+    let mut wide = good.clone();
+    wide.camera.as_mut().unwrap().yfov *= 1.2;
+    let mut moved = good.clone();
+    moved.camera.as_mut().unwrap().world_to_view[0][3] += 0.5;
+    for bad in [wide, moved] {
+        let e = read(&raw, Some(&bad)).unwrap_err().to_string();
+        assert!(e.contains("sidecar camera does not match") && e.contains("mitsuba_gbuffer.exr"), "{e}");
+    }
+}

@@ -4,7 +4,7 @@
 use crate::cli::common::{print_json, InputArgs};
 use anyhow::Context;
 use gbuf::detect::{self, truth, Detector, DetectorConfig, EdgeMask, IdSource};
-use gbuf::measure::edges::{evaluate_against, EdgeStats};
+use gbuf::measure::edges::{evaluate_against, shading_truth, EdgeStats, DEFAULT_SHADING_TOLERANCE};
 use gbuf::GBuffer;
 use std::io::Write;
 use std::path::PathBuf;
@@ -98,6 +98,10 @@ pub struct Args {
     /// Detector thresholds.
     #[command(flatten)]
     pub thresholds: ThresholdArgs,
+    /// Shading truth: a pixel needs per-sample shading when some sample's reference radiance differs from sample
+    /// 0's by more than this (any channel, linear units). Needs lights (sidecar or dump).
+    #[arg(long, value_name = "T", default_value_t = DEFAULT_SHADING_TOLERANCE)]
+    pub shading_tolerance: f32,
     /// Write a PNG of the scene with per-sample pixels in red, misses in yellow, false alarms in cyan.
     #[arg(long, value_name = "OUT.png")]
     pub mask: Option<PathBuf>,
@@ -115,9 +119,12 @@ struct Row {
     skipped: Option<String>,
     edge_fraction: f64,
     shading_fraction: f64,
-    /// Scores against the truth; `None` without object IDs.
+    /// Scores against the ID truth; `None` without object IDs.
     #[serde(flatten)]
     stats: Option<Scores>,
+    /// Scores against the shading truth; `None` without lights.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    shading: Option<Scores>,
     ms: f64,
 }
 
@@ -142,8 +149,20 @@ struct Output {
     /// "object" when object IDs give a ground truth, else null.
     truth: Option<&'static str>,
     true_edge_fraction: Option<f64>,
+    /// The shading truth, when the dump comes with lights.
+    shading_truth: Option<ShadingTruth>,
     thresholds: DetectorConfig,
     results: Vec<Row>,
+}
+
+/// How the shading truth was made.
+#[derive(Debug, serde::Serialize)]
+struct ShadingTruth {
+    tolerance: f32,
+    lights: usize,
+    brdf: &'static str,
+    falloff: &'static str,
+    true_edge_fraction: f64,
 }
 
 /// Runs `gbuf edges`.
@@ -156,6 +175,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let loaded = args.input.load()?;
     let gb = &loaded.gbuffer;
     let truth = truth::object_truth(gb);
+    if !(args.shading_tolerance.is_finite() && args.shading_tolerance >= 0.0) {
+        anyhow::bail!("--shading-tolerance {} must be finite and ≥ 0", args.shading_tolerance);
+    }
+    // The shading truth needs the reference radiance, so lights: from the sidecar or the dump.
+    let resolve_cfg = gbuf::resolve::ResolveConfig::default();
+    let shading = match loaded.lights.as_deref() {
+        Some(lights) if !lights.is_empty() => {
+            let radiance = gbuf::resolve::reference_per_sample(gb, lights, &resolve_cfg)
+                .with_context(|| format!("{}: reference shading", args.input.file.display()))?;
+            Some((shading_truth(gb, &radiance, args.shading_tolerance), lights.len()))
+        }
+        _ => None,
+    };
     let mut rows = Vec::new();
     let mut last_mask = None;
     for &d in &detectors {
@@ -164,7 +196,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let ms = t0.elapsed().as_secs_f64() * 1e3;
         match result {
             Ok(mask) => {
-                rows.push(row(d, &mask, truth.as_deref(), ms));
+                rows.push(row(d, &mask, truth.as_deref(), shading.as_ref().map(|s| s.0.as_slice()), ms));
                 last_mask = Some(mask);
             }
             // A single detector that cannot run is an error; in `all` mode it is a skipped row.
@@ -177,6 +209,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 edge_fraction: 0.0,
                 shading_fraction: 0.0,
                 stats: None,
+                shading: None,
                 ms,
             }),
         }
@@ -191,7 +224,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         height: gb.height,
         samples: gb.samples,
         truth: truth.as_ref().map(|_| "object"),
-        true_edge_fraction: truth.as_deref().map(|t| fraction(t.iter().filter(|&&e| e).count(), t.len())),
+        true_edge_fraction: truth.as_deref().map(true_fraction),
+        shading_truth: shading.as_ref().map(|(t, lights)| ShadingTruth {
+            tolerance: args.shading_tolerance,
+            lights: *lights,
+            brdf: resolve_cfg.brdf.name(),
+            falloff: resolve_cfg.falloff.name(),
+            true_edge_fraction: true_fraction(t),
+        }),
         thresholds: cfg,
         results: rows,
     };
@@ -202,25 +242,28 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
 }
 
-fn fraction(n: usize, d: usize) -> f64 {
-    if d == 0 {
+/// Fraction of `true` flags.
+fn true_fraction(t: &[bool]) -> f64 {
+    if t.is_empty() {
         0.0
     } else {
-        n as f64 / d as f64
+        t.iter().filter(|&&e| e).count() as f64 / t.len() as f64
     }
 }
 
-fn row(detector: Detector, mask: &EdgeMask, truth: Option<&[bool]>, ms: f64) -> Row {
-    let stats = truth.map(|t| {
-        let s: EdgeStats = evaluate_against(mask, t);
-        Scores { precision: s.precision, recall: s.recall, tp: s.tp, fp: s.fp, fn_: s.fn_ }
-    });
+fn scores(mask: &EdgeMask, truth: &[bool]) -> Scores {
+    let s: EdgeStats = evaluate_against(mask, truth);
+    Scores { precision: s.precision, recall: s.recall, tp: s.tp, fp: s.fp, fn_: s.fn_ }
+}
+
+fn row(detector: Detector, mask: &EdgeMask, truth: Option<&[bool]>, shading: Option<&[bool]>, ms: f64) -> Row {
     Row {
         detector,
         skipped: None,
         edge_fraction: mask.edge_fraction(),
         shading_fraction: mask.shading_fraction(),
-        stats,
+        stats: truth.map(|t| scores(mask, t)),
+        shading: shading.map(|t| scores(mask, t)),
         ms,
     }
 }
@@ -228,29 +271,44 @@ fn row(detector: Detector, mask: &EdgeMask, truth: Option<&[bool]>, ms: f64) -> 
 fn print_table(out: &Output, gb: &GBuffer) -> anyhow::Result<()> {
     let mut w = std::io::stdout().lock();
     let truth = match out.true_edge_fraction {
-        Some(f) => format!("truth: object IDs, {:.2} % true edge pixels", 100.0 * f),
-        None => "no object IDs: no ground truth".to_string(),
+        Some(f) => format!("ID truth (object IDs): {:.2} % true edge pixels", 100.0 * f),
+        None => "no object IDs: no ID truth".to_string(),
     };
     writeln!(w, "{}: {}×{}, {} samples/pixel; {truth}", out.file.display(), gb.width, gb.height, gb.samples)?;
+    match &out.shading_truth {
+        Some(t) => writeln!(
+            w,
+            "shading truth ({} lights, {} / {}, tolerance {}): {:.2} % of pixels vary",
+            t.lights,
+            t.brdf,
+            t.falloff,
+            t.tolerance,
+            100.0 * t.true_edge_fraction
+        )?,
+        None => writeln!(w, "no lights (sidecar or dump): no shading truth")?,
+    }
     writeln!(
         w,
-        "{:<13} {:>7} {:>10} {:>9} {:>7} {:>9} {:>9} {:>9} {:>8}",
-        "detector", "edge %", "shading %", "precision", "recall", "tp", "fp", "fn", "ms"
+        "{:<13} {:>7} {:>10} {:>9} {:>7} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8}",
+        "detector", "edge %", "shading %", "precision", "recall", "tp", "fp", "fn", "sh.prec", "sh.recall", "ms"
     )?;
+    let dash = |n: usize| format!("{:>n$}", "-");
     for r in &out.results {
         if let Some(why) = &r.skipped {
             writeln!(w, "{:<13} skipped: {why}", r.detector.name())?;
             continue;
         }
-        let scores = match &r.stats {
-            Some(s) => {
-                format!("{:>9.4} {:>7.4} {:>9} {:>9} {:>9}", s.precision, s.recall, s.tp, s.fp, s.fn_)
-            }
-            None => format!("{:>9} {:>7} {:>9} {:>9} {:>9}", "-", "-", "-", "-", "-"),
+        let ids = match &r.stats {
+            Some(s) => format!("{:>9.4} {:>7.4} {:>9} {:>9} {:>9}", s.precision, s.recall, s.tp, s.fp, s.fn_),
+            None => [dash(9), dash(7), dash(9), dash(9), dash(9)].join(" "),
+        };
+        let shading = match &r.shading {
+            Some(s) => format!("{:>9.4} {:>9.4}", s.precision, s.recall),
+            None => [dash(9), dash(9)].join(" "),
         };
         writeln!(
             w,
-            "{:<13} {:>7.3} {:>10.3} {scores} {:>8.2}",
+            "{:<13} {:>7.3} {:>10.3} {ids} {shading} {:>8.2}",
             r.detector.name(),
             100.0 * r.edge_fraction,
             100.0 * r.shading_fraction,

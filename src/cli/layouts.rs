@@ -1,15 +1,103 @@
-//! `gbuf layouts`.
+//! `gbuf layouts`: every layout with its bytes per sample and footprint at a resolution.
+
+use anyhow::Context;
+use gbuf::layout::{Layout, LayoutSummary};
 
 /// Flags of `gbuf layouts`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
+    /// Layouts to show in detail (built-in names or layout files); all built-ins when none is given.
+    pub layouts: Vec<String>,
+    /// Resolution the footprint is computed for, `WxH`.
+    #[arg(long, value_name = "WxH", default_value = "1920x1080", value_parser = parse_resolution)]
+    pub resolution: (u32, u32),
+    /// Samples per pixel.
+    #[arg(long, value_name = "S", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub msaa: u32,
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
 }
 
+/// Parses `WxH` (also `W×H`).
+pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X', '×']).ok_or_else(|| format!("{s:?} is not WxH"))?;
+    let parse = |v: &str| v.trim().parse::<u32>().ok().filter(|v| (1..=65536).contains(v));
+    match (parse(w), parse(h)) {
+        (Some(w), Some(h)) => Ok((w, h)),
+        _ => Err(format!("{s:?}: width and height must be integers in 1..=65536")),
+    }
+}
+
 /// Runs `gbuf layouts`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let _ = args.json;
-    anyhow::bail!("gbuf layouts is not available yet")
+    let detailed = !args.layouts.is_empty();
+    let layouts: Vec<Layout> = if detailed {
+        args.layouts
+            .iter()
+            .map(|n| Layout::by_name_or_path(n).with_context(|| format!("layout {n:?}")))
+            .collect::<anyhow::Result<_>>()?
+    } else {
+        Layout::builtins()
+    };
+    let (w, h) = args.resolution;
+    let rows: Vec<LayoutSummary> = layouts.iter().map(|l| LayoutSummary::new(l, w, h, args.msaa)).collect();
+    if args.json {
+        return super::common::print_json(&rows);
+    }
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "Footprints at {w}×{h}, {}× MSAA:", args.msaa)?;
+    writeln!(out, "{:<16} {:>7} {:>9} {:>15} {:>10}  targets", "layout", "B/smp", "used bits", "bytes", "MiB")?;
+    for r in &rows {
+        let targets: Vec<String> = r.targets.iter().map(|t| t.format.to_string()).collect();
+        writeln!(
+            out,
+            "{:<16} {:>7} {:>9} {:>15} {:>10.1}  {}",
+            r.name,
+            r.bytes_per_sample,
+            r.used_bits,
+            r.footprint_bytes,
+            r.footprint_mib,
+            targets.join(" + ")
+        )?;
+    }
+    if detailed {
+        for r in &rows {
+            writeln!(out, "\n{} — {}", r.name, r.description)?;
+            for s in &r.sources {
+                writeln!(out, "  source: {s}")?;
+            }
+            for t in &r.targets {
+                writeln!(out, "  {} ({}, {} B){}", t.name, t.format, t.bytes, note(&t.note))?;
+                for f in &t.fields {
+                    writeln!(
+                        out,
+                        "    bits {:>3}..{:<3} {:<16} {:<18} [{}]{}",
+                        f.offset,
+                        f.offset + f.bits,
+                        f.attribute,
+                        f.codec,
+                        f.components.join(""),
+                        note(&f.note)
+                    )?;
+                }
+            }
+            if let Some((bits, params)) = &r.material_indirection {
+                writeln!(out, "  material table: {bits}-bit index → {}", params.join(", "))?;
+            }
+            for (a, v) in &r.constants {
+                writeln!(out, "  constant {a} = {v:?}")?;
+            }
+        }
+    }
+    Ok(())
+}
+
+fn note(n: &str) -> String {
+    if n.is_empty() {
+        String::new()
+    } else {
+        format!("  — {n}")
+    }
 }

@@ -143,7 +143,7 @@ pub fn read(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
             (None, None, None) => unreachable!("checked above"),
         };
     }
-    let cam = resolve_camera(sidecar, pos_world.as_deref(), &gb.coverage, w, h);
+    let cam = resolve_camera(sidecar, pos_world.as_deref(), &gb.coverage, w, h, path)?;
     gb.camera = cam.camera;
 
     if let (Some(d), Some(c)) = (depth_raw, &depth_ch) {
@@ -366,15 +366,37 @@ pub(super) struct CameraChoice {
 
 /// The sidecar's camera, else one fitted to the world positions of the covered samples (pixel centres of this
 /// unfolded image), else none.
+/// A sidecar camera is checked against the position pass (when there is one): it must reproject the covered
+/// samples' world positions to their pixel centres within this median error, else the sidecar belongs to another
+/// render (or another frame) and the load fails instead of silently producing wrong view-space data.
+pub const SIDECAR_MAX_MEDIAN_REPROJECTION_PX: f32 = 2.0;
+/// Samples used for that check (a fixed stride over the covered samples).
+const CHECK_SAMPLES: usize = 2048;
+
 pub(super) fn resolve_camera(
     sidecar: Option<&Sidecar>,
     world_pos: Option<&[Vec3]>,
     coverage: &[bool],
     w: u32,
     h: u32,
-) -> CameraChoice {
+    path: &Path,
+) -> Result<CameraChoice> {
     if let Some(c) = sidecar.and_then(|s| s.camera.as_ref()) {
-        return CameraChoice { camera: Some(c.to_camera()), source: "sidecar".into(), detail: "sidecar camera".into() };
+        let camera = c.to_camera();
+        let mut detail = "sidecar camera".to_string();
+        if let Some(err) = world_pos.and_then(|p| median_reprojection_px(&camera, p, coverage, w, h)) {
+            if err.is_nan() || err > SIDECAR_MAX_MEDIAN_REPROJECTION_PX {
+                return Err(Error::invalid(
+                    path,
+                    format!(
+                        "the sidecar camera does not match this image: it reprojects the position pass {err:.1} px \
+                         (median) away from the pixels (limit {SIDECAR_MAX_MEDIAN_REPROJECTION_PX} px)"
+                    ),
+                ));
+            }
+            detail.push_str(&format!(", median reprojection error of the position pass {err:.3} px"));
+        }
+        return Ok(CameraChoice { camera: Some(camera), source: "sidecar".into(), detail });
     }
     if let Some(p) = world_pos {
         let (mut ps, mut qs) = (Vec::new(), Vec::new());
@@ -387,19 +409,40 @@ pub(super) fn resolve_camera(
         match super::camera_fit::fit_camera(&ps, &qs, w, h) {
             Some((camera, rms)) if rms <= FIT_MAX_RMS_PX => {
                 let detail = format!("camera fitted to {} positions, RMS reprojection error {rms:.3} px", ps.len());
-                return CameraChoice { camera: Some(camera), source: "fit".into(), detail };
+                return Ok(CameraChoice { camera: Some(camera), source: "fit".into(), detail });
             }
             Some((_, rms)) => {
                 let detail = format!("camera fit rejected: RMS reprojection error {rms:.2} px > {FIT_MAX_RMS_PX} px");
-                return CameraChoice { camera: None, source: "unknown".into(), detail };
+                return Ok(CameraChoice { camera: None, source: "unknown".into(), detail });
             }
             None => {
                 let detail = "camera fit failed: positions too few or degenerate (coplanar or collinear)".into();
-                return CameraChoice { camera: None, source: "unknown".into(), detail };
+                return Ok(CameraChoice { camera: None, source: "unknown".into(), detail });
             }
         }
     }
-    CameraChoice { camera: None, source: "unknown".into(), detail: "no sidecar camera and no position pass".into() }
+    Ok(CameraChoice { camera: None, source: "unknown".into(), detail: "no sidecar camera and no position pass".into() })
+}
+
+/// Median distance in pixels between the projection of covered world positions and their pixel centres (over a
+/// fixed-stride subsample); `None` without covered finite positions. Points behind the camera count as infinitely
+/// far off.
+fn median_reprojection_px(camera: &Camera, world_pos: &[Vec3], coverage: &[bool], w: u32, h: u32) -> Option<f32> {
+    let covered: Vec<usize> = (0..world_pos.len()).filter(|&i| coverage[i] && world_pos[i].is_finite()).collect();
+    let stride = covered.len().div_ceil(CHECK_SAMPLES).max(1);
+    let mut errs: Vec<f32> = covered
+        .iter()
+        .step_by(stride)
+        .map(|&i| {
+            let centre = Vec2::new((i % w as usize) as f32 + 0.5, (i / w as usize) as f32 + 0.5);
+            camera.project(camera.to_view_point(world_pos[i]), w, h).map_or(f32::INFINITY, |q| (q - centre).length())
+        })
+        .collect();
+    if errs.is_empty() {
+        return None;
+    }
+    let mid = errs.len() / 2;
+    Some(*errs.select_nth_unstable_by(mid, f32::total_cmp).1)
 }
 
 /// World-space normals → view space (inverse transpose of the world→view rotation part), renormalised. Without a

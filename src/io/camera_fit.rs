@@ -23,10 +23,20 @@ pub const MAX_FIT_POINTS: usize = 4096;
 const FLATNESS_RATIO: f64 = 1e-5;
 /// Gauss–Newton iterations of the refinement (it converges in a handful on consistent data).
 const REFINE_ITERATIONS: usize = 20;
+/// Rounds of outlier rejection after the first fit.
+const OUTLIER_ROUNDS: usize = 3;
+/// A point is an outlier when its reprojection error exceeds this multiple of the median error ...
+const OUTLIER_FACTOR: f64 = 4.0;
+/// ... and this many pixels (so that exact data, with tiny errors, keeps every point).
+const OUTLIER_FLOOR_PX: f64 = 0.5;
+/// At least this many tenths of the points must survive the rejection, else the fit is refused.
+const MIN_INLIER_TENTHS: usize = 8;
 
 /// Fits a camera to `world_positions[i]` seen at continuous pixel coordinates `pixel_coords[i]` ((0, 0) = top-left
 /// corner, pixel centres at +0.5, +y down) in a `width × height` image. Returns the camera (its near/far planes
-/// bracket the points' depths) and the RMS reprojection error in pixels; `None` when the input is degenerate.
+/// bracket the points' depths) and the RMS reprojection error in pixels over the points kept (outliers — more than
+/// 4× the median error and 0.5 px — are dropped in up to three refits; more than 20% outliers gives `None`);
+/// `None` when the input is degenerate.
 #[must_use]
 pub fn fit_camera(world_positions: &[Vec3], pixel_coords: &[Vec2], width: u32, height: u32) -> Option<(Camera, f32)> {
     if width == 0 || height == 0 {
@@ -46,10 +56,27 @@ pub fn fit_camera(world_positions: &[Vec3], pixel_coords: &[Vec2], width: u32, h
     if pts.len() < MIN_POINTS || is_flat(&pts) {
         return None;
     }
-    let p = dlt(&pts)?;
     let (w, h) = (f64::from(width), f64::from(height));
-    let mut model = decompose(&p, w, h)?;
-    model = refine(model, &pts, w, h);
+    let all = pts.len();
+    let mut pts = pts;
+    let mut model = refine(decompose(&dlt(&pts)?, w, h)?, &pts, w, h);
+    // Outlier rejection: samples that mix two surfaces (pixel-filtered edges), stray values. Keep points within
+    // OUTLIER_FACTOR × the median error (at least OUTLIER_FLOOR_PX) and fit again.
+    for _ in 0..OUTLIER_ROUNDS {
+        let errs = model.errors(&pts, w, h);
+        let mut sorted = errs.clone();
+        sorted.sort_by(f64::total_cmp);
+        let limit = (OUTLIER_FACTOR * sorted[sorted.len() / 2]).max(OUTLIER_FLOOR_PX);
+        if sorted.last().is_some_and(|e| *e <= limit) {
+            break;
+        }
+        pts = pts.into_iter().zip(&errs).filter(|(_, e)| **e <= limit).map(|(p, _)| p).collect();
+        if pts.len() * 10 < all * MIN_INLIER_TENTHS || is_flat(&pts) {
+            return None;
+        }
+        let start = dlt(&pts).and_then(|p| decompose(&p, w, h)).unwrap_or(model);
+        model = refine(start, &pts, w, h);
+    }
     let rms = model.rms(&pts, w, h);
     let depths: Vec<f64> = pts.iter().map(|(x, _)| -(model.rot * *x + model.t).z).collect();
     let front = depths.iter().filter(|d| **d > 0.0).count();
@@ -171,6 +198,13 @@ impl Model {
         let ndc_x = p.x / (-p.z * self.tan * self.aspect);
         let ndc_y = p.y / (-p.z * self.tan);
         Some([(ndc_x + 1.0) * 0.5 * w, (1.0 - ndc_y) * 0.5 * h])
+    }
+
+    /// Per-point reprojection errors in pixels (infinite behind the camera).
+    fn errors(&self, pts: &[(DVec3, [f64; 2])], w: f64, h: f64) -> Vec<f64> {
+        pts.iter()
+            .map(|(x, q)| self.project(*x, w, h).map_or(f64::INFINITY, |p| (p[0] - q[0]).hypot(p[1] - q[1])))
+            .collect()
     }
 
     fn rms(&self, pts: &[(DVec3, [f64; 2])], w: f64, h: f64) -> f64 {
@@ -442,6 +476,26 @@ mod tests {
         // Uniform noise of ±0.25 px per axis has an RMS of 0.25·√(2/3) ≈ 0.204 px.
         assert!((0.15..0.25).contains(&rms), "rms {rms}");
         assert!((fit.yfov - cam.yfov).abs() < 5e-3, "yfov {} vs {}", fit.yfov, cam.yfov);
+    }
+
+    #[test]
+    fn outliers_are_rejected() {
+        let cam = Camera::look_at(Vec3::new(-2.0, 4.0, 7.0), Vec3::ZERO, Vec3::Y, 0.9, 1.25, 0.1, 100.0);
+        let (mut ps, qs) = scene_points(&cam, 120, 96, 11, 1000);
+        let mut rng = SplitMix64::new(2);
+        // 8% of the positions replaced by unrelated points (some behind the camera).
+        for p in ps.iter_mut().step_by(12) {
+            *p = Vec3::new(rng.range_f32(-20.0, 20.0), rng.range_f32(-20.0, 20.0), rng.range_f32(-20.0, 20.0));
+        }
+        let (fit, rms) = fit_camera(&ps, &qs, 120, 96).expect("fit despite outliers");
+        assert!(rms < RMS_TOL_PX, "rms over inliers {rms}");
+        assert!((fit.yfov - cam.yfov).abs() < ANGLE_TOL, "yfov {} vs {}", fit.yfov, cam.yfov);
+        assert!(fit.world_to_view.abs_diff_eq(cam.world_to_view, POSE_TOL));
+        // Half the points wrong: no fit rather than a wrong one.
+        for p in ps.iter_mut().step_by(2) {
+            *p = Vec3::new(rng.range_f32(-20.0, 20.0), rng.range_f32(-20.0, 20.0), rng.range_f32(-20.0, 20.0));
+        }
+        assert!(fit_camera(&ps, &qs, 120, 96).is_none_or(|(_, rms)| rms > 1.0));
     }
 
     #[test]

@@ -171,7 +171,7 @@ pub fn read(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
             (None, None, None) => unreachable!("checked above"),
         };
     }
-    let cam = resolve_camera(sidecar, pos_world.as_deref(), &gb.coverage, w, h);
+    let cam = resolve_camera(sidecar, pos_world.as_deref(), &gb.coverage, w, h, path)?;
     gb.camera = cam.camera;
     let mut sources = Vec::new();
 

@@ -1,0 +1,340 @@
+//! Per-attribute error between two G-buffers of the same geometry: what a layout's quantization did.
+//!
+//! Input: the reference (f32) G-buffer and a test one (typically [`crate::layout::Layout::roundtrip`] of it).
+//! Output: [`AttributeErrors`], over covered samples of the reference only, each metric with the pixel of its
+//! worst sample. Normals: angle in degrees (mean, 95th percentile, max) computed as `atan2(|a×b|, a·b)` in f64,
+//! accurate for tiny angles where `acos` is not. Depth: relative error `|d′−d| / d`. Colours and scalars: absolute
+//! error. IDs: mismatch counts. Non-finite test values count as the worst possible error (180° for normals,
+//! otherwise they are tallied in `nonfinite` and skipped, so JSON stays finite).
+
+use crate::error::{Error, Result};
+use crate::gbuffer::{Attribute, GBuffer, PlaneRef};
+use glam::{DVec3, Vec3};
+use serde::{Deserialize, Serialize};
+
+/// Where a sample sits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SampleAt {
+    /// Pixel column.
+    pub x: u32,
+    /// Pixel row (0 at the top).
+    pub y: u32,
+    /// Sample within the pixel.
+    pub sample: u32,
+}
+
+/// Normal angular error.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct NormalErrors {
+    /// Mean angle, degrees.
+    pub mean_deg: f64,
+    /// 95th percentile, degrees.
+    pub p95_deg: f64,
+    /// Largest angle, degrees.
+    pub max_deg: f64,
+    /// The sample with the largest angle.
+    pub worst: SampleAt,
+}
+
+/// Depth error.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct DepthErrors {
+    /// Largest `|d′ − d| / d`.
+    pub rel_max: f64,
+    /// Mean `|d′ − d| / d`.
+    pub rel_mean: f64,
+    /// Largest `|d′ − d|` (view-space units).
+    pub abs_max: f64,
+    /// The sample with the largest relative error.
+    pub worst: SampleAt,
+}
+
+/// Error of a 1-, 2- or 3-component float attribute (albedo, position, motion, specular, …).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ValueErrors {
+    /// Attribute name.
+    pub attribute: String,
+    /// Largest absolute error of any component.
+    pub max_abs: f64,
+    /// Mean absolute error over components and samples.
+    pub mean_abs: f64,
+    /// Root mean square error over components and samples.
+    pub rmse: f64,
+    /// The sample with the largest error.
+    pub worst: SampleAt,
+}
+
+/// ID mismatches.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct IdErrors {
+    /// Attribute name.
+    pub attribute: String,
+    /// Covered samples whose IDs differ.
+    pub mismatches: u64,
+    /// The first mismatching sample in scan order.
+    pub first: Option<SampleAt>,
+}
+
+/// Everything [`compare`] measures.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct AttributeErrors {
+    /// Covered samples compared.
+    pub covered_samples: u64,
+    /// Normal error (both buffers have normals).
+    pub normal: Option<NormalErrors>,
+    /// Depth error.
+    pub depth: Option<DepthErrors>,
+    /// Albedo error.
+    pub albedo: Option<ValueErrors>,
+    /// Position error (absolute, view-space units).
+    pub position: Option<ValueErrors>,
+    /// Motion error (pixels).
+    pub motion: Option<ValueErrors>,
+    /// Scalar attributes (specular, specular power, roughness, metallic), in canonical order.
+    pub scalars: Vec<ValueErrors>,
+    /// ID attributes.
+    pub ids: Vec<IdErrors>,
+    /// Attributes the reference has and the test lacks.
+    pub missing: Vec<String>,
+    /// Non-finite test values skipped (per attribute sample component).
+    pub nonfinite: u64,
+}
+
+impl AttributeErrors {
+    /// The error of a scalar attribute, if measured.
+    #[must_use]
+    pub fn scalar(&self, attr: Attribute) -> Option<&ValueErrors> {
+        self.scalars.iter().find(|s| s.attribute == attr.name())
+    }
+
+    /// The mismatches of an ID attribute, if measured.
+    #[must_use]
+    pub fn id(&self, attr: Attribute) -> Option<&IdErrors> {
+        self.ids.iter().find(|s| s.attribute == attr.name())
+    }
+}
+
+fn at(gb: &GBuffer, i: usize) -> SampleAt {
+    let s = gb.samples as usize;
+    let p = i / s;
+    SampleAt { x: (p % gb.width as usize) as u32, y: (p / gb.width as usize) as u32, sample: (i % s) as u32 }
+}
+
+/// Angle between two vectors in degrees (0 when both are zero, 180 when one is zero or non-finite).
+#[must_use]
+pub fn angle_deg(a: Vec3, b: Vec3) -> f64 {
+    let (a, b) = (a.as_dvec3(), b.as_dvec3());
+    if !a.is_finite() || !b.is_finite() {
+        return 180.0;
+    }
+    match (a == DVec3::ZERO, b == DVec3::ZERO) {
+        (true, true) => 0.0,
+        (true, false) | (false, true) => 180.0,
+        _ => a.cross(b).length().atan2(a.dot(b)).to_degrees(),
+    }
+}
+
+/// Compares `test` against `reference` over the reference's covered samples. Errors when the geometry differs.
+pub fn compare(reference: &GBuffer, test: &GBuffer) -> Result<AttributeErrors> {
+    if (reference.width, reference.height, reference.samples) != (test.width, test.height, test.samples)
+        || reference.coverage.len() != reference.len()
+    {
+        return Err(Error::Argument(format!(
+            "compare: reference is {}×{}×{}, test is {}×{}×{}",
+            reference.width, reference.height, reference.samples, test.width, test.height, test.samples
+        )));
+    }
+    reference.validate()?;
+    test.validate()?;
+    let covered: Vec<usize> = (0..reference.len()).filter(|&i| reference.coverage[i]).collect();
+    let mut out = AttributeErrors { covered_samples: covered.len() as u64, ..Default::default() };
+    for attr in reference.attributes() {
+        let (Some(r), Some(t)) = (reference.plane(attr), test.plane(attr)) else {
+            out.missing.push(attr.name().to_string());
+            continue;
+        };
+        match (attr, r, t) {
+            (Attribute::Normal, PlaneRef::Vec3(r), PlaneRef::Vec3(t)) => {
+                out.normal = Some(normals(reference, &covered, r, t))
+            }
+            (Attribute::Depth, PlaneRef::F32(r), PlaneRef::F32(t)) => {
+                out.depth = Some(depth(reference, &covered, r, t, &mut out.nonfinite))
+            }
+            (_, PlaneRef::U32(r), PlaneRef::U32(t)) => {
+                let mut e = IdErrors { attribute: attr.name().into(), ..Default::default() };
+                for &i in &covered {
+                    if r[i] != t[i] {
+                        e.mismatches += 1;
+                        e.first.get_or_insert(at(reference, i));
+                    }
+                }
+                out.ids.push(e);
+            }
+            (_, r, t) => {
+                let comps = |p: PlaneRef<'_>, i: usize| -> [f32; 3] {
+                    match p {
+                        PlaneRef::F32(p) => [p[i], 0.0, 0.0],
+                        PlaneRef::Vec2(p) => [p[i].x, p[i].y, 0.0],
+                        PlaneRef::Vec3(p) => p[i].to_array(),
+                        PlaneRef::U32(p) => [p[i] as f32, 0.0, 0.0],
+                    }
+                };
+                let e = values(reference, attr, &covered, |i| (comps(r, i), comps(t, i)), &mut out.nonfinite);
+                match attr {
+                    Attribute::Albedo => out.albedo = Some(e),
+                    Attribute::Position => out.position = Some(e),
+                    Attribute::Motion => out.motion = Some(e),
+                    _ => out.scalars.push(e),
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+fn normals(gb: &GBuffer, covered: &[usize], r: &[Vec3], t: &[Vec3]) -> NormalErrors {
+    let mut angles: Vec<f64> = covered.iter().map(|&i| angle_deg(r[i], t[i])).collect();
+    if angles.is_empty() {
+        return NormalErrors::default();
+    }
+    let (wi, max) = angles.iter().enumerate().fold((0, -1.0), |b, (k, &a)| if a > b.1 { (k, a) } else { b });
+    let mean = angles.iter().sum::<f64>() / angles.len() as f64;
+    let k = ((angles.len() as f64 * 0.95).ceil() as usize).clamp(1, angles.len()) - 1;
+    let (_, p95, _) = angles.select_nth_unstable_by(k, f64::total_cmp);
+    NormalErrors { mean_deg: mean, p95_deg: *p95, max_deg: max, worst: at(gb, covered[wi]) }
+}
+
+fn depth(gb: &GBuffer, covered: &[usize], r: &[f32], t: &[f32], nonfinite: &mut u64) -> DepthErrors {
+    let mut e = DepthErrors::default();
+    let mut n = 0u64;
+    let mut sum = 0.0;
+    for &i in covered {
+        let (a, b) = (f64::from(r[i]), f64::from(t[i]));
+        if !b.is_finite() || !a.is_finite() {
+            *nonfinite += 1;
+            continue;
+        }
+        let abs = (b - a).abs();
+        let rel = abs / a.abs().max(f64::from(f32::MIN_POSITIVE));
+        n += 1;
+        sum += rel;
+        e.abs_max = e.abs_max.max(abs);
+        if rel > e.rel_max {
+            e.rel_max = rel;
+            e.worst = at(gb, i);
+        }
+    }
+    e.rel_mean = if n > 0 { sum / n as f64 } else { 0.0 };
+    e
+}
+
+fn values(
+    gb: &GBuffer,
+    attr: Attribute,
+    covered: &[usize],
+    get: impl Fn(usize) -> ([f32; 3], [f32; 3]),
+    nonfinite: &mut u64,
+) -> ValueErrors {
+    let nc = attr.components();
+    let mut e = ValueErrors { attribute: attr.name().into(), ..Default::default() };
+    let (mut n, mut sum, mut sum2) = (0u64, 0.0, 0.0);
+    for &i in covered {
+        let (a, b) = get(i);
+        for c in 0..nc {
+            let d = (f64::from(b[c]) - f64::from(a[c])).abs();
+            if !d.is_finite() {
+                *nonfinite += 1;
+                continue;
+            }
+            n += 1;
+            sum += d;
+            sum2 += d * d;
+            if d > e.max_abs {
+                e.max_abs = d;
+                e.worst = at(gb, i);
+            }
+        }
+    }
+    if n > 0 {
+        e.mean_abs = sum / n as f64;
+        e.rmse = (sum2 / n as f64).sqrt();
+    }
+    e
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pair() -> (GBuffer, GBuffer) {
+        let mut a = GBuffer::new(4, 3, 2).unwrap();
+        a.coverage = vec![true; a.len()];
+        a.coverage[0] = false;
+        a.normal = Some(vec![Vec3::Z; a.len()]);
+        a.depth = Some(vec![10.0; a.len()]);
+        a.albedo = Some(vec![Vec3::splat(0.5); a.len()]);
+        a.roughness = Some(vec![0.25; a.len()]);
+        a.object_id = Some((0..a.len() as u32).collect());
+        (a.clone(), a)
+    }
+
+    #[test]
+    fn identical_buffers_have_zero_error() {
+        let (a, b) = pair();
+        let e = compare(&a, &b).unwrap();
+        assert_eq!(e.covered_samples, 23);
+        assert_eq!(e.normal.as_ref().unwrap().max_deg, 0.0);
+        assert_eq!(e.depth.as_ref().unwrap().rel_max, 0.0);
+        assert_eq!(e.albedo.as_ref().unwrap().max_abs, 0.0);
+        assert_eq!(e.id(Attribute::ObjectId).unwrap().mismatches, 0);
+        assert!(e.missing.is_empty());
+    }
+
+    #[test]
+    fn worst_samples_are_located() {
+        let (a, mut b) = pair();
+        let i = a.index(3, 2, 1);
+        b.normal.as_mut().unwrap()[i] = Vec3::X;
+        b.depth.as_mut().unwrap()[a.index(1, 1, 0)] = 11.0;
+        b.roughness.as_mut().unwrap()[a.index(2, 0, 1)] = 0.5;
+        b.object_id.as_mut().unwrap()[a.index(1, 0, 0)] = 999;
+        b.object_id.as_mut().unwrap()[0] = 999; // background: ignored
+        let e = compare(&a, &b).unwrap();
+        let n = e.normal.unwrap();
+        assert!((n.max_deg - 90.0).abs() < 1e-9);
+        assert_eq!(n.worst, SampleAt { x: 3, y: 2, sample: 1 });
+        assert!((n.mean_deg - 90.0 / 23.0).abs() < 1e-9);
+        assert_eq!(n.p95_deg, 0.0); // one outlier in 23 is above the 95th percentile
+        let d = e.depth.unwrap();
+        assert!((d.rel_max - 0.1).abs() < 1e-9);
+        assert_eq!(d.worst, SampleAt { x: 1, y: 1, sample: 0 });
+        assert_eq!(e.scalars[0].attribute, "roughness");
+        assert_eq!(e.scalars[0].max_abs, 0.25);
+        assert_eq!(e.scalars[0].worst, SampleAt { x: 2, y: 0, sample: 1 });
+        let ids = e.ids[0].clone();
+        assert_eq!((ids.mismatches, ids.first), (1, Some(SampleAt { x: 1, y: 0, sample: 0 })));
+    }
+
+    #[test]
+    fn tiny_angles_are_accurate_and_nan_is_worst() {
+        let a = Vec3::Z;
+        let b = Vec3::new(1e-4, 0.0, 1.0).normalize();
+        assert!((angle_deg(a, b) - 1e-4f64.atan().to_degrees()).abs() < 1e-9);
+        assert_eq!(angle_deg(a, Vec3::NAN), 180.0);
+        assert_eq!(angle_deg(Vec3::ZERO, Vec3::ZERO), 0.0);
+        let (r, mut t) = pair();
+        t.albedo.as_mut().unwrap()[5] = Vec3::NAN;
+        t.remove(Attribute::Roughness);
+        let e = compare(&r, &t).unwrap();
+        assert_eq!(e.nonfinite, 3);
+        assert_eq!(e.missing, ["roughness"]);
+        assert!(serde_json::to_string(&e).is_ok());
+    }
+
+    #[test]
+    fn mismatched_geometry_is_an_error() {
+        let (a, _) = pair();
+        let b = GBuffer::new(3, 3, 2).unwrap();
+        assert!(compare(&a, &b).is_err());
+    }
+}

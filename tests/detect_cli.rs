@@ -1,0 +1,157 @@
+//! `gbuf edges` end to end: the built binary on canonical dumps written in a fresh temp dir.
+
+#[path = "detect_support.rs"]
+mod support;
+
+use gbuf::detect::{detect, Detector, DetectorConfig};
+use gbuf::measure::edges::evaluate;
+use gbuf::GBuffer;
+use glam::Vec3;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use support::{render, Shape, Surface};
+
+fn gbuf_cmd(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_gbuf")).current_dir(dir).args(args).output().unwrap()
+}
+
+/// A sphere in front of a tilted wall, with object and primitive IDs.
+fn scene() -> GBuffer {
+    let a = 30f32.to_radians();
+    let wall =
+        Surface::new(Shape::Plane { normal: Vec3::new(a.sin(), 0.0, a.cos()), point: Vec3::new(0.0, 0.0, -9.0) }, 1);
+    let sphere = Surface::new(Shape::Sphere { center: Vec3::new(0.3, 0.0, -5.0), radius: 1.0 }, 2);
+    render(40, 30, 4, &[wall, sphere])
+}
+
+fn write_dump(dir: &Path, gb: &GBuffer) -> PathBuf {
+    let p = dir.join("scene.exr");
+    gbuf::io::canonical::write(&p, gb).unwrap();
+    p
+}
+
+fn json(out: &Output) -> serde_json::Value {
+    assert!(out.status.success(), "stderr: {}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+#[test]
+fn all_detectors_json_matches_the_library() {
+    let dir = tempfile::tempdir().unwrap();
+    let gb = scene();
+    write_dump(dir.path(), &gb);
+    let v = json(&gbuf_cmd(dir.path(), &["edges", "scene.exr", "--detector", "all", "--json"]));
+    assert_eq!((v["width"].as_u64(), v["samples"].as_u64(), v["truth"].as_str()), (Some(40), Some(4), Some("object")));
+    let rows = v["results"].as_array().unwrap();
+    assert_eq!(rows.len(), Detector::ALL.len());
+    for (row, d) in rows.iter().zip(Detector::ALL) {
+        assert_eq!(row["detector"], d.name());
+        let mask = detect(&gb, d, &DetectorConfig::default()).unwrap();
+        let s = evaluate(&gb, &mask).unwrap();
+        assert_eq!(row["tp"].as_u64(), Some(s.tp), "{d}");
+        assert_eq!(row["fp"].as_u64(), Some(s.fp), "{d}");
+        assert_eq!(row["fn"].as_u64(), Some(s.fn_), "{d}");
+        assert_eq!(row["shading_fraction"].as_f64(), Some(mask.shading_fraction()), "{d}");
+        assert!(
+            row["precision"].as_f64().is_some() && row["recall"].as_f64().is_some() && row["ms"].as_f64().is_some()
+        );
+    }
+    // The sphere's silhouette is a true edge that lauritzen finds.
+    assert_eq!(rows[0]["recall"].as_f64(), Some(1.0), "{}", rows[0]);
+    assert!(rows[0]["tp"].as_u64().unwrap() > 20);
+}
+
+#[test]
+fn thresholds_flags_reach_the_detector() {
+    let dir = tempfile::tempdir().unwrap();
+    write_dump(dir.path(), &scene());
+    let edges = |extra: &[&str]| {
+        let mut args = vec!["edges", "scene.exr", "--detector", "depth", "--json"];
+        args.extend_from_slice(extra);
+        json(&gbuf_cmd(dir.path(), &args))["results"][0]["edge_fraction"].as_f64().unwrap()
+    };
+    let loose = edges(&["--depth-relative", "0.5"]);
+    let tight = edges(&["--depth-relative", "0.0001"]);
+    assert!(tight > loose, "{tight} vs {loose}");
+    let out = gbuf_cmd(dir.path(), &["edges", "scene.exr", "--normal-angle=-3"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("normal_angle_deg"));
+}
+
+#[test]
+fn mask_png_marks_hits_misses_and_false_alarms() {
+    let dir = tempfile::tempdir().unwrap();
+    write_dump(dir.path(), &scene());
+    // The normal test finds the sphere's silhouette and also flags its curvature (about 8° per pixel here):
+    // expect red hits and cyan false alarms.
+    let out = gbuf_cmd(dir.path(), &["edges", "scene.exr", "--detector", "normal", "--mask", "m.png"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let gb = scene();
+    let check = |png: &str, d: Detector| {
+        let img = image::open(dir.path().join(png)).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), (40, 30));
+        let count = |c: [u8; 3]| img.pixels().filter(|p| p.0 == c).count() as u64;
+        let s = evaluate(&gb, &detect(&gb, d, &DetectorConfig::default()).unwrap()).unwrap();
+        assert_eq!(count(gbuf::detect::picture::FLAGGED), s.tp, "{d}");
+        assert_eq!(count(gbuf::detect::picture::MISSED), s.fn_, "{d}");
+        assert_eq!(count(gbuf::detect::picture::FALSE_ALARM), s.fp, "{d}");
+        s
+    };
+    let s = check("m.png", Detector::Normal);
+    assert!(s.tp > 0 && s.fp > 0, "{s:?}");
+    // `none` flags nothing: every true edge is a yellow miss.
+    let out2 = gbuf_cmd(dir.path(), &["edges", "scene.exr", "--detector", "none", "--mask", "n.png"]);
+    assert!(out2.status.success());
+    let s = check("n.png", Detector::None);
+    assert!(s.fn_ > 0 && s.tp == 0, "{s:?}");
+    // Human output names the detector.
+    assert!(String::from_utf8_lossy(&out.stdout).contains("normal"));
+}
+
+#[test]
+fn shading_truth_with_lights_from_the_sidecar() {
+    let dir = tempfile::tempdir().unwrap();
+    write_dump(dir.path(), &scene());
+    let sidecar = r#"{"lights_space": "view", "lights": [
+        {"type": "point", "position": [0.5, 1.0, -3.0], "color": [1, 1, 1], "intensity": 20, "range": 30}]}"#;
+    std::fs::write(dir.path().join("scene.json"), sidecar).unwrap();
+    let v = json(&gbuf_cmd(dir.path(), &["edges", "scene.exr", "--detector", "all", "--json"]));
+    let t = &v["shading_truth"];
+    assert_eq!(t["lights"], 1, "{v}");
+    assert!(t["true_edge_fraction"].as_f64().unwrap() > 0.0, "{t}");
+    for row in v["results"].as_array().unwrap() {
+        let sh = &row["shading"];
+        assert!(sh["precision"].as_f64().is_some(), "{row}");
+        if row["detector"] == "ssaa" {
+            assert_eq!(sh["recall"].as_f64(), Some(1.0), "ssaa shades every sample: {row}");
+        }
+    }
+}
+
+#[test]
+fn bad_input_exits_1_with_the_file_name_and_bad_usage_exits_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = gbuf_cmd(dir.path(), &["edges", "nope.exr"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("nope.exr"));
+
+    let out = gbuf_cmd(dir.path(), &["edges", "nope.exr", "--detector", "sobel"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("lauritzen"), "the error lists the detectors");
+
+    let mut gb = scene();
+    gb.primitive_id = None;
+    write_dump(dir.path(), &gb);
+    let out = gbuf_cmd(dir.path(), &["edges", "scene.exr", "--detector", "forward-msaa"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("primitive_id") && err.contains("scene.exr"), "{err}");
+    // In `all` mode the same detector is a skipped row, not a failure.
+    let v = json(&gbuf_cmd(dir.path(), &["edges", "scene.exr", "--detector", "all", "--json"]));
+    let fwd = v["results"].as_array().unwrap().iter().find(|r| r["detector"] == "forward-msaa").unwrap();
+    assert!(fwd["skipped"].as_str().unwrap().contains("primitive_id"));
+
+    let out = gbuf_cmd(dir.path(), &["edges", "scene.exr", "--detector", "all", "--mask", "x.png"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(!dir.path().join("x.png").exists());
+}
