@@ -3,7 +3,7 @@
 mod io_support;
 
 use gbuf::gbuffer::Attribute;
-use gbuf::io::{load, load_exr_bytes, LoadOptions, ReadLimits, SourceFormat};
+use gbuf::io::{load, load_bytes, LoadOptions, ReadLimits, SourceFormat};
 use gbuf::Error;
 use io_support::*;
 use std::path::{Path, PathBuf};
@@ -119,7 +119,7 @@ fn nan_and_inf_are_counted_and_replaced() {
     d[7] = f32::NAN;
     gb.normal.as_mut().unwrap()[9].y = f32::NEG_INFINITY;
     gb.roughness.as_mut().unwrap()[0] = f32::NAN;
-    let l = load_exr_bytes(&canonical_bytes(&gb), Path::new("nan.exr"), &LoadOptions::default()).unwrap();
+    let l = load_bytes(&canonical_bytes(&gb), Path::new("nan.exr"), &LoadOptions::default()).unwrap();
     assert_eq!(l.sanitized, vec![("depth", 2, 1), ("normal", 0, 1), ("roughness", 1, 0)]);
     let d = l.gbuffer.depth.as_ref().unwrap();
     assert!(d.iter().all(|v| v.is_finite()));
@@ -131,28 +131,28 @@ fn nan_and_inf_are_counted_and_replaced() {
 
 #[test]
 fn unknown_naming_lists_channels_and_suggests_map() {
-    let bytes = generic_exr(4, 3, &["Z", "N.X", "N.Y", "N.Z"], |c, i| if c == 0 { 1.0 + i as f32 } else { 0.5 });
-    let e = load_exr_bytes(&bytes, Path::new("eng.exr"), &LoadOptions::default()).unwrap_err();
+    let bytes = generic_exr(4, 3, &["Z", "Nrm.X", "Nrm.Y", "Nrm.Z"], |c, i| if c == 0 { 1.0 + i as f32 } else { 0.5 });
+    let e = load_bytes(&bytes, Path::new("eng.exr"), &LoadOptions::default()).unwrap_err();
     let Error::MissingChannel { found, .. } = &e else { panic!("{e:?}") };
-    assert_eq!(found, "N.X, N.Y, N.Z, Z");
+    assert_eq!(found, "Nrm.X, Nrm.Y, Nrm.Z, Z");
     let msg = e.to_string();
     assert!(msg.contains("eng.exr") && msg.contains("--map"), "{msg}");
 
     let map = vec![
         (Attribute::Depth, vec!["Z".to_string()]),
-        (Attribute::Normal, vec!["N.X".into(), "N.Y".into(), "N.Z".into()]),
+        (Attribute::Normal, vec!["Nrm.X".into(), "Nrm.Y".into(), "Nrm.Z".into()]),
     ];
     let opts = LoadOptions { map, ..Default::default() };
-    let l = load_exr_bytes(&bytes, Path::new("eng.exr"), &opts).unwrap();
+    let l = load_bytes(&bytes, Path::new("eng.exr"), &opts).unwrap();
     assert_eq!(l.format, SourceFormat::Mapped);
     assert_eq!(l.gbuffer.depth.as_ref().unwrap()[5], 6.0);
     assert_eq!(l.gbuffer.background_samples(), 0);
-    assert_eq!(l.sources[1].channels, vec!["N.X", "N.Y", "N.Z"]);
+    assert_eq!(l.sources[1].channels, vec!["Nrm.X", "Nrm.Y", "Nrm.Z"]);
 
     // A mapped channel that does not exist is named, with the channels found.
     let opts = LoadOptions { map: vec![(Attribute::Depth, vec!["depth.V".into()])], ..Default::default() };
-    let e = load_exr_bytes(&bytes, Path::new("eng.exr"), &opts).unwrap_err().to_string();
-    assert!(e.contains("missing channel depth.V") && e.contains("N.X, N.Y, N.Z, Z"), "{e}");
+    let e = load_bytes(&bytes, Path::new("eng.exr"), &opts).unwrap_err().to_string();
+    assert!(e.contains("missing channel depth.V") && e.contains("Nrm.X, Nrm.Y, Nrm.Z, Z"), "{e}");
 }
 
 #[test]
@@ -160,7 +160,7 @@ fn mapped_depth_conventions_negative_z_and_sky() {
     // View-space z (negative) with sky at 0 and at 1e10.
     let bytes = generic_exr(3, 1, &["z"], |_, i| [-2.0, 0.0, 1e10][i]);
     let opts = LoadOptions { map: vec![(Attribute::Depth, vec!["z".into()])], ..Default::default() };
-    let l = load_exr_bytes(&bytes, Path::new("z.exr"), &opts).unwrap();
+    let l = load_bytes(&bytes, Path::new("z.exr"), &opts).unwrap();
     assert_eq!(l.gbuffer.coverage, vec![true, false, false]);
     assert_eq!(l.gbuffer.depth.as_ref().unwrap(), &vec![2.0, 0.0, 0.0]);
 }

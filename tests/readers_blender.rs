@@ -66,7 +66,7 @@ fn fixture_is_recognised_and_reads_with_its_sidecar() {
     }
     let spec = l.sources.iter().find(|s| s.attribute == "specular").unwrap();
     assert_eq!(spec.channels, ["ViewLayer.GlossCol.R", "ViewLayer.GlossCol.G", "ViewLayer.GlossCol.B"]);
-    assert!(spec.note.as_deref().unwrap().contains("mean"));
+    assert!(spec.note.as_deref().unwrap().contains("mean of the RGB"));
     assert_eq!(l.lights.as_ref().map(Vec::len), Some(2));
     // Background: the sky above the horizon, a plausible share of the frame.
     let bg = g.background_samples() as f32 / g.len() as f32;
@@ -372,5 +372,28 @@ fn a_sidecar_camera_from_another_render_is_refused() {
     for bad in [wide, moved] {
         let e = read(&raw, Some(&bad)).unwrap_err().to_string();
         assert!(e.contains("sidecar camera does not match") && e.contains("blender_gbuffer.exr"), "{e}");
+    }
+}
+
+#[test]
+fn colour_aovs_become_scalars_by_their_mean() {
+    let mut raw = raw();
+    // Turn the Metallic value AOV into a colour AOV named "Specular" holding (v, 2v, 3v): mean 2v.
+    let v = match &raw.channel("ViewLayer.Metallic.X").unwrap().data {
+        RawData::F32(v) => v.clone(),
+        other => panic!("{other:?}"),
+    };
+    for (c, k) in [("R", 1.0), ("G", 2.0), ("B", 3.0)] {
+        raw.channels.push(RawChannel {
+            name: format!("ViewLayer.Specular.{c}"),
+            data: RawData::F32(v.iter().map(|x| x * k).collect()),
+        });
+    }
+    let l = read(&raw, Some(&sidecar())).unwrap();
+    let spec = l.sources.iter().find(|s| s.attribute == "specular").unwrap();
+    assert_eq!(spec.channels, ["ViewLayer.Specular.R", "ViewLayer.Specular.G", "ViewLayer.Specular.B"]);
+    let (s, m) = (l.gbuffer.specular.unwrap(), l.gbuffer.metallic.unwrap());
+    for (s, m) in s.iter().zip(&m) {
+        assert!((s - 2.0 * m).abs() < 1e-6);
     }
 }

@@ -288,3 +288,15 @@ fn a_sidecar_camera_from_another_render_is_refused() {
         assert!(e.contains("sidecar camera does not match") && e.contains("mitsuba_gbuffer.exr"), "{e}");
     }
 }
+
+#[test]
+fn an_unnamed_uint_xyz_group_is_ignored_not_fatal() {
+    let mut raw = raw();
+    for c in ["X", "Y", "Z"] {
+        raw.channels
+            .push(gbuf::io::exr::RawChannel { name: format!("extra.{c}"), data: RawData::U32(vec![7; 128 * 96]) });
+    }
+    let l = read(&raw, Some(&sidecar())).unwrap();
+    assert!(l.sources.iter().all(|s| !s.channels.iter().any(|c| c.starts_with("extra."))));
+    assert_eq!(l.sources.iter().find(|s| s.attribute == "position").unwrap().channels[0], "position.X");
+}

@@ -105,11 +105,20 @@ pub fn read(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
     let mat_ch = ch.pick(Attribute::MaterialId, find(Role::MaterialId), 1)?;
     let obj_ch = ch.pick(Attribute::ObjectId, find(Role::ObjectId), 1)?;
     let motion_ch = ch.pick(Attribute::Motion, find(Role::Motion).map(|v| v[0..2].to_vec()), 2)?;
+    // A value AOV has one channel (`X`); a colour AOV three (`R`, `G`, `B`), reduced to their mean below.
     let aov = |names: &[&str]| -> Option<Vec<String>> {
-        raw.channels.iter().find_map(|c| {
+        let pass = raw.channels.iter().find_map(|c| {
             let (l, pass, _) = split(&c.name)?;
-            (l == layer && names.contains(&pass.to_ascii_lowercase().as_str())).then(|| vec![c.name.clone()])
-        })
+            (l == layer && names.contains(&pass.to_ascii_lowercase().as_str())).then_some(pass)
+        })?;
+        let rgb: Vec<String> = ["R", "G", "B"].iter().map(|c| format!("{layer}.{pass}.{c}")).collect();
+        if rgb.iter().all(|n| raw.channel(n).is_some()) {
+            return Some(rgb);
+        }
+        raw.channels
+            .iter()
+            .find(|c| split(&c.name).is_some_and(|(l, p, _)| l == layer && p == pass))
+            .map(|c| vec![c.name.clone()])
     };
     let mut scalar_ch = Vec::new();
     for (attr, names) in AOVS {
@@ -186,7 +195,7 @@ pub fn read(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
     for (attr, c) in &scalar_ch {
         let (plane, note) = if c.len() == 3 {
             let rgb = ch.vec3(c)?;
-            (rgb.iter().map(|v| (v.x + v.y + v.z) / 3.0).collect(), Some("mean of the Glossy Color RGB"))
+            (rgb.iter().map(|v| (v.x + v.y + v.z) / 3.0).collect(), Some("scalar = mean of the RGB channels"))
         } else {
             (ch.floats(&c[0])?, None)
         };

@@ -382,7 +382,38 @@ pub fn write_raw(path: &Path, image: &RawImage) -> Result<()> {
         .write()
         .to_buffered(&mut bytes)
         .map_err(|source| Error::Exr { path: path.into(), source })?;
-    crate::util::write_bytes_atomic(path, &bytes.into_inner())
+    let mut bytes = bytes.into_inner();
+    sort_header_attributes(&mut bytes);
+    crate::util::write_bytes_atomic(path, &bytes)
+}
+
+/// Sorts the attributes of a single-part header by name, in place. The exr crate writes custom attributes in hash
+/// map order, which would make identical images produce different files; the header keeps its length, so the
+/// offset table stays valid. Leaves the bytes alone if the header does not parse.
+fn sort_header_attributes(bytes: &mut [u8]) {
+    let mut i = 8;
+    let mut attrs: Vec<(&[u8], std::ops::Range<usize>)> = Vec::new();
+    while i < bytes.len() && bytes[i] != 0 {
+        let start = i;
+        let Some(n1) = bytes[i..].iter().position(|&b| b == 0) else { return };
+        let Some(n2) = bytes.get(i + n1 + 1..).and_then(|r| r.iter().position(|&b| b == 0)) else { return };
+        let at = i + n1 + n2 + 2;
+        let Some(size) = bytes.get(at..at + 4).map(|s| i32::from_le_bytes(s.try_into().expect("4 bytes"))) else {
+            return;
+        };
+        let Ok(size) = usize::try_from(size) else { return };
+        i = at + 4 + size;
+        if i > bytes.len() {
+            return;
+        }
+        attrs.push((&bytes[start..start + n1], start..i));
+    }
+    let (Some(first), Some(last)) = (attrs.first().map(|a| a.1.start), attrs.last().map(|a| a.1.end)) else {
+        return;
+    };
+    attrs.sort_by(|a, b| a.0.cmp(b.0));
+    let sorted: Vec<u8> = attrs.iter().flat_map(|(_, r)| bytes[r.clone()].to_vec()).collect();
+    bytes[first..last].copy_from_slice(&sorted);
 }
 
 #[cfg(test)]
@@ -424,5 +455,25 @@ mod tests {
             }
         }
         assert_eq!(back.attributes, img.attributes);
+    }
+
+    #[test]
+    fn identical_images_give_identical_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut img = RawImage { width: 2, height: 1, ..Default::default() };
+        img.channels.push(RawChannel { name: "Z".into(), data: RawData::F32(vec![1.0, 2.0]) });
+        img.attributes = (0..12).map(|i| (format!("key{i}"), format!("value {i}"))).collect();
+        img.attributes.sort();
+        let files: Vec<Vec<u8>> = (0..4)
+            .map(|i| {
+                let p = dir.path().join(format!("{i}.exr"));
+                write_raw(&p, &img).unwrap();
+                std::fs::read(&p).unwrap()
+            })
+            .collect();
+        assert!(files.iter().all(|f| *f == files[0]));
+        let back = read_raw_bytes(&files[0], Path::new("mem"), &ReadLimits::default()).unwrap();
+        assert_eq!(back.attributes, img.attributes);
+        assert_eq!(back.channels, img.channels);
     }
 }

@@ -110,7 +110,11 @@ pub fn read(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
     // Unnamed XYZ groups: unit vectors are normals, anything else positions.
     for g in &mut gs {
         if g.kind == Kind::UnknownXyz {
-            let v = ch.vec3(&g.channels)?;
+            // An unnamed XYZ group we cannot read as floats is not geometry: leave it out.
+            let Ok(v) = ch.vec3(&g.channels) else {
+                g.kind = Kind::Uv;
+                continue;
+            };
             let nonzero: Vec<&Vec3> = v.iter().filter(|p| **p != Vec3::ZERO).collect();
             let unit = nonzero.iter().filter(|p| (p.length() - 1.0).abs() < 0.01).count();
             g.kind = if !nonzero.is_empty() && unit as f32 >= UNIT_SHARE * nonzero.len() as f32 {

@@ -99,14 +99,18 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     finish(loaded, path, side.as_ref().map(|(s, p)| (s, p.as_path())), opts)
 }
 
-/// Loads an EXR dump held in memory (`path` names it in errors and locates the default sidecar beside it).
-pub fn load_exr_bytes(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<Loaded> {
+/// Loads a dump (EXR or ISPC `.bin`) held in memory, exactly as [`load`] would from a file (`path` names it in
+/// errors and locates the default sidecar beside it).
+pub fn load_bytes(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     let side = resolve_sidecar(path, opts)?;
-    if !bytes.starts_with(&EXR_MAGIC) {
+    let loaded = if ispc::matches_file(bytes, bytes.len() as u64) {
+        ispc::read_bytes(bytes, path, side.as_ref().map(|s| &s.0), opts)?
+    } else if bytes.starts_with(&EXR_MAGIC) {
+        let raw = exr::read_raw_bytes(bytes, path, &opts.limits)?;
+        read_exr(&raw, path, side.as_ref().map(|s| &s.0), opts)?
+    } else {
         return Err(not_a_dump(path, bytes));
-    }
-    let raw = exr::read_raw_bytes(bytes, path, &opts.limits)?;
-    let loaded = read_exr(&raw, path, side.as_ref().map(|s| &s.0), opts)?;
+    };
     finish(loaded, path, side.as_ref().map(|(s, p)| (s, p.as_path())), opts)
 }
 
@@ -149,7 +153,9 @@ fn resolve_sidecar(path: &Path, opts: &LoadOptions) -> Result<Option<(Sidecar, P
     Ok(Some((Sidecar::load(&p)?, p)))
 }
 
-/// Picks the EXR reader: canonical, Blender, Mitsuba, else the `--map` reader.
+/// Picks the EXR reader: canonical; the `--map` reader when the map names depth or position; Blender; Mitsuba;
+/// else the `--map` reader (which explains what is missing). Other `--map` entries override scalar and ID
+/// attributes of the format-specific readers.
 fn read_exr(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadOptions) -> Result<Loaded> {
     if canonical::matches(raw) {
         let gbuffer = canonical::from_raw(raw, path)?;
@@ -167,10 +173,14 @@ fn read_exr(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
         mapped::override_scalars(&mut loaded, raw, path, opts)?;
         return Ok(loaded);
     }
-    let mut loaded = if blender::matches(raw) {
+    // A map naming the geometry (depth or position) describes the whole file: read it as view space as mapped.
+    let geometry_mapped = opts.map.iter().any(|(a, _)| matches!(a, Attribute::Depth | Attribute::Position));
+    let mut loaded = if geometry_mapped {
+        return mapped::read(raw, path, opts);
+    } else if blender::matches(raw) {
         blender::read(raw, path, sidecar, opts)?
-    } else if pending::mitsuba::matches(raw) {
-        pending::mitsuba::read(raw, path, sidecar, opts)?
+    } else if mitsuba::matches(raw) {
+        mitsuba::read(raw, path, sidecar, opts)?
     } else {
         return mapped::read(raw, path, opts);
     };
@@ -234,19 +244,3 @@ fn finish(mut loaded: Loaded, path: &Path, side: Option<(&Sidecar, &Path)>, opts
 /// A sidecar camera's aspect may differ from the image's by this fraction: engines round the aspect they export
 /// (16:9 as 1.77 or 1.78), but a real mismatch (a sidecar from another render) is off by far more.
 pub const ASPECT_TOLERANCE: f32 = 0.01;
-
-/// Stand-in with the exact signatures of the Mitsuba reader until it lands (it matches nothing, so such files fall
-/// through to the `--map` reader).
-mod pending {
-    pub mod mitsuba {
-        use crate::error::Result;
-        use crate::io::{LoadOptions, Loaded, RawImage, Sidecar};
-        use std::path::Path;
-        pub fn matches(_raw: &RawImage) -> bool {
-            false
-        }
-        pub fn read(_: &RawImage, path: &Path, _: Option<&Sidecar>, _: &LoadOptions) -> Result<Loaded> {
-            Err(crate::Error::Unsupported { path: path.into(), what: "Mitsuba reader not built".into() })
-        }
-    }
-}
