@@ -80,6 +80,14 @@ fn degenerate_requests_do_not_panic() {
     for x in scatter_lights(&bare, 50, 3) {
         assert!(x.position.abs().max_element() <= 1.5 && x.position.z < 0.0, "{}", x.position);
     }
+    // Positions but no depth plane: the depth range comes from the positions.
+    let mut no_depth = render(SceneName::Room, 64, 36, 1).unwrap();
+    let (lo, hi) = covered_depth_range(&no_depth);
+    no_depth.depth = None;
+    for x in scatter_lights(&no_depth, 200, 4) {
+        let d = -x.position.z;
+        assert!(d >= lo * (1.0 - BOUNDARY_TOL) && d <= hi * (1.0 + BOUNDARY_TOL), "depth {d} outside [{lo}, {hi}]");
+    }
     // A broken camera is ignored, not trusted.
     let mut broken = GBuffer::new(4, 4, 1).unwrap();
     broken.camera = Some(Camera::identity(f32::NAN, 1.0, 0.0, -1.0));

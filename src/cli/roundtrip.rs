@@ -122,6 +122,15 @@ fn at(s: &SampleAt) -> String {
     format!("pixel ({}, {}) sample {}", s.x, s.y, s.sample)
 }
 
+/// "  worst at …" unless the error is zero (then there is no worst sample to point at).
+fn worst(err: f64, s: &SampleAt) -> String {
+    if err > 0.0 {
+        format!("  worst at {}", at(s))
+    } else {
+        String::new()
+    }
+}
+
 fn print_text(r: &Row) -> anyhow::Result<()> {
     use std::io::Write;
     let mut out = std::io::stdout().lock();
@@ -134,37 +143,37 @@ fn print_text(r: &Row) -> anyhow::Result<()> {
     if let Some(n) = &e.normal {
         writeln!(
             out,
-            "  normal        mean {:.4}°  p95 {:.4}°  max {:.4}°  worst at {}",
+            "  normal         mean {:.4}°  p95 {:.4}°  max {:.4}°{}",
             n.mean_deg,
             n.p95_deg,
             n.max_deg,
-            at(&n.worst)
+            worst(n.max_deg, &n.worst)
         )?;
     }
     if let Some(d) = &e.depth {
         writeln!(
             out,
-            "  depth         rel max {:.3e}  rel mean {:.3e}  abs max {:.3e}  worst at {}",
+            "  depth          rel max {:.3e}  rel mean {:.3e}  abs max {:.3e}{}",
             d.rel_max,
             d.rel_mean,
             d.abs_max,
-            at(&d.worst)
+            worst(d.rel_max, &d.worst)
         )?;
     }
     for v in e.albedo.iter().chain(&e.position).chain(&e.motion).chain(&e.scalars) {
         writeln!(
             out,
-            "  {:<13} max abs {:.3e}  mean abs {:.3e}  rmse {:.3e}  worst at {}",
+            "  {:<14} max abs {:.3e}  mean abs {:.3e}  rmse {:.3e}{}",
             v.attribute,
             v.max_abs,
             v.mean_abs,
             v.rmse,
-            at(&v.worst)
+            worst(v.max_abs, &v.worst)
         )?;
     }
     for id in &e.ids {
         let first = id.first.as_ref().map(|s| format!("  first at {}", at(s))).unwrap_or_default();
-        writeln!(out, "  {:<13} {} mismatches{first}", id.attribute, id.mismatches)?;
+        writeln!(out, "  {:<14} {} mismatches{first}", id.attribute, id.mismatches)?;
     }
     if let Some(t) = &r.material_table {
         writeln!(

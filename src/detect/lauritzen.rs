@@ -35,27 +35,51 @@ pub const CONSISTENCY: f32 = 0.5;
 /// without a usable neighbour gets 0 (which makes the test stricter, i.e. conservative).
 #[must_use]
 pub fn neighbour_gradient(gb: &GBuffer, depth: &[f32], x: u32, y: u32) -> Vec2 {
-    let z0 = depth[gb.index(x, y, 0)];
-    // Depth of sample 0 at (x + dx, y + dy) when inside, covered and finite.
-    let z = |dx: i64, dy: i64| -> Option<f32> {
+    estimate(|dx, dy| {
         let (nx, ny) = (i64::from(x) + dx, i64::from(y) + dy);
         if nx < 0 || ny < 0 || nx >= i64::from(gb.width) || ny >= i64::from(gb.height) {
-            return None;
+            return f32::NAN;
         }
         let i = gb.index(nx as u32, ny as u32, 0);
-        (gb.coverage[i] && depth[i].is_finite()).then_some(depth[i])
-    };
-    // (|a|, consistent) for the side in direction (dx, dy).
+        if gb.coverage[i] {
+            depth[i]
+        } else {
+            f32::NAN
+        }
+    })
+}
+
+/// Sample 0's depth of every pixel (row-major), NaN where it is background or not finite: a compact plane so the
+/// neighbour lookups of [`estimate`] touch 4 bytes per pixel instead of striding over the samples.
+fn sample0_depths(gb: &GBuffer, depth: &[f32]) -> Vec<f32> {
+    let s = gb.samples as usize;
+    (0..gb.pixel_count())
+        .map(|p| {
+            let z = depth[p * s];
+            if gb.coverage[p * s] && z.is_finite() {
+                z
+            } else {
+                f32::NAN
+            }
+        })
+        .collect()
+}
+
+/// The estimator of [`neighbour_gradient`] over a lookup `z(dx, dy)` of sample 0's depth at the pixel offset by
+/// (dx, dy): NaN when outside the image, background or not finite; `z(0, 0)` is the pixel itself.
+#[inline]
+fn estimate(z: impl Fn(i64, i64) -> f32) -> Vec2 {
+    let z0 = z(0, 0);
+    // (|a|, consistent) for the side in direction (dx, dy); `None` when the neighbour is unusable.
     let side = |dx: i64, dy: i64| -> Option<(f32, bool)> {
-        let z1 = z(dx, dy)?;
+        let z1 = z(dx, dy);
         let a = z1 - z0;
         if !a.is_finite() {
             return None;
         }
-        let consistent = z(2 * dx, 2 * dy).is_some_and(|z2| {
-            let b = z2 - z1;
-            (b - a).abs() <= CONSISTENCY * a.abs() + 4.0 * f32::EPSILON * z0.abs()
-        });
+        let b = z(2 * dx, 2 * dy) - z1;
+        // A NaN `b` (no usable pixel beyond) compares false: not consistent.
+        let consistent = (b - a).abs() <= CONSISTENCY * a.abs() + 4.0 * f32::EPSILON * z0.abs();
         Some((a.abs(), consistent))
     };
     let pick = |p: Option<(f32, bool)>, q: Option<(f32, bool)>| match (p, q) {
@@ -86,39 +110,48 @@ pub fn neighbour_gradients(gb: &GBuffer) -> Result<Vec<Vec2>> {
 }
 
 /// Lauritzen's test on one fully covered pixel whose samples start at `base`: are all samples on sample 0's
-/// surface? Any NaN or infinity (depth, normal, gradient) answers `false` (an edge).
+/// surface? Any NaN or infinity in the pixel's depths or normals answers `false` (an edge). The gradient is only
+/// asked for when some depth differs by more than the slack (most pixels of a frame are flat enough not to).
 #[inline]
 fn same_surface(
     depth: &[f32],
     normal: &[Vec3],
     base: usize,
     samples: usize,
-    gradient: Vec2,
+    gradient: impl FnOnce() -> Vec2,
     cfg: &DetectorConfig,
     min_dot: f32,
 ) -> bool {
     let z0 = depth[base];
-    // A bound that overflows to +∞ from finite inputs accepts everything (monotone in the thresholds); a NaN bound
-    // (from a non-finite depth or gradient) is an edge.
-    let bound = cfg.gradient_scale * (gradient.x.abs() + gradient.y.abs()) + cfg.depth_slack * z0.abs();
-    if !z0.is_finite() || bound.is_nan() {
+    if !z0.is_finite() {
         return false;
     }
     let n0 = normal[base];
     let l0 = n0.length_squared();
+    let mut max_dz = 0f32;
     for i in base + 1..base + samples {
-        // NaN and infinity land on "different surface", whatever the threshold.
-        let dz = (depth[i] - z0).abs();
-        if !dz.is_finite() || dz > bound {
-            return false;
-        }
         let ni = normal[i];
         let norms = (l0 * ni.length_squared()).sqrt();
         if !(norms > 0.0 && norms.is_finite() && n0.dot(ni) >= min_dot * norms) {
             return false;
         }
+        // NaN and infinity land on "different surface", whatever the threshold.
+        let dz = (depth[i] - z0).abs();
+        if !dz.is_finite() {
+            return false;
+        }
+        max_dz = max_dz.max(dz);
     }
-    true
+    let slack = cfg.depth_slack * z0.abs();
+    if max_dz <= slack {
+        return true;
+    }
+    // The bound is at least the slack, so pixels decided above would pass it too. A bound that overflows to +∞
+    // from finite inputs accepts everything (monotone in the thresholds); a NaN bound (non-finite gradient) is an
+    // edge.
+    let g = gradient();
+    let bound = cfg.gradient_scale * (g.x.abs() + g.y.abs()) + slack;
+    !bound.is_nan() && max_dz <= bound
 }
 
 /// Runs `lauritzen` (or `combined` when `with_ids`) with neighbour-estimated derivatives.
@@ -147,14 +180,23 @@ fn run(gb: &GBuffer, cfg: &DetectorConfig, with_ids: bool, gradient: Option<&[Ve
     let normal = gb.normal.as_deref().ok_or_else(|| missing(gb, detector, "depth (or position) and normal"))?;
     // `combined` uses IDs when the G-buffer has them and falls back to `lauritzen` alone otherwise.
     let ids = if with_ids { IdPlanes::resolve(gb, cfg.ids) } else { None };
-    let (s, w) = (gb.samples as usize, gb.width as usize);
+    let (s, w, h) = (gb.samples as usize, i64::from(gb.width), i64::from(gb.height));
     let min_dot = cfg.min_normal_dot();
+    let z0s = if gradient.is_none() { sample0_depths(gb, &depth) } else { Vec::new() };
     Ok(geometric_mask(gb, |x, y, base| {
-        let g = match gradient {
-            Some(g) => g[y as usize * w + x as usize],
-            None => neighbour_gradient(gb, &depth, x, y),
+        let p = y as usize * gb.width as usize + x as usize;
+        let g = || match gradient {
+            Some(g) => g[p],
+            None => estimate(|dx, dy| {
+                let (nx, ny) = (i64::from(x) + dx, i64::from(y) + dy);
+                if nx < 0 || ny < 0 || nx >= w || ny >= h {
+                    f32::NAN
+                } else {
+                    z0s[(ny * w + nx) as usize]
+                }
+            }),
         };
-        same_surface(&depth, normal, base, s, g, cfg, min_dot) && ids.as_ref().is_none_or(|p| p.same(base, s))
+        ids.as_ref().is_none_or(|ids| ids.same(base, s)) && same_surface(&depth, normal, base, s, g, cfg, min_dot)
     }))
 }
 
@@ -229,5 +271,23 @@ mod tests {
         assert!(detect_with_gradient(&gb, &cfg, false, &[Vec2::ZERO; 3]).is_err());
         let g = neighbour_gradients(&gb).unwrap();
         assert_eq!(g, vec![Vec2::ZERO; 2]);
+    }
+
+    #[test]
+    fn stored_estimate_and_inline_estimate_agree() {
+        // A bumpy buffer with background holes: feeding the per-pixel estimate back as a stored gradient must give
+        // the same mask as the inline path.
+        let mut rng = crate::util::SplitMix64::new(9);
+        let mut gb = flat(17, 11, 4, 1.0);
+        for i in 0..gb.len() {
+            let p = i / 4;
+            gb.depth.as_mut().unwrap()[i] = 3.0 + 0.05 * (p % 17) as f32 + rng.range_f32(0.0, 0.06);
+            gb.coverage[i] = rng.next_f32() > 0.03;
+        }
+        let cfg = DetectorConfig::default();
+        let inline = detect(&gb, &cfg, false).unwrap();
+        let stored = detect_with_gradient(&gb, &cfg, false, &neighbour_gradients(&gb).unwrap()).unwrap();
+        assert_eq!(inline, stored);
+        assert!(inline.edge_pixels() > 0 && inline.edge_pixels() < gb.pixel_count());
     }
 }

@@ -32,7 +32,7 @@ pub struct TargetSummary {
     pub format: &'static str,
     /// Bytes per texel.
     pub bytes: usize,
-    /// Bits not covered by any field (written as zero).
+    /// Bits holding no G-buffer attribute: free bits plus `reserved` fields (all written as zero).
     pub unused_bits: u32,
     /// The fields.
     pub fields: Vec<FieldSummary>,

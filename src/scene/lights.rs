@@ -83,11 +83,16 @@ pub fn default_lights(name: SceneName, gb: &GBuffer) -> Vec<Light> {
     }
 }
 
-/// The depth range covered by `gb`'s surfaces (finite, positive depths only), if any.
+/// The depth range covered by `gb`'s surfaces (finite, positive depths only; from the position plane when the
+/// depth plane is absent), if any.
 fn covered_depth_range(gb: &GBuffer) -> Option<(f32, f32)> {
-    let depth = gb.depth.as_ref()?;
+    let depths: Box<dyn Iterator<Item = f32> + '_> = match (&gb.depth, &gb.position) {
+        (Some(d), _) => Box::new(d.iter().copied()),
+        (None, Some(p)) => Box::new(p.iter().map(|p| -p.z)),
+        (None, None) => return None,
+    };
     let (mut lo, mut hi) = (f32::INFINITY, 0.0f32);
-    for (&d, &c) in depth.iter().zip(&gb.coverage) {
+    for (d, &c) in depths.zip(&gb.coverage) {
         if c && d.is_finite() && d > 0.0 {
             lo = lo.min(d);
             hi = hi.max(d);

@@ -1,0 +1,146 @@
+//! `gbuf layouts` and `gbuf roundtrip` through the built binary, plus every layout on the analytic scenes.
+
+use gbuf::gbuffer::Attribute;
+use gbuf::layout::Layout;
+use gbuf::measure::gbuffer::compare;
+use gbuf::scene::{render, SceneName};
+use serde_json::Value;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn gbuf(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_gbuf")).current_dir(dir).args(args).output().expect("run gbuf")
+}
+
+fn json(out: &Output) -> Value {
+    assert!(out.status.success(), "stderr: {}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).expect("JSON on stdout")
+}
+
+#[test]
+fn layouts_json_has_the_seed_footprint() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows = json(&gbuf(dir.path(), &["layouts", "--resolution", "1900x1200", "--msaa", "4", "--json"]));
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), Layout::builtins().len());
+    let fat = rows.iter().find(|r| r["name"] == "fat-20").unwrap();
+    assert_eq!(fat["bytes_per_sample"], 20);
+    assert_eq!(fat["footprint_bytes"], 182_400_000u64);
+    for r in rows {
+        let sum: u64 = r["targets"].as_array().unwrap().iter().map(|t| t["bytes"].as_u64().unwrap()).sum();
+        assert_eq!(r["bytes_per_sample"].as_u64().unwrap(), sum, "{}", r["name"]);
+        assert_eq!(r["footprint_bytes"].as_u64().unwrap(), 1900 * 1200 * 4 * sum);
+        assert!(r["targets"][0]["fields"].as_array().is_some());
+    }
+    // Human output mentions every layout.
+    let text = gbuf(dir.path(), &["layouts"]);
+    let text = String::from_utf8(text.stdout).unwrap();
+    for l in Layout::builtin_names() {
+        assert!(text.contains(&l), "{l} missing from\n{text}");
+    }
+}
+
+#[test]
+fn layouts_shows_user_files_and_refuses_bad_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/layouts/thin-12.toml");
+    let rows = json(&gbuf(dir.path(), &["layouts", example.to_str().unwrap(), "--json"]));
+    assert_eq!(rows[0]["name"], "thin-12");
+    assert_eq!(rows[0]["bytes_per_sample"], 12);
+    std::fs::write(dir.path().join("bad.toml"), "name = \"b\"\n[[targets]]\nname = \"t\"\nformat = \"rgba9\"\n")
+        .unwrap();
+    let out = gbuf(dir.path(), &["layouts", "bad.toml"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("bad.toml") && err.contains("rgba9"), "{err}");
+    let out = gbuf(dir.path(), &["layouts", "--resolution", "0x5"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+/// serde_json parses floats without the `float_roundtrip` feature, which may be off by one ulp.
+const JSON_REL_SLACK: f64 = 1e-14;
+
+fn assert_close(got: &Value, want: f64, what: &str) {
+    let got = got.as_f64().unwrap_or_else(|| panic!("{what}: {got} is not a number"));
+    assert!((got - want).abs() <= JSON_REL_SLACK * want.abs(), "{what}: JSON {got} vs library {want}");
+}
+
+#[test]
+fn roundtrip_json_matches_the_library() {
+    let dir = tempfile::tempdir().unwrap();
+    let gb = render(SceneName::Room, 48, 32, 4).unwrap();
+    let file = dir.path().join("room.exr");
+    gbuf::io::canonical::write(&file, &gb).unwrap();
+    for name in ["fat-20", "destiny-96", "reference-f32"] {
+        let row = json(&gbuf(dir.path(), &["roundtrip", "room.exr", "--layout", name, "--json"]));
+        let layout = Layout::by_name(name).unwrap();
+        let want = compare(&gb, &layout.roundtrip(&gb).unwrap()).unwrap();
+        assert_eq!(row["layout"], name);
+        assert_eq!(row["bytes_per_sample"].as_u64().unwrap() as usize, layout.bytes_per_sample());
+        let n = want.normal.as_ref().unwrap();
+        assert_close(&row["normal_mean_deg"], n.mean_deg, name);
+        assert_close(&row["normal_p95_deg"], n.p95_deg, name);
+        assert_close(&row["normal_max_deg"], n.max_deg, name);
+        assert_close(&row["depth_rel_max"], want.depth.as_ref().unwrap().rel_max, name);
+        assert_close(&row["albedo_max_abs"], want.albedo.as_ref().unwrap().max_abs, name);
+        assert_eq!(row["errors"]["normal"]["worst"]["x"].as_u64().unwrap(), u64::from(n.worst.x));
+    }
+    let reference = json(&gbuf(dir.path(), &["roundtrip", "room.exr", "--layout", "reference-f32", "--json"]));
+    assert_eq!(reference["normal_max_deg"], 0.0);
+    assert_eq!(reference["depth_rel_max"], 0.0);
+    // A user layout file works too, and the text output names the worst pixel.
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/layouts/thin-12.toml");
+    let out = gbuf(dir.path(), &["roundtrip", "room.exr", "--layout", example.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("thin-12") && text.contains("worst at pixel"), "{text}");
+}
+
+#[test]
+fn roundtrip_errors_are_clear() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = gbuf(dir.path(), &["roundtrip", "missing.exr", "--layout", "fat-20"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing.exr"));
+    let gb = render(SceneName::Room, 8, 8, 1).unwrap();
+    gbuf::io::canonical::write(&dir.path().join("r.exr"), &gb).unwrap();
+    let out = gbuf(dir.path(), &["roundtrip", "r.exr", "--layout", "nope"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("nope") && err.contains("fat-20"), "{err}");
+}
+
+/// An angular tolerance for comparing a layout's measured normal error with its codec's documented bound:
+/// the bound is stated in f32 degrees, the measurement is f64.
+const BOUND_SLACK_DEG: f64 = 1e-4;
+
+#[test]
+fn scene_roundtrips_stay_within_the_codec_bounds() {
+    for scene in SceneName::ALL {
+        let gb = render(scene, 64, 40, 4).unwrap();
+        for layout in Layout::builtins() {
+            let back = layout.roundtrip(&gb).unwrap();
+            let e = compare(&gb, &back).unwrap();
+            let name = format!("{} on {scene:?}", layout.name());
+            let Some(field) = layout.fields().iter().find(|f| f.slot == gbuf::layout::Slot::Whole(Attribute::Normal))
+            else {
+                assert_eq!(e.normal.as_ref().unwrap().max_deg, 0.0, "{name}");
+                continue;
+            };
+            let codec = gbuf::codec::normal_codec(&field.codec).unwrap();
+            let normals = gb.normal.as_ref().unwrap();
+            let in_domain = (0..gb.len()).filter(|&i| gb.coverage[i]).all(|i| codec.in_domain(normals[i]));
+            let n = e.normal.as_ref().unwrap();
+            if in_domain {
+                assert!(
+                    n.max_deg <= f64::from(codec.max_error_deg()) + BOUND_SLACK_DEG,
+                    "{name}: {} > bound {}",
+                    n.max_deg,
+                    codec.max_error_deg()
+                );
+            }
+            assert!(n.max_deg.is_finite() && n.p95_deg <= n.max_deg && n.mean_deg <= n.max_deg, "{name}");
+            assert!(e.nonfinite == 0, "{name}: {} non-finite", e.nonfinite);
+        }
+    }
+}
