@@ -112,6 +112,8 @@ fn inconsistent_layouts_are_refused() {
     assert!(load_err("index.toml", &no_table).contains("material_indirection"));
     let no_targets = "name = \"x\"\ntargets = []\n";
     assert!(load_err("empty.toml", no_targets).contains("no targets"));
+    let many: String = (0..17).map(|i| format!("[[targets]]\nname = \"t{i}\"\nformat = \"rgba32ui\"\n")).collect();
+    assert!(load_err("many.toml", &format!("name = \"m\"\n{many}")).contains("at most 16"));
 }
 
 #[test]

@@ -51,6 +51,10 @@ pub struct Indirection {
     pub parameters: Vec<Attribute>,
 }
 
+/// The most targets a layout may have: D3D12 and Vulkan bind at most 8 colour targets plus depth; 16 leaves room
+/// for CPU layouts while keeping a mistyped file from asking for gigabytes per G-buffer.
+pub const MAX_TARGETS: usize = 16;
+
 /// The largest material index we accept (a 2^24-entry table is already far beyond any real material count).
 pub const MAX_INDIRECTION_BITS: u32 = 24;
 
@@ -216,6 +220,9 @@ fn validate(spec: &LayoutSpec) -> std::result::Result<Layout, String> {
     }
     if spec.targets.is_empty() {
         return Err("the layout has no targets".into());
+    }
+    if spec.targets.len() > MAX_TARGETS {
+        return Err(format!("{} targets; a layout has at most {MAX_TARGETS}", spec.targets.len()));
     }
     let [znear, zfar] = spec.depth_range.unwrap_or(DEFAULT_DEPTH_RANGE);
     if !(znear > 0.0 && zfar > znear && zfar.is_finite()) {
