@@ -21,6 +21,12 @@
 //! Ground truth from IDs lives in [`truth`]; precision and recall in [`crate::measure::edges`].
 //!
 //! Work is parallel over rows with rayon.
+//!
+//! Measured on the built-in room (`gbuf scene room --width 960 --height 540 --msaa 4 -o room.exr && gbuf edges
+//! room.exr --detector all`): against object IDs, `lauritzen` has precision 0.85 and recall 0.56 at a shading
+//! fraction of 0.172 (`none` 0.165, `ssaa` 0.658 — a third of the frame is sky); `id` 1.00/1.00 at 0.176;
+//! `forward-msaa` 0.32/0.81 at 0.175. Most of the geometric detectors' misses are the floor's checker tiles: separate,
+//! coplanar objects that only a material or ID test can tell apart.
 
 pub mod baselines;
 pub mod geometric;
