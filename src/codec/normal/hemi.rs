@@ -7,7 +7,7 @@
 //! with perspective some visible normals do have z < 0, which is why engines moved away from it.
 //!
 //! Error bound on the domain z ≥ 0: reconstructing z is ill-conditioned at the horizon, where a radial error h
-//! costs acos(1 − h); with the lateral part: acos(1 − h) + h, h = √(hx²+hy²) (xy-hemi-16 ≤ 6.5°).
+//! costs acos(1 − h); with the lateral part: acos(1 − h) + h, h = √(hx²+hy²) (xy-hemi-16 ≤ 6.4°).
 //! Quantized points with x² + y² > 1 (which rounding does produce near the horizon) decode onto the horizon,
 //! renormalised; re-encoding that horizon vector can land on a neighbouring code, so the codec is not
 //! idempotent there (the exhaustive test holds the move to the bound instead).

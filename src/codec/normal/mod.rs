@@ -315,12 +315,12 @@ impl Quant {
         match self {
             Quant::Snorm(k) => {
                 let m = ((1u32 << (k - 1)) - 1) as f32;
-                let s = (v.clamp(-1.0, 1.0) * m).round() as i64;
+                let s = round_half_away(v.clamp(-1.0, 1.0) * m);
                 (s as u64) & mask(k)
             }
             Quant::Unorm(k) => {
                 let m = ((1u64 << k) - 1) as f32;
-                (v.clamp(0.0, 1.0) * m).round() as u64
+                round_half_away(v.clamp(0.0, 1.0) * m) as u64
             }
             Quant::F16 => u64::from(half::f16::from_f32(v.clamp(-F16_MAX, F16_MAX)).to_bits()),
         }
@@ -342,6 +342,15 @@ impl Quant {
             Quant::F16 => f16_to_finite((c & 0xffff) as u16),
         }
     }
+}
+
+/// `v.round() as i64` without the libm call that `f32::round` becomes on baseline x86-64 (no SSE4.1): the add
+/// happens in f64, where it is exact for |v| < 2^52, so halves round away from zero exactly like `round`.
+#[inline(always)]
+#[must_use]
+pub fn round_half_away(v: f32) -> i64 {
+    let d = f64::from(v);
+    (d + 0.5f64.copysign(d)) as i64
 }
 
 /// Largest finite half float.
@@ -495,6 +504,18 @@ mod tests {
         assert_eq!(Quant::F16.encode(1e9), u64::from(half::f16::MAX.to_bits()));
         assert_eq!(Quant::F16.decode(0x7c00), F16_MAX); // +Inf bits
         assert_eq!(Quant::F16.decode(0x7e00), 0.0); // NaN bits
+    }
+
+    #[test]
+    fn round_half_away_matches_round() {
+        let mut rng = crate::util::SplitMix64::new(5);
+        for v in [0.5f32, -0.5, 1.5, -2.5, 0.499_999_97, -0.499_999_97, 0.0, -0.0, 32767.5, 1e7 + 0.5] {
+            assert_eq!(round_half_away(v), v.round() as i64, "{v}");
+        }
+        for _ in 0..100_000 {
+            let v = rng.range_f32(-70_000.0, 70_000.0);
+            assert_eq!(round_half_away(v), v.round() as i64, "{v}");
+        }
     }
 
     #[test]

@@ -7,7 +7,7 @@
 //!
 //! Error bound: the decode map stretches plane distances by at most 3 (the largest singular value of its Jacobian,
 //! reached at the face centres (±⅓, ±⅓)), so a plane error of (hx, hy) moves the normal by at most
-//! 3·√(hx²+hy²) radians. With snorm k bits h = 1/(2·(2^(k−1)−1)): oct-16 ≤ 0.957°, oct-24 ≤ 0.0598°. The
+//! 3·√(hx²+hy²) radians. With snorm k bits h = 1/(2·(2^(k−1)−1)): oct-16 ≤ 0.957°, oct-24 ≤ 0.0596°. The
 //! precise variant never does worse (its candidate set contains the rounded code). Domain: the whole sphere.
 //! Fold lines (x = 0 or y = 0 with z < 0) and −0.0 use `signNotZero`, so −0.0 folds like +0.0.
 

@@ -8,6 +8,11 @@
 //! SIGGRAPH 2010, `deferred` sample, `ComputeNormal`) stores `e = g·0.5+0.5` as unorm and decodes
 //! `f = (x−x²)+(y−y²)`, `m = √(4f−1)`, `n = (m(4x−2), m(4y−2), 3−8f)` — algebraically the same map.
 //!
+//! Orientation matters: Mittring's view space is Direct3D's (+Z forward), where visible normals have n.z < 0 and
+//! land near the well-conditioned centre. In gbuf's view space (−Z forward, see [`crate::gbuffer`]) the literal
+//! formula puts the visible normals on the rim, where it is worst; the z-mirrored map, which is what CryEngine
+//! effectively gets, is our [`super::Lambert`] (0.89° max on z ≥ 0 at 16 bits instead of 11.6°).
+//!
 //! We keep Mittring's formulas literally; in f32 they cancel near −Z (`n.z·0.5+0.5`, `1−n.z²`): a decoded
 //! (3e-4, 0, −0.99999994) re-encodes to exactly −Z. Snorm codes never get that close to the centre; the f16
 //! storage does, and is therefore not exactly idempotent there (within the bound).
@@ -17,7 +22,7 @@
 //!
 //! Error bound: the azimuthal stretch is ≤ 2, but the radial one grows without limit at the rim (the
 //! view-facing direction): a radial error h there costs 2·acos(1−h). Bound: 2·acos(1−h) + 2h with
-//! h = √(hx²+hy²) — loose away from +Z; e.g. spheremap-cry-16 ≤ 12.1°, measured ≈ 7.7° near +Z (see
+//! h = √(hx²+hy²) — loose away from +Z; e.g. spheremap-cry-16 ≤ 12.7°, measured 11.6° near +Z (see
 //! docs/CODECS.md). Domain: the whole sphere.
 
 use super::{normalize2_or_x, Projection, Quant};

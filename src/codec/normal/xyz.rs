@@ -6,7 +6,7 @@
 //!
 //! Error bound: every component is off by at most half a step Δ/2, so the stored vector is within √3·Δ/2 of the
 //! unit input and the angle is ≤ asin(√3·Δ/2) (Δ = 1/(2^(k−1)−1) for snorm, 2/(2^k−1) for unorm, 2^-10 for f16
-//! components ≤ 1): xyz-snorm-24 ≤ 0.391°, xyz-snorm-30 ≤ 0.0970°. Domain: the whole sphere.
+//! components ≤ 1): xyz-snorm-24 ≤ 0.391°, xyz-snorm-30 ≤ 0.0973°. Domain: the whole sphere.
 //! Not idempotent: renormalising moves the decoded vector off the grid, so re-encoding it can land on a
 //! neighbouring code (within the bound). The all-zero snorm code decodes to +Z.
 
