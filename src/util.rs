@@ -12,6 +12,15 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&mut std::fs::File) -> std::
         _ => Path::new("."),
     };
     let mut tmp = tempfile::Builder::new().prefix(".gbuf-tmp-").tempfile_in(dir).map_err(|e| Error::io(path, e))?;
+    // tempfile creates files readable by the owner only; an output should get the usual permissions (those of the
+    // file it replaces, else rw-r--r-- before the umask's say, as a plain File::create would give).
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = std::fs::metadata(path).map(|m| m.permissions().mode()).unwrap_or(0o644);
+        std::fs::set_permissions(tmp.path(), std::fs::Permissions::from_mode(mode & 0o7777))
+            .map_err(|e| Error::io(path, e))?;
+    }
     write(tmp.as_file_mut()).map_err(|e| Error::io(path, e))?;
     tmp.as_file_mut().flush().map_err(|e| Error::io(path, e))?;
     tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
@@ -75,6 +84,12 @@ mod tests {
         write_bytes_atomic(&p, b"two").unwrap();
         assert_eq!(std::fs::read(&p).unwrap(), b"two");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&p).unwrap().permissions().mode() & 0o777;
+            assert_eq!(mode, 0o644, "outputs must not be owner-only");
+        }
     }
 
     #[test]
