@@ -1,8 +1,29 @@
-//! `gbuf demo`.
+//! `gbuf demo [--out DIR] [--width W --height H --msaa S] [--json]`: renders the `room` scene in memory with its
+//! default lights and runs the whole report on it. Needs no file.
+
+use crate::cli::report::{run_and_write, SweepArgs};
+use anyhow::Context;
+use gbuf::scene::{self, SceneName};
+use std::path::PathBuf;
 
 /// Flags of `gbuf demo`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
+    /// Output folder (created if missing; other files in it are left alone).
+    #[arg(short = 'o', long = "out", default_value = "gbuf-demo")]
+    pub out: PathBuf,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 960, value_parser = clap::value_parser!(u32).range(1..=8192))]
+    pub width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 540, value_parser = clap::value_parser!(u32).range(1..=8192))]
+    pub height: u32,
+    /// MSAA samples per pixel (1, 2, 4, 8 or 16).
+    #[arg(long, default_value_t = 4)]
+    pub msaa: u32,
+    /// What to sweep.
+    #[command(flatten)]
+    pub sweep: SweepArgs,
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
@@ -10,6 +31,11 @@ pub struct Args {
 
 /// Runs `gbuf demo`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let _ = args.json;
-    anyhow::bail!("gbuf demo is not available yet")
+    let cfg = args.sweep.config()?;
+    let gb = scene::render(SceneName::Room, args.width, args.height, args.msaa)
+        .with_context(|| format!("rendering the room scene at {}×{} × {}", args.width, args.height, args.msaa))?;
+    let lights = scene::default_lights(SceneName::Room, &gb);
+    let source = format!("the room's {} default lights", lights.len());
+    run_and_write("room (rendered in memory)", &gb, &lights, &source, &cfg, &args.out, args.json)?;
+    Ok(())
 }

@@ -5,7 +5,7 @@ use crate::report::row::Row;
 use std::fmt::Write as _;
 
 /// The header columns, in order.
-pub const COLUMNS: [&str; 33] = [
+pub const COLUMNS: [&str; 34] = [
     "layout",
     "bytes_per_sample",
     "footprint_bytes",
@@ -20,6 +20,7 @@ pub const COLUMNS: [&str; 33] = [
     "scalar_max_abs",
     "rmse",
     "psnr_db",
+    "layout_rmse",
     "max_abs",
     "rel_mse",
     "shading_fraction",
@@ -89,6 +90,7 @@ pub fn to_csv(rows: &[Row]) -> String {
             num(r.scalar_max_abs),
             num(r.rmse),
             num(r.psnr_db),
+            num(r.layout_rmse),
             num(r.max_abs),
             num(r.rel_mse),
             num(r.shading_fraction),

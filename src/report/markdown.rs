@@ -104,13 +104,13 @@ pub fn rows_table(rows: &[Row]) -> String {
         s.push_str(" culling |");
     }
     s.push_str(
-        " normal mean / p95 / max ° | depth rel max | PSNR dB | RMSE | shaded | precision / recall | \
+        " normal mean / p95 / max ° | depth rel max | PSNR dB | RMSE | layout RMSE | shaded | precision / recall | \
          encode ms | decode ms | detect ms | resolve ms | Pareto |\n|---|--:|--:|---|",
     );
     if culling {
         s.push_str("---|");
     }
-    s.push_str("--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|---|\n");
+    s.push_str("--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|---|\n");
     for r in rows {
         let pareto = match (r.pareto.bytes, r.pareto.time) {
             (true, true) => "bytes, time",
@@ -130,18 +130,19 @@ pub fn rows_table(rows: &[Row]) -> String {
             let _ = write!(s, " {} |", r.culling.as_deref().unwrap_or("—"));
         }
         if let Some(e) = &r.error {
-            let _ = writeln!(s, " error: {} | | | | | | | | | | |", e.replace('|', "/"));
+            let _ = writeln!(s, " error: {} | | | | | | | | | | | |", e.replace('|', "/"));
             continue;
         }
         let _ = writeln!(
             s,
-            " {} / {} / {} | {} | {} | {} | {} | {} / {} | {} | {} | {} | {} | {pareto} |",
+            " {} / {} / {} | {} | {} | {} | {} | {} | {} / {} | {} | {} | {} | {} | {pareto} |",
             fmt_opt(r.normal_mean_deg, 3),
             fmt_opt(r.normal_p95_deg, 3),
             fmt_opt(r.normal_max_deg, 3),
             fmt_opt(r.depth_rel_max, 6),
             fmt_opt(r.psnr_db, 2),
             fmt_opt(r.rmse, 5),
+            fmt_opt(r.layout_rmse, 5),
             pct(r.shading_fraction),
             fmt_opt(r.precision, 3),
             fmt_opt(r.recall, 3),
@@ -215,7 +216,10 @@ pub fn to_markdown(rep: &Report) -> String {
          - **normal °**: angle between the stored and the decoded normal over covered samples.\n\
          - **PSNR / RMSE**: the lit image from the decoded G-buffer (shaded per pixel or per sample as the detector \
          decides) against the reference lit from the unquantized G-buffer with every sample shaded. PSNR is \
-         infinite when the images are identical.\n\
+         infinite when the images are identical. It counts both the layout's quantization and the detector's \
+         aliasing (edge samples shaded once).\n\
+         - **layout RMSE**: the same lit image against the exact G-buffer lit with the same detector: what the \
+         layout's quantization alone costs.\n\
          - **shaded**: shading evaluations / (pixels × samples): 100% is supersampling, 1/samples is one per pixel.\n\
          - **precision / recall**: of the detector's edge pixels against ground-truth edges (pixels whose samples \
          shade differently).\n\

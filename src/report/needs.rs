@@ -112,6 +112,57 @@ impl Needs {
         self.absent.iter().any(|n| n == attr.name())
     }
 
+    /// A few lines for people (what `gbuf info` prints under "needs").
+    #[must_use]
+    pub fn to_text(&self) -> String {
+        let list = |v: &[String]| if v.is_empty() { "none".to_string() } else { v.join(", ") };
+        let constants: Vec<String> = self
+            .constant
+            .iter()
+            .map(|a| {
+                let v = self
+                    .constant_values
+                    .get(a)
+                    .map_or(String::new(), |v| v.iter().map(|x| format!("{x}")).collect::<Vec<_>>().join(" "));
+                format!("{a} = {v}")
+            })
+            .collect();
+        let mut t = String::new();
+        t.push_str(&format!("needs       constant: {}\n", list(&constants)));
+        t.push_str(&format!("            absent: {}; derivable: {}\n", list(&self.absent), list(&self.derivable)));
+        let bits = self.material_id_bits.map_or("too many for an ID table".into(), |b| format!("{b} ID bits"));
+        let capped = if self.material_count_capped { "more than " } else { "" };
+        t.push_str(&format!("            material tuples: {capped}{} ({bits})\n", self.material_count));
+        let faces = match self.normals_face_camera {
+            Some(true) => "all normals face the camera (hemisphere encodings are safe)".to_string(),
+            Some(false) => {
+                format!("{} covered samples have normal z ≤ 0 (use a full-sphere encoding)", self.back_facing_normals)
+            }
+            None => "no normals".into(),
+        };
+        t.push_str(&format!("            {faces}\n"));
+        if let (Some([lo, hi]), Some(b)) = (self.depth_range, self.depth_bits) {
+            t.push_str(&format!(
+                "            depth {lo} – {hi}: {} bits linear / {} bits log for {} relative precision\n",
+                b.linear_bits, b.log_bits, b.relative_precision
+            ));
+        }
+        if let Some(p) = &self.pruned_layout {
+            t.push_str(&format!(
+                "            pruned layout: {} = {} B/sample ({} B less than {}){}\n",
+                p.name,
+                p.bytes_per_sample,
+                p.bytes_saved,
+                p.base,
+                p.rmse.map_or(String::new(), |r| format!(", image RMSE {r:.6}"))
+            ));
+            for c in &p.changes {
+                t.push_str(&format!("              - {c}\n"));
+            }
+        }
+        t
+    }
+
     /// Attributes a layout does not need to store: absent, constant, or derivable ones.
     #[must_use]
     pub fn unneeded(&self) -> Vec<Attribute> {

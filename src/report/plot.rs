@@ -212,13 +212,23 @@ impl ScatterPlot {
         for w2 in front.windows(2) {
             c.line(w2[0], w2[1], FRONT, 2);
         }
+        // Labels move down a line while they would overlap one already drawn (identical points stay readable).
+        let mut boxes: Vec<(f64, f64, f64)> = Vec::new();
         for p in self.points.iter().filter(|p| p.x.is_finite() && p.y.is_finite()) {
             let (x, y) = (f.px(p.x), f.py(p.y));
             let col = if p.on_front { FRONT } else { OTHER };
             c.disc(x, y, 3.5, col, p.on_front);
             let lw = font::text_width(&p.label, 1) as f64;
             let lx = if x + 6.0 + lw > f.w - 2.0 { x - 6.0 - lw } else { x + 6.0 };
-            c.text(&p.label, lx as i32, y as i32 - 9, col);
+            let mut ly = y - 9.0;
+            for _ in 0..8 {
+                if !boxes.iter().any(|&(bx, by, bw)| lx < bx + bw && bx < lx + lw && (ly - by).abs() < 9.0) {
+                    break;
+                }
+                ly += 9.0;
+            }
+            boxes.push((lx, ly, lw));
+            c.text(&p.label, lx as i32, ly as i32, col);
         }
         c.0
     }

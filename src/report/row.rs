@@ -89,6 +89,9 @@ pub struct Row {
     pub rmse: Option<f64>,
     /// Image PSNR in dB against the reference (peak = reference maximum); infinite when identical.
     pub psnr_db: Option<f64>,
+    /// Image RMSE against the exact (unpacked-input) G-buffer lit with the same detector: the error the layout's
+    /// quantization alone causes, without the detector's aliasing that `rmse` also counts.
+    pub layout_rmse: Option<f64>,
     /// Largest absolute pixel error.
     pub max_abs: Option<f64>,
     /// Relative MSE (MSE / mean squared reference).

@@ -1,0 +1,169 @@
+//! The figures of a report: error against bytes and against run time (PNG + SVG), per-attribute error heatmaps
+//! of the worst layouts, the edge masks of each detector and the light-count heatmap.
+
+use crate::detect::EdgeMask;
+use crate::error::Result;
+use crate::gbuffer::GBuffer;
+use crate::report::pareto;
+use crate::report::plot::{self, PlotPoint, ScatterPlot};
+use crate::report::row::{Figure, Row};
+use crate::report::sweep::SweepOutput;
+use crate::report::write::Attachment;
+use image::{Rgb, RgbImage};
+
+/// Size of the scatter plots in pixels.
+pub const PLOT_SIZE: (u32, u32) = (720, 440);
+
+/// How many of the worst layouts get error heatmaps.
+pub const WORST_LAYOUTS: usize = 2;
+
+/// Heatmaps wider than this are downscaled (nearest pixel) to keep the report folder small.
+pub const MAX_PICTURE_WIDTH: u32 = 960;
+
+/// One point per layout: its row with the least image error (over detectors and culling modes), with the Pareto
+/// front of those points. The y axis is logarithmic when the errors span more than a factor of 20.
+fn scatter(rows: &[Row], title: &str, x_label: &str, x: impl Fn(&Row) -> Option<f64>) -> ScatterPlot {
+    let mut best: Vec<(&str, f64, f64)> = Vec::new();
+    for r in rows {
+        let (Some(xv), Some(y)) = (x(r), r.rmse) else { continue };
+        if !(xv.is_finite() && y.is_finite()) {
+            continue;
+        }
+        match best.iter_mut().find(|b| b.0 == r.layout) {
+            Some(b) if y < b.2 => *b = (&r.layout, xv, y),
+            Some(_) => {}
+            None => best.push((&r.layout, xv, y)),
+        }
+    }
+    let front = pareto::front(&best.iter().map(|b| (b.1, b.2)).collect::<Vec<_>>());
+    let (lo, hi) = best.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.2), b.max(p.2)));
+    let log_y = lo > 0.0 && hi / lo > 20.0;
+    let points = best
+        .iter()
+        .zip(front)
+        .map(|(b, f)| PlotPoint { x: b.1, y: b.2, label: b.0.to_string(), on_front: f })
+        .collect();
+    let y_label = if log_y { "image RMSE (log)" } else { "image RMSE" };
+    ScatterPlot { title: title.into(), x_label: x_label.into(), y_label: y_label.into(), log_y, points }
+}
+
+/// Downscales (nearest) so the width is at most [`MAX_PICTURE_WIDTH`].
+fn fit(img: RgbImage) -> RgbImage {
+    if img.width() <= MAX_PICTURE_WIDTH {
+        return img;
+    }
+    let k = img.width().div_ceil(MAX_PICTURE_WIDTH);
+    let (w, h) = (img.width() / k, (img.height() / k).max(1));
+    RgbImage::from_fn(w, h, |x, y| *img.get_pixel(x * k, y * k))
+}
+
+fn percentile_max(v: &[Option<f32>]) -> f32 {
+    let mut vals: Vec<f32> = v.iter().flatten().copied().filter(|x| x.is_finite()).collect();
+    if vals.is_empty() {
+        return 0.0;
+    }
+    // Scale to the 99.5th percentile so a few outliers do not wash out the map.
+    let k = ((vals.len() as f64 * 0.995) as usize).min(vals.len() - 1);
+    let (_, m, _) = vals.select_nth_unstable_by(k, f32::total_cmp);
+    *m
+}
+
+/// An edge-mask picture: per-sample pixels white, once-shaded pixels dim grey, background black.
+#[must_use]
+pub fn mask_picture(mask: &EdgeMask) -> RgbImage {
+    RgbImage::from_fn(mask.width, mask.height, |x, y| match mask.shade_count[(y * mask.width + x) as usize] {
+        0 => Rgb([0, 0, 0]),
+        1 => Rgb([70, 70, 70]),
+        _ => Rgb([255, 255, 255]),
+    })
+}
+
+/// The picture of the reference image, tone-mapped (Reinhard) and sRGB-encoded.
+#[must_use]
+pub fn image_picture(img: &crate::image::HdrImage) -> RgbImage {
+    let enc = |v: f32| {
+        let t = if v.is_finite() { (v / (1.0 + v)).clamp(0.0, 1.0) } else { 0.0 };
+        let s = if t <= 0.003_130_8 { 12.92 * t } else { 1.055 * t.powf(1.0 / 2.4) - 0.055 };
+        (s * 255.0).round() as u8
+    };
+    RgbImage::from_fn(img.width, img.height, |x, y| {
+        let c = img.rgb[(y * img.width + x) as usize];
+        Rgb([enc(c.x), enc(c.y), enc(c.z)])
+    })
+}
+
+/// Builds every figure of a sweep. Returns the files and their captions.
+pub fn figures(gb: &GBuffer, out: &SweepOutput) -> Result<(Vec<Attachment>, Vec<Figure>)> {
+    let mut files = Vec::new();
+    let mut figs = Vec::new();
+    let mut png = |name: &str, img: RgbImage, caption: String, files: &mut Vec<Attachment>| -> Result<()> {
+        files.push(Attachment { name: name.into(), bytes: plot::png_bytes(&fit(img))? });
+        figs.push(Figure { file: name.into(), caption });
+        Ok(())
+    };
+    let (w, h) = PLOT_SIZE;
+    let by_bytes = scatter(&out.rows, "Image error vs bytes per sample", "bytes per sample", |r| {
+        Some(f64::from(r.bytes_per_sample))
+    });
+    let by_time =
+        scatter(&out.rows, "Image error vs run time", "encode + decode + detect + resolve (ms)", |r| r.total_ms);
+    for (stem, p, what) in [("error_vs_bytes", &by_bytes, "bytes per sample"), ("error_vs_time", &by_time, "run time")]
+    {
+        png(&format!("{stem}.png"), p.to_png_image(w, h), format!("Image RMSE against {what}, one point per layout (its best detector); the Pareto front in red (SVG: {stem}.svg)"), &mut files)?;
+        files.push(Attachment { name: format!("{stem}.svg"), bytes: p.to_svg(w, h).into_bytes() });
+    }
+    png(
+        "reference.png",
+        image_picture(&out.reference),
+        "The reference image (every sample shaded, unquantized G-buffer), tone-mapped".into(),
+        &mut files,
+    )?;
+
+    // The worst layouts by their best image error.
+    let mut worst: Vec<(&str, f64)> = Vec::new();
+    for m in &out.maps {
+        let best = out.rows.iter().filter(|r| r.layout == m.layout).filter_map(|r| r.rmse).fold(f64::NAN, f64::min);
+        if best.is_finite() {
+            worst.push((&m.layout, best));
+        }
+    }
+    worst.sort_by(|a, b| b.1.total_cmp(&a.1));
+    for (name, _) in worst.iter().take(WORST_LAYOUTS) {
+        let Some(m) = out.maps.iter().find(|m| m.layout == *name) else { continue };
+        let slug: String = name.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
+        for (what, unit, map) in [
+            ("normal", "degrees", &m.normal_deg),
+            ("depth", "relative", &m.depth_rel),
+            ("albedo", "absolute", &m.albedo_abs),
+            ("image", "absolute radiance", &m.image_abs),
+        ] {
+            let Some(v) = map else { continue };
+            let max = percentile_max(v);
+            png(
+                &format!("heatmap_{slug}_{what}.png"),
+                plot::heatmap(v, gb.width, gb.height, max),
+                format!("{name}: per-pixel {what} error ({unit}; yellow = {max:.3e} or more, grey = background)"),
+                &mut files,
+            )?;
+        }
+    }
+    for (det, mask) in &out.masks {
+        png(
+            &format!("edges_{det}.png"),
+            mask_picture(mask),
+            format!("Edge mask of {det}: white = shaded per sample ({:.1}% of pixels)", 100.0 * mask.edge_fraction()),
+            &mut files,
+        )?;
+    }
+    if let Some(lpp) = &out.lights_per_pixel {
+        let v: Vec<Option<f32>> = lpp.iter().map(|&n| Some(n as f32)).collect();
+        let max = lpp.iter().copied().max().unwrap_or(0) as f32;
+        png(
+            "lights_per_pixel.png",
+            plot::heatmap(&v, gb.width, gb.height, max),
+            format!("Lights reaching each pixel after culling (yellow = {max})"),
+            &mut files,
+        )?;
+    }
+    Ok((files, figs))
+}

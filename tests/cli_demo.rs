@@ -1,0 +1,135 @@
+//! The `demo`, `report` and `budget` commands through the built binary, in fresh temp dirs.
+
+use std::path::Path;
+use std::process::Command;
+
+fn gbuf() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_gbuf"))
+}
+
+fn check_png(path: &Path) -> (u32, u32) {
+    let img = image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    (img.width(), img.height())
+}
+
+#[test]
+fn demo_writes_the_report_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("nested/gbuf-demo");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    let o = gbuf()
+        .args(["demo", "--width", "64", "--height", "36", "--msaa", "4", "--runs", "1"])
+        .args(["--layouts", "fat-20,minimal-8,reference-f32", "--json", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "stderr: {}", String::from_utf8_lossy(&o.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is JSON");
+    assert_eq!(json["width"], 64);
+    assert_eq!(json["rows"].as_array().unwrap().len(), 9);
+    for key in [
+        "layout",
+        "bytes_per_sample",
+        "detector",
+        "normal_mean_deg",
+        "normal_max_deg",
+        "psnr_db",
+        "rmse",
+        "shading_fraction",
+        "encode_ms",
+        "decode_ms",
+        "resolve_ms",
+        "pareto",
+    ] {
+        assert!(json["rows"][0].get(key).is_some(), "row lacks {key}");
+    }
+    for key in [
+        "constant",
+        "absent",
+        "material_count",
+        "material_id_bits",
+        "normals_face_camera",
+        "depth_range",
+        "pruned_layout",
+    ] {
+        assert!(json["needs"].get(key).is_some(), "needs lacks {key}");
+    }
+    for f in ["report.md", "report.csv", "report.json", "error_vs_bytes.svg"] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    assert_eq!(std::fs::read_to_string(out.join("notes.txt")).unwrap(), "mine");
+    assert_eq!(check_png(&out.join("error_vs_bytes.png")), gbuf::report::figures::PLOT_SIZE);
+    assert_eq!(check_png(&out.join("error_vs_time.png")), gbuf::report::figures::PLOT_SIZE);
+    assert_eq!(check_png(&out.join("lights_per_pixel.png")), (64, 36));
+    assert_eq!(check_png(&out.join("edges_lauritzen.png")), (64, 36));
+    let csv = std::fs::read_to_string(out.join("report.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 10, "header + 9 rows");
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("![") && md.contains("| fat-20 |"));
+    // Every image the markdown links exists.
+    for line in md.lines().filter(|l| l.starts_with("![")) {
+        let file = line.split("](").nth(1).unwrap().trim_end_matches(')');
+        assert!(out.join(file).is_file(), "{file} linked but missing");
+    }
+}
+
+#[test]
+fn report_on_a_canonical_dump_and_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("room.exr");
+    let o = gbuf()
+        .args(["scene", "room", "--width", "48", "--height", "27", "--msaa", "2", "-o"])
+        .arg(&exr)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "scene: {}", String::from_utf8_lossy(&o.stderr));
+    let out = dir.path().join("rep");
+    let o = gbuf()
+        .arg("report")
+        .arg(&exr)
+        .args(["--layouts", "minimal-8,lauritzen-15", "--detectors", "lauritzen", "--runs", "1", "-o"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "report: {}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("minimal-8") && text.contains("report.md"), "{text}");
+    assert!(out.join("report.json").is_file());
+
+    // Garbage input: exit 1 with the file named, no panic.
+    let bad = dir.path().join("bad.exr");
+    std::fs::write(&bad, b"not an exr at all").unwrap();
+    let o = gbuf().arg("report").arg(&bad).arg("-o").arg(dir.path().join("x")).output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("bad.exr") && !err.contains("panicked"), "{err}");
+    // Unknown layout / detector names: exit 1 with the known names.
+    let o = gbuf().arg("report").arg(&exr).args(["--layouts", "nope"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let o = gbuf().arg("report").arg(&exr).args(["--detectors", "nope"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("lauritzen"));
+    let o = gbuf().arg("budget").arg(&bad).args(["--max-bytes", "12"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+}
+
+#[test]
+fn budget_writes_a_layout_that_loads() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("room.exr");
+    let o = gbuf()
+        .args(["scene", "room", "--width", "48", "--height", "27", "--msaa", "2", "-o"])
+        .arg(&exr)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "scene: {}", String::from_utf8_lossy(&o.stderr));
+    let toml = dir.path().join("best.toml");
+    let o = gbuf().arg("budget").arg(&exr).args(["--max-bytes", "12", "--json", "-o"]).arg(&toml).output().unwrap();
+    assert!(o.status.success(), "budget: {}", String::from_utf8_lossy(&o.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let bytes = json["winner"]["bytes_per_sample"].as_u64().unwrap();
+    assert!(bytes <= 12);
+    let l = gbuf::layout::Layout::load(&toml).unwrap();
+    assert_eq!(l.bytes_per_sample() as u64, bytes);
+}

@@ -1,0 +1,65 @@
+//! The budget search: never over the budget, never worse than the best built-in that fits, and its layout file
+//! loads back with the same size.
+
+use gbuf::detect::{Detector, DetectorConfig};
+use gbuf::layout::Layout;
+use gbuf::report::budget::{search, BudgetConfig};
+use gbuf::resolve::ResolveConfig;
+use gbuf::scene::{self, SceneName};
+
+fn cfg(max_bytes: u32, max_error: Option<f64>) -> BudgetConfig {
+    BudgetConfig {
+        max_bytes,
+        max_error,
+        detector: Detector::Lauritzen,
+        detector_config: DetectorConfig::default(),
+        resolve: ResolveConfig::default(),
+    }
+}
+
+#[test]
+fn budget_fits_beats_builtins_and_round_trips_through_a_file() {
+    let gb = scene::render(SceneName::Room, 80, 45, 4).unwrap();
+    let lights = scene::default_lights(SceneName::Room, &gb);
+    for max in [8u32, 12, 20] {
+        let res = search(&gb, &lights, &cfg(max, None)).unwrap();
+        let w = &res.winner;
+        assert!(w.bytes_per_sample <= max, "{} B over the {max} B budget", w.bytes_per_sample);
+        let layout = Layout::from_spec(w.spec.clone()).unwrap();
+        assert_eq!(layout.bytes_per_sample() as u32, w.bytes_per_sample);
+        // Every measured candidate fits, and no fitting built-in measured better than the winner.
+        for c in &res.measured {
+            assert!(c.bytes_per_sample <= max, "{}", c.name);
+            if c.kind == "built-in" {
+                assert!(c.rmse.unwrap_or(f64::INFINITY) >= w.rmse.unwrap(), "{} beats the winner", c.name);
+            }
+        }
+        for b in Layout::builtins().iter().filter(|b| b.bytes_per_sample() as u32 <= max) {
+            assert!(res.measured.iter().any(|c| c.name == b.name()), "{} fits but was not measured", b.name());
+        }
+        // The layout file loads back with the same size.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("best.toml");
+        layout.save(&path).unwrap();
+        let back = Layout::load(&path).unwrap();
+        assert_eq!(back.bytes_per_sample(), layout.bytes_per_sample());
+        // The constant attributes of the scene cost no bits.
+        for c in &res.needs.constant {
+            let a = gbuf::Attribute::from_name(c).unwrap();
+            assert!(!layout.stores(a), "{c} is constant but stored");
+        }
+    }
+}
+
+#[test]
+fn error_cap_picks_a_layout_under_it_and_impossible_budgets_fail() {
+    let gb = scene::render(SceneName::Room, 64, 36, 2).unwrap();
+    let lights = scene::default_lights(SceneName::Room, &gb);
+    let loose = search(&gb, &lights, &cfg(32, None)).unwrap();
+    let cap = loose.winner.rmse.unwrap() * 4.0 + 1e-9;
+    let capped = search(&gb, &lights, &cfg(32, Some(cap))).unwrap();
+    assert!(capped.winner.rmse.unwrap() <= cap);
+    assert!(capped.winner.bytes_per_sample <= loose.winner.bytes_per_sample);
+    assert!(search(&gb, &lights, &cfg(0, None)).is_err());
+    assert!(search(&gb, &lights, &cfg(1, None)).is_err(), "nothing useful fits in one byte");
+}

@@ -1,0 +1,111 @@
+//! The sweep on a small rendered room: rows consistent with their layouts, the lossless layout exact, Pareto flags
+//! consistent with the numbers, and the needs analysis of a real scene.
+
+use gbuf::detect::{Detector, DetectorConfig};
+use gbuf::layout::Layout;
+use gbuf::report::pareto::dominates;
+use gbuf::report::sweep::{sweep, SweepConfig};
+use gbuf::resolve::ResolveConfig;
+use gbuf::scene::{self, SceneName};
+
+/// The fast f32 resolve against the f64 reference on an exact G-buffer: what is left is the resolve's own
+/// arithmetic (fast pow/exp), far below any quantization error.
+const RESOLVE_VS_REFERENCE_REL_MSE: f64 = 1e-4;
+
+fn small_room() -> (gbuf::GBuffer, Vec<gbuf::Light>) {
+    let gb = scene::render(SceneName::Room, 96, 54, 4).expect("room renders");
+    let lights = scene::default_lights(SceneName::Room, &gb);
+    (gb, lights)
+}
+
+#[test]
+fn sweep_rows_match_layouts_and_lossless_is_exact() {
+    let (gb, lights) = small_room();
+    let layouts: Vec<Layout> =
+        ["reference-f32", "fat-20", "minimal-8"].iter().map(|n| Layout::by_name(n).expect("built-in")).collect();
+    let cfg = SweepConfig {
+        layouts: layouts.clone(),
+        detectors: vec![Detector::Lauritzen, Detector::Ssaa],
+        detector_config: DetectorConfig::default(),
+        culling: vec![],
+        resolve: ResolveConfig::default(),
+        runs: 2,
+    };
+    let mut calls = 0;
+    let out = sweep(&gb, &lights, &cfg, &mut |done, total, _| {
+        assert!(done <= total);
+        calls += 1;
+    })
+    .unwrap();
+    assert!(calls > 3);
+    assert_eq!(out.rows.len(), 6);
+    for r in &out.rows {
+        let l = layouts.iter().find(|l| l.name() == r.layout).unwrap();
+        assert_eq!(r.bytes_per_sample as usize, l.bytes_per_sample(), "{}", r.layout);
+        assert_eq!(r.footprint_bytes, l.footprint_bytes(gb.width, gb.height, gb.samples));
+        assert!(r.error.is_none(), "{}: {:?}", r.layout, r.error);
+        assert!(r.rmse.is_some() && r.encode_ms.is_some() && r.decode_ms.is_some() && r.resolve_ms.is_some());
+        assert_eq!(r.timings["encode"].runs, 2);
+        let sf = r.shading_fraction.unwrap();
+        assert!((0.0..=1.0).contains(&sf));
+        if r.detector == "ssaa" {
+            let covered = (gb.len() - gb.background_samples()) as f64 / gb.len() as f64;
+            assert!(sf >= covered - 1e-9, "ssaa shades every covered sample: {sf} vs {covered}");
+        }
+    }
+    // The lossless layout with every sample shaded has exactly the error of resolving the unpacked input itself.
+    let exact = out.rows.iter().find(|r| r.layout == "reference-f32" && r.detector == "ssaa").unwrap();
+    let direct = gbuf::resolve::resolve(&gb, &lights, &gbuf::resolve::uniform_mask(&gb, true), &cfg.resolve).unwrap();
+    let e0 = gbuf::measure::image::compare(&out.reference, &direct.image);
+    assert_eq!(exact.rmse, Some(e0.rmse), "the f32 roundtrip is bit-exact");
+    assert!(exact.rel_mse.unwrap() <= RESOLVE_VS_REFERENCE_REL_MSE, "{:?}", exact.rel_mse);
+    assert_eq!(exact.normal_max_deg, Some(0.0));
+    // A lossy layout really is lossy.
+    let min8 = out.rows.iter().find(|r| r.layout == "minimal-8" && r.detector == "ssaa").unwrap();
+    assert!(min8.normal_max_deg.unwrap() > 0.0 && min8.rmse.unwrap() > exact.rmse.unwrap());
+    // Pareto flags agree with the numbers.
+    let pts: Vec<(f64, f64)> = out.rows.iter().map(|r| (f64::from(r.bytes_per_sample), r.rmse.unwrap())).collect();
+    for (i, r) in out.rows.iter().enumerate() {
+        let dominated = pts.iter().any(|&q| dominates(q, pts[i]));
+        assert_eq!(r.pareto.bytes, !dominated, "{} × {}", r.layout, r.detector);
+    }
+    assert_eq!(out.maps.len(), 3);
+    assert_eq!(out.masks.len(), 2);
+    assert_eq!(out.lights_per_pixel.as_ref().map(Vec::len), Some(gb.pixel_count()));
+}
+
+#[test]
+fn failing_rows_say_why() {
+    let (mut gb, lights) = small_room();
+    // Without IDs the `id` detector cannot run; the row must carry the reason, not a number.
+    gb.material_id = None;
+    gb.object_id = None;
+    let cfg = SweepConfig {
+        layouts: vec![Layout::by_name("minimal-8").unwrap()],
+        detectors: vec![Detector::Id, Detector::Lauritzen],
+        detector_config: DetectorConfig::default(),
+        culling: vec![],
+        resolve: ResolveConfig::default(),
+        runs: 1,
+    };
+    let out = sweep(&gb, &lights, &cfg, &mut |_, _, _| {}).unwrap();
+    let id = out.rows.iter().find(|r| r.detector == "id").unwrap();
+    assert!(id.error.as_deref().is_some_and(|e| e.contains("detector")), "{:?}", id.error);
+    assert!(id.rmse.is_none() && !id.pareto.bytes);
+    let ok = out.rows.iter().find(|r| r.detector == "lauritzen").unwrap();
+    assert!(ok.rmse.is_some());
+    assert!(ok.precision.is_none(), "no object IDs, no ground truth");
+    assert!(ok.note.as_deref().is_some_and(|n| n.contains("ground truth")));
+}
+
+#[test]
+fn needs_of_the_room() {
+    let (gb, _) = small_room();
+    let n = gbuf::report::needs::analyze(&gb);
+    assert!(n.absent.contains(&"motion".to_string()));
+    assert!(n.material_count >= 2, "the room has a dozen materials: {}", n.material_count);
+    assert_eq!(n.material_id_bits, Some(gbuf::report::needs::bits_for_count(n.material_count)));
+    let [lo, hi] = n.depth_range.unwrap();
+    assert!(lo > 0.0 && hi > lo);
+    assert_eq!(n.normals_face_camera, Some(n.back_facing_normals == 0));
+}
