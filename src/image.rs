@@ -1,6 +1,17 @@
-//! A linear HDR RGB image: what the resolve produces and what the measures compare.
+//! A linear HDR RGB image: what the resolve produces and what the measures compare; and its writers.
+//!
+//! - [`HdrImage::write_exr`]: lossless float EXR (channels `R`, `G`, `B`, f32), through [`crate::io::exr`].
+//! - [`HdrImage::write_png`]: 8-bit sRGB PNG with a stated tone map ([`ToneMap`]).
+//! - [`HdrImage::to_ldr_gamma22`]: the ISPC `deferred` sample's own output — clamp to [0, 1], `^(1/2.2)`, × 255,
+//!   truncate — so results compare byte for byte with that sample.
+//! - [`write_heatmap_png`]: counts per pixel (lights evaluated) as a colour ramp with a legend strip.
+//!
+//! Every writer is atomic (temporary file + rename).
 
+use crate::error::{Error, Result};
+use crate::io::exr::{write_raw, RawChannel, RawData, RawImage};
 use glam::Vec3;
+use std::path::Path;
 
 /// Linear RGB, row-major, row 0 at the top.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -13,10 +24,224 @@ pub struct HdrImage {
     pub rgb: Vec<Vec3>,
 }
 
+/// How HDR values become [0, 1] before sRGB encoding in [`HdrImage::write_png`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ToneMap {
+    /// `clamp(exposure · x, 0, 1)` per channel.
+    Clamp {
+        /// Scale applied first.
+        exposure: f32,
+    },
+    /// Reinhard per channel: `y = e·x / (1 + e·x)` with `e` the exposure (never saturates, keeps hue roughly).
+    Reinhard {
+        /// Scale applied first.
+        exposure: f32,
+    },
+}
+
+impl Default for ToneMap {
+    /// Reinhard with exposure 1.
+    fn default() -> Self {
+        ToneMap::Reinhard { exposure: 1.0 }
+    }
+}
+
+impl ToneMap {
+    /// Maps one linear value to [0, 1] (NaN → 0).
+    #[must_use]
+    pub fn apply(self, x: f32) -> f32 {
+        let y = match self {
+            ToneMap::Clamp { exposure } => exposure * x,
+            ToneMap::Reinhard { exposure } => {
+                let v = (exposure * x).max(0.0);
+                if v.is_infinite() {
+                    1.0
+                } else {
+                    v / (1.0 + v)
+                }
+            }
+        };
+        if y.is_nan() {
+            0.0
+        } else {
+            y.clamp(0.0, 1.0)
+        }
+    }
+}
+
+/// The sRGB transfer function (IEC 61966-2-1) of a value in [0, 1].
+#[must_use]
+pub fn srgb_encode(x: f32) -> f32 {
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
 impl HdrImage {
     /// A black image.
     #[must_use]
     pub fn new(width: u32, height: u32) -> Self {
         HdrImage { width, height, rgb: vec![Vec3::ZERO; width as usize * height as usize] }
+    }
+
+    /// 8-bit sRGB bytes (RGB, row-major) after `tone`, rounded to nearest.
+    #[must_use]
+    pub fn to_srgb8(&self, tone: ToneMap) -> Vec<u8> {
+        let enc = |x: f32| (srgb_encode(tone.apply(x)) * 255.0 + 0.5) as u8;
+        self.rgb.iter().flat_map(|c| [enc(c.x), enc(c.y), enc(c.z)]).collect()
+    }
+
+    /// The ISPC `deferred` sample's 8-bit output: `(u8)(pow(clamp(x, 0, 1), 1/2.2) · 255)` per channel (truncation,
+    /// not rounding, exactly as its `Float32ToUnorm8`). NaN becomes 0.
+    #[must_use]
+    pub fn to_ldr_gamma22(&self) -> Vec<u8> {
+        let enc = |x: f32| {
+            let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
+            (x.powf(1.0 / 2.2) * 255.0) as u8
+        };
+        self.rgb.iter().flat_map(|c| [enc(c.x), enc(c.y), enc(c.z)]).collect()
+    }
+
+    /// Writes a tone-mapped sRGB PNG.
+    pub fn write_png(&self, path: &Path, tone: ToneMap) -> Result<()> {
+        write_rgb8_png(path, self.width, self.height, self.to_srgb8(tone))
+    }
+
+    /// Writes the demo's gamma-2.2 LDR output ([`HdrImage::to_ldr_gamma22`]) as a PNG.
+    pub fn write_ldr_gamma22_png(&self, path: &Path) -> Result<()> {
+        write_rgb8_png(path, self.width, self.height, self.to_ldr_gamma22())
+    }
+
+    /// Writes a lossless EXR with f32 channels `R`, `G`, `B`.
+    pub fn write_exr(&self, path: &Path) -> Result<()> {
+        if self.width == 0 || self.height == 0 {
+            return Err(Error::Argument(format!("{}: cannot write an empty image", path.display())));
+        }
+        let chan = |name: &str, k: usize| RawChannel {
+            name: name.into(),
+            data: RawData::F32(self.rgb.iter().map(|c| c[k]).collect()),
+        };
+        let raw = RawImage {
+            width: self.width,
+            height: self.height,
+            channels: vec![chan("R", 0), chan("G", 1), chan("B", 2)],
+            ..Default::default()
+        };
+        write_raw(path, &raw)
+    }
+}
+
+/// Colour ramp for heatmaps: black → blue → cyan → green → yellow → red → white as `t` goes 0 → 1.
+#[must_use]
+pub fn heat_color(t: f32) -> [u8; 3] {
+    const STOPS: [[f32; 3]; 7] = [
+        [0.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [0.0, 1.0, 1.0],
+        [0.0, 1.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 1.0],
+    ];
+    let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) } * (STOPS.len() - 1) as f32;
+    let i = (t as usize).min(STOPS.len() - 2);
+    let f = t - i as f32;
+    let (a, b) = (STOPS[i], STOPS[i + 1]);
+    [0, 1, 2].map(|k| ((a[k] + (b[k] - a[k]) * f) * 255.0 + 0.5) as u8)
+}
+
+/// Height in pixels of the legend strip under a heatmap.
+pub const HEATMAP_LEGEND_ROWS: u32 = 8;
+
+/// Writes `counts` (row-major, `width × height`) as a heatmap PNG scaled so that `max(counts)` is white, with a
+/// legend strip of [`HEATMAP_LEGEND_ROWS`] rows underneath running from 0 (left) to the maximum (right). Returns
+/// the maximum, which the caller should print (the PNG carries no text).
+pub fn write_heatmap_png(path: &Path, width: u32, height: u32, counts: &[u32]) -> Result<u32> {
+    if counts.len() != width as usize * height as usize {
+        return Err(Error::Argument(format!(
+            "{}: {} counts for a {width}×{height} heatmap",
+            path.display(),
+            counts.len()
+        )));
+    }
+    let max = counts.iter().copied().max().unwrap_or(0);
+    let scale = if max > 0 { 1.0 / max as f32 } else { 0.0 };
+    let mut bytes: Vec<u8> = counts.iter().flat_map(|&c| heat_color(c as f32 * scale)).collect();
+    for _ in 0..HEATMAP_LEGEND_ROWS {
+        for x in 0..width {
+            bytes.extend(heat_color(x as f32 / (width.max(2) - 1) as f32));
+        }
+    }
+    write_rgb8_png(path, width, height + HEATMAP_LEGEND_ROWS, bytes)?;
+    Ok(max)
+}
+
+/// Encodes 8-bit RGB bytes as PNG and writes them atomically.
+pub fn write_rgb8_png(path: &Path, width: u32, height: u32, bytes: Vec<u8>) -> Result<()> {
+    if width == 0 || height == 0 {
+        return Err(Error::Argument(format!("{}: cannot write an empty image", path.display())));
+    }
+    let img = image::RgbImage::from_raw(width, height, bytes)
+        .ok_or_else(|| Error::Argument(format!("{}: pixel buffer does not match {width}×{height}", path.display())))?;
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, image::ImageFormat::Png).map_err(|e| Error::invalid(path, format!("PNG encoding: {e}")))?;
+    crate::util::write_bytes_atomic(path, &out.into_inner())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::exr::{read_raw, ReadLimits};
+
+    #[test]
+    fn ldr_gamma22_truncates_like_the_demo() {
+        let mut img = HdrImage::new(2, 1);
+        img.rgb = vec![Vec3::new(0.5, 2.0, -1.0), Vec3::new(f32::NAN, 1.0, 0.001)];
+        let b = img.to_ldr_gamma22();
+        let want = |x: f32| (x.powf(1.0 / 2.2) * 255.0) as u8;
+        assert_eq!(b, vec![want(0.5), 255, 0, 0, 255, want(0.001)]);
+        assert_eq!(want(0.5), 186); // 0.7297 · 255 = 186.08, truncated
+    }
+
+    #[test]
+    fn tone_maps_are_bounded_and_monotonic() {
+        for tone in [ToneMap::default(), ToneMap::Clamp { exposure: 2.0 }] {
+            let mut last = -1.0;
+            for x in [0.0, 0.01, 0.5, 1.0, 10.0, 1e30, f32::INFINITY] {
+                let y = tone.apply(x);
+                assert!((0.0..=1.0).contains(&y) && y >= last, "{tone:?}({x}) = {y}");
+                last = y;
+            }
+            assert_eq!(tone.apply(f32::NAN), 0.0);
+        }
+        assert!((srgb_encode(1.0) - 1.0).abs() < 1e-6);
+        assert_eq!(srgb_encode(0.0), 0.0);
+    }
+
+    #[test]
+    fn exr_and_png_writers_round_trip() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut img = HdrImage::new(3, 2);
+        img.rgb[4] = Vec3::new(1.5, 0.25, 1e-3);
+        let p = dir.path().join("o.exr");
+        img.write_exr(&p).unwrap();
+        let raw = read_raw(&p, &ReadLimits::default()).unwrap();
+        assert_eq!(raw.channel("G").unwrap().data.f32_at(4), 0.25);
+        let png = dir.path().join("o.png");
+        img.write_png(&png, ToneMap::default()).unwrap();
+        let back = image::open(&png).unwrap().to_rgb8();
+        assert_eq!(back.dimensions(), (3, 2));
+        assert_eq!(back.get_pixel(1, 1).0[0], (srgb_encode(0.6) * 255.0 + 0.5) as u8);
+        let heat = dir.path().join("h.png");
+        let max = write_heatmap_png(&heat, 3, 2, &[0, 1, 2, 3, 4, 8]).unwrap();
+        assert_eq!(max, 8);
+        let h = image::open(&heat).unwrap().to_rgb8();
+        assert_eq!(h.dimensions(), (3, 2 + HEATMAP_LEGEND_ROWS));
+        assert_eq!(h.get_pixel(2, 1).0, [255, 255, 255]);
+        assert_eq!(h.get_pixel(0, 0).0, [0, 0, 0]);
+        assert!(write_heatmap_png(&heat, 3, 3, &[0; 6]).is_err());
+        assert!(HdrImage::new(0, 0).write_png(&png, ToneMap::default()).is_err());
     }
 }

@@ -289,11 +289,11 @@ fn bad_header_fields_are_errors() {
     expect_invalid(&b, "NaN light");
 }
 
-#[test]
-fn random_mutations_never_panic() {
+/// Seeded random byte mutations of the fixture (header-only and whole-file): `Err` or a valid G-buffer.
+fn mutate_rounds(rounds: u64, seed: u64) {
     let bytes = std::fs::read(fixture()).unwrap();
-    let mut rng = gbuf::util::SplitMix64::new(0x15bc);
-    for round in 0..400 {
+    let mut rng = gbuf::util::SplitMix64::new(seed);
+    for round in 0..rounds {
         let mut b = bytes.clone();
         let header_only = round % 2 == 0;
         for _ in 0..1 + rng.next_u64() % 8 {
@@ -306,6 +306,18 @@ fn random_mutations_never_panic() {
             assert!(l.lights.unwrap().len() <= LIGHT_SLOTS);
         }
     }
+}
+
+#[test]
+fn random_mutations_never_panic() {
+    mutate_rounds(400, 0x15bc);
+}
+
+/// The long version: `cargo test --release --test readers_ispc -- --ignored`.
+#[test]
+#[ignore]
+fn random_mutations_never_panic_long() {
+    mutate_rounds(50_000, 0xdeadbeef);
 }
 
 #[test]

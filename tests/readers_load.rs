@@ -42,6 +42,21 @@ fn without_sidecar_blender_loads_unfolded_with_a_fitted_camera_or_folded_by_flag
 }
 
 #[test]
+fn mitsuba_fixture_loads_folded_with_its_sidecar() {
+    let l = load(&fixture("mitsuba_gbuffer.exr"), &LoadOptions::default()).unwrap();
+    assert_eq!(l.format, SourceFormat::Mitsuba);
+    let g = &l.gbuffer;
+    assert_eq!((g.width, g.height, g.samples), (64, 48, 4));
+    assert_eq!(l.camera_source, "sidecar");
+    assert_eq!(l.lights.as_ref().map(Vec::len), Some(1));
+    assert!(g.has(gbuf::Attribute::PrimitiveId) && g.has(gbuf::Attribute::ObjectId));
+    let n = g.normal.as_ref().unwrap();
+    for i in (0..g.len()).filter(|&i| g.coverage[i]) {
+        assert!((n[i].length() - 1.0).abs() < 1e-4);
+    }
+}
+
+#[test]
 fn ispc_fixture_loads() {
     let l = load(&fixture("ispc_deferred.bin"), &LoadOptions::default()).unwrap();
     assert_eq!(l.format, SourceFormat::IspcBin);

@@ -1,15 +1,332 @@
-//! `gbuf resolve`.
+//! `gbuf resolve FILE [--scene SIDECAR | --lights N --seed S] [--detector D] [--culling …] [--brdf …]
+//! [--falloff …] [--schedule …] [-o OUT.exr] [--png OUT.png] [--ldr gamma2.2] [--heatmap OUT.png] [--json]`:
+//! light the G-buffer on the CPU, measure it against the f64 reference, write the images.
+
+use crate::cli::common::{print_json, InputArgs};
+use crate::cli::edges::ThresholdArgs;
+use anyhow::Context;
+use gbuf::detect::{self, Detector};
+use gbuf::image::{write_heatmap_png, ToneMap};
+use gbuf::light::Light;
+use gbuf::measure::image::{compare, ImageError};
+use gbuf::measure::timing::{timed, StageMs};
+use gbuf::resolve::{self, Brdf, Culling, Falloff, ResolveConfig, ResolveStats, Schedule};
+use gbuf::GBuffer;
+use serde::Serialize;
+use std::io::Write;
+use std::path::PathBuf;
+
+fn parse_with<T>(s: &str, what: &str, from: fn(&str) -> Option<T>, names: String) -> Result<T, String> {
+    from(s).ok_or_else(|| format!("unknown {what} {s:?}; known: {names}"))
+}
+fn parse_culling(s: &str) -> Result<Culling, String> {
+    parse_with(s, "culling", Culling::from_name, Culling::names())
+}
+fn parse_brdf(s: &str) -> Result<Brdf, String> {
+    parse_with(s, "BRDF", Brdf::from_name, Brdf::names())
+}
+fn parse_falloff(s: &str) -> Result<Falloff, String> {
+    parse_with(s, "falloff", Falloff::from_name, Falloff::names())
+}
+fn parse_schedule(s: &str) -> Result<Schedule, String> {
+    parse_with(s, "schedule", Schedule::from_name, Schedule::names())
+}
+fn parse_detector(s: &str) -> Result<Detector, String> {
+    let names = Detector::ALL.map(Detector::name).join(", ");
+    parse_with(s, "detector", Detector::from_name, names)
+}
+fn parse_ldr(s: &str) -> Result<String, String> {
+    if s == "gamma2.2" {
+        Ok(s.into())
+    } else {
+        Err(format!("unknown LDR encoding {s:?}; known: gamma2.2"))
+    }
+}
+fn parse_tonemap(s: &str) -> Result<String, String> {
+    match s {
+        "reinhard" | "clamp" => Ok(s.into()),
+        _ => Err(format!("unknown tone map {s:?}; known: reinhard, clamp")),
+    }
+}
 
 /// Flags of `gbuf resolve`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
+    /// The dump to light.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Scatter N point lights over the visible surfaces when the dump and sidecar have no lights.
+    #[arg(long, value_name = "N")]
+    pub lights: Option<usize>,
+    /// Seed for `--lights`.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
+    /// Edge detector choosing the pixels shaded per sample.
+    #[arg(long, value_name = "D", default_value = "lauritzen", value_parser = parse_detector)]
+    pub detector: Detector,
+    /// Detector thresholds.
+    #[command(flatten)]
+    pub thresholds: ThresholdArgs,
+    /// Light culling: none, quad, tiled, clustered.
+    #[arg(long, value_name = "C", default_value = "tiled", value_parser = parse_culling)]
+    pub culling: Culling,
+    /// BRDF: lambert, blinn-phong, ggx.
+    #[arg(long, value_name = "B", default_value = "blinn-phong", value_parser = parse_brdf)]
+    pub brdf: Brdf,
+    /// Distance falloff: gltf, linear.
+    #[arg(long, value_name = "F", default_value = "linear", value_parser = parse_falloff)]
+    pub falloff: Falloff,
+    /// Schedule: deferred, light-prepass.
+    #[arg(long, value_name = "S", default_value = "deferred", value_parser = parse_schedule)]
+    pub schedule: Schedule,
+    /// Tile edge in pixels.
+    #[arg(long, value_name = "PX", default_value_t = resolve::DEFAULT_TILE_SIZE)]
+    pub tile_size: u32,
+    /// Depth slices per tile (clustered culling).
+    #[arg(long, value_name = "N", default_value_t = resolve::DEFAULT_DEPTH_SLICES)]
+    pub depth_slices: u32,
+    /// Write the lit image as a float EXR (channels R, G, B).
+    #[arg(short = 'o', long = "output", value_name = "OUT.exr")]
+    pub output: Option<PathBuf>,
+    /// Write an 8-bit sRGB PNG (tone map from --tonemap / --exposure, or the demo's encoding with --ldr).
+    #[arg(long, value_name = "OUT.png")]
+    pub png: Option<PathBuf>,
+    /// Encode the PNG as the ISPC demo does instead: clamp to [0,1], ^(1/2.2), ×255, truncate.
+    #[arg(long, value_name = "ENC", value_parser = parse_ldr)]
+    pub ldr: Option<String>,
+    /// Tone map of the PNG: reinhard (x/(1+x), default) or clamp; then sRGB encoding.
+    #[arg(long, value_name = "TM", default_value = "reinhard", value_parser = parse_tonemap)]
+    pub tonemap: String,
+    /// Exposure multiplied in before the tone map.
+    #[arg(long, value_name = "E", default_value_t = 1.0)]
+    pub exposure: f32,
+    /// Write a heatmap PNG of light evaluations per pixel (legend strip at the bottom: 0 left, max right).
+    #[arg(long, value_name = "OUT.png")]
+    pub heatmap: Option<PathBuf>,
+    /// Skip the f64 reference (no error numbers; much faster with many lights).
+    #[arg(long)]
+    pub no_reference: bool,
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
 }
 
+/// Milliseconds per stage as reported.
+#[derive(Serialize)]
+struct Ms {
+    decode: f64,
+    detect: f64,
+    gather: f64,
+    cull: f64,
+    shade: f64,
+    total: f64,
+    reference: f64,
+}
+
+/// What `--json` prints.
+#[derive(Serialize)]
+struct Report {
+    file: String,
+    width: u32,
+    height: u32,
+    samples: u32,
+    lights_source: &'static str,
+    detector: &'static str,
+    config: ResolveConfig,
+    shading_fraction: f64,
+    edge_fraction: f64,
+    light_pairs_tested: u64,
+    light_pairs_lit: u64,
+    shading_evaluations: u64,
+    lights_per_sample: f64,
+    rmse: Option<f64>,
+    psnr_db: Option<f64>,
+    max_abs: Option<f64>,
+    rel_mse: Option<f64>,
+    error: Option<ImageError>,
+    psnr_peak: &'static str,
+    stats: ResolveStats,
+    ms: Ms,
+    heatmap_max: Option<u32>,
+}
+
 /// Runs `gbuf resolve`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let _ = args.json;
-    anyhow::bail!("gbuf resolve is not available yet")
+    let cfg = ResolveConfig {
+        culling: args.culling,
+        brdf: args.brdf,
+        falloff: args.falloff,
+        schedule: args.schedule,
+        tile_size: args.tile_size,
+        depth_slices: args.depth_slices,
+    };
+    cfg.validate().context("resolve configuration")?;
+    if args.ldr.is_some() && args.png.is_none() {
+        anyhow::bail!("--ldr gamma2.2 selects the encoding of --png; give --png OUT.png too");
+    }
+    if !(args.exposure.is_finite() && args.exposure > 0.0) {
+        anyhow::bail!("--exposure must be a positive number, got {}", args.exposure);
+    }
+    let det_cfg = args.thresholds.config()?;
+    let file = args.input.file.display().to_string();
+
+    let (loaded, t_decode) = timed(|| args.input.load());
+    let loaded = loaded.with_context(|| format!("loading {file}"))?;
+    let gb: GBuffer = loaded.gbuffer;
+    let (lights, lights_source) = pick_lights(loaded.lights, args.lights, args.seed, &gb, &file)?;
+
+    let (mask, t_detect) = timed(|| detect::detect(&gb, args.detector, &det_cfg));
+    let mask = mask.with_context(|| format!("{file}: edge detector {}", args.detector))?;
+
+    let resolved = resolve::resolve(&gb, &lights, &mask, &cfg).with_context(|| format!("{file}: resolve"))?;
+    let mut stage = StageMs { decode: t_decode, detect: t_detect, ..resolved.stats.ms };
+    stage.total += t_decode + t_detect;
+
+    let (error, t_ref) = if args.no_reference {
+        (None, 0.0)
+    } else {
+        let (reference, t) = timed(|| resolve::reference(&gb, &lights, &cfg));
+        let reference = reference.with_context(|| format!("{file}: reference"))?;
+        (Some(compare(&reference, &resolved.image)), t)
+    };
+
+    if let Some(out) = &args.output {
+        resolved.image.write_exr(out).with_context(|| format!("writing {}", out.display()))?;
+    }
+    if let Some(out) = &args.png {
+        let r = if args.ldr.is_some() {
+            resolved.image.write_ldr_gamma22_png(out)
+        } else {
+            let tone = if args.tonemap == "clamp" {
+                ToneMap::Clamp { exposure: args.exposure }
+            } else {
+                ToneMap::Reinhard { exposure: args.exposure }
+            };
+            resolved.image.write_png(out, tone)
+        };
+        r.with_context(|| format!("writing {}", out.display()))?;
+    }
+    let heatmap_max = match &args.heatmap {
+        Some(out) => Some(
+            write_heatmap_png(out, gb.width, gb.height, &resolved.lights_per_pixel)
+                .with_context(|| format!("writing {}", out.display()))?,
+        ),
+        None => None,
+    };
+
+    let s = &resolved.stats;
+    let report = Report {
+        file,
+        width: gb.width,
+        height: gb.height,
+        samples: gb.samples,
+        lights_source,
+        detector: args.detector.name(),
+        config: cfg,
+        shading_fraction: s.shading_fraction,
+        edge_fraction: s.edge_fraction,
+        light_pairs_tested: s.light_pairs_tested,
+        light_pairs_lit: s.light_pairs_lit,
+        shading_evaluations: s.shading_evaluations,
+        lights_per_sample: s.lights_per_sample,
+        rmse: error.map(|e| e.rmse),
+        psnr_db: error.map(|e| e.psnr_db),
+        max_abs: error.map(|e| e.max_abs),
+        rel_mse: error.map(|e| e.rel_mse),
+        error,
+        psnr_peak: "the reference image's largest channel value",
+        stats: s.clone(),
+        ms: Ms {
+            decode: stage.decode,
+            detect: stage.detect,
+            gather: stage.gather,
+            cull: stage.cull,
+            shade: stage.shade,
+            total: stage.total,
+            reference: t_ref,
+        },
+        heatmap_max,
+    };
+    if args.json {
+        return print_json(&report);
+    }
+    print_human(&report)
+}
+
+/// Lights from the dump/sidecar; else `--lights N` scattered; else an error saying how to get some.
+fn pick_lights(
+    from_file: Option<Vec<Light>>,
+    scatter: Option<usize>,
+    seed: u64,
+    gb: &GBuffer,
+    file: &str,
+) -> anyhow::Result<(Vec<Light>, &'static str)> {
+    match (from_file, scatter) {
+        (_, Some(n)) => Ok((scatter_lights(gb, n, seed), "scattered")),
+        (Some(l), None) => Ok((l, "file")),
+        (None, None) => anyhow::bail!(
+            "{file}: no lights: the dump and its sidecar define none; pass --scene SIDECAR with a \"lights\" list, \
+             or --lights N [--seed S] to scatter N point lights"
+        ),
+    }
+}
+
+/// Scatters `n` point lights just above the visible surfaces, with a range of 15% of the median view depth.
+fn scatter_lights(gb: &GBuffer, n: usize, seed: u64) -> Vec<Light> {
+    let mut depths: Vec<f32> = match &gb.depth {
+        Some(d) => d.iter().zip(&gb.coverage).filter(|(v, &c)| c && v.is_finite()).map(|(v, _)| *v).collect(),
+        None => gb.position.as_ref().map_or_else(Vec::new, |p| {
+            p.iter().zip(&gb.coverage).filter(|(v, &c)| c && v.is_finite()).map(|(v, _)| -v.z).collect()
+        }),
+    };
+    if depths.is_empty() {
+        return Vec::new();
+    }
+    let mid = depths.len() / 2;
+    let median = *depths.select_nth_unstable_by(mid, f32::total_cmp).1;
+    resolve::fixture::lights_on_surfaces(gb, n, (0.15 * median).max(1e-3), seed)
+}
+
+fn print_human(r: &Report) -> anyhow::Result<()> {
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "{}: {}×{} × {} samples, {} lights ({})",
+        r.file, r.width, r.height, r.samples, r.stats.lights, r.lights_source
+    )?;
+    writeln!(
+        out,
+        "config: culling {}, brdf {}, falloff {}, schedule {}, tiles {}px, detector {}",
+        r.config.culling, r.config.brdf, r.config.falloff, r.config.schedule, r.config.tile_size, r.detector
+    )?;
+    writeln!(
+        out,
+        "shading: {:.2}% of samples shaded, {:.2}% edge pixels, {} light-sample pairs tested ({:.1} per sample), {} lit",
+        100.0 * r.shading_fraction,
+        100.0 * r.edge_fraction,
+        r.light_pairs_tested,
+        r.lights_per_sample,
+        r.light_pairs_lit
+    )?;
+    if let Some(e) = &r.error {
+        writeln!(
+            out,
+            "error vs reference: rmse {:.3e}, psnr {:.2} dB (peak {:.3e} = reference max), max |Δ| {:.3e}, rel. mse {:.3e}",
+            e.rmse, e.psnr_db, e.peak, e.max_abs, e.rel_mse
+        )?;
+    }
+    let m = &r.ms;
+    writeln!(
+        out,
+        "time (ms): decode {:.1}, detect {:.1}, gather {:.1}, cull {:.1}, shade {:.1}, total {:.1}; reference {:.1}",
+        m.decode, m.detect, m.gather, m.cull, m.shade, m.total, m.reference
+    )?;
+    let s = &r.stats.sanitized;
+    if s.total() > 0 {
+        writeln!(out, "sanitised: {s:?}")?;
+    }
+    if let Some(max) = r.heatmap_max {
+        writeln!(out, "heatmap: black = 0, white = {max} light evaluations per pixel")?;
+    }
+    Ok(())
 }

@@ -72,11 +72,15 @@ impl Bounds {
     #[inline]
     #[must_use]
     pub fn may_touch(&self, c: Vec3, r: f32) -> bool {
+        // Non-short-circuit `&` so a loop over lights compiles to branch-free vector code.
         let depth = -c.z;
-        if depth + r < self.d0 || depth - r > self.d1 {
-            return false;
-        }
-        self.planes.iter().all(|n| n.dot(c) >= -r)
+        let [a, b, e, f] = self.planes;
+        (depth + r >= self.d0)
+            & (depth - r <= self.d1)
+            & (a.dot(c) >= -r)
+            & (b.dot(c) >= -r)
+            & (e.dot(c) >= -r)
+            & (f.dot(c) >= -r)
     }
 
     /// Does a quad rectangle (light `i` of `q`) overlap these bounds (rectangle and depth)?

@@ -35,11 +35,13 @@ pub fn log2(x: f32) -> f32 {
 #[must_use]
 pub fn exp2(x: f32) -> f32 {
     let x = x.clamp(-126.0, 126.0);
-    // Round half up without `floor` (a libm call on baseline x86_64): truncate, then fix negative values.
-    let t = x + 0.5;
-    let mut i = t as i32;
-    i -= i32::from((i as f32) > t);
-    let f = (x - i as f32) * std::f32::consts::LN_2;
+    // Round to nearest with the 1.5·2²³ trick: adding it leaves round(x) in the low mantissa bits. Unlike `floor`
+    // (a libm call on baseline x86_64) or a saturating `as i32` (NaN/overflow fix-ups), this is plain vector
+    // arithmetic.
+    const MAGIC: f32 = 12_582_912.0;
+    let shifted = x + MAGIC;
+    let i = shifted.to_bits() as i32 - MAGIC.to_bits() as i32;
+    let f = (x - (shifted - MAGIC)) * std::f32::consts::LN_2;
     let p = 1.0
         + f * (1.0
             + f * (1.0 / 2.0

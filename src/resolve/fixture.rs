@@ -27,6 +27,19 @@ const GROUND_Y: f32 = -1.0;
 /// Ground plane at `y = −1` and six spheres seen by a camera at the origin (60° vertical field of view), with
 /// `samples` per pixel at the standard positions. Every attribute is filled (IDs: 0 = ground, 1.. = spheres).
 pub fn spheres(width: u32, height: u32, samples: u32) -> Result<GBuffer> {
+    build(width, height, samples, false)
+}
+
+/// [`spheres`] closed by a back wall at view depth [`WALL_DEPTH`] (object ID 7), so every sample is covered —
+/// the benches' frame.
+pub fn room(width: u32, height: u32, samples: u32) -> Result<GBuffer> {
+    build(width, height, samples, true)
+}
+
+/// View depth of [`room`]'s back wall.
+pub const WALL_DEPTH: f32 = 30.0;
+
+fn build(width: u32, height: u32, samples: u32, wall: bool) -> Result<GBuffer> {
     let mut gb = GBuffer::new(width, height, samples)?;
     let aspect = width.max(1) as f32 / height.max(1) as f32;
     let cam = Camera::identity(60f32.to_radians(), aspect, 0.1, 1000.0);
@@ -47,9 +60,16 @@ pub fn spheres(width: u32, height: u32, samples: u32) -> Result<GBuffer> {
                 let i = gb.index(x, y, s);
                 let o = gb.sample_positions[s as usize];
                 let ray = cam.view_ray(Vec2::new(x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y), width, height);
-                let Some((t, id)) = intersect(ray) else { continue };
+                let hit = match intersect(ray) {
+                    Some(h) if !wall || h.0 < WALL_DEPTH => Some(h),
+                    _ if wall => Some((WALL_DEPTH, BALLS.len() as u32 + 1)),
+                    _ => None,
+                };
+                let Some((t, id)) = hit else { continue };
                 let p = ray * t;
-                let (n_, a, pw, r, m) = if id == 0 {
+                let (n_, a, pw, r, m) = if id as usize == BALLS.len() + 1 {
+                    (Vec3::Z, Vec3::splat(0.6), 16.0, 0.6, 0.0)
+                } else if id == 0 {
                     let check = ((p.x.floor() + p.z.floor()) as i32 & 1) as f32;
                     (Vec3::Y, Vec3::splat(0.35 + 0.4 * check), 8.0, 0.7, 0.0)
                 } else {
@@ -141,6 +161,8 @@ mod tests {
         for id in 0..=BALLS.len() as u32 {
             assert!(ids.iter().zip(&gb.coverage).any(|(&i, &c)| c && i == id), "object {id} not visible");
         }
+        let room = room(64, 36, 4).unwrap();
+        assert!(room.coverage.iter().all(|&c| c));
         let lights = lights_on_surfaces(&gb, 10, 2.0, 1);
         assert_eq!(lights.len(), 10);
         assert!(lights.iter().all(|l| l.position.is_finite() && l.position.z < 0.0));

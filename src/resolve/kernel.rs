@@ -16,6 +16,11 @@ use super::surface::Surface;
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
+/// Work lists are padded to a multiple of this many items (the widest vector: 16 f32 lanes of AVX-512).
+pub const LANES: usize = 16;
+/// `pixel` of padding items.
+pub const PAD_PIXEL: u32 = u32::MAX;
+
 /// Per-light screen rectangle (tangent units x/d, y/d) and depth bounds for quad culling.
 #[derive(Clone, Debug, Default)]
 pub struct QuadSoa {
@@ -65,6 +70,11 @@ macro_rules! soa {
                 $(self.$f.clear();)*
                 $(self.$u.clear();)*
             }
+            /// Appends a copy of its own item `i`.
+            pub fn push_copy(&mut self, i: usize) {
+                $(let v = self.$f[i]; self.$f.push(v);)*
+                $(let v = self.$u[i]; self.$u.push(v);)*
+            }
             /// Appends item `i` of `o` (used to reorder a work list).
             pub fn push_from(&mut self, o: &$name, i: usize) {
                 $(self.$f.push(o.$f[i]);)*
@@ -95,6 +105,17 @@ impl Items {
     #[must_use]
     pub fn is_empty(&self) -> bool {
         self.px.is_empty()
+    }
+
+    /// Pads the list to a multiple of [`LANES`] with copies of item `template` that go nowhere (`pixel` =
+    /// [`PAD_PIXEL`], weight 0): the kernel then runs whole vectors only, with no scalar remainder loop.
+    pub fn pad_to_lanes(&mut self, template: usize) {
+        while !self.len().is_multiple_of(LANES) {
+            self.push_copy(template);
+            let last = self.len() - 1;
+            self.pixel[last] = PAD_PIXEL;
+            self.weight[last] = 0.0;
+        }
     }
 
     /// Appends a sample with its destination pixel (index within the tile) and box-filter weight.
@@ -224,22 +245,43 @@ fn run<const B: u8, const F: u8, const Q: bool, const P: bool>(
     lights: &LightSoa,
     quad: &QuadSoa,
 ) {
-    let r = range;
-    let n = r.len();
-    let (px, py, pz) = (&it.px[r.clone()], &it.py[r.clone()], &it.pz[r.clone()]);
-    let (nx, ny, nz) = (&it.nx[r.clone()], &it.ny[r.clone()], &it.nz[r.clone()]);
-    let (vx, vy, vz) = (&it.vx[r.clone()], &it.vy[r.clone()], &it.vz[r.clone()]);
-    let (ar, ag, ab) = (&it.ar[r.clone()], &it.ag[r.clone()], &it.ab[r.clone()]);
-    let (sn, pw, a2s, nvs) = (&it.sn[r.clone()], &it.pw[r.clone()], &it.a2[r.clone()], &it.nv[r.clone()]);
-    let (f0r, f0g, f0b) = (&it.f0r[r.clone()], &it.f0g[r.clone()], &it.f0b[r.clone()]);
-    let (dr, dg, db) = (&it.dr[r.clone()], &it.dg[r.clone()], &it.db[r.clone()]);
-    let (tx, ty, dep) = (&it.tx[r.clone()], &it.ty[r.clone()], &it.dep[r.clone()]);
-    let or = &mut it.or[r.clone()];
-    let og = &mut it.og[r.clone()];
-    let ob = &mut it.ob[r.clone()];
-    let ls = &mut it.ls[r.clone()];
-    let tested = &mut it.tested[r.clone()];
-    let lit = &mut it.lit[r];
+    debug_assert!(range.len().is_multiple_of(LANES), "work lists are padded to whole vectors");
+    let mut c = range.start;
+    while c + LANES <= range.end {
+        run_chunk::<B, F, Q, P>(it, c, lights, quad);
+        c += LANES;
+    }
+}
+
+/// Loads `LANES` values starting at `c`.
+#[inline(always)]
+fn ld(a: &[f32], c: usize) -> [f32; LANES] {
+    let mut out = [0.0; LANES];
+    out.copy_from_slice(&a[c..c + LANES]);
+    out
+}
+
+/// Shades one vector of `LANES` items against every light. Inputs and accumulators live in fixed-size local
+/// arrays, so the lane loop compiles to straight vector code (no aliasing checks, no remainder) and the
+/// accumulators stay in registers across the light loop.
+#[inline(always)]
+fn run_chunk<const B: u8, const F: u8, const Q: bool, const P: bool>(
+    it: &mut Items,
+    c: usize,
+    lights: &LightSoa,
+    quad: &QuadSoa,
+) {
+    let (px, py, pz) = (ld(&it.px, c), ld(&it.py, c), ld(&it.pz, c));
+    let (nx, ny, nz) = (ld(&it.nx, c), ld(&it.ny, c), ld(&it.nz, c));
+    let (vx, vy, vz) = (ld(&it.vx, c), ld(&it.vy, c), ld(&it.vz, c));
+    let (ar, ag, ab) = (ld(&it.ar, c), ld(&it.ag, c), ld(&it.ab, c));
+    let (sn, pw, a2s, nvs) = (ld(&it.sn, c), ld(&it.pw, c), ld(&it.a2, c), ld(&it.nv, c));
+    let (f0r, f0g, f0b) = (ld(&it.f0r, c), ld(&it.f0g, c), ld(&it.f0b, c));
+    let (dr, dg, db) = (ld(&it.dr, c), ld(&it.dg, c), ld(&it.db, c));
+    let (tx, ty, dep) = (ld(&it.tx, c), ld(&it.ty, c), ld(&it.dep, c));
+    let (mut or, mut og, mut ob, mut ls) = (ld(&it.or, c), ld(&it.og, c), ld(&it.ob, c), ld(&it.ls, c));
+    let mut tested = [0u32; LANES];
+    let mut lit = [0u32; LANES];
     let min_d = MIN_DISTANCE;
     for l in 0..lights.len() {
         let (lx, ly, lz, w) = (lights.px[l], lights.py[l], lights.pz[l], lights.w[l]);
@@ -251,9 +293,9 @@ fn run<const B: u8, const F: u8, const Q: bool, const P: bool>(
         } else {
             (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         };
-        for j in 0..n {
+        for j in 0..LANES {
             let inside = if Q {
-                tx[j] >= qx0 && tx[j] <= qx1 && ty[j] >= qy0 && ty[j] <= qy1 && dep[j] >= qz0 && dep[j] <= qz1
+                (tx[j] >= qx0) & (tx[j] <= qx1) & (ty[j] >= qy0) & (ty[j] <= qy1) & (dep[j] >= qz0) & (dep[j] <= qz1)
             } else {
                 true
             };
@@ -342,10 +384,15 @@ fn run<const B: u8, const F: u8, const Q: bool, const P: bool>(
         }
     }
     if !Q {
-        let nl = lights.len() as u32;
-        for t in tested.iter_mut() {
-            *t += nl;
-        }
+        tested = [lights.len() as u32; LANES];
+    }
+    it.or[c..c + LANES].copy_from_slice(&or);
+    it.og[c..c + LANES].copy_from_slice(&og);
+    it.ob[c..c + LANES].copy_from_slice(&ob);
+    it.ls[c..c + LANES].copy_from_slice(&ls);
+    for j in 0..LANES {
+        it.tested[c + j] += tested[j];
+        it.lit[c + j] += lit[j];
     }
 }
 

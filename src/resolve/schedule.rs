@@ -109,7 +109,6 @@ struct Scratch {
     quads: QuadSoa,
     tile_lights: Vec<u32>,
     mask: Vec<u8>,
-    slice_of: Vec<u32>,
     order: Vec<usize>,
 }
 
@@ -135,12 +134,14 @@ fn run_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32, sc: &mut Scratc
     gather(frame, &mut out, sc);
     let t1 = Instant::now();
     out.t_gather = t1 - t0;
-    let n = sc.items.len();
+    let n_real = sc.items.len();
     out.rgb = vec![Vec3::ZERO; (w * h) as usize];
     out.heat = vec![0; (w * h) as usize];
-    if n == 0 {
+    if n_real == 0 {
         return out;
     }
+    sc.items.pad_to_lanes(n_real - 1);
+    let n = sc.items.len();
     let variant = Variant {
         brdf: frame.cfg.brdf,
         falloff: frame.cfg.falloff,
@@ -170,7 +171,7 @@ fn run_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32, sc: &mut Scratc
             let t = Instant::now();
             let bounds = Bounds::of_items(&sc.items, 0..n).expect("nonempty");
             cull_tile_list(frame, &bounds, sc);
-            let ranges = sort_by_slice(&bounds, frame.cfg.depth_slices, sc);
+            let ranges = sort_by_slice(&bounds, frame.cfg.depth_slices, n_real, sc);
             t_cull += t.elapsed();
             for range in ranges {
                 let t = Instant::now();
@@ -185,7 +186,7 @@ fn run_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32, sc: &mut Scratc
             }
             // Back to tile order, so the box filter adds samples in the same order whatever the culling.
             let (it, so) = (&mut sc.items, &sc.sorted);
-            for (k, &j) in sc.order.iter().enumerate() {
+            for (j, &k) in sc.order.iter().enumerate() {
                 (it.or[j], it.og[j], it.ob[j], it.ls[j]) = (so.or[k], so.og[k], so.ob[k], so.ls[k]);
                 (it.tested[j], it.lit[j]) = (so.tested[k], so.lit[k]);
             }
@@ -196,7 +197,7 @@ fn run_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32, sc: &mut Scratc
     if variant.prepass {
         finish_prepass(items, frame.cfg.brdf);
     }
-    for j in 0..items.len() {
+    for j in 0..n_real {
         let px = items.pixel[j] as usize;
         let c = Vec3::new(items.or[j], items.og[j], items.ob[j]) * items.weight[j];
         out.rgb[px] += c;
@@ -204,7 +205,7 @@ fn run_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32, sc: &mut Scratc
         out.tested += u64::from(items.tested[j]);
         out.lit += u64::from(items.lit[j]);
     }
-    out.evaluations = n as u64;
+    out.evaluations = n_real as u64;
     t_shade += t.elapsed();
     out.t_cull = t_cull;
     out.t_shade = t_shade;
@@ -299,35 +300,29 @@ fn cull_into(frame: &Frame<'_>, b: &Bounds, subset: Option<&[u32]>, sc: &mut Scr
     }
 }
 
-/// Assigns every item to one of `slices` depth slices (log-spaced between the tile's min and max depth), reorders
-/// the work list by slice into `sc.sorted`, and returns the non-empty slices' item ranges.
-fn sort_by_slice(b: &Bounds, slices: u32, sc: &mut Scratch) -> Vec<std::ops::Range<usize>> {
-    let n = sc.items.len();
+/// Assigns every real item (`0..n_real`) to one of `slices` depth slices (log-spaced between the tile's min and
+/// max depth), copies the work list slice by slice into `sc.sorted` (each slice padded to whole vectors), sets
+/// `sc.order[j]` to item `j`'s position there, and returns the non-empty slices' ranges.
+fn sort_by_slice(b: &Bounds, slices: u32, n_real: usize, sc: &mut Scratch) -> Vec<std::ops::Range<usize>> {
     let ratio = (b.d1 / b.d0).ln();
     let scale = if ratio > 1e-6 && ratio.is_finite() { slices as f32 / ratio } else { 0.0 };
-    let mut counts = vec![0usize; slices as usize + 1];
-    sc.slice_of.clear();
-    for j in 0..n {
-        let k = ((sc.items.dep[j] / b.d0).ln() * scale) as u32;
-        let k = k.min(slices - 1);
-        sc.slice_of.push(k);
-        counts[k as usize + 1] += 1;
-    }
-    for k in 0..slices as usize {
-        counts[k + 1] += counts[k];
-    }
-    let starts = counts.clone();
-    sc.order.clear();
-    sc.order.resize(n, 0);
-    let mut next = counts;
-    for j in 0..n {
-        let k = sc.slice_of[j] as usize;
-        sc.order[next[k]] = j;
-        next[k] += 1;
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); slices as usize];
+    for j in 0..n_real {
+        let k = (((sc.items.dep[j] / b.d0).ln() * scale) as u32).min(slices - 1);
+        members[k as usize].push(j);
     }
     sc.sorted.clear();
-    for &j in &sc.order {
-        sc.sorted.push_from(&sc.items, j);
+    sc.order.clear();
+    sc.order.resize(n_real, 0);
+    let mut ranges = Vec::new();
+    for list in members.iter().filter(|l| !l.is_empty()) {
+        let start = sc.sorted.len();
+        for &j in list {
+            sc.order[j] = sc.sorted.len();
+            sc.sorted.push_from(&sc.items, j);
+        }
+        sc.sorted.pad_to_lanes(sc.sorted.len() - 1);
+        ranges.push(start..sc.sorted.len());
     }
-    (0..slices as usize).map(|k| starts[k]..starts[k + 1]).filter(|r| !r.is_empty()).collect()
+    ranges
 }

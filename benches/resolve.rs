@@ -1,0 +1,91 @@
+//! Resolve benches (issue 4's speed section): 1280×720, 1024 point lights placed so about 40 survive tile culling
+//! per sample, the demo's Blinn-Phong with linear falloff.
+//!
+//! - `resolve/tiled/1x/1280x720`: 1 sample per pixel, the < 15 ms target on 2 cores;
+//! - `resolve/tiled/4x-adaptive/1280x720`: 4× MSAA, lauritzen-style adaptive (edge pixels per sample), ≤ 1.5× the
+//!   1-sample cost; `resolve/tiled/4x-ssaa` for scale;
+//! - `resolve/none/1x/1280x720`: no culling, same lights;
+//! - `resolve/tiled/1x/1280x720/threads-1` and `threads-2`: thread scaling (local rayon pools).
+//!
+//! The G-buffer is built in code once, outside the timed loop. Run briefly:
+//! `cargo bench --bench resolve -- --warm-up-time 1 --measurement-time 3`.
+
+use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use gbuf::detect::{detect, Detector, DetectorConfig};
+use gbuf::light::Light;
+use gbuf::resolve::{fixture, resolve, uniform_mask, Culling, ResolveConfig};
+use gbuf::GBuffer;
+
+const W: u32 = 1280;
+const H: u32 = 720;
+const LIGHTS: usize = 1024;
+/// Lights per sample after tile culling that the light range is tuned for.
+const TARGET_LIGHTS_PER_SAMPLE: f64 = 40.0;
+
+/// Finds the light range giving about `TARGET_LIGHTS_PER_SAMPLE` tile-culled lights per sample (bisection on a
+/// quarter-size frame, then checked at full size).
+fn tuned_lights(gb: &GBuffer) -> Vec<Light> {
+    let small = fixture::room(W / 4, H / 4, 1).expect("fixture");
+    let mask = uniform_mask(&small, false);
+    let (mut lo, mut hi) = (0.05f32, 8.0f32);
+    for _ in 0..18 {
+        let mid = (lo * hi).sqrt();
+        let lights = fixture::lights_on_surfaces(&small, LIGHTS, mid, 7);
+        let r = resolve(&small, &lights, &mask, &ResolveConfig { tile_size: 4, ..Default::default() }).unwrap();
+        if r.stats.lights_per_sample < TARGET_LIGHTS_PER_SAMPLE {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    fixture::lights_on_surfaces(gb, LIGHTS, (lo * hi).sqrt(), 7)
+}
+
+fn benches(c: &mut Criterion) {
+    let gb1 = fixture::room(W, H, 1).expect("fixture");
+    let gb4 = fixture::room(W, H, 4).expect("fixture");
+    let lights = tuned_lights(&gb1);
+    let mask1 = uniform_mask(&gb1, false);
+    let mask4 = detect(&gb4, Detector::Lauritzen, &DetectorConfig::default()).expect("detect");
+    let ssaa4 = uniform_mask(&gb4, true);
+    let tiled = ResolveConfig::default();
+    let none = ResolveConfig { culling: Culling::None, ..tiled };
+
+    let probe = resolve(&gb1, &lights, &mask1, &tiled).unwrap();
+    let probe4 = resolve(&gb4, &lights, &mask4, &tiled).unwrap();
+    eprintln!(
+        "resolve bench: {} lights, {:.1} lights/sample after tile culling, {} pairs tested (1x); 4x adaptive: \
+         {:.1}% edge pixels, {:.3} shading fraction, {} pairs",
+        lights.len(),
+        probe.stats.lights_per_sample,
+        probe.stats.light_pairs_tested,
+        100.0 * probe4.stats.edge_fraction,
+        probe4.stats.shading_fraction,
+        probe4.stats.light_pairs_tested
+    );
+
+    let mut g = c.benchmark_group("resolve");
+    g.sample_size(10);
+    g.bench_function("tiled/1x/1280x720", |b| {
+        b.iter(|| resolve(black_box(&gb1), black_box(&lights), &mask1, &tiled).unwrap())
+    });
+    g.bench_function("tiled/4x-adaptive/1280x720", |b| {
+        b.iter(|| resolve(black_box(&gb4), black_box(&lights), &mask4, &tiled).unwrap())
+    });
+    g.bench_function("tiled/4x-ssaa/1280x720", |b| {
+        b.iter(|| resolve(black_box(&gb4), black_box(&lights), &ssaa4, &tiled).unwrap())
+    });
+    g.bench_function("none/1x/1280x720", |b| {
+        b.iter(|| resolve(black_box(&gb1), black_box(&lights), &mask1, &none).unwrap())
+    });
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+        g.bench_function(format!("tiled/1x/1280x720/threads-{threads}"), |b| {
+            b.iter(|| pool.install(|| resolve(black_box(&gb1), black_box(&lights), &mask1, &tiled).unwrap()))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(resolve_benches, benches);
+criterion_main!(resolve_benches);
