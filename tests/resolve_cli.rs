@@ -47,3 +47,58 @@ fn inconsistent_flags_are_refused_before_loading() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("tile size"), "{}", stderr(&o));
 }
+
+#[test]
+fn resolves_a_canonical_dump_end_to_end() {
+    let dir = tempfile::tempdir().unwrap();
+    let gb = gbuf::scene::render(gbuf::scene::SceneName::Room, 48, 32, 4).unwrap();
+    gbuf::io::canonical::write(&dir.path().join("room.exr"), &gb).unwrap();
+    let o = gbuf(
+        dir.path(),
+        &[
+            "resolve",
+            "room.exr",
+            "--lights",
+            "24",
+            "--seed",
+            "3",
+            "-o",
+            "lit.exr",
+            "--png",
+            "lit.png",
+            "--heatmap",
+            "heat.png",
+            "--json",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    for key in ["shading_fraction", "edge_fraction", "light_pairs_tested", "light_pairs_lit", "rmse", "psnr_db"] {
+        assert!(v[key].is_number(), "{key} missing in {v}");
+    }
+    for key in ["max_abs", "rel_mse"] {
+        assert!(v[key].is_number(), "{key} missing in {v}");
+    }
+    for key in ["decode", "detect", "cull", "shade", "total"] {
+        assert!(v["ms"][key].is_number(), "ms.{key} missing in {v}");
+    }
+    let sf = v["shading_fraction"].as_f64().unwrap();
+    assert!(sf > 0.0 && sf <= 1.0, "{sf}");
+    // Same scene, every sample shaded against the f64 reference: tiny error.
+    assert!(v["rel_mse"].as_f64().unwrap() < 0.05, "{v}");
+    for f in ["lit.exr", "lit.png", "heat.png"] {
+        assert!(dir.path().join(f).metadata().unwrap().len() > 0, "{f} not written");
+    }
+    // The demo's LDR encoding and a layout round trip.
+    let o = gbuf(
+        dir.path(),
+        &["resolve", "room.exr", "--lights", "8", "--png", "ldr.png", "--ldr", "gamma2.2", "--detector", "ssaa"],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("error vs reference"));
+    let o = gbuf(dir.path(), &["resolve", "room.exr", "--lights", "8", "--scene", "missing.json"]);
+    assert_eq!(o.status.code(), Some(1));
+    let o = gbuf(dir.path(), &["resolve", "room.exr"]);
+    assert_eq!(o.status.code(), Some(1), "no lights must be an error: {}", stderr(&o));
+    assert!(stderr(&o).contains("--lights"), "{}", stderr(&o));
+}

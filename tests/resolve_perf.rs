@@ -20,7 +20,7 @@ fn cpu_seconds() -> Option<f64> {
 fn cpu_time_per_frame() {
     let gb1 = fixture::room(1280, 720, 1).unwrap();
     let gb4 = fixture::room(1280, 720, 4).unwrap();
-    // Same light set-up as benches/resolve.rs (range tuned there to ≈ 40 lights per sample; 0.2 is close).
+    // Light range from GBUF_RANGE (default 1.0: about 31 lights per sample after tile culling).
     let range: f32 = std::env::var("GBUF_RANGE").ok().and_then(|s| s.parse().ok()).unwrap_or(1.0);
     let lights = fixture::lights_on_surfaces(&gb1, 1024, range, 7);
     let mask1 = uniform_mask(&gb1, false);

@@ -58,6 +58,10 @@ pub struct Args {
     /// Scatter N point lights over the visible surfaces when the dump and sidecar have no lights.
     #[arg(long, value_name = "N")]
     pub lights: Option<usize>,
+    /// Pack and unpack with this layout (built-in name or layout file) before lighting; the reference uses the
+    /// unpacked-free original.
+    #[arg(long, value_name = "L")]
+    pub layout: Option<String>,
     /// Seed for `--lights`.
     #[arg(long, value_name = "S", default_value_t = 1)]
     pub seed: u64,
@@ -131,6 +135,7 @@ struct Report {
     height: u32,
     samples: u32,
     lights_source: &'static str,
+    layout: Option<String>,
     detector: &'static str,
     config: ResolveConfig,
     shading_fraction: f64,
@@ -175,10 +180,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let gb: GBuffer = loaded.gbuffer;
     let (lights, lights_source) = pick_lights(loaded.lights, args.lights, args.seed, &gb, &file)?;
 
-    let (mask, t_detect) = timed(|| detect::detect(&gb, args.detector, &det_cfg));
+    let layout_name = args.layout.clone();
+    let (packed, t_pack) = timed(|| -> anyhow::Result<Option<GBuffer>> {
+        let Some(name) = &layout_name else { return Ok(None) };
+        let layout = gbuf::layout::Layout::by_name_or_path(name).with_context(|| format!("--layout {name}"))?;
+        Ok(Some(layout.roundtrip(&gb).with_context(|| format!("{file}: packing with layout {name}"))?))
+    });
+    let packed = packed?;
+    let lit_gb = packed.as_ref().unwrap_or(&gb);
+    let t_decode = t_decode + t_pack;
+
+    let (mask, t_detect) = timed(|| detect::detect(lit_gb, args.detector, &det_cfg));
     let mask = mask.with_context(|| format!("{file}: edge detector {}", args.detector))?;
 
-    let resolved = resolve::resolve(&gb, &lights, &mask, &cfg).with_context(|| format!("{file}: resolve"))?;
+    let resolved = resolve::resolve(lit_gb, &lights, &mask, &cfg).with_context(|| format!("{file}: resolve"))?;
     let mut stage = StageMs { decode: t_decode, detect: t_detect, ..resolved.stats.ms };
     stage.total += t_decode + t_detect;
 
@@ -221,6 +236,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         height: gb.height,
         samples: gb.samples,
         lights_source,
+        layout: args.layout.clone(),
         detector: args.detector.name(),
         config: cfg,
         shading_fraction: s.shading_fraction,
@@ -262,29 +278,13 @@ fn pick_lights(
     file: &str,
 ) -> anyhow::Result<(Vec<Light>, &'static str)> {
     match (from_file, scatter) {
-        (_, Some(n)) => Ok((scatter_lights(gb, n, seed), "scattered")),
+        (_, Some(n)) => Ok((gbuf::scene::scatter_lights(gb, n, seed), "scattered")),
         (Some(l), None) => Ok((l, "file")),
         (None, None) => anyhow::bail!(
             "{file}: no lights: the dump and its sidecar define none; pass --scene SIDECAR with a \"lights\" list, \
              or --lights N [--seed S] to scatter N point lights"
         ),
     }
-}
-
-/// Scatters `n` point lights just above the visible surfaces, with a range of 15% of the median view depth.
-fn scatter_lights(gb: &GBuffer, n: usize, seed: u64) -> Vec<Light> {
-    let mut depths: Vec<f32> = match &gb.depth {
-        Some(d) => d.iter().zip(&gb.coverage).filter(|(v, &c)| c && v.is_finite()).map(|(v, _)| *v).collect(),
-        None => gb.position.as_ref().map_or_else(Vec::new, |p| {
-            p.iter().zip(&gb.coverage).filter(|(v, &c)| c && v.is_finite()).map(|(v, _)| -v.z).collect()
-        }),
-    };
-    if depths.is_empty() {
-        return Vec::new();
-    }
-    let mid = depths.len() / 2;
-    let median = *depths.select_nth_unstable_by(mid, f32::total_cmp).1;
-    resolve::fixture::lights_on_surfaces(gb, n, (0.15 * median).max(1e-3), seed)
 }
 
 fn print_human(r: &Report) -> anyhow::Result<()> {
