@@ -125,14 +125,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.detector
     );
     println!("  {}", w.summary);
-    let n = &res.needs;
-    println!(
-        "needs: constant [{}], absent [{}], {} material tuples, normals face camera: {}",
-        n.constant.join(", "),
-        n.absent.join(", "),
-        n.material_count,
-        n.normals_face_camera.map_or("n/a".into(), |b| b.to_string())
-    );
+    println!("{}", res.needs.summary_line());
     if res.builtin_is_best {
         println!("a built-in layout is the best within {} B: {}", res.max_bytes, w.name);
     } else if let Some(b) = &res.best_builtin {

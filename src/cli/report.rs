@@ -106,16 +106,8 @@ pub fn print_summary(rep: &Report, dir: &Path) {
         rep.lights,
         rep.lights_source
     );
-    let n = &rep.needs;
-    println!(
-        "needs: constant [{}], absent [{}], {} material tuples ({} ID bits), normals face camera: {}",
-        n.constant.join(", "),
-        n.absent.join(", "),
-        n.material_count,
-        n.material_id_bits.map_or("n/a".into(), |b| b.to_string()),
-        n.normals_face_camera.map_or("n/a".into(), |b| b.to_string())
-    );
-    if let Some(p) = &n.pruned_layout {
+    println!("{}", rep.needs.summary_line());
+    if let Some(p) = &rep.needs.pruned_layout {
         println!(
             "pruned layout {}: {} B/sample ({} B less than {}), RMSE {} (base {})",
             p.name,

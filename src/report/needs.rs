@@ -112,6 +112,19 @@ impl Needs {
         self.absent.iter().any(|n| n == attr.name())
     }
 
+    /// One line for people (what `gbuf report`, `gbuf demo` and `gbuf budget` print before their tables).
+    #[must_use]
+    pub fn summary_line(&self) -> String {
+        format!(
+            "needs: constant [{}], absent [{}], {} material tuples ({} ID bits), normals face camera: {}",
+            self.constant.join(", "),
+            self.absent.join(", "),
+            self.material_count,
+            self.material_id_bits.map_or("n/a".into(), |b| b.to_string()),
+            self.normals_face_camera.map_or("n/a".into(), |b| b.to_string())
+        )
+    }
+
     /// A few lines for people (what `gbuf info` prints under "needs").
     #[must_use]
     pub fn to_text(&self) -> String {
