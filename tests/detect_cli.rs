@@ -126,6 +126,31 @@ fn shading_truth_with_lights_from_the_sidecar() {
             assert_eq!(sh["recall"].as_f64(), Some(1.0), "ssaa shades every sample: {row}");
         }
     }
+    // The tolerance is stated in the output: domain, threshold and rule; and the agreement with the ID truth.
+    assert_eq!((t["tolerance"]["domain"].as_str(), t["tolerance"]["codes"].as_f64()), (Some("display"), Some(1.0)));
+    assert!(t["rule"].as_str().unwrap().contains("code step"), "{t}");
+    let agree = &t["agreement_with_id_truth"];
+    assert!(agree["both"].as_u64().unwrap() > 0, "{t}");
+    // A looser tolerance flags fewer pixels, an absolute linear one more; both are stated back.
+    let fraction = |tol: &str| {
+        let v = json(&gbuf_cmd(dir.path(), &["edges", "scene.exr", "--json", "--shading-tolerance", tol]));
+        assert!(v["shading_truth"]["rule"].is_string(), "{v}");
+        v["shading_truth"]["true_edge_fraction"].as_f64().unwrap()
+    };
+    let default = t["true_edge_fraction"].as_f64().unwrap();
+    assert!(fraction("display:100") < default, "{default}");
+    assert!(fraction("linear:0") > default, "{default}");
+    let human = gbuf_cmd(dir.path(), &["edges", "scene.exr", "--shading-tolerance", "2.5"]);
+    let text = String::from_utf8_lossy(&human.stdout);
+    assert!(text.contains("> 2.5 8-bit code step") && text.contains("vs ID truth"), "{text}");
+    for bad in ["bogus", "linear:-1", "gamma:1"] {
+        let out = gbuf_cmd(dir.path(), &["edges", "scene.exr", "--shading-tolerance", bad]);
+        assert_eq!(out.status.code(), Some(2), "{bad}");
+        assert!(String::from_utf8_lossy(&out.stderr).contains("shading tolerance"), "{bad}");
+    }
+    let out = gbuf_cmd(dir.path(), &["edges", "scene.exr", "--exposure", "0"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("exposure"));
 }
 
 #[test]

@@ -4,7 +4,9 @@
 use crate::cli::common::{print_json, InputArgs};
 use anyhow::Context;
 use gbuf::detect::{self, truth, Detector, DetectorConfig, EdgeMask, IdSource};
-use gbuf::measure::edges::{evaluate_against, shading_truth, EdgeStats, DEFAULT_SHADING_TOLERANCE};
+use gbuf::measure::edges::{
+    evaluate_against, shading_truth, truth_agreement, EdgeStats, ShadingTolerance, TruthAgreement,
+};
 use gbuf::GBuffer;
 use std::io::Write;
 use std::path::PathBuf;
@@ -98,10 +100,15 @@ pub struct Args {
     /// Detector thresholds.
     #[command(flatten)]
     pub thresholds: ThresholdArgs,
-    /// Shading truth: a pixel needs per-sample shading when some sample's reference radiance differs from sample
-    /// 0's by more than this (any channel, linear units). Needs lights (sidecar or dump).
-    #[arg(long, value_name = "T", default_value_t = DEFAULT_SHADING_TOLERANCE)]
-    pub shading_tolerance: f32,
+    /// Shading truth: a pixel needs per-sample shading when its per-sample-shaded value (box filter of every
+    /// sample's reference radiance) and its once-shaded value (sample 0's) differ by more than this on screen:
+    /// `CODES` or `display:CODES` = 8-bit code steps after the PNG's Reinhard tone map and sRGB (default 1);
+    /// `linear:X` = linear radiance. Needs lights (sidecar or dump).
+    #[arg(long, value_name = "T", default_value = "display:1", value_parser = ShadingTolerance::parse)]
+    pub shading_tolerance: ShadingTolerance,
+    /// Exposure of the display tone map used by the shading truth (as `gbuf resolve --exposure`).
+    #[arg(long, value_name = "E", default_value_t = 1.0)]
+    pub exposure: f32,
     /// Write a PNG of the scene with per-sample pixels in red, misses in yellow, false alarms in cyan.
     #[arg(long, value_name = "OUT.png")]
     pub mask: Option<PathBuf>,
@@ -158,11 +165,15 @@ struct Output {
 /// How the shading truth was made.
 #[derive(Debug, serde::Serialize)]
 struct ShadingTruth {
-    tolerance: f32,
+    tolerance: ShadingTolerance,
+    /// The tolerance in words.
+    rule: String,
     lights: usize,
     brdf: &'static str,
     falloff: &'static str,
     true_edge_fraction: f64,
+    /// How the shading truth (`a`) agrees with the ID truth (`b`), when there are object IDs.
+    agreement_with_id_truth: Option<TruthAgreement>,
 }
 
 /// Runs `gbuf edges`.
@@ -172,19 +183,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.mask.is_some() && detectors.len() > 1 {
         anyhow::bail!("--mask draws one detector's mask; pick one with --detector instead of `all`");
     }
+    let tolerance = match args.shading_tolerance {
+        ShadingTolerance::Display { codes, .. } => ShadingTolerance::Display { codes, exposure: args.exposure },
+        t => t,
+    };
+    tolerance.validate().context("--shading-tolerance / --exposure")?;
     let loaded = args.input.load()?;
     let gb = &loaded.gbuffer;
     let truth = truth::object_truth(gb);
-    if !(args.shading_tolerance.is_finite() && args.shading_tolerance >= 0.0) {
-        anyhow::bail!("--shading-tolerance {} must be finite and ≥ 0", args.shading_tolerance);
-    }
     // The shading truth needs the reference radiance, so lights: from the sidecar or the dump.
     let resolve_cfg = gbuf::resolve::ResolveConfig::default();
     let shading = match loaded.lights.as_deref() {
         Some(lights) if !lights.is_empty() => {
             let radiance = gbuf::resolve::reference_per_sample(gb, lights, &resolve_cfg)
                 .with_context(|| format!("{}: reference shading", args.input.file.display()))?;
-            Some((shading_truth(gb, &radiance, args.shading_tolerance), lights.len()))
+            Some((shading_truth(gb, &radiance, tolerance), lights.len()))
         }
         _ => None,
     };
@@ -226,11 +239,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         truth: truth.as_ref().map(|_| "object"),
         true_edge_fraction: truth.as_deref().map(true_fraction),
         shading_truth: shading.as_ref().map(|(t, lights)| ShadingTruth {
-            tolerance: args.shading_tolerance,
+            tolerance,
+            rule: tolerance.to_string(),
             lights: *lights,
             brdf: resolve_cfg.brdf.name(),
             falloff: resolve_cfg.falloff.name(),
             true_edge_fraction: true_fraction(t),
+            agreement_with_id_truth: truth.as_deref().map(|ids| truth_agreement(t, ids)),
         }),
         thresholds: cfg,
         results: rows,
@@ -276,15 +291,25 @@ fn print_table(out: &Output, gb: &GBuffer) -> anyhow::Result<()> {
     };
     writeln!(w, "{}: {}×{}, {} samples/pixel; {truth}", out.file.display(), gb.width, gb.height, gb.samples)?;
     match &out.shading_truth {
-        Some(t) => writeln!(
-            w,
-            "shading truth ({} lights, {} / {}, tolerance {}): {:.2} % of pixels vary",
-            t.lights,
-            t.brdf,
-            t.falloff,
-            t.tolerance,
-            100.0 * t.true_edge_fraction
-        )?,
+        Some(t) => {
+            writeln!(
+                w,
+                "shading truth ({} lights, {} / {}; edge when {}): {:.2} % of pixels",
+                t.lights,
+                t.brdf,
+                t.falloff,
+                t.rule,
+                100.0 * t.true_edge_fraction
+            )?;
+            if let Some(a) = &t.agreement_with_id_truth {
+                writeln!(
+                    w,
+                    "shading truth vs ID truth: flags {:.1} % of the ID edges; {:.1} % of its pixels are ID edges",
+                    100.0 * a.b_covered_by_a,
+                    100.0 * a.a_covered_by_b
+                )?;
+            }
+        }
         None => writeln!(w, "no lights (sidecar or dump): no shading truth")?,
     }
     writeln!(
