@@ -47,8 +47,8 @@ fn room_at_4x_relations_between_detectors() {
         );
     }
     // The shading truth at the default tolerance (one display code step beyond the smooth gradient) is a small
-    // part of the frame — under twice the ID edges (at 1/255 linear it was 43% of the pixels) —, contains nearly every ID edge (different objects are lit
-    // differently), and the id detector's flags are nearly all in it.
+    // part of the frame, under twice the ID edges (at 1/255 linear it was 43% of the pixels); it contains nearly
+    // every ID edge (different objects are lit differently), and the id detector's flags are nearly all in it.
     let agree = truth_agreement(&shading, &truth);
     println!("shading truth vs ID truth: {agree:?}");
     assert!(frac(&shading) < 2.0 * frac(&truth), "{} vs {}", frac(&shading), frac(&truth));

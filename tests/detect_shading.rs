@@ -25,8 +25,8 @@ fn count(t: &[bool]) -> usize {
     t.iter().filter(|&&x| x).count()
 }
 
-/// A camera-facing plane at depth 5, split at x = 0.05 (inside a pixel column) into two objects 2 mm apart in depth. Objects 1 and 9 get the
-/// same albedo from the support renderer, so only the IDs tell the halves apart.
+/// A camera-facing plane at depth 5, split at x = 0.05 (inside a pixel column) into two objects 2 mm apart in
+/// depth. Objects 1 and 9 get the same albedo from the support renderer, so only the IDs tell the halves apart.
 fn split_plane() -> GBuffer {
     let left = Surface {
         keep: Some(|p| p.x < 0.05),

@@ -29,7 +29,7 @@
 //! coplanar objects that only a material or ID test can tell apart. Against the shading truth
 //! ([`crate::measure::edges::shading_truth`], one display code step beyond the smooth gradient: 2.20% of the
 //! pixels), precision / recall are `lauritzen` 0.98 / 0.45, `id` 1.00 / 0.69, `combined` 0.99 / 0.75,
-//! `forward-msaa` 0.43 / 0.76; the rest of the shading truth is specular highlights and sphere rims, shading
+//! `forward-msaa` 0.43 / 0.76; the rest of the shading truth is creases, specular highlights and sphere rims, shading
 //! variation inside one surface that no G-buffer edge test sees.
 
 pub mod baselines;
