@@ -180,3 +180,43 @@ fn bad_input_exits_1_with_the_file_name_and_bad_usage_exits_2() {
     assert_eq!(out.status.code(), Some(1));
     assert!(!dir.path().join("x.png").exists());
 }
+
+#[test]
+fn mask_picture_can_be_coloured_against_the_shading_truth() {
+    use gbuf::measure::edges::{evaluate_against, shading_truth, DEFAULT_SHADING_TOLERANCE};
+    let dir = tempfile::tempdir().unwrap();
+    let gb = scene();
+    write_dump(dir.path(), &gb);
+    let light = gbuf::Light::point(Vec3::new(0.5, 1.0, -3.0), Vec3::ONE, 20.0, 30.0);
+    let sidecar = r#"{"lights_space": "view", "lights": [
+        {"type": "point", "position": [0.5, 1.0, -3.0], "color": [1, 1, 1], "intensity": 20, "range": 30}]}"#;
+    std::fs::write(dir.path().join("scene.json"), sidecar).unwrap();
+    let radiance =
+        gbuf::resolve::reference_per_sample(&gb, &[light], &gbuf::resolve::ResolveConfig::default()).unwrap();
+    let shading = shading_truth(&gb, &radiance, DEFAULT_SHADING_TOLERANCE);
+    let count_colours = |png: &str| {
+        let img = image::open(dir.path().join(png)).unwrap().to_rgb8();
+        let count = |c: [u8; 3]| img.pixels().filter(|p| p.0 == c).count() as u64;
+        use gbuf::detect::picture::{FALSE_ALARM, FLAGGED, MISSED};
+        (count(FLAGGED), count(MISSED), count(FALSE_ALARM))
+    };
+    let args = ["edges", "scene.exr", "--detector", "normal", "--mask", "s.png", "--mask-truth", "shading", "--json"];
+    let v = json(&gbuf_cmd(dir.path(), &args));
+    assert_eq!(v["mask_truth"], "shading", "{v}");
+    let s = evaluate_against(&detect(&gb, Detector::Normal, &DetectorConfig::default()).unwrap(), &shading);
+    assert_eq!(count_colours("s.png"), (s.tp, s.fn_, s.fp), "{s:?}");
+    assert!(s.tp > 0, "{s:?}");
+    // Without object IDs the shading truth is the default; asking for the ID truth is then an error.
+    let mut no_ids = gb.clone();
+    no_ids.object_id = None;
+    write_dump(dir.path(), &no_ids);
+    let v = json(&gbuf_cmd(dir.path(), &["edges", "scene.exr", "--detector", "normal", "--mask", "d.png", "--json"]));
+    assert_eq!(v["mask_truth"], "shading", "{v}");
+    let out =
+        gbuf_cmd(dir.path(), &["edges", "scene.exr", "--detector", "normal", "--mask", "e.png", "--mask-truth", "id"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no object IDs"));
+    let out = gbuf_cmd(dir.path(), &["edges", "scene.exr", "--mask-truth", "shading"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--mask OUT.png"));
+}

@@ -1,5 +1,5 @@
-//! `gbuf edges FILE [--detector D|all] [threshold flags] [--mask OUT.png] [--json]`: run edge detectors and score
-//! them against the ID ground truth.
+//! `gbuf edges FILE [--detector D|all] [threshold flags] [--shading-tolerance T] [--mask OUT.png [--mask-truth
+//! id|shading]] [--json]`: run edge detectors and score them against the ID ground truth and the shading truth.
 
 use crate::cli::common::{print_json, InputArgs};
 use anyhow::Context;
@@ -112,6 +112,10 @@ pub struct Args {
     /// Write a PNG of the scene with per-sample pixels in red, misses in yellow, false alarms in cyan.
     #[arg(long, value_name = "OUT.png")]
     pub mask: Option<PathBuf>,
+    /// Which truth colours the misses and false alarms of --mask: id (object IDs) or shading (needs lights).
+    /// Default: id when the dump has object IDs, else shading when it has lights.
+    #[arg(long, value_name = "TRUTH", value_parser = ["id", "shading"])]
+    pub mask_truth: Option<String>,
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
@@ -158,6 +162,9 @@ struct Output {
     true_edge_fraction: Option<f64>,
     /// The shading truth, when the dump comes with lights.
     shading_truth: Option<ShadingTruth>,
+    /// The truth the --mask picture was coloured with ("id", "shading"), when a picture was drawn with one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mask_truth: Option<&'static str>,
     thresholds: DetectorConfig,
     results: Vec<Row>,
 }
@@ -182,6 +189,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let detectors = args.detector.detectors();
     if args.mask.is_some() && detectors.len() > 1 {
         anyhow::bail!("--mask draws one detector's mask; pick one with --detector instead of `all`");
+    }
+    if args.mask_truth.is_some() && args.mask.is_none() {
+        anyhow::bail!("--mask-truth chooses the colours of the --mask picture; give --mask OUT.png too");
     }
     let tolerance = match args.shading_tolerance {
         ShadingTolerance::Display { codes, .. } => ShadingTolerance::Display { codes, exposure: args.exposure },
@@ -227,8 +237,29 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             }),
         }
     }
+    let mut mask_truth = None;
     if let (Some(path), Some(mask)) = (&args.mask, &last_mask) {
-        detect::picture::write_png(path, gb, mask, truth.as_deref())
+        let shading_flags = shading.as_ref().map(|s| s.0.as_slice());
+        let picked = match args.mask_truth.as_deref() {
+            Some("id") => Some((
+                "id",
+                truth
+                    .as_deref()
+                    .with_context(|| format!("--mask-truth id: {} has no object IDs", args.input.file.display()))?,
+            )),
+            Some(_) => Some((
+                "shading",
+                shading_flags.with_context(|| {
+                    format!(
+                        "--mask-truth shading: {} comes with no lights (sidecar or dump)",
+                        args.input.file.display()
+                    )
+                })?,
+            )),
+            None => truth.as_deref().map(|t| ("id", t)).or(shading_flags.map(|t| ("shading", t))),
+        };
+        mask_truth = picked.map(|(name, _)| name);
+        detect::picture::write_png(path, gb, mask, picked.map(|(_, t)| t))
             .with_context(|| format!("writing the mask picture {}", path.display()))?;
     }
     let out = Output {
@@ -247,6 +278,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             true_edge_fraction: true_fraction(t),
             agreement_with_id_truth: truth.as_deref().map(|ids| truth_agreement(t, ids)),
         }),
+        mask_truth,
         thresholds: cfg,
         results: rows,
     };
@@ -311,6 +343,9 @@ fn print_table(out: &Output, gb: &GBuffer) -> anyhow::Result<()> {
             }
         }
         None => writeln!(w, "no lights (sidecar or dump): no shading truth")?,
+    }
+    if let Some(t) = out.mask_truth {
+        writeln!(w, "mask picture: misses and false alarms against the {t} truth")?;
     }
     writeln!(
         w,
