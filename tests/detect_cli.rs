@@ -3,8 +3,9 @@
 #[path = "detect_support.rs"]
 mod support;
 
+use gbuf::detect::truth::{id_truth, TruthSource};
 use gbuf::detect::{detect, Detector, DetectorConfig};
-use gbuf::measure::edges::evaluate;
+use gbuf::measure::edges::{evaluate, evaluate_against};
 use gbuf::GBuffer;
 use glam::Vec3;
 use std::path::{Path, PathBuf};
@@ -44,6 +45,9 @@ fn all_detectors_json_matches_the_library() {
     assert_eq!((v["width"].as_u64(), v["samples"].as_u64(), v["truth"].as_str()), (Some(40), Some(4), Some("object")));
     let rows = v["results"].as_array().unwrap();
     assert_eq!(rows.len(), Detector::ALL.len());
+    let prim = id_truth(&gb, TruthSource::Primitive).unwrap();
+    let prim_fraction = prim.iter().filter(|&&t| t).count() as f64 / prim.len() as f64;
+    assert_eq!(v["primitive_true_edge_fraction"].as_f64(), Some(prim_fraction));
     for (row, d) in rows.iter().zip(Detector::ALL) {
         assert_eq!(row["detector"], d.name());
         let mask = detect(&gb, d, &DetectorConfig::default()).unwrap();
@@ -52,6 +56,13 @@ fn all_detectors_json_matches_the_library() {
         assert_eq!(row["fp"].as_u64(), Some(s.fp), "{d}");
         assert_eq!(row["fn"].as_u64(), Some(s.fn_), "{d}");
         assert_eq!(row["shading_fraction"].as_f64(), Some(mask.shading_fraction()), "{d}");
+        // The primitive-ID truth (the forward-MSAA rate) gets its own scores.
+        let p = evaluate_against(&mask, &prim);
+        assert_eq!(
+            (row["primitive"]["tp"].as_u64(), row["primitive"]["fn"].as_u64()),
+            (Some(p.tp), Some(p.fn_)),
+            "{d}"
+        );
         assert!(
             row["precision"].as_f64().is_some() && row["recall"].as_f64().is_some() && row["ms"].as_f64().is_some()
         );

@@ -136,6 +136,9 @@ struct Row {
     /// Scores against the shading truth; `None` without lights.
     #[serde(skip_serializing_if = "Option::is_none")]
     shading: Option<Scores>,
+    /// Scores against the primitive-ID truth (the rate forward MSAA shades at); `None` without primitive IDs.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    primitive: Option<Scores>,
     ms: f64,
 }
 
@@ -160,6 +163,8 @@ struct Output {
     /// "object" when object IDs give a ground truth, else null.
     truth: Option<&'static str>,
     true_edge_fraction: Option<f64>,
+    /// Fraction of pixels whose samples span several primitives (or mix background in): the primitive-ID truth.
+    primitive_true_edge_fraction: Option<f64>,
     /// The shading truth, when the dump comes with lights.
     shading_truth: Option<ShadingTruth>,
     /// The truth the --mask picture was coloured with ("id", "shading"), when a picture was drawn with one.
@@ -201,6 +206,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let loaded = args.input.load()?;
     let gb = &loaded.gbuffer;
     let truth = truth::object_truth(gb);
+    let prim_truth = truth::id_truth(gb, truth::TruthSource::Primitive);
     // The shading truth needs the reference radiance, so lights: from the sidecar or the dump.
     let resolve_cfg = gbuf::resolve::ResolveConfig::default();
     let shading = match loaded.lights.as_deref() {
@@ -219,7 +225,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let ms = t0.elapsed().as_secs_f64() * 1e3;
         match result {
             Ok(mask) => {
-                rows.push(row(d, &mask, truth.as_deref(), shading.as_ref().map(|s| s.0.as_slice()), ms));
+                let truths = Truths {
+                    ids: truth.as_deref(),
+                    shading: shading.as_ref().map(|s| s.0.as_slice()),
+                    primitives: prim_truth.as_deref(),
+                };
+                rows.push(row(d, &mask, &truths, ms));
                 last_mask = Some(mask);
             }
             // A single detector that cannot run is an error; in `all` mode it is a skipped row.
@@ -233,6 +244,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 shading_fraction: 0.0,
                 stats: None,
                 shading: None,
+                primitive: None,
                 ms,
             }),
         }
@@ -269,6 +281,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         samples: gb.samples,
         truth: truth.as_ref().map(|_| "object"),
         true_edge_fraction: truth.as_deref().map(true_fraction),
+        primitive_true_edge_fraction: prim_truth.as_deref().map(true_fraction),
         shading_truth: shading.as_ref().map(|(t, lights)| ShadingTruth {
             tolerance,
             rule: tolerance.to_string(),
@@ -303,14 +316,22 @@ fn scores(mask: &EdgeMask, truth: &[bool]) -> Scores {
     Scores { precision: s.precision, recall: s.recall, tp: s.tp, fp: s.fp, fn_: s.fn_ }
 }
 
-fn row(detector: Detector, mask: &EdgeMask, truth: Option<&[bool]>, shading: Option<&[bool]>, ms: f64) -> Row {
+/// The truths a mask is scored against (each absent when the dump cannot give it).
+struct Truths<'a> {
+    ids: Option<&'a [bool]>,
+    shading: Option<&'a [bool]>,
+    primitives: Option<&'a [bool]>,
+}
+
+fn row(detector: Detector, mask: &EdgeMask, truths: &Truths<'_>, ms: f64) -> Row {
     Row {
         detector,
         skipped: None,
         edge_fraction: mask.edge_fraction(),
         shading_fraction: mask.shading_fraction(),
-        stats: truth.map(|t| scores(mask, t)),
-        shading: shading.map(|t| scores(mask, t)),
+        stats: truths.ids.map(|t| scores(mask, t)),
+        shading: truths.shading.map(|t| scores(mask, t)),
+        primitive: truths.primitives.map(|t| scores(mask, t)),
         ms,
     }
 }
@@ -322,6 +343,13 @@ fn print_table(out: &Output, gb: &GBuffer) -> anyhow::Result<()> {
         None => "no object IDs: no ID truth".to_string(),
     };
     writeln!(w, "{}: {}×{}, {} samples/pixel; {truth}", out.file.display(), gb.width, gb.height, gb.samples)?;
+    if let Some(f) = out.primitive_true_edge_fraction {
+        writeln!(
+            w,
+            "primitive-ID truth (forward MSAA's rate): {:.2} % of pixels (scores under `primitive` in --json)",
+            100.0 * f
+        )?;
+    }
     match &out.shading_truth {
         Some(t) => {
             writeln!(
