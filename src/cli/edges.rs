@@ -100,10 +100,10 @@ pub struct Args {
     /// Detector thresholds.
     #[command(flatten)]
     pub thresholds: ThresholdArgs,
-    /// Shading truth: a pixel needs per-sample shading when its per-sample-shaded value (box filter of every
-    /// sample's reference radiance) and its once-shaded value (sample 0's) differ by more than this on screen:
-    /// `CODES` or `display:CODES` = 8-bit code steps after the PNG's Reinhard tone map and sRGB (default 1);
-    /// `linear:X` = linear radiance. Needs lights (sidecar or dump).
+    /// Shading truth: a pixel needs per-sample shading when some sample's reference shading differs from sample
+    /// 0's by more than this, beyond the image's smooth gradient: `CODES` or `display:CODES` = 8-bit code steps
+    /// after the PNG's Reinhard tone map and sRGB (default 1); `linear:X` = linear radiance. Needs lights (sidecar
+    /// or dump). See docs/RESOLVE.md.
     #[arg(long, value_name = "T", default_value = "display:1", value_parser = ShadingTolerance::parse)]
     pub shading_tolerance: ShadingTolerance,
     /// Exposure of the display tone map used by the shading truth (as `gbuf resolve --exposure`).

@@ -3,8 +3,9 @@
 //!
 //! Two truths: the *ID truth* ([`evaluate`]: a pixel whose samples come from different objects, or mix background
 //! and surface; see [`crate::detect::truth`]) and the *shading truth* ([`shading_truth`]: a pixel whose reference
-//! shading varies between its samples by more than a tolerance), which is what per-sample shading is for.
-//! Both are compared with [`evaluate_against`].
+//! shading varies between its samples by more than a stated [`ShadingTolerance`], beyond the image's smooth
+//! gradient), which is what per-sample shading is for. Both are compared with [`evaluate_against`];
+//! [`truth_agreement`] compares two truths.
 
 use crate::detect::truth::object_truth;
 use crate::detect::EdgeMask;
