@@ -3,8 +3,9 @@
 //!
 //! Two truths: the *ID truth* ([`evaluate`]: a pixel whose samples come from different objects, or mix background
 //! and surface; see [`crate::detect::truth`]) and the *shading truth* ([`shading_truth`]: a pixel whose reference
-//! shading varies between its samples by more than a tolerance), which is what per-sample shading is for.
-//! Both are compared with [`evaluate_against`].
+//! shading varies between its samples by more than a stated [`ShadingTolerance`], beyond the image's smooth
+//! gradient), which is what per-sample shading is for. Both are compared with [`evaluate_against`];
+//! [`truth_agreement`] compares two truths.
 
 use crate::detect::truth::object_truth;
 use crate::detect::EdgeMask;
@@ -226,7 +227,9 @@ pub fn shading_truth(gb: &GBuffer, per_sample_radiance: &[Vec3], tolerance: Shad
         debug_assert!(gb.pixel_count() == 0, "inconsistent G-buffer reached shading_truth");
         return out;
     }
-    let value = |i: usize| per_sample_radiance.get(i).map(|&r| tolerance.to_domain(r));
+    // Every sample in the comparison domain, once (the sRGB curve is the costly part).
+    let domain: Vec<Vec3> = per_sample_radiance.par_iter().map(|&r| tolerance.to_domain(r)).collect();
+    let value = |i: usize| domain.get(i).copied();
     // Sample 0's value per pixel, where sample 0 is covered and finite: the neighbours' side of the gradient.
     let s0: Vec<Option<Vec3>> =
         (0..w * h).into_par_iter().map(|p| value(p * s).filter(|v| gb.coverage[p * s] && v.is_finite())).collect();
@@ -236,11 +239,8 @@ pub fn shading_truth(gb: &GBuffer, per_sample_radiance: &[Vec3], tolerance: Shad
             let p = y * w + x;
             let base = p * s;
             let Some(k) = gb.coverage[base..base + s].iter().position(|&c| c) else { continue };
-            let Some(vals) = (0..s).map(|i| value(base + i)).collect::<Option<Vec<Vec3>>>() else {
-                *edge = true;
-                continue;
-            };
-            if vals.iter().any(|v| !v.is_finite()) {
+            // Every sample present and finite, else conservative.
+            if (base..base + s).any(|i| !value(i).is_some_and(|v| v.is_finite())) {
                 *edge = true;
                 continue;
             }
@@ -255,8 +255,9 @@ pub fn shading_truth(gb: &GBuffer, per_sample_radiance: &[Vec3], tolerance: Shad
             };
             let dx = slope((x > 0).then(|| p - 1), (x + 1 < w).then_some(p + 1));
             let dy = slope((y > 0).then(|| p - w), (y + 1 < h).then_some(p + w));
-            let (dk, ok) = (vals[k], gb.sample_positions[k]);
-            *edge = vals.iter().zip(&gb.sample_positions).any(|(&d, &o)| {
+            let (dk, ok) = (value(base + k).unwrap_or_default(), gb.sample_positions[k]);
+            *edge = gb.sample_positions.iter().enumerate().any(|(i, &o)| {
+                let d = value(base + i).unwrap_or_default();
                 let off = (o - ok).abs();
                 let bound = dx * off.x + dy * off.y + Vec3::splat(threshold);
                 (d - dk).abs().cmpgt(bound).any()
