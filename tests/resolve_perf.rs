@@ -32,22 +32,30 @@ fn cpu_time_per_frame() {
         ("tiled 4x adaptive", &gb4, &mask4, ResolveConfig::default()),
         ("none 1x", &gb1, &mask1, ResolveConfig { culling: Culling::None, ..Default::default() }),
     ] {
+        if std::env::var("GBUF_PERF_CASE").is_ok_and(|c| !name.starts_with(c.as_str())) {
+            continue;
+        }
         let warm = pool.install(|| resolve(gb, &lights, mask, &cfg)).unwrap();
         let t0 = cpu_seconds().unwrap_or(0.0);
+        let mut split = [0.0f64; 3];
         for _ in 0..frames {
-            pool.install(|| resolve(gb, &lights, mask, &cfg)).unwrap();
+            let r = pool.install(|| resolve(gb, &lights, mask, &cfg)).unwrap();
+            for (acc, v) in split.iter_mut().zip([r.stats.ms.gather, r.stats.ms.cull, r.stats.ms.shade]) {
+                *acc += v / f64::from(frames);
+            }
         }
         let cpu = (cpu_seconds().unwrap_or(0.0) - t0) / f64::from(frames);
         let s = &warm.stats;
         println!(
-            "{name}: {:.1} ms CPU/frame, {} pairs tested ({:.1}/sample), split gather {:.1} cull {:.1} shade {:.1} ms \
-             (wall, last run)",
+            "{name}: {:.1} ms CPU/frame, {} pairs tested ({:.1}/sample, {:.0}% lit), gather {:.1} cull {:.1} shade \
+             {:.1} ms (mean wall of {frames} frames)",
             cpu * 1e3,
             s.light_pairs_tested,
             s.lights_per_sample,
-            s.ms.gather,
-            s.ms.cull,
-            s.ms.shade
+            100.0 * s.light_pairs_lit as f64 / s.light_pairs_tested.max(1) as f64,
+            split[0],
+            split[1],
+            split[2]
         );
     }
 }

@@ -11,6 +11,7 @@
 //! specular amount [`DEFAULT_SPECULAR`], specular power [`DEFAULT_SPECULAR_POWER`], metallic 0; roughness, when
 //! absent, is mapped from the specular power (see [`roughness_from_power`]).
 
+use super::kernel::Items;
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::gbuffer::GBuffer;
@@ -112,6 +113,8 @@ pub struct Surface {
 pub struct SurfaceReader<'a> {
     gb: &'a GBuffer,
     camera: Option<Camera>,
+    /// `(tan(fov/2) · aspect, tan(fov/2))`: the camera's ray slopes, computed once.
+    slopes: Vec2,
 }
 
 impl<'a> SurfaceReader<'a> {
@@ -127,7 +130,11 @@ impl<'a> SurfaceReader<'a> {
                     .into(),
             ));
         }
-        Ok(SurfaceReader { gb, camera: gb.camera })
+        let slopes = gb.camera.map_or(Vec2::ZERO, |c| {
+            let ray = c.view_ray(Vec2::ZERO, 2, 2);
+            Vec2::new(-ray.x, ray.y)
+        });
+        Ok(SurfaceReader { gb, camera: gb.camera, slopes })
     }
 
     /// The G-buffer being read.
@@ -139,17 +146,27 @@ impl<'a> SurfaceReader<'a> {
     /// Sample `s` of pixel (`x`, `y`); `None` for background (or an unusable position, counted).
     #[inline]
     pub fn read(&self, x: u32, y: u32, s: u32, counts: &mut SanitizedCounts) -> Option<Surface> {
+        let i = self.gb.index(x, y, s);
+        let p = self.position(x, y, s, i, counts)?;
+        Some(self.attributes(i, p, counts))
+    }
+
+    /// View-space position of sample `s` of pixel (`x`, `y`) (flat index `i`); `None` for background or an
+    /// unusable position (counted).
+    #[inline]
+    pub fn position(&self, x: u32, y: u32, s: u32, i: usize, counts: &mut SanitizedCounts) -> Option<Vec3> {
         let gb = self.gb;
-        let i = gb.index(x, y, s);
         if !gb.coverage[i] {
             return None;
         }
         let p = match (&gb.position, &gb.depth, &self.camera) {
             (Some(pos), _, _) => pos[i],
-            (None, Some(depth), Some(cam)) => {
+            (None, Some(depth), Some(_)) => {
+                // Camera::view_position with the ray slopes hoisted.
                 let o = gb.sample_positions[s as usize];
-                let px = Vec2::new(x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y);
-                cam.view_position(px, depth[i], gb.width, gb.height)
+                let ndc_x = (x as f32 + 0.5 + o.x) / gb.width as f32 * 2.0 - 1.0;
+                let ndc_y = 1.0 - (y as f32 + 0.5 + o.y) / gb.height as f32 * 2.0;
+                Vec3::new(ndc_x * self.slopes.x, ndc_y * self.slopes.y, -1.0) * depth[i]
             }
             _ => Vec3::NAN,
         };
@@ -157,28 +174,15 @@ impl<'a> SurfaceReader<'a> {
             counts.position += 1;
             return None;
         }
-        let n = match &gb.normal {
-            Some(nn) => match nn[i].try_normalize() {
-                Some(n) => n,
-                None => {
-                    counts.normal += 1;
-                    Vec3::Z
-                }
-            },
-            None => Vec3::Z,
-        };
-        let albedo = match &gb.albedo {
-            Some(a) => {
-                let a = a[i];
-                if a.is_finite() && a.min_element() >= 0.0 {
-                    a
-                } else {
-                    counts.albedo += 1;
-                    Vec3::new(clean(a.x, 0.0), clean(a.y, 0.0), clean(a.z, 0.0)).max(Vec3::ZERO)
-                }
-            }
-            None => Vec3::splat(DEFAULT_ALBEDO),
-        };
+        Some(p)
+    }
+
+    /// The attributes of sample `i` (position `p` already read), with defaults and sanitisation.
+    #[inline]
+    fn attributes(&self, i: usize, p: Vec3, counts: &mut SanitizedCounts) -> Surface {
+        let gb = self.gb;
+        let n = gb.normal.as_ref().map_or(Vec3::Z, |nn| clean_normal(nn[i], &mut counts.normal));
+        let albedo = gb.albedo.as_ref().map_or(Vec3::splat(DEFAULT_ALBEDO), |a| clean_albedo(a[i], &mut counts.albedo));
         let specular = scalar(gb.specular.as_deref(), i, DEFAULT_SPECULAR, 0.0, f32::MAX, &mut counts.specular);
         let power = scalar(
             gb.specular_power.as_deref(),
@@ -193,7 +197,93 @@ impl<'a> SurfaceReader<'a> {
             None => roughness_from_power(power),
         };
         let metallic = scalar(gb.metallic.as_deref(), i, 0.0, 0.0, 1.0, &mut counts.metallic);
-        Some(Surface { p, n, albedo, specular, power, roughness, metallic })
+        Surface { p, n, albedo, specular, power, roughness, metallic }
+    }
+
+    /// Batch form of [`SurfaceReader::read`]'s attribute part for a work list: the positions, pixels and weights
+    /// of `it` are set and `src[j]` is item `j`'s flat sample index; fills every other surface array of `it`, one
+    /// attribute plane at a time (the same defaults, sanitisation and counts as `read`).
+    pub fn fill_attributes(&self, src: &[usize], it: &mut Items, counts: &mut SanitizedCounts) {
+        let gb = self.gb;
+        let n = src.len();
+        debug_assert_eq!(it.len(), n);
+        it.resize(n);
+        match &gb.normal {
+            Some(plane) => {
+                for (j, &i) in src.iter().enumerate() {
+                    let v = clean_normal(plane[i], &mut counts.normal);
+                    (it.nx[j], it.ny[j], it.nz[j]) = (v.x, v.y, v.z);
+                }
+            }
+            None => {
+                it.nx.fill(0.0);
+                it.ny.fill(0.0);
+                it.nz.fill(1.0);
+            }
+        }
+        match &gb.albedo {
+            Some(plane) => {
+                for (j, &i) in src.iter().enumerate() {
+                    let v = clean_albedo(plane[i], &mut counts.albedo);
+                    (it.ar[j], it.ag[j], it.ab[j]) = (v.x, v.y, v.z);
+                }
+            }
+            None => {
+                it.ar.fill(DEFAULT_ALBEDO);
+                it.ag.fill(DEFAULT_ALBEDO);
+                it.ab.fill(DEFAULT_ALBEDO);
+            }
+        }
+        let fill = |out: &mut [f32], plane: Option<&[f32]>, default: f32, lo: f32, hi: f32, count: &mut u64| {
+            for (o, &i) in out.iter_mut().zip(src) {
+                *o = scalar(plane, i, default, lo, hi, count);
+            }
+        };
+        fill(&mut it.spec, gb.specular.as_deref(), DEFAULT_SPECULAR, 0.0, f32::MAX, &mut counts.specular);
+        fill(
+            &mut it.pw,
+            gb.specular_power.as_deref(),
+            DEFAULT_SPECULAR_POWER,
+            0.0,
+            MAX_SPECULAR_POWER,
+            &mut counts.specular_power,
+        );
+        match gb.roughness.as_deref() {
+            Some(plane) => {
+                for ((o, &i), &pw) in it.rough.iter_mut().zip(src).zip(&it.pw) {
+                    *o = scalar(Some(plane), i, roughness_from_power(pw), 0.0, 1.0, &mut counts.roughness);
+                }
+            }
+            None => {
+                for (o, &pw) in it.rough.iter_mut().zip(&it.pw) {
+                    *o = roughness_from_power(pw);
+                }
+            }
+        }
+        fill(&mut it.metal, gb.metallic.as_deref(), 0.0, 0.0, 1.0, &mut counts.metallic);
+    }
+}
+
+/// A stored normal made unit length; NaN/Inf or zero length → `+Z` (facing the camera), counted.
+#[inline]
+fn clean_normal(n: Vec3, count: &mut u64) -> Vec3 {
+    match n.try_normalize() {
+        Some(n) => n,
+        None => {
+            *count += 1;
+            Vec3::Z
+        }
+    }
+}
+
+/// A stored albedo with NaN/Inf components → 0 and negative ones clamped to 0, counted once per sample.
+#[inline]
+fn clean_albedo(a: Vec3, count: &mut u64) -> Vec3 {
+    if a.is_finite() && a.min_element() >= 0.0 {
+        a
+    } else {
+        *count += 1;
+        Vec3::new(clean(a.x, 0.0), clean(a.y, 0.0), clean(a.z, 0.0)).max(Vec3::ZERO)
     }
 }
 
@@ -207,6 +297,7 @@ fn clean(v: f32, default: f32) -> f32 {
 
 /// Value `i` of an optional plane: the default when absent; NaN/Inf → default and out-of-range → clamped, both
 /// counted.
+#[inline]
 fn scalar(plane: Option<&[f32]>, i: usize, default: f32, lo: f32, hi: f32, count: &mut u64) -> f32 {
     let Some(plane) = plane else { return default };
     let v = plane[i];
