@@ -18,15 +18,22 @@ fn cpu_seconds() -> Option<f64> {
 #[test]
 #[ignore = "measurement, not a test: run in release with --ignored --nocapture"]
 fn cpu_time_per_frame() {
-    let gb1 = fixture::room(1280, 720, 1).unwrap();
-    let gb4 = fixture::room(1280, 720, 4).unwrap();
+    let (w, h): (u32, u32) = match std::env::var("GBUF_PERF_SIZE")
+        .ok()
+        .and_then(|s| s.split_once('x').map(|(a, b)| (a.parse().ok(), b.parse().ok())))
+    {
+        Some((Some(w), Some(h))) => (w, h),
+        _ => (1280, 720),
+    };
+    let gb1 = fixture::room(w, h, 1).unwrap();
+    let gb4 = fixture::room(w, h, 4).unwrap();
     // Light range from GBUF_RANGE (default 1.0: about 31 lights per sample after tile culling).
     let range: f32 = std::env::var("GBUF_RANGE").ok().and_then(|s| s.parse().ok()).unwrap_or(1.0);
     let lights = fixture::lights_on_surfaces(&gb1, 1024, range, 7);
     let mask1 = uniform_mask(&gb1, false);
     let mask4 = detect(&gb4, Detector::Lauritzen, &DetectorConfig::default()).unwrap();
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-    let frames = 5;
+    let frames: u32 = std::env::var("GBUF_PERF_FRAMES").ok().and_then(|s| s.parse().ok()).unwrap_or(5);
     for (name, gb, mask, cfg) in [
         ("tiled 1x", &gb1, &mask1, ResolveConfig::default()),
         ("tiled 4x adaptive", &gb4, &mask4, ResolveConfig::default()),

@@ -71,7 +71,7 @@ impl Bounds {
     }
 
     /// Can a sphere at `c` with radius `r` (already grown by the margin) reach a point inside the bounds?
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn may_touch(&self, c: Vec3, r: f32) -> bool {
         // Non-short-circuit `&` so a loop over lights compiles to branch-free vector code.

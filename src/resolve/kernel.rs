@@ -350,7 +350,18 @@ fn run_chunk<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
     let (mut tested, mut lit) = (zero, zero);
     let min_d2 = s(MIN_DISTANCE * MIN_DISTANCE);
     let min_h2 = s(MIN_HALF_LENGTH * MIN_HALF_LENGTH);
+    // The vector's bounding box: a light whose sphere misses it adds exactly 0 to every lane and is skipped (the
+    // pair still counts as tested: tile culling passed it). Quad culling counts its own tests, so it runs all.
+    let lo = [k.p[0].hmin(), k.p[1].hmin(), k.p[2].hmin()];
+    let hi = [k.p[0].hmax(), k.p[1].hmax(), k.p[2].hmax()];
     for (l, rec) in lights.rec.iter().enumerate() {
+        if !Q {
+            let gap = |c: f32, lo: f32, hi: f32| (lo - c).max(c - hi).max(0.0);
+            let (gx, gy, gz) = (gap(rec.px, lo[0], hi[0]), gap(rec.py, lo[1], hi[1]), gap(rec.pz, lo[2], hi[2]));
+            if gx * gx + gy * gy + gz * gz > rec.r2 {
+                continue;
+            }
+        }
         let w = s(-rec.w);
         let lv = [k.p[0].mul_add(w, s(rec.px)), k.p[1].mul_add(w, s(rec.py)), k.p[2].mul_add(w, s(rec.pz))];
         // d = max(|L|, MIN_DISTANCE): clamping d² first keeps rsqrt away from 0.

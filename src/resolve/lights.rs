@@ -7,6 +7,7 @@
 //! factor is `clamp(dot(axis, −L̂) · scale + offset, 0, 1)²` with `scale = 0, offset = 1` for non-spot lights.
 
 use super::config::Falloff;
+use super::culling::light_sphere;
 use super::falloff::{cone_constants, MIN_RAMP_FRACTION};
 use crate::light::{Light, LightKind};
 use glam::Vec3;
@@ -96,6 +97,9 @@ pub struct LightRec {
     pub cs: f32,
     /// Cone offset (1 for non-spot lights).
     pub co: f32,
+    /// Squared radius of the culling sphere around `pos` (∞ for directional and unbounded lights): beyond it
+    /// the light adds exactly 0.
+    pub r2: f32,
 }
 
 /// The kernel's light list: one [`LightRec`] per light, same order as the input.
@@ -179,6 +183,10 @@ impl LightRec {
             sz: axis.z,
             cs,
             co,
+            r2: {
+                let r = light_sphere(l).1;
+                r * r
+            },
         }
     }
 }

@@ -9,7 +9,7 @@
 
 use super::config::{Culling, ResolveConfig, Schedule};
 use super::culling::{light_sphere, quad_rects, Bounds};
-use super::kernel::{finish_prepass, shade, Items, QuadSoa, Variant};
+use super::kernel::{finish_prepass, shade, Items, QuadSoa, Variant, LANES, PAD_PIXEL};
 use super::lights::LightTable;
 use super::surface::{SanitizedCounts, SurfaceReader};
 use crate::detect::EdgeMask;
@@ -146,27 +146,58 @@ pub fn run_tiles(frame: &Frame<'_>, rgb: &mut [Vec3], heat: &mut [u32]) -> TileS
         .enumerate()
         .map_init(Scratch::default, |sc, (band, (rgb, heat))| {
             let y0 = band as u32 * ts;
-            let h = ts.min(gb.height - y0);
-            let mut st = TileStats::default();
-            let mut x0 = 0;
-            while x0 < gb.width {
-                let w = ts.min(gb.width - x0);
-                let next = x0 + w;
-                if next < gb.width {
-                    prefetch_tile(frame, next, y0, ts.min(gb.width - next), h);
+            #[cfg(target_arch = "x86_64")]
+            {
+                if std::is_x86_feature_detected!("avx512f") {
+                    // SAFETY: the CPU has the features the function is compiled for (checked just above).
+                    return unsafe { run_band_avx512(frame, y0, sc, rgb, heat) };
                 }
-                run_tile(frame, Tile { x0, y0, w, h }, sc, rgb, heat, &mut st);
-                x0 = next;
+                if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+                    // SAFETY: as above.
+                    return unsafe { run_band_avx2(frame, y0, sc, rgb, heat) };
+                }
             }
-            st
+            run_band(frame, y0, sc, rgb, heat)
         })
         .reduce(TileStats::default, TileStats::merged)
+}
+
+/// One band of tiles starting at row `y0`, left to right. Compiled once per instruction set (below) so the
+/// work-list build and the box filter vectorise too; the shading kernel dispatches on its own.
+#[inline(always)]
+fn run_band(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat: &mut [u32]) -> TileStats {
+    let gb = frame.reader.gbuffer();
+    let ts = frame.cfg.tile_size;
+    let h = ts.min(gb.height - y0);
+    let mut st = TileStats::default();
+    let mut x0 = 0;
+    while x0 < gb.width {
+        let w = ts.min(gb.width - x0);
+        let next = x0 + w;
+        if next < gb.width {
+            prefetch_tile(frame, next, y0, ts.min(gb.width - next), h);
+        }
+        run_tile(frame, Tile { x0, y0, w, h }, sc, rgb, heat, &mut st);
+        x0 = next;
+    }
+    st
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+fn run_band_avx512(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat: &mut [u32]) -> TileStats {
+    run_band(frame, y0, sc, rgb, heat)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn run_band_avx2(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat: &mut [u32]) -> TileStats {
+    run_band(frame, y0, sc, rgb, heat)
 }
 
 /// Asks the CPU to start loading the G-buffer rows of a tile into cache (a hint: it never faults, and only
 /// addresses inside the planes are formed). A tile's 16 row segments of 7 or so planes are too many short streams
 /// for the hardware prefetcher; without this the work-list build waits on memory.
-#[inline(never)]
 fn prefetch_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32) {
     #[cfg(target_arch = "x86_64")]
     {
@@ -211,16 +242,15 @@ fn prefetch_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32) {
 
 /// Gathers, culls and shades one tile, box-filtering into the band's rows `rgb` / `heat` (pixels with nothing
 /// to shade stay black) and adding the work to `st`.
+#[inline(always)]
 fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, rgb: &mut [Vec3], heat: &mut [u32], st: &mut TileStats) {
     let t0 = Instant::now();
     st.tiles += 1;
-    gather(frame, tile, sc, st);
+    let n_real = gather(frame, tile, sc, st);
     st.t_gather += t0.elapsed();
-    let n_real = sc.items.len();
     if n_real == 0 {
         return;
     }
-    sc.items.pad_to_lanes(n_real - 1);
     let n = sc.items.len();
     let variant = Variant {
         brdf: frame.cfg.brdf,
@@ -298,8 +328,8 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, rgb: &mut [Vec3], h
 /// Builds the tile's work list: first the single samples of non-edge pixels, then the packed samples of edge
 /// pixels. Positions are read pixel by pixel (they decide which samples are shaded); the other attributes are
 /// then read plane by plane for the whole list.
-#[inline(never)]
-fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) {
+#[inline(always)]
+fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -> usize {
     let gb = frame.reader.gbuffer();
     let samples = gb.samples;
     let weight = 1.0 / samples as f32;
@@ -346,22 +376,59 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) {
             }
         }
     }
-    frame.reader.fill_attributes(&sc.src, it, counts);
+    let n_real = sc.src.len();
+    if n_real > 0 {
+        // Pad to whole vectors with copies of the last item that go nowhere (weight 0).
+        while !sc.src.len().is_multiple_of(LANES) {
+            let (i, p) = (sc.src[n_real - 1], glam::Vec3::new(it.px[n_real - 1], it.py[n_real - 1], it.pz[n_real - 1]));
+            push(it, &mut sc.src, p, i, PAD_PIXEL, 0.0);
+        }
+        frame.reader.fill_attributes(&sc.src, it, counts);
+    }
+    n_real
 }
 
-/// Tests every light's sphere against `bounds` (branch-free over lights), writing survivors' indices into
-/// `sc.tile_lights`.
+/// Tests every light's sphere against `bounds` (branch-free over lights, vectorised for the CPU at hand), writing
+/// survivors' indices into `sc.tile_lights`.
 fn cull_tile_list(frame: &Frame<'_>, b: &Bounds, sc: &mut Scratch) {
     let s = &frame.spheres;
-    let n = s.x.len();
     sc.mask.clear();
-    sc.mask.resize(n, 0);
-    let probe = |c: Vec3, r: f32| b.may_touch(c, r);
-    for (i, m) in sc.mask.iter_mut().enumerate() {
-        *m = u8::from(probe(Vec3::new(s.x[i], s.y[i], s.z[i]), s.r[i]));
+    sc.mask.resize(s.x.len(), 0);
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has the features the function is compiled for (checked just above).
+            unsafe { sphere_mask_avx512(b, s, &mut sc.mask) };
+        } else if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+            // SAFETY: as above.
+            unsafe { sphere_mask_avx2(b, s, &mut sc.mask) };
+        } else {
+            sphere_mask(b, s, &mut sc.mask);
+        }
     }
+    #[cfg(not(target_arch = "x86_64"))]
+    sphere_mask(b, s, &mut sc.mask);
     sc.tile_lights.clear();
     sc.tile_lights.extend(sc.mask.iter().enumerate().filter(|(_, &m)| m != 0).map(|(i, _)| i as u32));
+}
+
+#[inline(always)]
+fn sphere_mask(b: &Bounds, s: &Spheres, mask: &mut [u8]) {
+    for ((((m, &x), &y), &z), &r) in mask.iter_mut().zip(&s.x).zip(&s.y).zip(&s.z).zip(&s.r) {
+        *m = u8::from(b.may_touch(Vec3::new(x, y, z), r));
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+fn sphere_mask_avx512(b: &Bounds, s: &Spheres, mask: &mut [u8]) {
+    sphere_mask(b, s, mask);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn sphere_mask_avx2(b: &Bounds, s: &Spheres, mask: &mut [u8]) {
+    sphere_mask(b, s, mask);
 }
 
 /// Culls lights (all, or only those in `subset`) against `b` and gathers the survivors' constants into

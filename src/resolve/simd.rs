@@ -60,6 +60,10 @@ pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = S
     fn count(self, m: Self::Mask) -> Self;
     /// True when some lane of `m` is set.
     fn any(m: Self::Mask) -> bool;
+    /// Smallest lane.
+    fn hmin(self) -> f32;
+    /// Largest lane.
+    fn hmax(self) -> f32;
 
     /// `clamp(self, 0, 1)`.
     #[inline(always)]
@@ -107,6 +111,28 @@ impl<const FMA: bool> Mul for Portable<FMA> {
     }
 }
 
+impl<const FMA: bool> Portable<FMA> {
+    /// `f` applied to every lane (a plain loop: `array::map` is not vectorised).
+    #[inline(always)]
+    fn each(self, f: impl Fn(f32) -> f32) -> Self {
+        let mut out = self.0;
+        for o in &mut out {
+            *o = f(*o);
+        }
+        Portable(out)
+    }
+
+    /// Lane-wise comparison.
+    #[inline(always)]
+    fn cmp(self, o: Self, f: impl Fn(f32, f32) -> bool) -> [bool; LANES] {
+        let mut out = [false; LANES];
+        for ((m, &x), &y) in out.iter_mut().zip(&self.0).zip(&o.0) {
+            *m = f(x, y);
+        }
+        out
+    }
+}
+
 impl<const FMA: bool> Lanes for Portable<FMA> {
     type Mask = [bool; LANES];
     #[inline(always)]
@@ -125,15 +151,11 @@ impl<const FMA: bool> Lanes for Portable<FMA> {
     }
     #[inline(always)]
     fn mul_add(self, b: Self, c: Self) -> Self {
-        Portable(std::array::from_fn(
-            |j| {
-                if FMA {
-                    self.0[j].mul_add(b.0[j], c.0[j])
-                } else {
-                    self.0[j] * b.0[j] + c.0[j]
-                }
-            },
-        ))
+        let mut out = self.0;
+        for ((o, &y), &z) in out.iter_mut().zip(&b.0).zip(&c.0) {
+            *o = if FMA { o.mul_add(y, z) } else { *o * y + z };
+        }
+        Portable(out)
     }
     #[inline(always)]
     fn max(self, o: Self) -> Self {
@@ -145,47 +167,67 @@ impl<const FMA: bool> Lanes for Portable<FMA> {
     }
     #[inline(always)]
     fn rsqrt(self) -> Self {
-        Portable(self.0.map(|x| 1.0 / x.sqrt()))
+        self.each(|x| 1.0 / x.sqrt())
     }
     #[inline(always)]
     fn recip(self) -> Self {
-        Portable(self.0.map(|x| 1.0 / x))
+        self.each(|x| 1.0 / x)
     }
     #[inline(always)]
     fn log2(self) -> Self {
-        Portable(self.0.map(fastmath::log2))
+        self.each(fastmath::log2)
     }
     #[inline(always)]
     fn exp2(self) -> Self {
-        Portable(self.0.map(fastmath::exp2))
+        self.each(fastmath::exp2)
     }
     #[inline(always)]
     fn gt(self, o: Self) -> Self::Mask {
-        std::array::from_fn(|j| self.0[j] > o.0[j])
+        self.cmp(o, |x, y| x > y)
     }
     #[inline(always)]
     fn ge(self, o: Self) -> Self::Mask {
-        std::array::from_fn(|j| self.0[j] >= o.0[j])
+        self.cmp(o, |x, y| x >= y)
     }
     #[inline(always)]
     fn le(self, o: Self) -> Self::Mask {
-        std::array::from_fn(|j| self.0[j] <= o.0[j])
+        self.cmp(o, |x, y| x <= y)
     }
     #[inline(always)]
     fn and(a: Self::Mask, b: Self::Mask) -> Self::Mask {
-        std::array::from_fn(|j| a[j] & b[j])
+        let mut out = a;
+        for (o, &y) in out.iter_mut().zip(&b) {
+            *o &= y;
+        }
+        out
     }
     #[inline(always)]
     fn keep(self, m: Self::Mask) -> Self {
-        Portable(std::array::from_fn(|j| if m[j] { self.0[j] } else { 0.0 }))
+        let mut out = self.0;
+        for (o, &k) in out.iter_mut().zip(&m) {
+            *o = if k { *o } else { 0.0 };
+        }
+        Portable(out)
     }
     #[inline(always)]
     fn count(self, m: Self::Mask) -> Self {
-        Portable(std::array::from_fn(|j| self.0[j] + f32::from(u8::from(m[j]))))
+        let mut out = self.0;
+        for (o, &k) in out.iter_mut().zip(&m) {
+            *o += f32::from(u8::from(k));
+        }
+        Portable(out)
     }
     #[inline(always)]
     fn any(m: Self::Mask) -> bool {
         m.iter().fold(false, |a, &b| a | b)
+    }
+    #[inline(always)]
+    fn hmin(self) -> f32 {
+        self.0.iter().fold(f32::INFINITY, |a, &b| a.min(b))
+    }
+    #[inline(always)]
+    fn hmax(self) -> f32 {
+        self.0.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b))
     }
 }
 
@@ -338,6 +380,14 @@ mod avx512 {
         fn any(m: Self::Mask) -> bool {
             m != 0
         }
+        #[inline(always)]
+        fn hmin(self) -> f32 {
+            unsafe { _mm512_reduce_min_ps(self.0) }
+        }
+        #[inline(always)]
+        fn hmax(self) -> f32 {
+            unsafe { _mm512_reduce_max_ps(self.0) }
+        }
     }
 }
 
@@ -397,6 +447,8 @@ mod tests {
         }
         assert!(V::any(V::splat(1.0).gt(V::splat(0.0))));
         assert!(!V::any(V::splat(1.0).gt(V::splat(1.0))));
+        assert_eq!(a.hmin(), ex[..LANES].iter().fold(f32::INFINITY, |m, &x| m.min(x)));
+        assert_eq!(a.hmax(), ex[..LANES].iter().fold(f32::NEG_INFINITY, |m, &x| m.max(x)));
         V::splat(-3.0).saturate().store(&mut out);
         assert_eq!(out, [0.0; LANES]);
     }
