@@ -93,7 +93,7 @@ macro_rules! soa {
 
 soa! {
     /// A packed work list: one entry per sample to shade. The schedule fills the surface (`px..metal`), `pixel`
-    /// and `weight` (where the result goes: the box filter); [`shade`] writes `or..ls` (colour, or the light
+    /// and `weight` (where the result goes: the box filter; `pixel` indexes the rows of the tile's band); [`shade`] writes `or..ls` (colour, or the light
     /// pre-pass buffers), `tested` and `lit` (light counts, exact in f32 below 2²⁴ lights).
     Items {
         f32: [px, py, pz, nx, ny, nz, ar, ag, ab, spec, pw, rough, metal, or, og, ob, ls, tested, lit, weight],
@@ -125,7 +125,7 @@ impl Items {
         }
     }
 
-    /// Appends a sample with its destination pixel (index within the tile) and box-filter weight.
+    /// Appends a sample with its destination pixel and box-filter weight.
     pub fn push(&mut self, s: &Surface, pixel: u32, weight: f32) {
         let n = self.len();
         self.resize(n + 1);

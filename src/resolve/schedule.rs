@@ -307,11 +307,9 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, rgb: &mut [Vec3], h
     if variant.prepass {
         finish_prepass(items, frame.cfg.brdf);
     }
-    let width = frame.reader.gbuffer().width as usize;
     for j in 0..n_real {
         // `pixel` is the index within the tile; the band's rows start at the tile's top row.
-        let local = items.pixel[j];
-        let px = (local / tile.w) as usize * width + tile.x0 as usize + (local % tile.w) as usize;
+        let px = items.pixel[j] as usize;
         let c = Vec3::new(items.or[j], items.og[j], items.ob[j]) * items.weight[j];
         rgb[px] += c;
         let (tested, lit) = (items.tested[j] as u32, items.lit[j] as u32);
@@ -349,7 +347,8 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
         for y in tile.y0..tile.y0 + tile.h {
             for x in tile.x0..tile.x0 + tile.w {
                 let p = y as usize * gb.width as usize + x as usize;
-                let local = (y - tile.y0) * tile.w + (x - tile.x0);
+                // Index within the band's rows of the output.
+                let local = ((y - tile.y0) as usize * gb.width as usize + x as usize) as u32;
                 let edge = frame.mask.is_edge(p);
                 if edge != pass_edges {
                     continue;
