@@ -3,8 +3,9 @@
 #[path = "detect_support.rs"]
 mod support;
 
+use gbuf::detect::truth::{id_truth, TruthSource};
 use gbuf::detect::{detect, Detector, DetectorConfig};
-use gbuf::measure::edges::evaluate;
+use gbuf::measure::edges::{evaluate, evaluate_against};
 use gbuf::GBuffer;
 use glam::Vec3;
 use std::path::{Path, PathBuf};
@@ -44,6 +45,9 @@ fn all_detectors_json_matches_the_library() {
     assert_eq!((v["width"].as_u64(), v["samples"].as_u64(), v["truth"].as_str()), (Some(40), Some(4), Some("object")));
     let rows = v["results"].as_array().unwrap();
     assert_eq!(rows.len(), Detector::ALL.len());
+    let prim = id_truth(&gb, TruthSource::Primitive).unwrap();
+    let prim_fraction = prim.iter().filter(|&&t| t).count() as f64 / prim.len() as f64;
+    assert_eq!(v["primitive_true_edge_fraction"].as_f64(), Some(prim_fraction));
     for (row, d) in rows.iter().zip(Detector::ALL) {
         assert_eq!(row["detector"], d.name());
         let mask = detect(&gb, d, &DetectorConfig::default()).unwrap();
@@ -52,6 +56,13 @@ fn all_detectors_json_matches_the_library() {
         assert_eq!(row["fp"].as_u64(), Some(s.fp), "{d}");
         assert_eq!(row["fn"].as_u64(), Some(s.fn_), "{d}");
         assert_eq!(row["shading_fraction"].as_f64(), Some(mask.shading_fraction()), "{d}");
+        // The primitive-ID truth (the forward-MSAA rate) gets its own scores.
+        let p = evaluate_against(&mask, &prim);
+        assert_eq!(
+            (row["primitive"]["tp"].as_u64(), row["primitive"]["fn"].as_u64()),
+            (Some(p.tp), Some(p.fn_)),
+            "{d}"
+        );
         assert!(
             row["precision"].as_f64().is_some() && row["recall"].as_f64().is_some() && row["ms"].as_f64().is_some()
         );
@@ -126,6 +137,31 @@ fn shading_truth_with_lights_from_the_sidecar() {
             assert_eq!(sh["recall"].as_f64(), Some(1.0), "ssaa shades every sample: {row}");
         }
     }
+    // The tolerance is stated in the output: domain, threshold and rule; and the agreement with the ID truth.
+    assert_eq!((t["tolerance"]["domain"].as_str(), t["tolerance"]["codes"].as_f64()), (Some("display"), Some(1.0)));
+    assert!(t["rule"].as_str().unwrap().contains("code step"), "{t}");
+    let agree = &t["agreement_with_id_truth"];
+    assert!(agree["both"].as_u64().unwrap() > 0, "{t}");
+    // A looser tolerance flags fewer pixels, an absolute linear one more; both are stated back.
+    let fraction = |tol: &str| {
+        let v = json(&gbuf_cmd(dir.path(), &["edges", "scene.exr", "--json", "--shading-tolerance", tol]));
+        assert!(v["shading_truth"]["rule"].is_string(), "{v}");
+        v["shading_truth"]["true_edge_fraction"].as_f64().unwrap()
+    };
+    let default = t["true_edge_fraction"].as_f64().unwrap();
+    assert!(fraction("display:100") < default, "{default}");
+    assert!(fraction("linear:0") > default, "{default}");
+    let human = gbuf_cmd(dir.path(), &["edges", "scene.exr", "--shading-tolerance", "2.5"]);
+    let text = String::from_utf8_lossy(&human.stdout);
+    assert!(text.contains("> 2.5 8-bit code step") && text.contains("vs ID truth"), "{text}");
+    for bad in ["bogus", "linear:-1", "gamma:1"] {
+        let out = gbuf_cmd(dir.path(), &["edges", "scene.exr", "--shading-tolerance", bad]);
+        assert_eq!(out.status.code(), Some(2), "{bad}");
+        assert!(String::from_utf8_lossy(&out.stderr).contains("shading tolerance"), "{bad}");
+    }
+    let out = gbuf_cmd(dir.path(), &["edges", "scene.exr", "--exposure", "0"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("exposure"));
 }
 
 #[test]
@@ -154,4 +190,44 @@ fn bad_input_exits_1_with_the_file_name_and_bad_usage_exits_2() {
     let out = gbuf_cmd(dir.path(), &["edges", "scene.exr", "--detector", "all", "--mask", "x.png"]);
     assert_eq!(out.status.code(), Some(1));
     assert!(!dir.path().join("x.png").exists());
+}
+
+#[test]
+fn mask_picture_can_be_coloured_against_the_shading_truth() {
+    use gbuf::measure::edges::{evaluate_against, shading_truth, DEFAULT_SHADING_TOLERANCE};
+    let dir = tempfile::tempdir().unwrap();
+    let gb = scene();
+    write_dump(dir.path(), &gb);
+    let light = gbuf::Light::point(Vec3::new(0.5, 1.0, -3.0), Vec3::ONE, 20.0, 30.0);
+    let sidecar = r#"{"lights_space": "view", "lights": [
+        {"type": "point", "position": [0.5, 1.0, -3.0], "color": [1, 1, 1], "intensity": 20, "range": 30}]}"#;
+    std::fs::write(dir.path().join("scene.json"), sidecar).unwrap();
+    let radiance =
+        gbuf::resolve::reference_per_sample(&gb, &[light], &gbuf::resolve::ResolveConfig::default()).unwrap();
+    let shading = shading_truth(&gb, &radiance, DEFAULT_SHADING_TOLERANCE);
+    let count_colours = |png: &str| {
+        let img = image::open(dir.path().join(png)).unwrap().to_rgb8();
+        let count = |c: [u8; 3]| img.pixels().filter(|p| p.0 == c).count() as u64;
+        use gbuf::detect::picture::{FALSE_ALARM, FLAGGED, MISSED};
+        (count(FLAGGED), count(MISSED), count(FALSE_ALARM))
+    };
+    let args = ["edges", "scene.exr", "--detector", "normal", "--mask", "s.png", "--mask-truth", "shading", "--json"];
+    let v = json(&gbuf_cmd(dir.path(), &args));
+    assert_eq!(v["mask_truth"], "shading", "{v}");
+    let s = evaluate_against(&detect(&gb, Detector::Normal, &DetectorConfig::default()).unwrap(), &shading);
+    assert_eq!(count_colours("s.png"), (s.tp, s.fn_, s.fp), "{s:?}");
+    assert!(s.tp > 0, "{s:?}");
+    // Without object IDs the shading truth is the default; asking for the ID truth is then an error.
+    let mut no_ids = gb.clone();
+    no_ids.object_id = None;
+    write_dump(dir.path(), &no_ids);
+    let v = json(&gbuf_cmd(dir.path(), &["edges", "scene.exr", "--detector", "normal", "--mask", "d.png", "--json"]));
+    assert_eq!(v["mask_truth"], "shading", "{v}");
+    let out =
+        gbuf_cmd(dir.path(), &["edges", "scene.exr", "--detector", "normal", "--mask", "e.png", "--mask-truth", "id"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no object IDs"));
+    let out = gbuf_cmd(dir.path(), &["edges", "scene.exr", "--mask-truth", "shading"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--mask OUT.png"));
 }

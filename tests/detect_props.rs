@@ -205,3 +205,80 @@ fn every_threshold_is_monotone_on_a_deterministic_sweep() {
         assert!(first.unwrap() > last, "{d}: sweep from {first:?} to {last} did not change anything");
     }
 }
+
+mod shading_truth_props {
+    use gbuf::measure::edges::{shading_truth, ShadingTolerance};
+    use gbuf::GBuffer;
+    use glam::{Vec2, Vec3};
+    use proptest::prelude::*;
+
+    /// Radiance of every sample from `f(x, y)` at the sample's position in pixels, every sample covered.
+    fn sampled(w: u32, h: u32, s: u32, f: impl Fn(Vec2) -> Vec3) -> (GBuffer, Vec<Vec3>) {
+        let mut gb = GBuffer::new(w, h, s).unwrap();
+        gb.coverage.fill(true);
+        let mut r = vec![Vec3::ZERO; gb.len()];
+        for y in 0..h {
+            for x in 0..w {
+                for k in 0..s {
+                    let o = gb.sample_positions[k as usize];
+                    r[gb.index(x, y, k)] = f(Vec2::new(x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y));
+                }
+            }
+        }
+        (gb, r)
+    }
+
+    fn size() -> impl Strategy<Value = (u32, u32, u32)> {
+        (1u32..9, 1u32..7, prop::sample::select(vec![2u32, 4, 8, 16]))
+    }
+
+    proptest! {
+        /// A linear field is never a shading edge in the linear domain, however steep: the neighbours' one-sided
+        /// differences are its exact slopes, and they bound every sample's difference from sample 0. (Needs a
+        /// neighbour in each direction: in a 1-pixel-wide image the slope across it is unknown and taken as 0.)
+        #[test]
+        fn linear_fields_are_never_edges(
+            (w, h, s) in size(),
+            a in prop::array::uniform3(-10.0f32..10.0),
+            b in prop::array::uniform3(-5.0f32..5.0),
+            c in prop::array::uniform3(-5.0f32..5.0),
+        ) {
+            prop_assume!(w >= 2 && h >= 2);
+            let (a, b, c) = (Vec3::from(a), Vec3::from(b), Vec3::from(c));
+            let (gb, r) = sampled(w, h, s, |p| a + b * p.x + c * p.y);
+            // f32 rounding of values up to ~100: a threshold far below any real edge but above the rounding.
+            let t = shading_truth(&gb, &r, ShadingTolerance::Linear { absolute: 1e-3 });
+            prop_assert!(t.iter().all(|&e| !e), "{t:?}");
+        }
+
+        /// A vertical step of height `jump` inside pixel column `col` (at fraction `at` of the pixel, strictly
+        /// between two sample columns) is a shading edge exactly in that column, on every row, with flat
+        /// neighbours on both sides.
+        #[test]
+        fn a_step_inside_a_column_is_an_edge_on_every_row_and_nowhere_else(
+            (w, h, s) in size(),
+            col_pick in 0u32..100,
+            jump in 0.1f32..100.0,
+            base in 0.0f32..10.0,
+        ) {
+            prop_assume!(w >= 3);
+            let col = 1 + col_pick % (w - 2);
+            let gb0 = GBuffer::new(w, h, s).unwrap();
+            // The step sits halfway between the two sample columns nearest the pixel centre on either side of it.
+            let mut xs: Vec<f32> = gb0.sample_positions.iter().map(|o| o.x).collect();
+            xs.sort_by(f32::total_cmp);
+            xs.dedup();
+            prop_assume!(xs.len() >= 2);
+            let mid = xs.len() / 2;
+            let at = 0.5 + 0.5 * (xs[mid - 1] + xs[mid]);
+            let edge_x = col as f32 + at;
+            let (gb, r) = sampled(w, h, s, |p| Vec3::splat(if p.x < edge_x { base } else { base + jump }));
+            let t = shading_truth(&gb, &r, ShadingTolerance::Linear { absolute: 0.05 });
+            for y in 0..h {
+                for x in 0..w {
+                    prop_assert_eq!(t[(y * w + x) as usize], x == col, "pixel ({}, {}) with the step in column {}", x, y, col);
+                }
+            }
+        }
+    }
+}

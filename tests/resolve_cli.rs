@@ -102,3 +102,110 @@ fn resolves_a_canonical_dump_end_to_end() {
     assert_eq!(o.status.code(), Some(1), "no lights must be an error: {}", stderr(&o));
     assert!(stderr(&o).contains("--lights"), "{}", stderr(&o));
 }
+
+/// A small room dump in `dir` (no sidecar: lights come from `--lights` or a sidecar the test writes).
+fn small_room(dir: &Path) -> gbuf::GBuffer {
+    let gb = gbuf::scene::render(gbuf::scene::SceneName::Room, 48, 32, 4).unwrap();
+    gbuf::io::canonical::write(&dir.join("room.exr"), &gb).unwrap();
+    gb
+}
+
+fn json(o: &Output) -> serde_json::Value {
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(o));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+#[test]
+fn layout_flag_packs_before_lighting_and_lossy_layouts_cost_error() {
+    let dir = tempfile::tempdir().unwrap();
+    small_room(dir.path());
+    // ssaa: every sample shaded, so the only error left is the layout's (and f32 vs f64 arithmetic).
+    let run = |layout: Option<&str>| {
+        let mut args = vec!["resolve", "room.exr", "--lights", "16", "--detector", "ssaa", "--json"];
+        if let Some(l) = layout {
+            args.extend(["--layout", l]);
+        }
+        json(&gbuf(dir.path(), &args))
+    };
+    let plain = run(None);
+    let lossless = run(Some("reference-f32"));
+    assert_eq!(lossless["layout"], "reference-f32");
+    assert!(plain["layout"].is_null());
+    // reference-f32 stores every attribute as f32: lighting it is lighting the original.
+    assert_eq!(lossless["rmse"], plain["rmse"], "{lossless}");
+    let rmse = |v: &serde_json::Value| v["rmse"].as_f64().unwrap();
+    for lossy in ["minimal-8", "lauritzen-15"] {
+        let v = run(Some(lossy));
+        assert_eq!(v["layout"], lossy);
+        assert!(rmse(&v) > 10.0 * rmse(&lossless), "{lossy}: {} vs {}", rmse(&v), rmse(&lossless));
+        assert!(v["psnr_db"].as_f64().unwrap() < lossless["psnr_db"].as_f64().unwrap(), "{lossy}");
+    }
+    // 8 bytes per sample lose more than 15.
+    assert!(rmse(&run(Some("minimal-8"))) > rmse(&run(Some("lauritzen-15"))));
+    // A layout file works as well as a built-in name.
+    let file = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/layouts/thin-12.toml");
+    let v = run(Some(file));
+    assert_eq!(v["layout"], file);
+    assert!(rmse(&v) > rmse(&lossless), "{v}");
+
+    let o = gbuf(dir.path(), &["resolve", "room.exr", "--lights", "4", "--layout", "nosuch"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("--layout nosuch") && err.contains("reference-f32"),
+        "the error names the flag and lists the built-ins: {err}"
+    );
+    assert!(o.stdout.is_empty());
+    let o = gbuf(dir.path(), &["resolve", "room.exr", "--lights", "4", "--layout", "missing.toml"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("missing.toml"), "{}", stderr(&o));
+}
+
+#[test]
+fn light_prepass_reports_its_error_against_full_deferred() {
+    let dir = tempfile::tempdir().unwrap();
+    let gb = small_room(dir.path());
+    let run = |extra: &[&str]| {
+        let mut args = vec!["resolve", "room.exr", "--json"];
+        args.extend_from_slice(extra);
+        json(&gbuf(dir.path(), &args))
+    };
+    // Scattered lights have random hues: the monochrome specular takes the wrong colour.
+    let deferred = run(&["--lights", "16"]);
+    assert!(deferred["prepass_vs_deferred"].is_null(), "{deferred}");
+    let pre = run(&["--lights", "16", "--schedule", "light-prepass"]);
+    let e = &pre["prepass_vs_deferred"];
+    for key in ["rmse", "psnr_db", "max_abs", "rel_mse"] {
+        assert!(e[key].is_number(), "prepass_vs_deferred.{key} missing in {pre}");
+    }
+    assert!(e["rel_mse"].as_f64().unwrap() > 1e-6 && e["max_abs"].as_f64().unwrap() > 0.0, "{e}");
+    assert!(pre["ms"]["deferred_for_prepass"].as_f64().unwrap() > 0.0, "{pre}");
+    // The error against the reference is the pre-pass's own, not a copy of deferred's.
+    assert_ne!(pre["rmse"], deferred["rmse"]);
+
+    // The same lights, all white (a sidecar next to the dump): pre-pass and deferred agree up to f32 rounding.
+    let lights = gbuf::scene::scatter_lights(&gb, 16, 1);
+    let list: Vec<String> = lights
+        .iter()
+        .map(|l| {
+            let p = l.position;
+            format!(
+                r#"{{"type": "point", "position": [{}, {}, {}], "color": [1, 1, 1], "intensity": {}, "range": {}}}"#,
+                p.x, p.y, p.z, l.intensity, l.range
+            )
+        })
+        .collect();
+    let sidecar = format!(r#"{{"lights_space": "view", "lights": [{}]}}"#, list.join(", "));
+    std::fs::write(dir.path().join("room.json"), sidecar).unwrap();
+    let white = run(&["--schedule", "light-prepass"]);
+    assert_eq!(white["lights_source"], "file", "{white}");
+    let w = &white["prepass_vs_deferred"];
+    assert!(w["rel_mse"].as_f64().unwrap() < 1e-10, "white lights: {w}");
+    assert!(w["psnr_db"].as_f64().unwrap() > 100.0, "{w}");
+
+    // The human output has its own line for it.
+    let o = gbuf(dir.path(), &["resolve", "room.exr", "--lights", "16", "--schedule", "light-prepass"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("light pre-pass vs full deferred") && text.contains("error vs reference"), "{text}");
+}

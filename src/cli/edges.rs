@@ -1,10 +1,12 @@
-//! `gbuf edges FILE [--detector D|all] [threshold flags] [--mask OUT.png] [--json]`: run edge detectors and score
-//! them against the ID ground truth.
+//! `gbuf edges FILE [--detector D|all] [threshold flags] [--shading-tolerance T] [--mask OUT.png [--mask-truth
+//! id|shading]] [--json]`: run edge detectors and score them against the ID ground truth and the shading truth.
 
 use crate::cli::common::{print_json, InputArgs};
 use anyhow::Context;
 use gbuf::detect::{self, truth, Detector, DetectorConfig, EdgeMask, IdSource};
-use gbuf::measure::edges::{evaluate_against, shading_truth, EdgeStats, DEFAULT_SHADING_TOLERANCE};
+use gbuf::measure::edges::{
+    evaluate_against, shading_truth, truth_agreement, EdgeStats, ShadingTolerance, TruthAgreement,
+};
 use gbuf::GBuffer;
 use std::io::Write;
 use std::path::PathBuf;
@@ -98,13 +100,22 @@ pub struct Args {
     /// Detector thresholds.
     #[command(flatten)]
     pub thresholds: ThresholdArgs,
-    /// Shading truth: a pixel needs per-sample shading when some sample's reference radiance differs from sample
-    /// 0's by more than this (any channel, linear units). Needs lights (sidecar or dump).
-    #[arg(long, value_name = "T", default_value_t = DEFAULT_SHADING_TOLERANCE)]
-    pub shading_tolerance: f32,
+    /// Shading truth: a pixel needs per-sample shading when some sample's reference shading differs from sample
+    /// 0's by more than this, beyond the image's smooth gradient: `CODES` or `display:CODES` = 8-bit code steps
+    /// after the PNG's Reinhard tone map and sRGB (default 1); `linear:X` = linear radiance. Needs lights (sidecar
+    /// or dump). See docs/RESOLVE.md.
+    #[arg(long, value_name = "T", default_value = "display:1", value_parser = ShadingTolerance::parse)]
+    pub shading_tolerance: ShadingTolerance,
+    /// Exposure of the display tone map used by the shading truth (as `gbuf resolve --exposure`).
+    #[arg(long, value_name = "E", default_value_t = 1.0)]
+    pub exposure: f32,
     /// Write a PNG of the scene with per-sample pixels in red, misses in yellow, false alarms in cyan.
     #[arg(long, value_name = "OUT.png")]
     pub mask: Option<PathBuf>,
+    /// Which truth colours the misses and false alarms of --mask: id (object IDs) or shading (needs lights).
+    /// Default: id when the dump has object IDs, else shading when it has lights.
+    #[arg(long, value_name = "TRUTH", value_parser = ["id", "shading"])]
+    pub mask_truth: Option<String>,
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
@@ -125,6 +136,9 @@ struct Row {
     /// Scores against the shading truth; `None` without lights.
     #[serde(skip_serializing_if = "Option::is_none")]
     shading: Option<Scores>,
+    /// Scores against the primitive-ID truth (the rate forward MSAA shades at); `None` without primitive IDs.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    primitive: Option<Scores>,
     ms: f64,
 }
 
@@ -149,8 +163,13 @@ struct Output {
     /// "object" when object IDs give a ground truth, else null.
     truth: Option<&'static str>,
     true_edge_fraction: Option<f64>,
+    /// Fraction of pixels whose samples span several primitives (or mix background in): the primitive-ID truth.
+    primitive_true_edge_fraction: Option<f64>,
     /// The shading truth, when the dump comes with lights.
     shading_truth: Option<ShadingTruth>,
+    /// The truth the --mask picture was coloured with ("id", "shading"), when a picture was drawn with one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mask_truth: Option<&'static str>,
     thresholds: DetectorConfig,
     results: Vec<Row>,
 }
@@ -158,11 +177,15 @@ struct Output {
 /// How the shading truth was made.
 #[derive(Debug, serde::Serialize)]
 struct ShadingTruth {
-    tolerance: f32,
+    tolerance: ShadingTolerance,
+    /// The tolerance in words.
+    rule: String,
     lights: usize,
     brdf: &'static str,
     falloff: &'static str,
     true_edge_fraction: f64,
+    /// How the shading truth (`a`) agrees with the ID truth (`b`), when there are object IDs.
+    agreement_with_id_truth: Option<TruthAgreement>,
 }
 
 /// Runs `gbuf edges`.
@@ -172,19 +195,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.mask.is_some() && detectors.len() > 1 {
         anyhow::bail!("--mask draws one detector's mask; pick one with --detector instead of `all`");
     }
+    if args.mask_truth.is_some() && args.mask.is_none() {
+        anyhow::bail!("--mask-truth chooses the colours of the --mask picture; give --mask OUT.png too");
+    }
+    let tolerance = match args.shading_tolerance {
+        ShadingTolerance::Display { codes, .. } => ShadingTolerance::Display { codes, exposure: args.exposure },
+        t => t,
+    };
+    tolerance.validate().context("--shading-tolerance / --exposure")?;
     let loaded = args.input.load()?;
     let gb = &loaded.gbuffer;
     let truth = truth::object_truth(gb);
-    if !(args.shading_tolerance.is_finite() && args.shading_tolerance >= 0.0) {
-        anyhow::bail!("--shading-tolerance {} must be finite and ≥ 0", args.shading_tolerance);
-    }
+    let prim_truth = truth::id_truth(gb, truth::TruthSource::Primitive);
     // The shading truth needs the reference radiance, so lights: from the sidecar or the dump.
     let resolve_cfg = gbuf::resolve::ResolveConfig::default();
     let shading = match loaded.lights.as_deref() {
         Some(lights) if !lights.is_empty() => {
             let radiance = gbuf::resolve::reference_per_sample(gb, lights, &resolve_cfg)
                 .with_context(|| format!("{}: reference shading", args.input.file.display()))?;
-            Some((shading_truth(gb, &radiance, args.shading_tolerance), lights.len()))
+            Some((shading_truth(gb, &radiance, tolerance), lights.len()))
         }
         _ => None,
     };
@@ -196,7 +225,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let ms = t0.elapsed().as_secs_f64() * 1e3;
         match result {
             Ok(mask) => {
-                rows.push(row(d, &mask, truth.as_deref(), shading.as_ref().map(|s| s.0.as_slice()), ms));
+                let truths = Truths {
+                    ids: truth.as_deref(),
+                    shading: shading.as_ref().map(|s| s.0.as_slice()),
+                    primitives: prim_truth.as_deref(),
+                };
+                rows.push(row(d, &mask, &truths, ms));
                 last_mask = Some(mask);
             }
             // A single detector that cannot run is an error; in `all` mode it is a skipped row.
@@ -210,12 +244,34 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 shading_fraction: 0.0,
                 stats: None,
                 shading: None,
+                primitive: None,
                 ms,
             }),
         }
     }
+    let mut mask_truth = None;
     if let (Some(path), Some(mask)) = (&args.mask, &last_mask) {
-        detect::picture::write_png(path, gb, mask, truth.as_deref())
+        let shading_flags = shading.as_ref().map(|s| s.0.as_slice());
+        let picked = match args.mask_truth.as_deref() {
+            Some("id") => Some((
+                "id",
+                truth
+                    .as_deref()
+                    .with_context(|| format!("--mask-truth id: {} has no object IDs", args.input.file.display()))?,
+            )),
+            Some(_) => Some((
+                "shading",
+                shading_flags.with_context(|| {
+                    format!(
+                        "--mask-truth shading: {} comes with no lights (sidecar or dump)",
+                        args.input.file.display()
+                    )
+                })?,
+            )),
+            None => truth.as_deref().map(|t| ("id", t)).or(shading_flags.map(|t| ("shading", t))),
+        };
+        mask_truth = picked.map(|(name, _)| name);
+        detect::picture::write_png(path, gb, mask, picked.map(|(_, t)| t))
             .with_context(|| format!("writing the mask picture {}", path.display()))?;
     }
     let out = Output {
@@ -225,13 +281,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         samples: gb.samples,
         truth: truth.as_ref().map(|_| "object"),
         true_edge_fraction: truth.as_deref().map(true_fraction),
+        primitive_true_edge_fraction: prim_truth.as_deref().map(true_fraction),
         shading_truth: shading.as_ref().map(|(t, lights)| ShadingTruth {
-            tolerance: args.shading_tolerance,
+            tolerance,
+            rule: tolerance.to_string(),
             lights: *lights,
             brdf: resolve_cfg.brdf.name(),
             falloff: resolve_cfg.falloff.name(),
             true_edge_fraction: true_fraction(t),
+            agreement_with_id_truth: truth.as_deref().map(|ids| truth_agreement(t, ids)),
         }),
+        mask_truth,
         thresholds: cfg,
         results: rows,
     };
@@ -256,14 +316,22 @@ fn scores(mask: &EdgeMask, truth: &[bool]) -> Scores {
     Scores { precision: s.precision, recall: s.recall, tp: s.tp, fp: s.fp, fn_: s.fn_ }
 }
 
-fn row(detector: Detector, mask: &EdgeMask, truth: Option<&[bool]>, shading: Option<&[bool]>, ms: f64) -> Row {
+/// The truths a mask is scored against (each absent when the dump cannot give it).
+struct Truths<'a> {
+    ids: Option<&'a [bool]>,
+    shading: Option<&'a [bool]>,
+    primitives: Option<&'a [bool]>,
+}
+
+fn row(detector: Detector, mask: &EdgeMask, truths: &Truths<'_>, ms: f64) -> Row {
     Row {
         detector,
         skipped: None,
         edge_fraction: mask.edge_fraction(),
         shading_fraction: mask.shading_fraction(),
-        stats: truth.map(|t| scores(mask, t)),
-        shading: shading.map(|t| scores(mask, t)),
+        stats: truths.ids.map(|t| scores(mask, t)),
+        shading: truths.shading.map(|t| scores(mask, t)),
+        primitive: truths.primitives.map(|t| scores(mask, t)),
         ms,
     }
 }
@@ -275,17 +343,37 @@ fn print_table(out: &Output, gb: &GBuffer) -> anyhow::Result<()> {
         None => "no object IDs: no ID truth".to_string(),
     };
     writeln!(w, "{}: {}×{}, {} samples/pixel; {truth}", out.file.display(), gb.width, gb.height, gb.samples)?;
-    match &out.shading_truth {
-        Some(t) => writeln!(
+    if let Some(f) = out.primitive_true_edge_fraction {
+        writeln!(
             w,
-            "shading truth ({} lights, {} / {}, tolerance {}): {:.2} % of pixels vary",
-            t.lights,
-            t.brdf,
-            t.falloff,
-            t.tolerance,
-            100.0 * t.true_edge_fraction
-        )?,
+            "primitive-ID truth (forward MSAA's rate): {:.2} % of pixels (scores under `primitive` in --json)",
+            100.0 * f
+        )?;
+    }
+    match &out.shading_truth {
+        Some(t) => {
+            writeln!(
+                w,
+                "shading truth ({} lights, {} / {}; edge when {}): {:.2} % of pixels",
+                t.lights,
+                t.brdf,
+                t.falloff,
+                t.rule,
+                100.0 * t.true_edge_fraction
+            )?;
+            if let Some(a) = &t.agreement_with_id_truth {
+                writeln!(
+                    w,
+                    "shading truth vs ID truth: flags {:.1} % of the ID edges; {:.1} % of its pixels are ID edges",
+                    100.0 * a.b_covered_by_a,
+                    100.0 * a.a_covered_by_b
+                )?;
+            }
+        }
         None => writeln!(w, "no lights (sidecar or dump): no shading truth")?,
+    }
+    if let Some(t) = out.mask_truth {
+        writeln!(w, "mask picture: misses and false alarms against the {t} truth")?;
     }
     writeln!(
         w,

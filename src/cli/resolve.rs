@@ -8,7 +8,7 @@ use anyhow::Context;
 use gbuf::detect::{self, Detector};
 use gbuf::image::{write_heatmap_png, ToneMap};
 use gbuf::light::Light;
-use gbuf::measure::image::{compare, ImageError};
+use gbuf::measure::image::{against_full_deferred, compare, ImageError};
 use gbuf::measure::timing::{timed, StageMs};
 use gbuf::resolve::{self, Brdf, Culling, Falloff, ResolveConfig, ResolveStats, Schedule};
 use gbuf::GBuffer;
@@ -125,6 +125,8 @@ struct Ms {
     shade: f64,
     total: f64,
     reference: f64,
+    /// The full deferred resolve run to measure the light pre-pass against (0 for the deferred schedule).
+    deferred_for_prepass: f64,
 }
 
 /// What `--json` prints.
@@ -150,6 +152,9 @@ struct Report {
     rel_mse: Option<f64>,
     error: Option<ImageError>,
     psnr_peak: &'static str,
+    /// With `--schedule light-prepass`: the pre-pass image against full deferred shading of the same G-buffer,
+    /// mask and lights (PSNR peak: the deferred image's largest channel value).
+    prepass_vs_deferred: Option<ImageError>,
     stats: ResolveStats,
     ms: Ms,
     heatmap_max: Option<u32>,
@@ -196,6 +201,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let resolved = resolve::resolve(lit_gb, &lights, &mask, &cfg).with_context(|| format!("{file}: resolve"))?;
     let mut stage = StageMs { decode: t_decode, detect: t_detect, ..resolved.stats.ms };
     stage.total += t_decode + t_detect;
+
+    // The light pre-pass approximates full deferred shading; its own error is measured against that, on the same
+    // input, apart from the error against the reference (which also holds the detector's and the layout's).
+    let (prepass_vs_deferred, t_deferred) = if cfg.schedule == Schedule::LightPrepass {
+        let (e, t) = against_full_deferred(lit_gb, &lights, &mask, &cfg, &resolved.image)
+            .with_context(|| format!("{file}: full deferred resolve for the pre-pass comparison"))?;
+        (Some(e), t)
+    } else {
+        (None, 0.0)
+    };
 
     let (error, t_ref) = if args.no_reference {
         (None, 0.0)
@@ -251,6 +266,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         rel_mse: error.map(|e| e.rel_mse),
         error,
         psnr_peak: "the reference image's largest channel value",
+        prepass_vs_deferred,
         stats: s.clone(),
         ms: Ms {
             decode: stage.decode,
@@ -260,6 +276,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             shade: stage.shade,
             total: stage.total,
             reference: t_ref,
+            deferred_for_prepass: t_deferred,
         },
         heatmap_max,
     };
@@ -315,12 +332,23 @@ fn print_human(r: &Report) -> anyhow::Result<()> {
             e.rmse, e.psnr_db, e.peak, e.max_abs, e.rel_mse
         )?;
     }
+    if let Some(e) = &r.prepass_vs_deferred {
+        writeln!(
+            out,
+            "light pre-pass vs full deferred (same G-buffer, mask, lights): rmse {:.3e}, psnr {:.2} dB (peak {:.3e} = \
+             deferred max), max |Δ| {:.3e}, rel. mse {:.3e}",
+            e.rmse, e.psnr_db, e.peak, e.max_abs, e.rel_mse
+        )?;
+    }
     let m = &r.ms;
     writeln!(
         out,
         "time (ms): decode {:.1}, detect {:.1}, gather {:.1}, cull {:.1}, shade {:.1}, total {:.1}; reference {:.1}",
         m.decode, m.detect, m.gather, m.cull, m.shade, m.total, m.reference
     )?;
+    if m.deferred_for_prepass > 0.0 {
+        writeln!(out, "time (ms): full deferred for the pre-pass comparison {:.1}", m.deferred_for_prepass)?;
+    }
     let s = &r.stats.sanitized;
     if s.total() > 0 {
         writeln!(out, "sanitised: {s:?}")?;

@@ -14,6 +14,7 @@
 //! patterns of the float formats decode to the largest finite value / 0).
 
 use super::normal::{f16_to_finite, F16_MAX};
+use super::simd::f32_to_f16_bits;
 use super::{mask, split_bits, ColorCodec};
 use glam::Vec3;
 
@@ -37,6 +38,7 @@ pub fn color_codec(name: &str) -> Option<Box<dyn ColorCodec>> {
     }
 }
 
+#[inline(always)]
 fn clean(v: f32, lo: f32, hi: f32) -> f32 {
     if v.is_nan() {
         0.0f32.clamp(lo, hi)
@@ -47,6 +49,7 @@ fn clean(v: f32, lo: f32, hi: f32) -> f32 {
 
 /// sRGB transfer: linear → encoded (IEC 61966-2-1).
 #[must_use]
+#[inline]
 pub fn linear_to_srgb(l: f32) -> f32 {
     if l <= 0.003_130_8 {
         l * 12.92
@@ -57,6 +60,7 @@ pub fn linear_to_srgb(l: f32) -> f32 {
 
 /// sRGB transfer: encoded → linear.
 #[must_use]
+#[inline]
 pub fn srgb_to_linear(e: f32) -> f32 {
     if e <= 0.040_45 {
         e / 12.92
@@ -83,15 +87,18 @@ impl ColorCodec for UnormRgb {
     fn bits(&self) -> u32 {
         3 * self.bits
     }
+    #[inline(always)]
     fn encode(&self, c: Vec3) -> u64 {
         let m = mask(self.bits) as f32;
         let q = |v: f32| {
             let v = clean(v, 0.0, 1.0);
             let v = if self.srgb { linear_to_srgb(v) } else { v };
-            (v * m).round() as u64
+            // ≤ 65535: i32 lanes hold it (and vectorise).
+            (v * m).round() as i32 as u64
         };
         q(c.x) | (q(c.y) << self.bits) | (q(c.z) << (2 * self.bits))
     }
+    #[inline(always)]
     fn decode(&self, code: u64) -> Vec3 {
         let m = mask(self.bits) as f32;
         let d = |c: u64| {
@@ -122,6 +129,7 @@ impl ColorCodec for UnormRgb {
 }
 
 /// An unsigned small float with a 5-bit exponent (bias 15) and `m` mantissa bits, as in R11G11B10F.
+#[inline]
 fn encode_ufloat(v: f32, m: u32) -> u32 {
     let max = ufloat_max(m);
     if v.is_nan() || v <= 0.0 {
@@ -145,6 +153,7 @@ fn encode_ufloat(v: f32, m: u32) -> u32 {
     (((e + 15) as u32) << m) | (mant - (1 << m))
 }
 
+#[inline]
 fn decode_ufloat(bits: u32, m: u32) -> f32 {
     let exp = (bits >> m) & 31;
     let mant = bits & ((1 << m) - 1);
@@ -171,12 +180,14 @@ impl ColorCodec for R11G11B10F {
     fn bits(&self) -> u32 {
         32
     }
+    #[inline(always)]
     fn encode(&self, c: Vec3) -> u64 {
         let r = encode_ufloat(c.x, 6);
         let g = encode_ufloat(c.y, 6);
         let b = encode_ufloat(c.z, 5);
         u64::from(r | (g << 11) | (b << 22))
     }
+    #[inline(always)]
     fn decode(&self, code: u64) -> Vec3 {
         let code = code as u32;
         Vec3::new(decode_ufloat(code & 0x7ff, 6), decode_ufloat((code >> 11) & 0x7ff, 6), decode_ufloat(code >> 22, 5))
@@ -205,6 +216,7 @@ impl ColorCodec for Rgb9e5 {
     fn bits(&self) -> u32 {
         32
     }
+    #[inline(always)]
     fn encode(&self, c: Vec3) -> u64 {
         // EXT_texture_shared_exponent, section "RGB9E5", with round-to-nearest mantissas.
         let c = c.map(|v| clean(v, 0.0, RGB9E5_MAX));
@@ -221,6 +233,7 @@ impl ColorCodec for Rgb9e5 {
         let q = |v: f32| ((f64::from(v) / denom).round() as u32).min(511);
         u64::from(q(c.x) | (q(c.y) << 9) | (q(c.z) << 18) | ((exp as u32) << 27))
     }
+    #[inline(always)]
     fn decode(&self, code: u64) -> Vec3 {
         let code = code as u32;
         let scale = 2f32.powi((code >> 27) as i32 - 15 - 9);
@@ -246,10 +259,12 @@ impl ColorCodec for RgbF16 {
     fn bits(&self) -> u32 {
         48
     }
+    #[inline(always)]
     fn encode(&self, c: Vec3) -> u64 {
-        let h = |v: f32| u64::from(half::f16::from_f32(clean(v, -F16_MAX, F16_MAX)).to_bits());
+        let h = |v: f32| u64::from(f32_to_f16_bits(clean(v, -F16_MAX, F16_MAX)));
         h(c.x) | (h(c.y) << 16) | (h(c.z) << 32)
     }
+    #[inline(always)]
     fn decode(&self, code: u64) -> Vec3 {
         let d = |c: u64| f16_to_finite((c & 0xffff) as u16);
         Vec3::new(d(code), d(code >> 16), d(code >> 32))
@@ -274,9 +289,11 @@ impl ColorCodec for RgbF32 {
     fn bits(&self) -> u32 {
         96
     }
+    #[inline(always)]
     fn encode(&self, c: Vec3) -> u64 {
         self.encode_wide(c) as u64
     }
+    #[inline(always)]
     fn decode(&self, code: u64) -> Vec3 {
         self.decode_wide(u128::from(code))
     }

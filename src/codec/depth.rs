@@ -19,6 +19,7 @@
 //! positive value). Every decode is finite and positive.
 
 use super::normal::{f16_to_finite, F16_MAX};
+use super::simd::f32_to_f16_bits;
 use super::{mask, DepthCodec};
 use crate::camera::Camera;
 use glam::{Vec2, Vec3};
@@ -77,10 +78,12 @@ impl DepthCodec for LinearF32 {
     fn bits(&self) -> u32 {
         32
     }
+    #[inline(always)]
     fn encode(&self, depth: f32) -> u64 {
         let z = if depth.is_nan() { self.zfar } else { depth.clamp(f32::MIN_POSITIVE, f32::MAX) };
         u64::from(z.to_bits())
     }
+    #[inline(always)]
     fn decode(&self, code: u64) -> f32 {
         let z = f32::from_bits(code as u32);
         if z.is_nan() {
@@ -109,10 +112,12 @@ impl DepthCodec for LinearF16 {
     fn bits(&self) -> u32 {
         16
     }
+    #[inline(always)]
     fn encode(&self, depth: f32) -> u64 {
         let z = if depth.is_nan() { self.zfar } else { depth };
-        u64::from(half::f16::from_f32(z.clamp(F16_MIN_POSITIVE, F16_MAX)).to_bits())
+        u64::from(f32_to_f16_bits(z.clamp(F16_MIN_POSITIVE, F16_MAX)))
     }
+    #[inline(always)]
     fn decode(&self, code: u64) -> f32 {
         f16_to_finite((code & 0xffff) as u16).clamp(F16_MIN_POSITIVE, F16_MAX)
     }
@@ -144,18 +149,21 @@ pub struct PostProjection {
 
 impl PostProjection {
     /// d of a view depth already clamped to [n, f].
+    #[inline(always)]
     fn d_of(&self, z: f64) -> f64 {
         let (n, f) = (self.n, self.f);
         let d = if self.reversed { n / (f - n) * (f / z - 1.0) } else { f / (f - n) * (1.0 - n / z) };
         d.clamp(0.0, 1.0)
     }
     /// View depth of d ∈ [0, 1].
+    #[inline(always)]
     fn z_of(&self, d: f64) -> f64 {
         let (n, f) = (self.n, self.f);
         let d = d.clamp(0.0, 1.0);
         let z = if self.reversed { n * f / (n + d * (f - n)) } else { n * f / (f - d * (f - n)) };
         z.clamp(n, f)
     }
+    #[inline(always)]
     fn clamp_depth(&self, depth: f32) -> f64 {
         if depth.is_nan() {
             self.f
@@ -194,16 +202,19 @@ impl DepthCodec for PostProjection {
             DepthStorage::F32 => 32,
         }
     }
+    #[inline(always)]
     fn encode(&self, depth: f32) -> u64 {
         let d = self.d_of(self.clamp_depth(depth));
         match self.storage {
-            DepthStorage::Unorm(k) => (d * mask(k) as f64).round() as u64,
+            // d·mask < 2^24: i32 lanes hold it (and vectorise).
+            DepthStorage::Unorm(k) => (d * mask(k) as f64).round() as i32 as u64,
             DepthStorage::F32 => u64::from((d as f32).to_bits()),
         }
     }
+    #[inline(always)]
     fn decode(&self, code: u64) -> f32 {
         let d = match self.storage {
-            DepthStorage::Unorm(k) => (code & mask(k)) as f64 / mask(k) as f64,
+            DepthStorage::Unorm(k) => f64::from((code & mask(k)) as i32) / mask(k) as f64,
             DepthStorage::F32 => {
                 let d = f32::from_bits(code as u32);
                 // NaN reads as the far plane, like NaN input.

@@ -25,6 +25,7 @@ pub mod depth;
 pub mod eval;
 pub mod normal;
 pub mod scalar;
+pub mod simd;
 #[cfg(test)]
 pub mod strategies;
 
@@ -32,6 +33,7 @@ pub use color::color_codec;
 pub use depth::depth_codec;
 pub use normal::{angle_deg, normal_codec, NormalScheme};
 pub use scalar::scalar_codec;
+pub use simd::Isa;
 
 /// A unit-normal encoding.
 pub trait NormalCodec: Send + Sync {
@@ -59,20 +61,26 @@ pub trait NormalCodec: Send + Sync {
     fn is_idempotent(&self) -> bool {
         true
     }
-    /// Encodes a slice (`out.len()` must equal `input.len()`); statically dispatched inside, so one virtual
-    /// call per slice rather than per normal.
+    /// Encodes a slice on the calling thread with the widest instruction set this CPU has ([`Isa::detect`]);
+    /// bit-identical to [`Self::encode`] element by element. Panics if `out.len() != input.len()`. For all
+    /// threads see [`simd::par_encode_normals`].
     fn encode_slice(&self, input: &[Vec3], out: &mut [u64]) {
-        debug_assert_eq!(input.len(), out.len());
-        for (o, &n) in out.iter_mut().zip(input) {
-            *o = self.encode(n);
-        }
+        self.encode_slice_isa(Isa::detect(), input, out);
     }
-    /// Decodes a slice (`out.len()` must equal `codes.len()`).
+    /// Decodes a slice on the calling thread (see [`Self::encode_slice`]). Panics if the lengths differ.
     fn decode_slice(&self, codes: &[u64], out: &mut [Vec3]) {
-        debug_assert_eq!(codes.len(), out.len());
-        for (o, &c) in out.iter_mut().zip(codes) {
-            *o = self.decode(c);
-        }
+        self.decode_slice_isa(Isa::detect(), codes, out);
+    }
+    /// [`Self::encode_slice`] compiled for `isa` (clamped to what the CPU has). The default runs
+    /// [`Self::encode`] in a loop; the cheap codecs override it with a vectorised body.
+    fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
+        assert_eq!(input.len(), out.len(), "encode_slice: {} normals into {} codes", input.len(), out.len());
+        simd::run(isa, simd::MapKernel { input, out, f: |n: &Vec3| self.encode(*n) });
+    }
+    /// [`Self::decode_slice`] compiled for `isa` (see [`Self::encode_slice_isa`]).
+    fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Vec3]) {
+        assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} normals", codes.len(), out.len());
+        simd::run(isa, simd::MapKernel { input: codes, out, f: |c: &u64| self.decode(*c) });
     }
 }
 
@@ -94,6 +102,26 @@ pub trait ScalarCodec: Send + Sync {
     fn error_bound(&self, v: f32) -> f32 {
         let _ = v;
         f32::INFINITY
+    }
+    /// Encodes a slice on the calling thread with the widest instruction set this CPU has; bit-identical to
+    /// [`Self::encode`] element by element. Panics if the lengths differ.
+    fn encode_slice(&self, input: &[f32], out: &mut [u64]) {
+        self.encode_slice_isa(Isa::detect(), input, out);
+    }
+    /// Decodes a slice on the calling thread (see [`Self::encode_slice`]). Panics if the lengths differ.
+    fn decode_slice(&self, codes: &[u64], out: &mut [f32]) {
+        self.decode_slice_isa(Isa::detect(), codes, out);
+    }
+    /// [`Self::encode_slice`] compiled for `isa` (clamped to what the CPU has). The default runs
+    /// [`Self::encode`] in a loop; the cheap codecs override it with a vectorised body.
+    fn encode_slice_isa(&self, isa: Isa, input: &[f32], out: &mut [u64]) {
+        assert_eq!(input.len(), out.len(), "encode_slice: {} values into {} codes", input.len(), out.len());
+        simd::run(isa, simd::MapKernel { input, out, f: |v: &f32| self.encode(*v) });
+    }
+    /// [`Self::decode_slice`] compiled for `isa` (see [`Self::encode_slice_isa`]).
+    fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [f32]) {
+        assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} values", codes.len(), out.len());
+        simd::run(isa, simd::MapKernel { input: codes, out, f: |c: &u64| self.decode(*c) });
     }
 }
 
@@ -126,6 +154,26 @@ pub trait ColorCodec: Send + Sync {
     fn decode_wide(&self, code: u128) -> Vec3 {
         self.decode(code as u64)
     }
+    /// Encodes a slice on the calling thread with the widest instruction set this CPU has; bit-identical to
+    /// [`Self::encode`] element by element. Panics if the lengths differ.
+    fn encode_slice(&self, input: &[Vec3], out: &mut [u64]) {
+        self.encode_slice_isa(Isa::detect(), input, out);
+    }
+    /// Decodes a slice on the calling thread (see [`Self::encode_slice`]). Panics if the lengths differ.
+    fn decode_slice(&self, codes: &[u64], out: &mut [Vec3]) {
+        self.decode_slice_isa(Isa::detect(), codes, out);
+    }
+    /// [`Self::encode_slice`] compiled for `isa` (clamped to what the CPU has). The default runs
+    /// [`Self::encode`] in a loop; the cheap codecs override it with a vectorised body.
+    fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
+        assert_eq!(input.len(), out.len(), "encode_slice: {} colours into {} codes", input.len(), out.len());
+        simd::run(isa, simd::MapKernel { input, out, f: |v: &Vec3| self.encode(*v) });
+    }
+    /// [`Self::decode_slice`] compiled for `isa` (see [`Self::encode_slice_isa`]).
+    fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Vec3]) {
+        assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} colours", codes.len(), out.len());
+        simd::run(isa, simd::MapKernel { input: codes, out, f: |c: &u64| self.decode(*c) });
+    }
 }
 
 /// A view-depth encoding. Codecs that depend on the projection are built with the near/far planes.
@@ -146,6 +194,26 @@ pub trait DepthCodec: Send + Sync {
     fn error_bound(&self, depth: f32) -> f32 {
         let _ = depth;
         f32::INFINITY
+    }
+    /// Encodes a slice on the calling thread with the widest instruction set this CPU has; bit-identical to
+    /// [`Self::encode`] element by element. Panics if the lengths differ.
+    fn encode_slice(&self, input: &[f32], out: &mut [u64]) {
+        self.encode_slice_isa(Isa::detect(), input, out);
+    }
+    /// Decodes a slice on the calling thread (see [`Self::encode_slice`]). Panics if the lengths differ.
+    fn decode_slice(&self, codes: &[u64], out: &mut [f32]) {
+        self.decode_slice_isa(Isa::detect(), codes, out);
+    }
+    /// [`Self::encode_slice`] compiled for `isa` (clamped to what the CPU has). The default runs
+    /// [`Self::encode`] in a loop; the cheap codecs override it with a vectorised body.
+    fn encode_slice_isa(&self, isa: Isa, input: &[f32], out: &mut [u64]) {
+        assert_eq!(input.len(), out.len(), "encode_slice: {} depths into {} codes", input.len(), out.len());
+        simd::run(isa, simd::MapKernel { input, out, f: |v: &f32| self.encode(*v) });
+    }
+    /// [`Self::decode_slice`] compiled for `isa` (see [`Self::encode_slice_isa`]).
+    fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [f32]) {
+        assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} depths", codes.len(), out.len());
+        simd::run(isa, simd::MapKernel { input: codes, out, f: |c: &u64| self.decode(*c) });
     }
 }
 

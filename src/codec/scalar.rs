@@ -3,22 +3,36 @@
 //! | name | bits | domain | error bound | source |
 //! |---|---|---|---|---|
 //! | `unorm-N` (N = 1..=24) | N | [0, 1] | 0.5/(2^N−1) | D3D/Vulkan UNORM conversion rules |
+//! | `snorm-N` (N = 2..=24) | N | [−1, 1] | 0.5/(2^(N−1)−1) | D3D/Vulkan SNORM conversion rules |
+//! | `snorm-N:R` (R > 0 finite) | N | [−R, R] | R·0.5/(2^(N−1)−1) | SNORM scaled by R (e.g. motion in pixels) |
 //! | `f16` | 16 | [−65504, 65504] | |v|·2^-11 + 2^-25 | IEEE 754 binary16 (`half` crate) |
 //! | `f32` | 32 | all finite f32 | 0 | IEEE 754 binary32 |
 //! | `log2-unorm-N` (N = 2..=24) | N | specular power [1, 4096] | v·(2^(6/(2^N−1)) − 1) | power as log2 (Killzone 2 / Valient 2007 style) |
 //! | `specpow-unorm-N` (N = 2..=24) | N | specular power [0, 4096] | 2048/(2^N−1) | power stored directly, scaled |
 //!
-//! Defined results outside the domain: NaN encodes as the domain's lower end (0, or 1 for log2), +Inf as the
-//! upper end, −Inf as the lower end; finite values clamp. f16: magnitudes above 65504 clamp to ±65504 (never Inf),
+//! Defined results outside the domain: NaN encodes as the domain's lower end (0, or 1 for log2; 0 for snorm), +Inf
+//! as the upper end, −Inf as the lower end; finite values clamp. Snorm codes are N-bit two's complement; 0 and ±R
+//! are exact, and the code −2^(N−1) (which no encode produces) decodes to −R, as in D3D. f16: magnitudes above 65504 clamp to ±65504 (never Inf),
 //! magnitudes below 2^-25 flush to ±0. Decoders only ever return finite values (f16 Inf/NaN codes decode to
 //! ±65504 / 0).
 
 use super::normal::f16_to_finite;
+use super::simd::f32_to_f16_bits;
 use super::{mask, split_bits, ScalarCodec};
 
 /// Every valid name pattern (for error messages).
-pub const VALID_NAMES: &[&str] =
-    &["unorm-N (1..=24)", "f16", "f32", "log2-unorm-N (2..=24)", "specpow-unorm-N (2..=24)"];
+pub const VALID_NAMES: &[&str] = &[
+    "unorm-N (1..=24)",
+    "snorm-N (2..=24)",
+    "snorm-N:R (range ±R)",
+    "f16",
+    "f32",
+    "log2-unorm-N (2..=24)",
+    "specpow-unorm-N (2..=24)",
+];
+
+/// Largest `R` of `snorm-N:R` (beyond it the range overflows f32 arithmetic of the bound).
+pub const MAX_SNORM_RANGE: f32 = 1e30;
 
 /// Largest specular power the log2 and direct power codecs represent (2^12).
 pub const MAX_SPECULAR_POWER: f32 = 4096.0;
@@ -31,6 +45,18 @@ pub fn scalar_codec(name: &str) -> Option<Box<dyn ScalarCodec>> {
         "f16" => return Some(Box::new(ScalarF16)),
         "f32" => return Some(Box::new(ScalarF32)),
         _ => {}
+    }
+    if let Some(rest) = name.strip_prefix("snorm-") {
+        let (bits, range) = match rest.split_once(':') {
+            Some((b, r)) => (b, r.parse::<f32>().ok()?),
+            None => (rest, 1.0),
+        };
+        if bits.is_empty() || bits.len() > 2 || !bits.bytes().all(|b| b.is_ascii_digit()) {
+            return None;
+        }
+        let n: u32 = bits.parse().ok()?;
+        let range_ok = range.is_finite() && range > 0.0 && range <= MAX_SNORM_RANGE;
+        return ((2..=24).contains(&n) && range_ok).then(|| Box::new(Snorm::new(n, range)) as Box<dyn ScalarCodec>);
     }
     let (prefix, n) = split_bits(name)?;
     match prefix {
@@ -58,8 +84,62 @@ impl Unorm {
     pub fn new(bits: u32, lo: f32, hi: f32, prefix: &'static str) -> Self {
         Unorm { bits, lo, hi, prefix }
     }
+    #[inline(always)]
     fn max_code(&self) -> f64 {
         mask(self.bits) as f64
+    }
+}
+
+/// Signed normalized integer of `bits` bits over [−R, R] (D3D SNORM rules scaled by R):
+/// `s = round(clamp(v/R, −1, 1)·(2^(N−1)−1))` in N-bit two's complement; decode `max(s/(2^(N−1)−1), −1)·R`.
+#[derive(Clone, Copy, Debug)]
+pub struct Snorm {
+    bits: u32,
+    range: f32,
+}
+
+impl Snorm {
+    /// Snorm with `bits` bits (2..=24) over [−range, range].
+    #[must_use]
+    pub fn new(bits: u32, range: f32) -> Self {
+        Snorm { bits, range }
+    }
+    #[inline(always)]
+    fn max_code(&self) -> f64 {
+        mask(self.bits - 1) as f64
+    }
+}
+
+impl ScalarCodec for Snorm {
+    fn name(&self) -> String {
+        if self.range == 1.0 {
+            format!("snorm-{}", self.bits)
+        } else {
+            format!("snorm-{}:{}", self.bits, self.range)
+        }
+    }
+    fn bits(&self) -> u32 {
+        self.bits
+    }
+    #[inline(always)]
+    fn encode(&self, v: f32) -> u64 {
+        let t = if v.is_nan() { 0.0 } else { (v / self.range).clamp(-1.0, 1.0) };
+        // f64 so that 24-bit codes round exactly (halves away from zero, like D3D).
+        let s = (f64::from(t) * self.max_code()).round() as i32;
+        (s as u32 as u64) & mask(self.bits)
+    }
+    #[inline(always)]
+    fn decode(&self, code: u64) -> f32 {
+        let k = self.bits;
+        let s = ((((code & mask(k)) as u32) << (32 - k)) as i32) >> (32 - k);
+        ((f64::from(s) / self.max_code()).max(-1.0) * f64::from(self.range)) as f32
+    }
+    fn domain(&self) -> (f32, f32) {
+        (-self.range, self.range)
+    }
+    fn error_bound(&self, _v: f32) -> f32 {
+        // Half a step, plus f32 rounding of the result (relative 2^-24 of the range).
+        ((0.5 / self.max_code()) * f64::from(self.range)) as f32 + self.range * 2f32.powi(-23)
     }
 }
 
@@ -70,15 +150,15 @@ impl ScalarCodec for Unorm {
     fn bits(&self) -> u32 {
         self.bits
     }
-    #[inline]
+    #[inline(always)]
     fn encode(&self, v: f32) -> u64 {
         let t = if v.is_nan() { 0.0 } else { ((v - self.lo) / (self.hi - self.lo)).clamp(0.0, 1.0) };
-        // f64 so that 24-bit codes round exactly.
-        (f64::from(t) * self.max_code()).round() as u64
+        // f64 so that 24-bit codes round exactly; the code is < 2^24, so i32 lanes hold it (and vectorise).
+        (f64::from(t) * self.max_code()).round() as i32 as u64
     }
-    #[inline]
+    #[inline(always)]
     fn decode(&self, code: u64) -> f32 {
-        let t = (code & mask(self.bits)) as f64 / self.max_code();
+        let t = f64::from((code & mask(self.bits)) as i32) / self.max_code();
         (f64::from(self.lo) + t * f64::from(self.hi - self.lo)) as f32
     }
     fn domain(&self) -> (f32, f32) {
@@ -133,12 +213,12 @@ impl ScalarCodec for ScalarF16 {
     fn bits(&self) -> u32 {
         16
     }
-    #[inline]
+    #[inline(always)]
     fn encode(&self, v: f32) -> u64 {
         let v = if v.is_nan() { 0.0 } else { v.clamp(-super::normal::F16_MAX, super::normal::F16_MAX) };
-        u64::from(half::f16::from_f32(v).to_bits())
+        u64::from(f32_to_f16_bits(v))
     }
-    #[inline]
+    #[inline(always)]
     fn decode(&self, code: u64) -> f32 {
         f16_to_finite((code & 0xffff) as u16)
     }
@@ -161,12 +241,12 @@ impl ScalarCodec for ScalarF32 {
     fn bits(&self) -> u32 {
         32
     }
-    #[inline]
+    #[inline(always)]
     fn encode(&self, v: f32) -> u64 {
         let v = if v.is_nan() { 0.0 } else { v.clamp(f32::MIN, f32::MAX) };
         u64::from(v.to_bits())
     }
-    #[inline]
+    #[inline(always)]
     fn decode(&self, code: u64) -> f32 {
         let v = f32::from_bits(code as u32);
         if v.is_nan() {
@@ -203,6 +283,34 @@ mod tests {
         assert_eq!(h.decode(h.encode(1e-9)), 0.0);
         assert_eq!(h.decode(0x7c00), 65504.0);
         for bad in ["unorm-0", "unorm-25", "log2-unorm-1", "f64", "unorm", "unorm-x"] {
+            assert!(scalar_codec(bad).is_none(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn snorm_follows_d3d_rules_and_parses_its_range() {
+        let s8 = scalar_codec("snorm-8").unwrap();
+        assert_eq!(s8.name(), "snorm-8");
+        assert_eq!(s8.encode(1.0), 127);
+        assert_eq!(s8.encode(-1.0), 0x81);
+        assert_eq!(s8.encode(-0.0), 0);
+        assert_eq!(s8.encode(f32::NAN), 0);
+        assert_eq!(s8.encode(f32::NEG_INFINITY), 0x81);
+        assert_eq!(s8.decode(0x80), -1.0);
+        assert_eq!(s8.decode(0x81), -1.0);
+        assert_eq!(s8.decode(0x17f), 1.0); // bits above 8 ignored
+        assert_eq!(s8.decode(s8.encode(0.5)), 64.0 / 127.0);
+        let m = scalar_codec("snorm-8:32").unwrap();
+        assert_eq!(m.name(), "snorm-8:32");
+        assert_eq!(m.domain(), (-32.0, 32.0));
+        assert_eq!(m.decode(m.encode(-32.0)), -32.0);
+        assert_eq!(m.decode(m.encode(1e9)), 32.0);
+        assert!((m.decode(m.encode(3.3)) - 3.3).abs() <= m.error_bound(3.3));
+        let s24 = scalar_codec("snorm-24").unwrap();
+        assert_eq!(s24.encode(1.0), (1 << 23) - 1);
+        for bad in
+            ["snorm-1", "snorm-25", "snorm-8:0", "snorm-8:-1", "snorm-8:inf", "snorm-8:nan", "snorm-:2", "snorm-8:"]
+        {
             assert!(scalar_codec(bad).is_none(), "{bad}");
         }
     }

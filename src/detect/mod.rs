@@ -26,7 +26,11 @@
 //! room.exr --detector all`): against object IDs, `lauritzen` has precision 0.85 and recall 0.56 at a shading
 //! fraction of 0.172 (`none` 0.165, `ssaa` 0.658 — a third of the frame is sky); `id` 1.00/1.00 at 0.176;
 //! `forward-msaa` 0.32/0.81 at 0.175. Most of the geometric detectors' misses are the floor's checker tiles: separate,
-//! coplanar objects that only a material or ID test can tell apart.
+//! coplanar objects that only a material or ID test can tell apart. Against the shading truth
+//! ([`crate::measure::edges::shading_truth`], one display code step beyond the smooth gradient: 2.20% of the
+//! pixels), precision / recall are `lauritzen` 0.98 / 0.45, `id` 1.00 / 0.69, `combined` 0.99 / 0.75,
+//! `forward-msaa` 0.43 / 0.76; the rest of the shading truth is creases, specular highlights and sphere rims, shading
+//! variation inside one surface that no G-buffer edge test sees.
 
 pub mod baselines;
 pub mod geometric;

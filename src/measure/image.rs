@@ -3,8 +3,15 @@
 //! PSNR's peak is stated explicitly: `psnr_db = 10·log10(peak² / mse)` with `peak` = the reference's largest
 //! channel value (HDR images have no fixed white; 1 when the reference is black). Identical images report
 //! [`PSNR_CAP_DB`] rather than infinity, so the JSON stays a number.
+//!
+//! [`against_full_deferred`] measures a second schedule (the light pre-pass) against full deferred shading of the
+//! same input, the way the issue asks its error to be reported, separately from the error against the reference.
 
+use crate::detect::EdgeMask;
 use crate::image::HdrImage;
+use crate::light::Light;
+use crate::resolve::{resolve, ResolveConfig, Schedule};
+use crate::GBuffer;
 use serde::Serialize;
 
 /// How far `test` is from `reference`, per channel value (3 per pixel), in f64.
@@ -98,6 +105,27 @@ pub fn compare(reference: &HdrImage, test: &HdrImage) -> ImageError {
     })
 }
 
+/// The error of `image` (e.g. the light pre-pass's output) against full deferred shading of the same G-buffer,
+/// lights and edge mask: `cfg` with its schedule set to [`Schedule::Deferred`] (culling, BRDF, falloff and tiles
+/// as given). The PSNR peak is the deferred image's largest channel value. Also returns the deferred resolve's
+/// wall time in milliseconds.
+pub fn against_full_deferred(
+    gb: &GBuffer,
+    lights: &[Light],
+    mask: &EdgeMask,
+    cfg: &ResolveConfig,
+    image: &HdrImage,
+) -> crate::Result<(ImageError, f64)> {
+    let deferred = resolve(gb, lights, mask, &ResolveConfig { schedule: Schedule::Deferred, ..*cfg })?;
+    let err = try_compare(&deferred.image, image).ok_or_else(|| {
+        crate::Error::Argument(format!(
+            "image is {}×{} but the G-buffer is {}×{}",
+            image.width, image.height, deferred.image.width, deferred.image.height
+        ))
+    })?;
+    Ok((err, deferred.stats.ms.total))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -134,5 +162,51 @@ mod tests {
     fn size_mismatch_is_reported() {
         assert!(try_compare(&HdrImage::new(2, 1), &HdrImage::new(1, 2)).is_none());
         assert_eq!(compare(&HdrImage::new(2, 1), &HdrImage::new(1, 1)).rmse, f64::INFINITY);
+    }
+
+    /// Pre-pass and deferred shading sum the same f32 terms in a different order (the pre-pass multiplies the
+    /// albedo in after the sum): when they are mathematically equal they still differ by a few ulp per value, so a
+    /// relative MSE up to this bound counts as "equal" (1e-5 relative per value, squared).
+    const SAME_UP_TO_ROUNDING_REL_MSE: f64 = 1e-10;
+
+    fn prepass_error(gb: &GBuffer, lights: &[Light], brdf: crate::resolve::Brdf) -> ImageError {
+        let mask = crate::detect::detect(gb, crate::detect::Detector::Lauritzen, &Default::default()).unwrap();
+        let cfg = ResolveConfig { brdf, schedule: Schedule::LightPrepass, ..Default::default() };
+        let pre = resolve(gb, lights, &mask, &cfg).unwrap();
+        against_full_deferred(gb, lights, &mask, &cfg, &pre.image).unwrap().0
+    }
+
+    #[test]
+    fn light_prepass_equals_deferred_for_one_light_colour_and_not_for_coloured_specular() {
+        use crate::resolve::{fixture, Brdf};
+        let gb = fixture::spheres(48, 32, 4).unwrap();
+        let coloured = fixture::lights_on_surfaces(&gb, 12, 2.0, 7);
+        assert!(coloured.windows(2).any(|w| w[0].color != w[1].color), "the fixture's lights must differ in colour");
+        let recolour = |c: Vec3| coloured.iter().map(|l| Light { color: c, ..*l }).collect::<Vec<_>>();
+        let (white, orange) = (recolour(Vec3::ONE), recolour(Vec3::new(0.9, 0.4, 0.1)));
+        // GGX is left out: its pre-pass puts (1 − F0) on the diffuse instead of the per-light (1 − F(v·h)) and
+        // replaces a metal's coloured F0 by the light's colour, so it is approximate even under white light.
+        for brdf in [Brdf::BlinnPhong, Brdf::Lambert] {
+            for (name, lights) in [("white", &white), ("one colour", &orange)] {
+                let e = prepass_error(&gb, lights, brdf);
+                assert!(e.rel_mse <= SAME_UP_TO_ROUNDING_REL_MSE && e.peak > 0.0, "{brdf} {name}: {e:?}");
+            }
+        }
+        // Without specular (Lambert) the pre-pass is exact whatever the colours; with it, coloured lights make
+        // the monochrome specular take the wrong hue.
+        let e = prepass_error(&gb, &coloured, Brdf::Lambert);
+        assert!(e.rel_mse <= SAME_UP_TO_ROUNDING_REL_MSE, "lambert: {e:?}");
+        for brdf in [Brdf::BlinnPhong, Brdf::Ggx] {
+            let e = prepass_error(&gb, &coloured, brdf);
+            assert!(e.rel_mse > 1e3 * SAME_UP_TO_ROUNDING_REL_MSE && e.max_abs > 0.0, "{brdf}: {e:?}");
+        }
+    }
+
+    #[test]
+    fn against_full_deferred_refuses_an_image_of_another_size() {
+        let gb = crate::resolve::fixture::spheres(8, 4, 1).unwrap();
+        let mask = crate::detect::detect(&gb, crate::detect::Detector::None, &Default::default()).unwrap();
+        let e = against_full_deferred(&gb, &[], &mask, &ResolveConfig::default(), &HdrImage::new(4, 8));
+        assert!(e.unwrap_err().to_string().contains("4×8"));
     }
 }

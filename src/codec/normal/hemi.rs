@@ -27,11 +27,11 @@ impl Projection for XyHemi {
             "xy-hemi"
         }
     }
-    #[inline]
+    #[inline(always)]
     fn encode_plane(&self, n: Vec3) -> Vec2 {
         Vec2::new(n.x, n.y)
     }
-    #[inline]
+    #[inline(always)]
     fn decode_plane(&self, p: Vec2) -> Vec3 {
         let p = p.clamp(Vec2::NEG_ONE, Vec2::ONE);
         Vec3::new(p.x, p.y, (1.0 - p.length_squared()).max(0.0).sqrt())

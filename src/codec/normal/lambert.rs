@@ -22,7 +22,7 @@ pub struct Lambert;
 
 impl Lambert {
     /// Unit vector → point in the unit disc.
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn project(n: Vec3) -> Vec2 {
         let xy = Vec2::new(n.x, n.y);
@@ -35,7 +35,7 @@ impl Lambert {
     }
 
     /// Point in the unit disc → unit vector (outside the disc counts as the rim).
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn unproject(q: Vec2) -> Vec3 {
         let s = q.length_squared().min(1.0);
@@ -52,11 +52,11 @@ impl Projection for Lambert {
             "lambert"
         }
     }
-    #[inline]
+    #[inline(always)]
     fn encode_plane(&self, n: Vec3) -> Vec2 {
         Lambert::project(n)
     }
-    #[inline]
+    #[inline(always)]
     fn decode_plane(&self, p: Vec2) -> Vec3 {
         Lambert::unproject(p)
     }

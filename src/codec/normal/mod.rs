@@ -12,6 +12,7 @@
 //!
 //! Codes: component 0 sits in the low `k` bits, component 1 in the next `k`, and so on.
 
+use super::simd::{f16_bits_to_f32, f32_to_f16_bits, run, Isa, Kernel, BLOCK};
 use super::{mask, split_bits, NormalCodec};
 use glam::{DVec3, Vec2, Vec3};
 
@@ -219,40 +220,44 @@ pub fn angle_deg(a: Vec3, b: Vec3) -> f32 {
     a.cross(b).length().atan2(a.dot(b)).to_degrees() as f32
 }
 
-/// Cleans an input normal (see the module doc): a finite unit vector for any input.
+/// Cleans an input normal (see the module doc): a finite unit vector for any input. Branch-free (every case is
+/// computed, then selected), so the slice paths vectorise it.
+#[inline(always)]
 #[must_use]
 pub fn sanitize(n: Vec3) -> Vec3 {
-    if n.is_nan() {
-        return Vec3::Z;
-    }
-    let n = if n.is_finite() {
-        n
-    } else {
-        // Only the infinite components carry direction.
-        Vec3::from_array(n.to_array().map(|c| if c.is_infinite() { c.signum() } else { 0.0 }))
-    };
+    let nan = n.x.is_nan() | n.y.is_nan() | n.z.is_nan();
+    let finite = n.x.is_finite() & n.y.is_finite() & n.z.is_finite();
+    // Only the infinite components carry direction.
+    let dir = |c: f32| if c.is_infinite() { 1.0f32.copysign(c) } else { 0.0 };
+    let n = if finite { n } else { Vec3::new(dir(n.x), dir(n.y), dir(n.z)) };
     let m = n.abs().max_element();
-    if m == 0.0 {
-        return Vec3::Z;
-    }
     // Dividing by the largest magnitude first keeps the squared length away from overflow and underflow.
     let v = n / m;
-    v / v.length()
+    let v = v / v.length();
+    if nan | (m == 0.0) {
+        Vec3::Z
+    } else {
+        v
+    }
 }
 
 /// Robust 2D normalisation; the zero vector gives +X (the documented choice where a direction is undefined).
+/// Branch-free.
+#[inline(always)]
 #[must_use]
 pub fn normalize2_or_x(v: Vec2) -> Vec2 {
     let m = v.abs().max_element();
+    let u = v / m;
+    let u = u / u.length();
     if m.is_nan() || m <= 0.0 || !m.is_finite() {
-        return Vec2::X;
+        Vec2::X
+    } else {
+        u
     }
-    let v = v / m;
-    v / v.length()
 }
 
 /// `+1` for `v ≥ 0` including −0.0, else `−1` (Cigolle et al.'s `signNotZero`).
-#[inline]
+#[inline(always)]
 #[must_use]
 pub fn sign_not_zero(v: f32) -> f32 {
     if v >= 0.0 {
@@ -263,12 +268,13 @@ pub fn sign_not_zero(v: f32) -> f32 {
 }
 
 /// Final step of every decoder: a finite unit vector, +Z if the arithmetic degenerated.
-#[inline]
+#[inline(always)]
 #[must_use]
 pub(crate) fn finish(v: Vec3) -> Vec3 {
     let l2 = v.length_squared();
+    let u = v / l2.sqrt();
     if l2 > 0.0 && l2.is_finite() {
-        v / l2.sqrt()
+        u
     } else {
         Vec3::Z
     }
@@ -311,56 +317,156 @@ impl Quant {
     #[inline]
     #[must_use]
     pub fn encode(self, v: f32) -> u64 {
-        let v = if v.is_nan() { 0.0 } else { v };
-        match self {
-            Quant::Snorm(k) => {
-                let m = ((1u32 << (k - 1)) - 1) as f32;
-                let s = round_half_away(v.clamp(-1.0, 1.0) * m);
-                (s as u64) & mask(k)
-            }
-            Quant::Unorm(k) => {
-                let m = ((1u64 << k) - 1) as f32;
-                round_half_away(v.clamp(0.0, 1.0) * m) as u64
-            }
-            Quant::F16 => u64::from(half::f16::from_f32(v.clamp(-F16_MAX, F16_MAX)).to_bits()),
-        }
+        u64::from(match self {
+            Quant::Snorm(k) => SnormQ::new(k).enc(v),
+            Quant::Unorm(k) => UnormQ::new(k).enc(v),
+            Quant::F16 => F16Q.enc(v),
+        })
     }
 
     /// Dequantizes one coordinate (only the low `bits()` bits of `c` are read). Always finite.
     #[inline]
     #[must_use]
     pub fn decode(self, c: u64) -> f32 {
+        // Bits above `bits()` ≤ 16 are ignored, so truncating to u32 first changes nothing.
         match self {
-            Quant::Snorm(k) => {
-                let c = c & mask(k);
-                // Sign-extend k bits.
-                let s = ((c << (64 - k)) as i64) >> (64 - k);
-                let m = ((1u32 << (k - 1)) - 1) as f32;
-                (s as f32 / m).max(-1.0)
-            }
-            Quant::Unorm(k) => (c & mask(k)) as f32 / ((1u64 << k) - 1) as f32,
-            Quant::F16 => f16_to_finite((c & 0xffff) as u16),
+            Quant::Snorm(k) => SnormQ::new(k).dec(c as u32),
+            Quant::Unorm(k) => UnormQ::new(k).dec(c as u32),
+            Quant::F16 => F16Q.dec(c as u32),
         }
     }
 }
 
-/// `v.round() as i64` without the libm call that `f32::round` becomes on baseline x86-64 (no SSE4.1): the add
-/// happens in f64, where it is exact for |v| < 2^52, so halves round away from zero exactly like `round`.
+/// A [`Quant`] with its constants precomputed: the form the per-element bodies (scalar and slice paths alike)
+/// are generic over, so the storage choice is made once per slice, not per element.
+pub trait Quantizer: Copy + Send + Sync + 'static {
+    /// Bits per coordinate (≤ 16).
+    fn bits(self) -> u32;
+    /// Quantizes one coordinate (NaN → 0; out-of-range values clamp); the code fits in `bits()` bits.
+    fn enc(self, v: f32) -> u32;
+    /// Dequantizes the low `bits()` bits of `c`; always finite.
+    fn dec(self, c: u32) -> f32;
+}
+
+/// [`Quant::Snorm`] with its scale and mask.
+#[derive(Clone, Copy, Debug)]
+pub struct SnormQ {
+    k: u32,
+    m: f32,
+    mask: u32,
+}
+
+impl SnormQ {
+    /// Snorm with `k` bits (2..=16).
+    #[inline(always)]
+    #[must_use]
+    pub fn new(k: u32) -> Self {
+        SnormQ { k, m: ((1u32 << (k - 1)) - 1) as f32, mask: mask(k) as u32 }
+    }
+}
+
+impl Quantizer for SnormQ {
+    #[inline(always)]
+    fn bits(self) -> u32 {
+        self.k
+    }
+    #[inline(always)]
+    fn enc(self, v: f32) -> u32 {
+        let v = if v.is_nan() { 0.0 } else { v };
+        (round_in_range(v.clamp(-1.0, 1.0) * self.m) as u32) & self.mask
+    }
+    #[inline(always)]
+    fn dec(self, c: u32) -> f32 {
+        // Sign-extend k bits.
+        let s = (((c & self.mask) << (32 - self.k)) as i32) >> (32 - self.k);
+        (s as f32 / self.m).max(-1.0)
+    }
+}
+
+/// [`Quant::Unorm`] with its scale and mask.
+#[derive(Clone, Copy, Debug)]
+pub struct UnormQ {
+    k: u32,
+    m: f32,
+    mask: u32,
+}
+
+impl UnormQ {
+    /// Unorm with `k` bits (1..=16).
+    #[inline(always)]
+    #[must_use]
+    pub fn new(k: u32) -> Self {
+        UnormQ { k, m: mask(k) as f32, mask: mask(k) as u32 }
+    }
+}
+
+impl Quantizer for UnormQ {
+    #[inline(always)]
+    fn bits(self) -> u32 {
+        self.k
+    }
+    #[inline(always)]
+    fn enc(self, v: f32) -> u32 {
+        let v = if v.is_nan() { 0.0 } else { v };
+        round_in_range(v.clamp(0.0, 1.0) * self.m) as u32
+    }
+    #[inline(always)]
+    fn dec(self, c: u32) -> f32 {
+        (c & self.mask) as f32 / self.m
+    }
+}
+
+/// [`Quant::F16`].
+#[derive(Clone, Copy, Debug)]
+pub struct F16Q;
+
+impl Quantizer for F16Q {
+    #[inline(always)]
+    fn bits(self) -> u32 {
+        16
+    }
+    #[inline(always)]
+    fn enc(self, v: f32) -> u32 {
+        let v = if v.is_nan() { 0.0 } else { v };
+        u32::from(f32_to_f16_bits(v.clamp(-F16_MAX, F16_MAX)))
+    }
+    #[inline(always)]
+    fn dec(self, c: u32) -> f32 {
+        f16_to_finite(c as u16)
+    }
+}
+
+/// `v.round() as i32` for |v| < 2^31, without the libm call that `f32::round` becomes on baseline x86-64 (no
+/// SSE4.1) and in 32-bit lanes so it vectorises: truncate, then step away from zero when the fraction, which
+/// `v − trunc(v)` gives exactly, is at least one half.
 #[inline(always)]
 #[must_use]
-pub fn round_half_away(v: f32) -> i64 {
-    let d = f64::from(v);
-    (d + 0.5f64.copysign(d)) as i64
+pub fn round_half_away(v: f32) -> i32 {
+    let t = v as i32;
+    let f = v - t as f32;
+    t + i32::from(f >= 0.5) - i32::from(f <= -0.5)
+}
+
+/// [`round_half_away`] for a value already known to be finite with |v| ≤ 2^16 (a clamped, scaled coordinate):
+/// the truncation skips the saturating checks of `as`, which keeps the vectorised loop at one conversion.
+#[inline(always)]
+fn round_in_range(v: f32) -> i32 {
+    debug_assert!(v.abs() <= 65536.0, "{v}");
+    // SAFETY: callers pass a value clamped to [−(2^16−1), 2^16−1] after replacing NaN, so it is finite and its
+    // truncation fits in an i32.
+    let t: i32 = unsafe { v.to_int_unchecked() };
+    let f = v - t as f32;
+    t + i32::from(f >= 0.5) - i32::from(f <= -0.5)
 }
 
 /// Largest finite half float.
 pub const F16_MAX: f32 = 65504.0;
 
 /// Decodes half-float bits to a finite f32: NaN → 0, ±Inf → ±65504.
-#[inline]
+#[inline(always)]
 #[must_use]
 pub fn f16_to_finite(bits: u16) -> f32 {
-    let v = half::f16::from_bits(bits).to_f32();
+    let v = f16_bits_to_f32(bits);
     if v.is_nan() {
         0.0
     } else {
@@ -411,11 +517,100 @@ impl<P: Projection> Planar<P> {
     }
 
     /// The two stored plane coordinates of a code.
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn plane_of(&self, code: u64) -> Vec2 {
         let k = self.quant.bits();
         Vec2::new(self.quant.decode(code), self.quant.decode(code >> k))
+    }
+}
+
+impl<P: Projection> Planar<P> {
+    /// The per-element encode body shared by the scalar and slice paths.
+    #[inline(always)]
+    fn encode_with<Q: Quantizer>(proj: P, q: Q, n: Vec3) -> u64 {
+        let p = proj.encode_plane(sanitize(n));
+        u64::from(q.enc(p.x) | (q.enc(p.y) << q.bits()))
+    }
+
+    /// The per-element decode body shared by the scalar and slice paths.
+    #[inline(always)]
+    fn decode_with<Q: Quantizer>(proj: P, q: Q, code: u64) -> Vec3 {
+        let c = code as u32;
+        finish(proj.decode_plane(Vec2::new(q.dec(c), q.dec(c >> q.bits()))))
+    }
+}
+
+/// Slice encode of a [`Planar`] codec: blocks of [`BLOCK`] normals are split into x, y, z arrays first so the
+/// arithmetic runs on unit-stride lanes.
+struct PlanarEncode<'a, P, Q> {
+    proj: P,
+    q: Q,
+    input: &'a [Vec3],
+    out: &'a mut [u64],
+}
+
+impl<P: Projection, Q: Quantizer> Kernel for PlanarEncode<'_, P, Q> {
+    #[inline(always)]
+    fn run(self) {
+        let (proj, q) = (self.proj, self.q);
+        let mut ins = self.input.chunks_exact(BLOCK);
+        let mut outs = self.out.chunks_exact_mut(BLOCK);
+        for (i, o) in (&mut ins).zip(&mut outs) {
+            let (x, y, z) = split_block(i);
+            for j in 0..BLOCK {
+                o[j] = Planar::encode_with(proj, q, Vec3::new(x[j], y[j], z[j]));
+            }
+        }
+        for (n, o) in ins.remainder().iter().zip(outs.into_remainder()) {
+            *o = Planar::encode_with(proj, q, *n);
+        }
+    }
+}
+
+/// Slice decode of a [`Planar`] codec (blocks decoded into x, y, z arrays, then interleaved).
+struct PlanarDecode<'a, P, Q> {
+    proj: P,
+    q: Q,
+    codes: &'a [u64],
+    out: &'a mut [Vec3],
+}
+
+impl<P: Projection, Q: Quantizer> Kernel for PlanarDecode<'_, P, Q> {
+    #[inline(always)]
+    fn run(self) {
+        let (proj, q) = (self.proj, self.q);
+        let mut ins = self.codes.chunks_exact(BLOCK);
+        let mut outs = self.out.chunks_exact_mut(BLOCK);
+        for (c, o) in (&mut ins).zip(&mut outs) {
+            let (mut x, mut y, mut z) = ([0f32; BLOCK], [0f32; BLOCK], [0f32; BLOCK]);
+            for j in 0..BLOCK {
+                let v = Planar::decode_with(proj, q, c[j]);
+                (x[j], y[j], z[j]) = (v.x, v.y, v.z);
+            }
+            join_block(&x, &y, &z, o);
+        }
+        for (c, o) in ins.remainder().iter().zip(outs.into_remainder()) {
+            *o = Planar::decode_with(proj, q, *c);
+        }
+    }
+}
+
+/// One block of vectors as three component arrays.
+#[inline(always)]
+pub(crate) fn split_block(v: &[Vec3]) -> ([f32; BLOCK], [f32; BLOCK], [f32; BLOCK]) {
+    let (mut x, mut y, mut z) = ([0f32; BLOCK], [0f32; BLOCK], [0f32; BLOCK]);
+    for (j, n) in v[..BLOCK].iter().enumerate() {
+        (x[j], y[j], z[j]) = (n.x, n.y, n.z);
+    }
+    (x, y, z)
+}
+
+/// Three component arrays back into one block of vectors.
+#[inline(always)]
+pub(crate) fn join_block(x: &[f32; BLOCK], y: &[f32; BLOCK], z: &[f32; BLOCK], out: &mut [Vec3]) {
+    for (j, o) in out[..BLOCK].iter_mut().enumerate() {
+        *o = Vec3::new(x[j], y[j], z[j]);
     }
 }
 
@@ -428,13 +623,19 @@ impl<P: Projection + std::fmt::Debug> NormalCodec for Planar<P> {
     }
     #[inline]
     fn encode(&self, n: Vec3) -> u64 {
-        let p = self.proj.encode_plane(sanitize(n));
-        let k = self.quant.bits();
-        self.quant.encode(p.x) | (self.quant.encode(p.y) << k)
+        match self.quant {
+            Quant::Snorm(k) => Self::encode_with(self.proj, SnormQ::new(k), n),
+            Quant::Unorm(k) => Self::encode_with(self.proj, UnormQ::new(k), n),
+            Quant::F16 => Self::encode_with(self.proj, F16Q, n),
+        }
     }
     #[inline]
     fn decode(&self, code: u64) -> Vec3 {
-        finish(self.proj.decode_plane(self.plane_of(code)))
+        match self.quant {
+            Quant::Snorm(k) => Self::decode_with(self.proj, SnormQ::new(k), code),
+            Quant::Unorm(k) => Self::decode_with(self.proj, UnormQ::new(k), code),
+            Quant::F16 => Self::decode_with(self.proj, F16Q, code),
+        }
     }
     fn max_error_deg(&self) -> f32 {
         let h = self.quant.half_step(self.proj.plane_extent());
@@ -445,6 +646,24 @@ impl<P: Projection + std::fmt::Debug> NormalCodec for Planar<P> {
     }
     fn is_idempotent(&self) -> bool {
         self.proj.is_idempotent(self.quant)
+    }
+    fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
+        assert_eq!(input.len(), out.len(), "encode_slice: {} normals into {} codes", input.len(), out.len());
+        let proj = self.proj;
+        match self.quant {
+            Quant::Snorm(k) => run(isa, PlanarEncode { proj, q: SnormQ::new(k), input, out }),
+            Quant::Unorm(k) => run(isa, PlanarEncode { proj, q: UnormQ::new(k), input, out }),
+            Quant::F16 => run(isa, PlanarEncode { proj, q: F16Q, input, out }),
+        }
+    }
+    fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Vec3]) {
+        assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} normals", codes.len(), out.len());
+        let proj = self.proj;
+        match self.quant {
+            Quant::Snorm(k) => run(isa, PlanarDecode { proj, q: SnormQ::new(k), codes, out }),
+            Quant::Unorm(k) => run(isa, PlanarDecode { proj, q: UnormQ::new(k), codes, out }),
+            Quant::F16 => run(isa, PlanarDecode { proj, q: F16Q, codes, out }),
+        }
     }
 }
 
@@ -510,11 +729,11 @@ mod tests {
     fn round_half_away_matches_round() {
         let mut rng = crate::util::SplitMix64::new(5);
         for v in [0.5f32, -0.5, 1.5, -2.5, 0.499_999_97, -0.499_999_97, 0.0, -0.0, 32767.5, 1e7 + 0.5] {
-            assert_eq!(round_half_away(v), v.round() as i64, "{v}");
+            assert_eq!(round_half_away(v), v.round() as i32, "{v}");
         }
         for _ in 0..100_000 {
             let v = rng.range_f32(-70_000.0, 70_000.0);
-            assert_eq!(round_half_away(v), v.round() as i64, "{v}");
+            assert_eq!(round_half_away(v), v.round() as i32, "{v}");
         }
     }
 

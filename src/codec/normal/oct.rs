@@ -24,7 +24,7 @@ pub const OCT_MAX_STRETCH: f32 = 3.0;
 
 impl Oct {
     /// Unit vector → octahedral plane point in [−1, 1]².
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn project(n: Vec3) -> Vec2 {
         let l1 = n.x.abs() + n.y.abs() + n.z.abs();
@@ -37,7 +37,7 @@ impl Oct {
     }
 
     /// Octahedral plane point → (unnormalised) vector.
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn unproject(p: Vec2) -> Vec3 {
         let p = p.clamp(Vec2::NEG_ONE, Vec2::ONE);
@@ -58,11 +58,11 @@ impl Projection for Oct {
             "oct"
         }
     }
-    #[inline]
+    #[inline(always)]
     fn encode_plane(&self, n: Vec3) -> Vec2 {
         Oct::project(n)
     }
-    #[inline]
+    #[inline(always)]
     fn decode_plane(&self, p: Vec2) -> Vec3 {
         Oct::unproject(p)
     }
@@ -113,7 +113,7 @@ impl NormalCodec for OctPrecise {
         }
         best.1
     }
-    #[inline]
+    #[inline(always)]
     fn decode(&self, code: u64) -> Vec3 {
         finish(Oct::unproject(self.plain.plane_of(code)))
     }

@@ -34,23 +34,24 @@ pub struct SpheremapCry;
 
 impl SpheremapCry {
     /// Mittring's encode, with +X as the direction where `normalize(n.xy)` is undefined.
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn project(n: Vec3) -> Vec2 {
         normalize2_or_x(Vec2::new(n.x, n.y)) * (n.z * 0.5 + 0.5).max(0.0).sqrt()
     }
 
     /// Mittring's decode (g outside the unit disc is treated as on the rim).
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn unproject(g: Vec2) -> Vec3 {
         let z = (g.length_squared() * 2.0 - 1.0).clamp(-1.0, 1.0);
         let r = (1.0 - z * z).max(0.0).sqrt();
-        if g == Vec2::ZERO {
-            return Vec3::NEG_Z;
-        }
         let xy = normalize2_or_x(g) * r;
-        Vec3::new(xy.x, xy.y, z)
+        if g == Vec2::ZERO {
+            Vec3::NEG_Z
+        } else {
+            Vec3::new(xy.x, xy.y, z)
+        }
     }
 }
 
@@ -68,11 +69,11 @@ impl Projection for SpheremapCry {
             "spheremap-cry"
         }
     }
-    #[inline]
+    #[inline(always)]
     fn encode_plane(&self, n: Vec3) -> Vec2 {
         SpheremapCry::project(n)
     }
-    #[inline]
+    #[inline(always)]
     fn decode_plane(&self, p: Vec2) -> Vec3 {
         SpheremapCry::unproject(p)
     }
@@ -108,11 +109,11 @@ impl Projection for SpheremapIspc {
     fn scheme_name(&self, _q: Quant) -> &'static str {
         "spheremap-ispc"
     }
-    #[inline]
+    #[inline(always)]
     fn encode_plane(&self, n: Vec3) -> Vec2 {
         ispc_spheremap_encode(n)
     }
-    #[inline]
+    #[inline(always)]
     fn decode_plane(&self, p: Vec2) -> Vec3 {
         ispc_spheremap_decode(p)
     }

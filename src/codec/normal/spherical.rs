@@ -22,13 +22,13 @@ impl Projection for Spherical {
     fn scheme_name(&self, _q: Quant) -> &'static str {
         "spherical"
     }
-    #[inline]
+    #[inline(always)]
     fn encode_plane(&self, n: Vec3) -> Vec2 {
         let theta = Vec2::new(n.x, n.y).length().atan2(n.z);
         let phi = n.y.atan2(n.x);
         Vec2::new(theta / PI, (phi + PI) / TAU)
     }
-    #[inline]
+    #[inline(always)]
     fn decode_plane(&self, p: Vec2) -> Vec3 {
         // sin(π) is not 0 in f32: snap the south pole so that every code on it decodes to exactly −Z.
         if p.x >= 1.0 {

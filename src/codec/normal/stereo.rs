@@ -27,15 +27,17 @@ impl Stereo {
     pub const UNSCALED: Stereo = Stereo { scale: 1.0 };
 
     /// tan(θ/2) along the direction of n.xy, divided by the scale (unclamped; may be huge near −Z).
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn project_unclamped(self, n: Vec3) -> Vec2 {
         let xy = Vec2::new(n.x, n.y);
         let r = xy.length();
+        let front = xy / ((1.0 + n.z) * self.scale);
+        let back = normalize2_or_x(xy) * ((1.0 - n.z) / r / self.scale).min(F16_MAX);
         if n.z >= 0.0 {
-            xy / ((1.0 + n.z) * self.scale)
+            front
         } else if r > 0.0 {
-            normalize2_or_x(xy) * ((1.0 - n.z) / r / self.scale).min(F16_MAX)
+            back
         } else {
             Vec2::new(F16_MAX, 0.0)
         }
@@ -50,7 +52,7 @@ impl Projection for Stereo {
             "stereo"
         }
     }
-    #[inline]
+    #[inline(always)]
     fn encode_plane(&self, n: Vec3) -> Vec2 {
         let p = self.project_unclamped(n);
         // Radial clamp onto the square [-1, 1]² for the snorm variant (scale ≠ 1), onto f16 range otherwise.
@@ -62,15 +64,17 @@ impl Projection for Stereo {
             p
         }
     }
-    #[inline]
+    #[inline(always)]
     fn decode_plane(&self, p: Vec2) -> Vec3 {
         let p = p * self.scale;
         let r2 = p.length_squared();
-        if !r2.is_finite() {
-            return Vec3::NEG_Z;
-        }
         let d = 1.0 + r2;
-        Vec3::new(2.0 * p.x / d, 2.0 * p.y / d, (1.0 - r2) / d)
+        let v = Vec3::new(2.0 * p.x / d, 2.0 * p.y / d, (1.0 - r2) / d);
+        if r2.is_finite() {
+            v
+        } else {
+            Vec3::NEG_Z
+        }
     }
     fn bound_rad(&self, hx: f32, hy: f32, q: Quant) -> f32 {
         if q == Quant::F16 {

@@ -10,7 +10,10 @@
 //! Not idempotent: renormalising moves the decoded vector off the grid, so re-encoding it can land on a
 //! neighbouring code (within the bound). The all-zero snorm code decodes to +Z.
 
-use super::{finish, sanitize, NormalCodec, Quant, FLOAT_SLACK_RAD};
+use super::{
+    finish, join_block, sanitize, split_block, NormalCodec, Quant, Quantizer, SnormQ, UnormQ, F16Q, FLOAT_SLACK_RAD,
+};
+use crate::codec::simd::{run, Isa, Kernel, BLOCK};
 use glam::Vec3;
 
 /// How each xyz component is stored.
@@ -42,20 +45,92 @@ impl Xyz {
         };
         Xyz { storage, quant }
     }
+}
 
-    #[inline]
-    fn n_to_stored(self, v: f32) -> f32 {
-        match self.storage {
-            XyzStorage::Unorm(_) => v * 0.5 + 0.5,
-            _ => v,
+/// How a stored component maps to a normal component: identity (snorm, f16) or `v·0.5+0.5` (unorm).
+#[inline(always)]
+fn n_to_stored(unorm: bool, v: f32) -> f32 {
+    if unorm {
+        v * 0.5 + 0.5
+    } else {
+        v
+    }
+}
+
+#[inline(always)]
+fn stored_to_n(unorm: bool, v: f32) -> f32 {
+    if unorm {
+        v * 2.0 - 1.0
+    } else {
+        v
+    }
+}
+
+/// The per-element encode body shared by the scalar and slice paths.
+#[inline(always)]
+fn encode_with<Q: Quantizer>(q: Q, unorm: bool, n: Vec3) -> u64 {
+    let n = sanitize(n);
+    let k = q.bits();
+    let e = |v: f32| u64::from(q.enc(n_to_stored(unorm, v)));
+    e(n.x) | (e(n.y) << k) | (e(n.z) << (2 * k))
+}
+
+/// The per-element decode body shared by the scalar and slice paths.
+#[inline(always)]
+fn decode_with<Q: Quantizer>(q: Q, unorm: bool, code: u64) -> Vec3 {
+    let k = q.bits();
+    let d = |c: u64| stored_to_n(unorm, q.dec(c as u32));
+    finish(Vec3::new(d(code), d(code >> k), d(code >> (2 * k))))
+}
+
+struct XyzEncode<'a, Q> {
+    q: Q,
+    unorm: bool,
+    input: &'a [Vec3],
+    out: &'a mut [u64],
+}
+
+impl<Q: Quantizer> Kernel for XyzEncode<'_, Q> {
+    #[inline(always)]
+    fn run(self) {
+        let (q, unorm) = (self.q, self.unorm);
+        let mut ins = self.input.chunks_exact(BLOCK);
+        let mut outs = self.out.chunks_exact_mut(BLOCK);
+        for (i, o) in (&mut ins).zip(&mut outs) {
+            let (x, y, z) = split_block(i);
+            for j in 0..BLOCK {
+                o[j] = encode_with(q, unorm, Vec3::new(x[j], y[j], z[j]));
+            }
+        }
+        for (n, o) in ins.remainder().iter().zip(outs.into_remainder()) {
+            *o = encode_with(q, unorm, *n);
         }
     }
+}
 
-    #[inline]
-    fn stored_to_n(self, v: f32) -> f32 {
-        match self.storage {
-            XyzStorage::Unorm(_) => v * 2.0 - 1.0,
-            _ => v,
+struct XyzDecode<'a, Q> {
+    q: Q,
+    unorm: bool,
+    codes: &'a [u64],
+    out: &'a mut [Vec3],
+}
+
+impl<Q: Quantizer> Kernel for XyzDecode<'_, Q> {
+    #[inline(always)]
+    fn run(self) {
+        let (q, unorm) = (self.q, self.unorm);
+        let mut ins = self.codes.chunks_exact(BLOCK);
+        let mut outs = self.out.chunks_exact_mut(BLOCK);
+        for (c, o) in (&mut ins).zip(&mut outs) {
+            let (mut x, mut y, mut z) = ([0f32; BLOCK], [0f32; BLOCK], [0f32; BLOCK]);
+            for j in 0..BLOCK {
+                let v = decode_with(q, unorm, c[j]);
+                (x[j], y[j], z[j]) = (v.x, v.y, v.z);
+            }
+            join_block(&x, &y, &z, o);
+        }
+        for (c, o) in ins.remainder().iter().zip(outs.into_remainder()) {
+            *o = decode_with(q, unorm, *c);
         }
     }
 }
@@ -73,16 +148,35 @@ impl NormalCodec for Xyz {
     }
     #[inline]
     fn encode(&self, n: Vec3) -> u64 {
-        let n = sanitize(n);
-        let k = self.quant.bits();
-        let q = |v: f32| self.quant.encode(self.n_to_stored(v));
-        q(n.x) | (q(n.y) << k) | (q(n.z) << (2 * k))
+        match self.storage {
+            XyzStorage::Snorm(k) => encode_with(SnormQ::new(k), false, n),
+            XyzStorage::Unorm(k) => encode_with(UnormQ::new(k), true, n),
+            XyzStorage::F16 => encode_with(F16Q, false, n),
+        }
     }
     #[inline]
     fn decode(&self, code: u64) -> Vec3 {
-        let k = self.quant.bits();
-        let d = |c: u64| self.stored_to_n(self.quant.decode(c));
-        finish(Vec3::new(d(code), d(code >> k), d(code >> (2 * k))))
+        match self.storage {
+            XyzStorage::Snorm(k) => decode_with(SnormQ::new(k), false, code),
+            XyzStorage::Unorm(k) => decode_with(UnormQ::new(k), true, code),
+            XyzStorage::F16 => decode_with(F16Q, false, code),
+        }
+    }
+    fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
+        assert_eq!(input.len(), out.len(), "encode_slice: {} normals into {} codes", input.len(), out.len());
+        match self.storage {
+            XyzStorage::Snorm(k) => run(isa, XyzEncode { q: SnormQ::new(k), unorm: false, input, out }),
+            XyzStorage::Unorm(k) => run(isa, XyzEncode { q: UnormQ::new(k), unorm: true, input, out }),
+            XyzStorage::F16 => run(isa, XyzEncode { q: F16Q, unorm: false, input, out }),
+        }
+    }
+    fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Vec3]) {
+        assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} normals", codes.len(), out.len());
+        match self.storage {
+            XyzStorage::Snorm(k) => run(isa, XyzDecode { q: SnormQ::new(k), unorm: false, codes, out }),
+            XyzStorage::Unorm(k) => run(isa, XyzDecode { q: UnormQ::new(k), unorm: true, codes, out }),
+            XyzStorage::F16 => run(isa, XyzDecode { q: F16Q, unorm: false, codes, out }),
+        }
     }
     fn max_error_deg(&self) -> f32 {
         // Half a step in n units: unorm steps are twice as large in n = 2v − 1.

@@ -1,0 +1,71 @@
+//! The report stage (issue 5): what one layout × detector row of `gbuf report` costs, against the plain resolve of
+//! the same frame.
+//!
+//! - `report/row/<layout>/<detector>/WxHxS`: `report::sweep::sweep` with one layout and one detector and one timing
+//!   run — the f64 reference, the exact-G-buffer resolve the row's `layout_rmse` compares with, the layout's pack /
+//!   unpack, attribute error maps, the detector, its ground-truth scores, the resolve and the image errors;
+//! - `report/plain-resolve/<detector>/WxHxS`: the baseline, what `gbuf resolve --no-reference` does for the same
+//!   frame: the detector and the resolve on the unpacked G-buffer.
+//!
+//! - `report/reference/WxHxS`: the f64 every-sample reference alone, the largest part of a row.
+//!
+//! The ratio of the two (measured in the same run) is what a report row costs in resolves. The room and its lights
+//! are built once, outside the timed loop. Run briefly:
+//! `cargo bench --bench report -- --warm-up-time 1 --measurement-time 3`.
+//!
+//! Measured (2 shared cores, load average 4–5.5 from other work, so the absolute times are noisy): plain resolve
+//! 7.8 ms, reference 79.7 ms, row 161 ms — a row costs about 21 plain resolves, half of it the f64 reference, which
+//! `gbuf report` computes once per sweep, not once per row. An earlier run in the same session gave 2.4 / 107 ms
+//! (45×): the 2-thread plain resolve is the figure most sensitive to the load.
+
+use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use gbuf::detect::{detect, Detector, DetectorConfig};
+use gbuf::layout::Layout;
+use gbuf::report::sweep::{sweep, SweepConfig};
+use gbuf::resolve::{reference, resolve, ResolveConfig};
+use gbuf::scene::{default_lights, render, SceneName};
+
+const W: u32 = 320;
+const H: u32 = 180;
+const SAMPLES: u32 = 4;
+const LAYOUT: &str = "lauritzen-15";
+const DETECTOR: Detector = Detector::Lauritzen;
+
+fn benches(c: &mut Criterion) {
+    let gb = render(SceneName::Room, W, H, SAMPLES).expect("room");
+    let lights = default_lights(SceneName::Room, &gb);
+    let layout = Layout::by_name_or_path(LAYOUT).expect("built-in layout");
+    let det_cfg = DetectorConfig::default();
+    let resolve_cfg = ResolveConfig::default();
+    let sweep_cfg = SweepConfig {
+        layouts: vec![layout],
+        detectors: vec![DETECTOR],
+        detector_config: det_cfg,
+        culling: Vec::new(),
+        resolve: resolve_cfg,
+        runs: 1,
+    };
+    let size = format!("{W}x{H}x{SAMPLES}");
+    let mut group = c.benchmark_group("report");
+    group.sample_size(10);
+    group.bench_function(format!("plain-resolve/{}/{size}", DETECTOR.name()), |b| {
+        b.iter(|| {
+            let mask = detect(black_box(&gb), DETECTOR, &det_cfg).unwrap();
+            resolve(&gb, black_box(&lights), &mask, &resolve_cfg).unwrap()
+        })
+    });
+    group.bench_function(format!("reference/{size}"), |b| {
+        b.iter(|| reference(black_box(&gb), black_box(&lights), &resolve_cfg).unwrap())
+    });
+    group.bench_function(format!("row/{LAYOUT}/{}/{size}", DETECTOR.name()), |b| {
+        b.iter(|| {
+            let out = sweep(black_box(&gb), black_box(&lights), &sweep_cfg, &mut |_, _, _| {}).unwrap();
+            assert!(out.rows.len() == 1 && out.rows[0].error.is_none(), "the row must succeed");
+            out
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(report, benches);
+criterion_main!(report);
