@@ -1,4 +1,6 @@
-//! Each edge detector on a 1280×720 G-buffer with 4 samples per pixel: `detect/<detector>/1280x720x4`.
+//! Each edge detector on a 1280×720 G-buffer with 4 samples per pixel: `detect/<detector>/1280x720x4`; and the
+//! shading truth from the per-sample reference radiance (computed once, outside the loop):
+//! `detect/shading-truth/1280x720x4`.
 //! The G-buffer is ray-cast once, outside the timed loop, from a few analytic surfaces (floor, back wall, a tilted
 //! panel in front, a tessellated sphere) so every detector has silhouettes, creases and triangle edges to find.
 
@@ -7,6 +9,7 @@ mod support;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use gbuf::detect::{detect, Detector, DetectorConfig};
+use gbuf::measure::edges::{shading_truth, DEFAULT_SHADING_TOLERANCE};
 use glam::Vec3;
 use support::{render, Shape, Surface};
 
@@ -52,6 +55,14 @@ fn bench(c: &mut Criterion) {
             b.iter(|| detect(black_box(&gb), d, black_box(&cfg)).unwrap())
         });
     }
+    let lights = [
+        gbuf::Light::point(Vec3::new(-1.0, 0.5, -5.0), Vec3::new(1.0, 0.8, 0.6), 8.0, 12.0),
+        gbuf::Light::point(Vec3::new(2.0, 1.0, -7.0), Vec3::new(0.6, 0.8, 1.0), 8.0, 12.0),
+    ];
+    let radiance = gbuf::resolve::reference_per_sample(&gb, &lights, &Default::default()).unwrap();
+    group.bench_function(format!("shading-truth/{w}x{h}x{s}"), |b| {
+        b.iter(|| shading_truth(black_box(&gb), black_box(&radiance), DEFAULT_SHADING_TOLERANCE))
+    });
     group.finish();
 }
 

@@ -159,6 +159,16 @@ fn shading_truth_with_lights_from_the_sidecar() {
         assert_eq!(out.status.code(), Some(2), "{bad}");
         assert!(String::from_utf8_lossy(&out.stderr).contains("shading tolerance"), "{bad}");
     }
+    // The reference's lighting model is a flag too, and is stated back.
+    let lambert =
+        json(&gbuf_cmd(dir.path(), &["edges", "scene.exr", "--json", "--brdf", "lambert", "--falloff", "gltf"]));
+    assert_eq!(
+        (lambert["shading_truth"]["brdf"].as_str(), lambert["shading_truth"]["falloff"].as_str()),
+        (Some("lambert"), Some("gltf"))
+    );
+    let out = gbuf_cmd(dir.path(), &["edges", "scene.exr", "--brdf", "phong"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("blinn-phong"));
     let out = gbuf_cmd(dir.path(), &["edges", "scene.exr", "--exposure", "0"]);
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("exposure"));

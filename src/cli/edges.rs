@@ -7,6 +7,7 @@ use gbuf::detect::{self, truth, Detector, DetectorConfig, EdgeMask, IdSource};
 use gbuf::measure::edges::{
     evaluate_against, shading_truth, truth_agreement, EdgeStats, ShadingTolerance, TruthAgreement,
 };
+use gbuf::resolve::{Brdf, Falloff};
 use gbuf::GBuffer;
 use std::io::Write;
 use std::path::PathBuf;
@@ -88,6 +89,33 @@ impl ThresholdArgs {
     }
 }
 
+/// `--mask-truth`: the truth the mask picture's misses and false alarms are drawn against.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MaskTruth {
+    /// Object IDs.
+    Id,
+    /// The shading truth (needs lights).
+    Shading,
+}
+
+impl MaskTruth {
+    /// The CLI / JSON spelling.
+    pub fn name(self) -> &'static str {
+        match self {
+            MaskTruth::Id => "id",
+            MaskTruth::Shading => "shading",
+        }
+    }
+}
+
+fn parse_mask_truth(s: &str) -> Result<MaskTruth, String> {
+    match s {
+        "id" => Ok(MaskTruth::Id),
+        "shading" => Ok(MaskTruth::Shading),
+        _ => Err(format!("unknown truth {s:?}; known: id, shading")),
+    }
+}
+
 /// Flags of `gbuf edges`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -114,8 +142,14 @@ pub struct Args {
     pub mask: Option<PathBuf>,
     /// Which truth colours the misses and false alarms of --mask: id (object IDs) or shading (needs lights).
     /// Default: id when the dump has object IDs, else shading when it has lights.
-    #[arg(long, value_name = "TRUTH", value_parser = ["id", "shading"])]
-    pub mask_truth: Option<String>,
+    #[arg(long, value_name = "TRUTH", value_parser = parse_mask_truth)]
+    pub mask_truth: Option<MaskTruth>,
+    /// BRDF of the shading truth's reference: lambert, blinn-phong, ggx.
+    #[arg(long, value_name = "B", default_value = "blinn-phong", value_parser = crate::cli::resolve::parse_brdf)]
+    pub brdf: Brdf,
+    /// Distance falloff of the shading truth's reference: gltf, linear.
+    #[arg(long, value_name = "F", default_value = "linear", value_parser = crate::cli::resolve::parse_falloff)]
+    pub falloff: Falloff,
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
@@ -208,7 +242,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let truth = truth::object_truth(gb);
     let prim_truth = truth::id_truth(gb, truth::TruthSource::Primitive);
     // The shading truth needs the reference radiance, so lights: from the sidecar or the dump.
-    let resolve_cfg = gbuf::resolve::ResolveConfig::default();
+    let resolve_cfg = gbuf::resolve::ResolveConfig { brdf: args.brdf, falloff: args.falloff, ..Default::default() };
     let shading = match loaded.lights.as_deref() {
         Some(lights) if !lights.is_empty() => {
             let radiance = gbuf::resolve::reference_per_sample(gb, lights, &resolve_cfg)
@@ -252,15 +286,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut mask_truth = None;
     if let (Some(path), Some(mask)) = (&args.mask, &last_mask) {
         let shading_flags = shading.as_ref().map(|s| s.0.as_slice());
-        let picked = match args.mask_truth.as_deref() {
-            Some("id") => Some((
-                "id",
+        let picked = match args.mask_truth {
+            Some(MaskTruth::Id) => Some((
+                MaskTruth::Id,
                 truth
                     .as_deref()
                     .with_context(|| format!("--mask-truth id: {} has no object IDs", args.input.file.display()))?,
             )),
-            Some(_) => Some((
-                "shading",
+            Some(MaskTruth::Shading) => Some((
+                MaskTruth::Shading,
                 shading_flags.with_context(|| {
                     format!(
                         "--mask-truth shading: {} comes with no lights (sidecar or dump)",
@@ -268,9 +302,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     )
                 })?,
             )),
-            None => truth.as_deref().map(|t| ("id", t)).or(shading_flags.map(|t| ("shading", t))),
+            None => truth.as_deref().map(|t| (MaskTruth::Id, t)).or(shading_flags.map(|t| (MaskTruth::Shading, t))),
         };
-        mask_truth = picked.map(|(name, _)| name);
+        mask_truth = picked.map(|(which, _)| which.name());
         detect::picture::write_png(path, gb, mask, picked.map(|(_, t)| t))
             .with_context(|| format!("writing the mask picture {}", path.display()))?;
     }

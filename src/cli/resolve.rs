@@ -22,10 +22,10 @@ fn parse_with<T>(s: &str, what: &str, from: fn(&str) -> Option<T>, names: String
 fn parse_culling(s: &str) -> Result<Culling, String> {
     parse_with(s, "culling", Culling::from_name, Culling::names())
 }
-fn parse_brdf(s: &str) -> Result<Brdf, String> {
+pub(crate) fn parse_brdf(s: &str) -> Result<Brdf, String> {
     parse_with(s, "BRDF", Brdf::from_name, Brdf::names())
 }
-fn parse_falloff(s: &str) -> Result<Falloff, String> {
+pub(crate) fn parse_falloff(s: &str) -> Result<Falloff, String> {
     parse_with(s, "falloff", Falloff::from_name, Falloff::names())
 }
 fn parse_schedule(s: &str) -> Result<Schedule, String> {

@@ -92,7 +92,9 @@ named_enum! {
         /// Full deferred shading: every shaded sample evaluates the whole BRDF per light.
         Deferred => "deferred",
         /// Deferred lighting (light pre-pass): lights accumulate RGB diffuse light and a monochromatic specular
-        /// term, which a second pass combines with the albedo. Exact for white lights, approximate otherwise.
+        /// term, which a second pass combines with the albedo. Exact (up to f32 rounding) for Lambert, and for
+        /// Blinn-Phong when all lights share one colour; approximate otherwise, and for GGX even under white
+        /// light (see docs/RESOLVE.md, "Light pre-pass against full deferred").
         LightPrepass => "light-prepass",
     }
 }

@@ -45,12 +45,14 @@ impl Bounds {
         }
         let mut b = [f32::INFINITY, f32::NEG_INFINITY, f32::INFINITY, f32::NEG_INFINITY, f32::INFINITY, 0.0];
         for j in range {
-            b[0] = b[0].min(it.tx[j]);
-            b[1] = b[1].max(it.tx[j]);
-            b[2] = b[2].min(it.ty[j]);
-            b[3] = b[3].max(it.ty[j]);
-            b[4] = b[4].min(it.dep[j]);
-            b[5] = b[5].max(it.dep[j]);
+            let d = -it.pz[j];
+            let (tx, ty) = (it.px[j] / d, it.py[j] / d);
+            b[0] = b[0].min(tx);
+            b[1] = b[1].max(tx);
+            b[2] = b[2].min(ty);
+            b[3] = b[3].max(ty);
+            b[4] = b[4].min(d);
+            b[5] = b[5].max(d);
         }
         Some(Bounds::new(b[0], b[1], b[2], b[3], b[4], b[5]))
     }
@@ -69,7 +71,7 @@ impl Bounds {
     }
 
     /// Can a sphere at `c` with radius `r` (already grown by the margin) reach a point inside the bounds?
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn may_touch(&self, c: Vec3, r: f32) -> bool {
         // Non-short-circuit `&` so a loop over lights compiles to branch-free vector code.

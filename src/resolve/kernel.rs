@@ -10,16 +10,18 @@
 use super::brdf::{DIELECTRIC_F0, MIN_ALPHA, MIN_HALF_LENGTH, MIN_NDOTV};
 use super::config::{Brdf, Falloff};
 use super::falloff::MIN_DISTANCE;
-use super::fastmath::pow_clamped;
-use super::lights::{LightSoa, LUMA};
+use super::fastmath::POW_MIN_BASE;
+use super::lights::{LightTable, LUMA};
+#[cfg(target_arch = "x86_64")]
+use super::simd::Avx512;
+pub use super::simd::LANES;
+use super::simd::{Lanes, Portable};
 use super::surface::Surface;
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
-
-/// Work lists are padded to a multiple of this many items (the widest vector: 16 f32 lanes of AVX-512).
-pub const LANES: usize = 16;
 /// `pixel` of padding items.
 pub const PAD_PIXEL: u32 = u32::MAX;
+const SKIP_DARK: bool = true;
 
 /// Per-light screen rectangle (tangent units x/d, y/d) and depth bounds for quad culling.
 #[derive(Clone, Debug, Default)]
@@ -80,17 +82,22 @@ macro_rules! soa {
                 $(self.$f.push(o.$f[i]);)*
                 $(self.$u.push(o.$u[i]);)*
             }
+            /// Sets every array's length to `n` (new entries 0).
+            pub fn resize(&mut self, n: usize) {
+                $(self.$f.resize(n, 0.0);)*
+                $(self.$u.resize(n, 0);)*
+            }
         }
     };
 }
 
 soa! {
-    /// A packed work list: one entry per sample to shade. Inputs are set by [`Items::push`]; `or..ls`, `tested`
-    /// and `lit` are accumulated by [`shade`]; `pixel` and `weight` say where the result goes (box filter).
+    /// A packed work list: one entry per sample to shade. The schedule fills the surface (`px..metal`), `pixel`
+    /// and `weight` (where the result goes: the box filter; `pixel` indexes the rows of the tile's band); [`shade`] writes `or..ls` (colour, or the light
+    /// pre-pass buffers), `tested` and `lit` (light counts, exact in f32 below 2²⁴ lights).
     Items {
-        f32: [px, py, pz, nx, ny, nz, vx, vy, vz, ar, ag, ab, sn, pw, a2, nv, f0r, f0g, f0b, dr, dg, db, tx, ty, dep,
-              or, og, ob, ls, weight],
-        u32: [tested, lit, pixel]
+        f32: [px, py, pz, nx, ny, nz, ar, ag, ab, spec, pw, rough, metal, or, og, ob, ls, tested, lit, weight],
+        u32: [pixel]
     }
 }
 
@@ -118,46 +125,27 @@ impl Items {
         }
     }
 
-    /// Appends a sample with its destination pixel (index within the tile) and box-filter weight.
+    /// Appends a sample with its destination pixel and box-filter weight.
     pub fn push(&mut self, s: &Surface, pixel: u32, weight: f32) {
-        let v = -s.p / s.p.length();
-        let d = -s.p.z;
-        self.px.push(s.p.x);
-        self.py.push(s.p.y);
-        self.pz.push(s.p.z);
-        self.nx.push(s.n.x);
-        self.ny.push(s.n.y);
-        self.nz.push(s.n.z);
-        self.vx.push(v.x);
-        self.vy.push(v.y);
-        self.vz.push(v.z);
-        self.ar.push(s.albedo.x);
-        self.ag.push(s.albedo.y);
-        self.ab.push(s.albedo.z);
-        self.sn.push(s.specular * (s.power + 2.0) / 8.0);
-        self.pw.push(s.power);
-        let alpha = (s.roughness * s.roughness).max(MIN_ALPHA);
-        self.a2.push(alpha * alpha);
-        self.nv.push(s.n.dot(v).max(MIN_NDOTV));
-        let f0 = Vec3::splat(DIELECTRIC_F0).lerp(s.albedo, s.metallic);
-        self.f0r.push(f0.x);
-        self.f0g.push(f0.y);
-        self.f0b.push(f0.z);
-        let c_diff = s.albedo * (1.0 - s.metallic) * FRAC_1_PI;
-        self.dr.push(c_diff.x);
-        self.dg.push(c_diff.y);
-        self.db.push(c_diff.z);
-        self.tx.push(s.p.x / d);
-        self.ty.push(s.p.y / d);
-        self.dep.push(d);
-        self.or.push(0.0);
-        self.og.push(0.0);
-        self.ob.push(0.0);
-        self.ls.push(0.0);
-        self.weight.push(weight);
-        self.tested.push(0);
-        self.lit.push(0);
-        self.pixel.push(pixel);
+        let n = self.len();
+        self.resize(n + 1);
+        self.set(n, s);
+        self.pixel[n] = pixel;
+        self.weight[n] = weight;
+    }
+
+    /// Writes surface `s` into item `j`.
+    pub fn set(&mut self, j: usize, s: &Surface) {
+        (self.px[j], self.py[j], self.pz[j]) = (s.p.x, s.p.y, s.p.z);
+        (self.nx[j], self.ny[j], self.nz[j]) = (s.n.x, s.n.y, s.n.z);
+        (self.ar[j], self.ag[j], self.ab[j]) = (s.albedo.x, s.albedo.y, s.albedo.z);
+        (self.spec[j], self.pw[j], self.rough[j], self.metal[j]) = (s.specular, s.power, s.roughness, s.metallic);
+    }
+
+    /// View depth `−z` of item `j`.
+    #[must_use]
+    pub fn depth(&self, j: usize) -> f32 {
+        -self.pz[j]
     }
 }
 
@@ -170,12 +158,13 @@ pub struct Variant {
     pub falloff: Falloff,
     /// Apply the per-sample rectangle + depth test of quad culling.
     pub quad: bool,
-    /// Accumulate light pre-pass buffers (diffuse RGB in `or..ob`, monochrome specular in `ls`).
+    /// Write light pre-pass buffers (diffuse light RGB in `or..ob`, monochrome specular in `ls`) instead of colour.
     pub prepass: bool,
 }
 
-/// Shades items `range` of `it` against every light of `lights` (and, for quad culling, `quad`), accumulating.
-pub fn shade(it: &mut Items, range: std::ops::Range<usize>, lights: &LightSoa, quad: &QuadSoa, v: Variant) {
+/// Shades items `range` of `it` (a whole number of vectors) against every light of `lights` (and, for quad
+/// culling, `quad`), overwriting the items' outputs.
+pub fn shade(it: &mut Items, range: std::ops::Range<usize>, lights: &LightTable, quad: &QuadSoa, v: Variant) {
     macro_rules! pick {
         ($b:literal, $f:literal) => {
             match (v.quad, v.prepass) {
@@ -196,15 +185,30 @@ pub fn shade(it: &mut Items, range: std::ops::Range<usize>, lights: &LightSoa, q
     }
 }
 
+/// The instruction set the kernel runs with on this CPU: `avx512`, `avx2+fma` or `portable`.
+#[must_use]
+pub fn instruction_set() -> &'static str {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx512f") {
+            return "avx512";
+        }
+        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+            return "avx2+fma";
+        }
+    }
+    "portable"
+}
+
 fn dispatch<const B: u8, const F: u8, const Q: bool, const P: bool>(
     it: &mut Items,
     range: std::ops::Range<usize>,
-    lights: &LightSoa,
+    lights: &LightTable,
     quad: &QuadSoa,
 ) {
     #[cfg(target_arch = "x86_64")]
     {
-        if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512vl") {
+        if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the features the function was compiled for (checked just above).
             return unsafe { run_avx512::<B, F, Q, P>(it, range, lights, quad) };
         }
@@ -213,18 +217,18 @@ fn dispatch<const B: u8, const F: u8, const Q: bool, const P: bool>(
             return unsafe { run_avx2::<B, F, Q, P>(it, range, lights, quad) };
         }
     }
-    run::<B, F, Q, P>(it, range, lights, quad);
+    run::<Portable<false>, B, F, Q, P>(it, range, lights, quad);
 }
 
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
+#[target_feature(enable = "avx512f,avx2,fma")]
 fn run_avx512<const B: u8, const F: u8, const Q: bool, const P: bool>(
     it: &mut Items,
     range: std::ops::Range<usize>,
-    lights: &LightSoa,
+    lights: &LightTable,
     quad: &QuadSoa,
 ) {
-    run::<B, F, Q, P>(it, range, lights, quad);
+    run::<Avx512, B, F, Q, P>(it, range, lights, quad);
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -232,174 +236,244 @@ fn run_avx512<const B: u8, const F: u8, const Q: bool, const P: bool>(
 fn run_avx2<const B: u8, const F: u8, const Q: bool, const P: bool>(
     it: &mut Items,
     range: std::ops::Range<usize>,
-    lights: &LightSoa,
+    lights: &LightTable,
     quad: &QuadSoa,
 ) {
-    run::<B, F, Q, P>(it, range, lights, quad);
+    run::<Portable<true>, B, F, Q, P>(it, range, lights, quad);
 }
 
 #[inline(always)]
-fn run<const B: u8, const F: u8, const Q: bool, const P: bool>(
+fn run<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
     it: &mut Items,
     range: std::ops::Range<usize>,
-    lights: &LightSoa,
+    lights: &LightTable,
     quad: &QuadSoa,
 ) {
     debug_assert!(range.len().is_multiple_of(LANES), "work lists are padded to whole vectors");
     let mut c = range.start;
     while c + LANES <= range.end {
-        run_chunk::<B, F, Q, P>(it, c, lights, quad);
+        run_chunk::<V, B, F, Q, P>(it, c, lights, quad);
         c += LANES;
     }
 }
 
-/// Loads `LANES` values starting at `c`.
-#[inline(always)]
-fn ld(a: &[f32], c: usize) -> [f32; LANES] {
-    let mut out = [0.0; LANES];
-    out.copy_from_slice(&a[c..c + LANES]);
-    out
+/// Per-sample constants of one vector of items, derived once and reused for every light.
+struct Chunk<V> {
+    p: [V; 3],
+    n: [V; 3],
+    v: [V; 3],
+    /// Raw N·V (for N·H through the half-vector identity).
+    nv_raw: V,
+    /// N·V floored at [`MIN_NDOTV`] (GGX visibility).
+    nv: V,
+    /// Blinn-Phong `specAmount · (p + 2)/8` and `p`.
+    sn: V,
+    pw: V,
+    /// GGX α², `√((N·V)²(1 − α²) + α²)`, F0 and `c_diff/π`.
+    a2: V,
+    gv: V,
+    f0: [V; 3],
+    cd: [V; 3],
+    /// Quad test inputs: `x/d`, `y/d`, `d`.
+    t: [V; 3],
 }
 
-/// Shades one vector of `LANES` items against every light. Inputs and accumulators live in fixed-size local
-/// arrays, so the lane loop compiles to straight vector code (no aliasing checks, no remainder) and the
-/// accumulators stay in registers across the light loop.
 #[inline(always)]
-fn run_chunk<const B: u8, const F: u8, const Q: bool, const P: bool>(
+fn dot<V: Lanes>(a: &[V; 3], b: &[V; 3]) -> V {
+    a[0].mul_add(b[0], a[1].mul_add(b[1], a[2] * b[2]))
+}
+
+#[inline(always)]
+fn load_chunk<V: Lanes, const B: u8, const Q: bool>(it: &Items, c: usize) -> Chunk<V> {
+    let ld = |a: &[f32]| V::load(&a[c..]);
+    let s = V::splat;
+    let p = [ld(&it.px), ld(&it.py), ld(&it.pz)];
+    let n = [ld(&it.nx), ld(&it.ny), ld(&it.nz)];
+    let inv_len = dot(&p, &p).rsqrt();
+    let m = s(0.0) - inv_len;
+    let v = [p[0] * m, p[1] * m, p[2] * m];
+    let nv_raw = dot(&n, &v);
+    let nv = nv_raw.max(s(MIN_NDOTV));
+    let zero = s(0.0);
+    let mut k = Chunk {
+        p,
+        n,
+        v,
+        nv_raw,
+        nv,
+        sn: zero,
+        pw: zero,
+        a2: zero,
+        gv: zero,
+        f0: [zero; 3],
+        cd: [zero; 3],
+        t: [zero; 3],
+    };
+    if B == 1 {
+        k.pw = ld(&it.pw);
+        k.sn = ld(&it.spec) * (k.pw + s(2.0)) * s(0.125);
+    }
+    if B == 2 {
+        let r = ld(&it.rough);
+        let alpha = (r * r).max(s(MIN_ALPHA));
+        k.a2 = alpha * alpha;
+        let g2 = (nv * nv).mul_add(s(1.0) - k.a2, k.a2);
+        k.gv = g2 * g2.rsqrt();
+        let metal = ld(&it.metal);
+        let albedo = [ld(&it.ar), ld(&it.ag), ld(&it.ab)];
+        let diffuse = (s(1.0) - metal) * s(FRAC_1_PI);
+        k.f0 = albedo.map(|a| (a - s(DIELECTRIC_F0)).mul_add(metal, s(DIELECTRIC_F0)));
+        k.cd = albedo.map(|a| a * diffuse);
+    }
+    if Q {
+        let d = zero - p[2];
+        let inv_d = d.recip();
+        k.t = [p[0] * inv_d, p[1] * inv_d, d];
+    }
+    k
+}
+
+/// Shades one vector of `LANES` items against every light: per-sample constants and accumulators stay in
+/// registers across the light loop; a light whose energy is zero for all lanes skips the specular part (its
+/// contribution would be exactly 0).
+#[inline(always)]
+fn run_chunk<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
     it: &mut Items,
     c: usize,
-    lights: &LightSoa,
+    lights: &LightTable,
     quad: &QuadSoa,
 ) {
-    let (px, py, pz) = (ld(&it.px, c), ld(&it.py, c), ld(&it.pz, c));
-    let (nx, ny, nz) = (ld(&it.nx, c), ld(&it.ny, c), ld(&it.nz, c));
-    let (vx, vy, vz) = (ld(&it.vx, c), ld(&it.vy, c), ld(&it.vz, c));
-    let (ar, ag, ab) = (ld(&it.ar, c), ld(&it.ag, c), ld(&it.ab, c));
-    let (sn, pw, a2s, nvs) = (ld(&it.sn, c), ld(&it.pw, c), ld(&it.a2, c), ld(&it.nv, c));
-    let (f0r, f0g, f0b) = (ld(&it.f0r, c), ld(&it.f0g, c), ld(&it.f0b, c));
-    let (dr, dg, db) = (ld(&it.dr, c), ld(&it.dg, c), ld(&it.db, c));
-    let (tx, ty, dep) = (ld(&it.tx, c), ld(&it.ty, c), ld(&it.dep, c));
-    let (mut or, mut og, mut ob, mut ls) = (ld(&it.or, c), ld(&it.og, c), ld(&it.ob, c), ld(&it.ls, c));
-    let mut tested = [0u32; LANES];
-    let mut lit = [0u32; LANES];
-    let min_d = MIN_DISTANCE;
-    for l in 0..lights.len() {
-        let (lx, ly, lz, w) = (lights.px[l], lights.py[l], lights.pz[l], lights.w[l]);
-        let (cr, cg, cb, lum) = (lights.cr[l], lights.cg[l], lights.cb[l], lights.lum[l]);
-        let (fa, fb) = (lights.fa[l], lights.fb[l]);
-        let (sx, sy, sz, cs, co) = (lights.sx[l], lights.sy[l], lights.sz[l], lights.cs[l], lights.co[l]);
-        let (qx0, qx1, qy0, qy1, qz0, qz1) = if Q {
-            (quad.x0[l], quad.x1[l], quad.y0[l], quad.y1[l], quad.z0[l], quad.z1[l])
-        } else {
-            (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-        };
-        for j in 0..LANES {
-            let inside = if Q {
-                (tx[j] >= qx0) & (tx[j] <= qx1) & (ty[j] >= qy0) & (ty[j] <= qy1) & (dep[j] >= qz0) & (dep[j] <= qz1)
-            } else {
-                true
-            };
-            let mut lvx = lx - w * px[j];
-            let mut lvy = ly - w * py[j];
-            let mut lvz = lz - w * pz[j];
-            let d2 = lvx * lvx + lvy * lvy + lvz * lvz;
-            let d = d2.sqrt().max(min_d);
-            let inv = 1.0 / d;
-            lvx *= inv;
-            lvy *= inv;
-            lvz *= inv;
-            let ndl = (nx[j] * lvx + ny[j] * lvy + nz[j] * lvz).max(0.0);
-            let atten = if F == 0 {
-                let dd = d * d;
-                let win = (1.0 - dd * dd * fa).clamp(0.0, 1.0);
-                win * win / dd
-            } else {
-                (fa - fb * d).clamp(0.0, 1.0)
-            };
-            let cone = (-(sx * lvx + sy * lvy + sz * lvz) * cs + co).clamp(0.0, 1.0);
-            let e = if inside { atten * cone * cone * ndl } else { 0.0 };
-            if Q {
-                tested[j] += u32::from(inside);
-            }
-            lit[j] += u32::from(e > 0.0);
-            if B == 0 {
-                let k = e * FRAC_1_PI;
-                if P {
-                    or[j] += cr * k;
-                    og[j] += cg * k;
-                    ob[j] += cb * k;
-                } else {
-                    or[j] += ar[j] * cr * k;
-                    og[j] += ag[j] * cg * k;
-                    ob[j] += ab[j] * cb * k;
-                }
+    let s = V::splat;
+    let k = load_chunk::<V, B, Q>(it, c);
+    let zero = s(0.0);
+    let (mut acc_r, mut acc_g, mut acc_b, mut acc_s) = (zero, zero, zero, zero);
+    let (mut tested, mut lit) = (zero, zero);
+    let min_d2 = s(MIN_DISTANCE * MIN_DISTANCE);
+    let min_h2 = s(MIN_HALF_LENGTH * MIN_HALF_LENGTH);
+    // The vector's bounding box: a light whose sphere misses it adds exactly 0 to every lane and is skipped (the
+    // pair still counts as tested: tile culling passed it). Quad culling counts its own tests, so it runs all.
+    let lo = [k.p[0].hmin(), k.p[1].hmin(), k.p[2].hmin()];
+    let hi = [k.p[0].hmax(), k.p[1].hmax(), k.p[2].hmax()];
+    for (l, rec) in lights.rec.iter().enumerate() {
+        if !Q {
+            let gap = |c: f32, lo: f32, hi: f32| (lo - c).max(c - hi).max(0.0);
+            let (gx, gy, gz) = (gap(rec.px, lo[0], hi[0]), gap(rec.py, lo[1], hi[1]), gap(rec.pz, lo[2], hi[2]));
+            if gx * gx + gy * gy + gz * gz > rec.r2 {
                 continue;
             }
-            let mut hx = lvx + vx[j];
-            let mut hy = lvy + vy[j];
-            let mut hz = lvz + vz[j];
-            let hinv = 1.0 / (hx * hx + hy * hy + hz * hz).sqrt().max(MIN_HALF_LENGTH);
-            hx *= hinv;
-            hy *= hinv;
-            hz *= hinv;
-            let ndh = (nx[j] * hx + ny[j] * hy + nz[j] * hz).max(0.0);
-            if B == 1 {
-                let spec = sn[j] * pow_clamped(ndh, pw[j]);
-                if P {
-                    or[j] += cr * e;
-                    og[j] += cg * e;
-                    ob[j] += cb * e;
-                    ls[j] += lum * e * spec;
-                } else {
-                    let k = e * (1.0 + spec);
-                    or[j] += ar[j] * cr * k;
-                    og[j] += ag[j] * cg * k;
-                    ob[j] += ab[j] * cb * k;
-                }
+        }
+        let w = s(-rec.w);
+        let lv = [k.p[0].mul_add(w, s(rec.px)), k.p[1].mul_add(w, s(rec.py)), k.p[2].mul_add(w, s(rec.pz))];
+        // d = max(|L|, MIN_DISTANCE): clamping d² first keeps rsqrt away from 0.
+        let d2 = dot(&lv, &lv).max(min_d2);
+        let inv = d2.rsqrt();
+        let l_hat = [lv[0] * inv, lv[1] * inv, lv[2] * inv];
+        let ndl_raw = dot(&k.n, &l_hat);
+        let ndl = ndl_raw.max(zero);
+        let atten = if F == 0 {
+            let win = (zero - d2 * d2).mul_add(s(rec.fa), s(1.0)).saturate();
+            win * win * (inv * inv)
+        } else {
+            (d2 * inv).mul_add(s(-rec.fb), s(rec.fa)).saturate()
+        };
+        let mut e = atten * ndl;
+        if rec.cs != 0.0 {
+            let sl = dot(&[s(rec.sx), s(rec.sy), s(rec.sz)], &l_hat);
+            let cone = sl.mul_add(s(-rec.cs), s(rec.co)).saturate();
+            e = e * (cone * cone);
+        }
+        if Q {
+            let inside = V::and(
+                V::and(
+                    V::and(k.t[0].ge(s(quad.x0[l])), k.t[0].le(s(quad.x1[l]))),
+                    V::and(k.t[1].ge(s(quad.y0[l])), k.t[1].le(s(quad.y1[l]))),
+                ),
+                V::and(k.t[2].ge(s(quad.z0[l])), k.t[2].le(s(quad.z1[l]))),
+            );
+            tested = tested.count(inside);
+            e = e.keep(inside);
+        }
+        let on = e.gt(zero);
+        lit = lit.count(on);
+        let (cr, cg, cb) = (s(rec.cr), s(rec.cg), s(rec.cb));
+        if B == 0 {
+            acc_r = cr.mul_add(e, acc_r);
+            acc_g = cg.mul_add(e, acc_g);
+            acc_b = cb.mul_add(e, acc_b);
+            continue;
+        }
+        if SKIP_DARK && !V::any(on) {
+            continue;
+        }
+        // H = normalize(L̂ + V): |L̂ + V|² = 2 + 2 L̂·V, N·H = (N·L̂ + N·V)/|H|, V·H = (L̂·V + 1)/|H|.
+        let ldv = dot(&l_hat, &k.v);
+        let h2 = ldv.mul_add(s(2.0), s(2.0)).max(min_h2);
+        let hinv = h2.rsqrt();
+        let ndh = ((ndl_raw + k.nv_raw) * hinv).max(zero);
+        if B == 1 {
+            let spec = k.sn * (k.pw * ndh.max(s(POW_MIN_BASE)).log2()).exp2();
+            if P {
+                acc_r = cr.mul_add(e, acc_r);
+                acc_g = cg.mul_add(e, acc_g);
+                acc_b = cb.mul_add(e, acc_b);
+                acc_s = (s(rec.lum) * e).mul_add(spec, acc_s);
             } else {
-                let a2 = a2s[j];
-                let nv = nvs[j];
-                let vdh = (vx[j] * hx + vy[j] * hy + vz[j] * hz).max(0.0);
-                let t = ndh * ndh * (a2 - 1.0) + 1.0;
-                let dist = a2 * FRAC_1_PI / (t * t);
-                let vis_den = ndl * (nv * nv * (1.0 - a2) + a2).sqrt() + nv * (ndl * ndl * (1.0 - a2) + a2).sqrt();
-                let dv = dist * 0.5 / vis_den.max(1e-12);
-                let m = 1.0 - vdh;
-                let m5 = m * m * m * m * m;
-                if P {
-                    let f0 = LUMA.x * f0r[j] + LUMA.y * f0g[j] + LUMA.z * f0b[j];
-                    or[j] += cr * e;
-                    og[j] += cg * e;
-                    ob[j] += cb * e;
-                    ls[j] += lum * e * (f0 + (1.0 - f0) * m5) * dv;
-                } else {
-                    let fr = f0r[j] + (1.0 - f0r[j]) * m5;
-                    let fg = f0g[j] + (1.0 - f0g[j]) * m5;
-                    let fb_ = f0b[j] + (1.0 - f0b[j]) * m5;
-                    or[j] += cr * e * ((1.0 - fr) * dr[j] + fr * dv);
-                    og[j] += cg * e * ((1.0 - fg) * dg[j] + fg * dv);
-                    ob[j] += cb * e * ((1.0 - fb_) * db[j] + fb_ * dv);
-                }
+                let kk = e.mul_add(spec, e);
+                acc_r = cr.mul_add(kk, acc_r);
+                acc_g = cg.mul_add(kk, acc_g);
+                acc_b = cb.mul_add(kk, acc_b);
+            }
+        } else {
+            let vdh = ((ldv + s(1.0)) * hinv).max(zero);
+            let a2 = k.a2;
+            let t = (ndh * ndh).mul_add(a2 - s(1.0), s(1.0));
+            let gl2 = (ndl * ndl).mul_add(s(1.0) - a2, a2);
+            let vis_den = ndl.mul_add(k.gv, k.nv * (gl2 * gl2.rsqrt())).max(s(1e-12));
+            let dv = a2 * s(0.5 * FRAC_1_PI) * (t * t * vis_den).recip();
+            let m = s(1.0) - vdh;
+            let m2 = m * m;
+            let m5 = m2 * m2 * m;
+            if P {
+                let f0 = k.f0[0].mul_add(s(LUMA.x), k.f0[1].mul_add(s(LUMA.y), k.f0[2] * s(LUMA.z)));
+                acc_r = cr.mul_add(e, acc_r);
+                acc_g = cg.mul_add(e, acc_g);
+                acc_b = cb.mul_add(e, acc_b);
+                let fres = (s(1.0) - f0).mul_add(m5, f0);
+                acc_s = (s(rec.lum) * e).mul_add(fres * dv, acc_s);
+            } else {
+                let out: [V; 3] = std::array::from_fn(|ch| {
+                    let f = (s(1.0) - k.f0[ch]).mul_add(m5, k.f0[ch]);
+                    (s(1.0) - f).mul_add(k.cd[ch], f * dv)
+                });
+                let ee = [cr * e, cg * e, cb * e];
+                acc_r = ee[0].mul_add(out[0], acc_r);
+                acc_g = ee[1].mul_add(out[1], acc_g);
+                acc_b = ee[2].mul_add(out[2], acc_b);
             }
         }
     }
     if !Q {
-        tested = [lights.len() as u32; LANES];
+        tested = s(lights.len() as f32);
     }
-    it.or[c..c + LANES].copy_from_slice(&or);
-    it.og[c..c + LANES].copy_from_slice(&og);
-    it.ob[c..c + LANES].copy_from_slice(&ob);
-    it.ls[c..c + LANES].copy_from_slice(&ls);
-    for j in 0..LANES {
-        it.tested[c + j] += tested[j];
-        it.lit[c + j] += lit[j];
-    }
+    // Lambert and Blinn-Phong accumulate light only; the albedo (and Lambert's 1/π) multiplies the sum.
+    let scale = |acc: V, a: &[f32]| match (B, P) {
+        (0, false) => acc * V::load(&a[c..]) * s(FRAC_1_PI),
+        (0, true) => acc * s(FRAC_1_PI),
+        (1, false) => acc * V::load(&a[c..]),
+        _ => acc,
+    };
+    scale(acc_r, &it.ar).store(&mut it.or[c..]);
+    scale(acc_g, &it.ag).store(&mut it.og[c..]);
+    scale(acc_b, &it.ab).store(&mut it.ob[c..]);
+    acc_s.store(&mut it.ls[c..]);
+    tested.store(&mut it.tested[c..]);
+    lit.store(&mut it.lit[c..]);
 }
 
-/// Light pre-pass second pass: turns the accumulated buffers (diffuse light `D` in `or..ob`, monochrome specular
-/// `S` in `ls`) into colour. Blinn-Phong: `albedo ⊙ (D + S · D/lum(D))`; Lambert: `albedo/π` was already folded into
-/// `D` except the albedo, so `albedo ⊙ D`; GGX: `c_diff/π ⊙ (1 − F0) ⊙ D + S · D/lum(D)`. The specular takes the
-/// chromaticity of the diffuse light, which is exact when all lights share one colour.
+/// Light pre-pass second pass: turns the buffers (diffuse light `D` in `or..ob`, monochrome specular `S` in `ls`)
+/// into colour. Blinn-Phong: `albedo ⊙ (D + S · D/lum(D))`; Lambert: `albedo ⊙ D` (`D` already holds 1/π); GGX:
+/// `c_diff/π ⊙ (1 − F0) ⊙ D + S · D/lum(D)`. The specular takes the chromaticity of the diffuse light, which is
+/// exact when all lights share one colour.
 pub fn finish_prepass(it: &mut Items, brdf: Brdf) {
     for j in 0..it.len() {
         let d = Vec3::new(it.or[j], it.og[j], it.ob[j]);
@@ -411,8 +485,9 @@ pub fn finish_prepass(it: &mut Items, brdf: Brdf) {
             Brdf::Lambert => albedo * d,
             Brdf::BlinnPhong => albedo * (d + spec),
             Brdf::Ggx => {
-                let c_diff = Vec3::new(it.dr[j], it.dg[j], it.db[j]);
-                let f0 = Vec3::new(it.f0r[j], it.f0g[j], it.f0b[j]);
+                let metal = it.metal[j];
+                let c_diff = albedo * (1.0 - metal) * FRAC_1_PI;
+                let f0 = Vec3::splat(DIELECTRIC_F0).lerp(albedo, metal);
                 c_diff * (Vec3::ONE - f0) * d + spec
             }
         };

@@ -1,5 +1,5 @@
-//! Light preparation: sanitise the caller's lights once, then lay them out as structure-of-arrays constants the
-//! batched kernel reads (one uniform representation for point, spot and directional lights, so the inner loop has
+//! Light preparation: sanitise the caller's lights once, then lay them out as one cache-line record of constants
+//! per light for the batched kernel (one uniform representation for point, spot and directional lights, so the inner loop has
 //! no branch on the light kind).
 //!
 //! Uniform representation: the unnormalised light vector is `L = pos − w · p` (`w = 1` for positional lights;
@@ -7,6 +7,7 @@
 //! factor is `clamp(dot(axis, −L̂) · scale + offset, 0, 1)²` with `scale = 0, offset = 1` for non-spot lights.
 
 use super::config::Falloff;
+use super::culling::light_sphere;
 use super::falloff::{cone_constants, MIN_RAMP_FRACTION};
 use crate::light::{Light, LightKind};
 use glam::Vec3;
@@ -62,110 +63,89 @@ fn sanitize_one(l: &Light) -> Option<Light> {
     Some(l)
 }
 
-/// Structure-of-arrays light constants for the kernel (one entry per light, same order as the input).
-#[derive(Clone, Debug, Default)]
-pub struct LightSoa {
+/// One light's kernel constants, in one 64-byte cache line (the kernel broadcasts them into vectors).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C, align(64))]
+pub struct LightRec {
     /// `pos.x` (position, or −direction for directional lights).
-    pub px: Vec<f32>,
+    pub px: f32,
     /// `pos.y`.
-    pub py: Vec<f32>,
+    pub py: f32,
     /// `pos.z`.
-    pub pz: Vec<f32>,
+    pub pz: f32,
     /// 1 for positional lights, 0 for directional.
-    pub w: Vec<f32>,
+    pub w: f32,
     /// colour.r × intensity.
-    pub cr: Vec<f32>,
+    pub cr: f32,
     /// colour.g × intensity.
-    pub cg: Vec<f32>,
+    pub cg: f32,
     /// colour.b × intensity.
-    pub cb: Vec<f32>,
+    pub cb: f32,
     /// Luminance of the scaled colour (light pre-pass specular).
-    pub lum: Vec<f32>,
+    pub lum: f32,
     /// Falloff constant a: linear `end / width` (1 when unbounded); gltf `1 / range⁴` (0 when unbounded).
-    pub fa: Vec<f32>,
+    pub fa: f32,
     /// Falloff constant b: linear `1 / width` (0 when unbounded); unused by gltf.
-    pub fb: Vec<f32>,
+    pub fb: f32,
     /// Spot axis x.
-    pub sx: Vec<f32>,
+    pub sx: f32,
     /// Spot axis y.
-    pub sy: Vec<f32>,
+    pub sy: f32,
     /// Spot axis z.
-    pub sz: Vec<f32>,
-    /// Cone scale (0 for non-spot lights).
-    pub cs: Vec<f32>,
+    pub sz: f32,
+    /// Cone scale (0 for non-spot lights: the kernel then skips the cone).
+    pub cs: f32,
     /// Cone offset (1 for non-spot lights).
-    pub co: Vec<f32>,
+    pub co: f32,
+    /// Squared radius of the culling sphere around `pos` (∞ for directional and unbounded lights): beyond it
+    /// the light adds exactly 0.
+    pub r2: f32,
+}
+
+/// The kernel's light list: one [`LightRec`] per light, same order as the input.
+#[derive(Clone, Debug, Default)]
+pub struct LightTable {
+    /// The records.
+    pub rec: Vec<LightRec>,
 }
 
 /// Rec. 709 luminance weights, used to make the light pre-pass specular monochromatic.
 pub const LUMA: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
 
-impl LightSoa {
+impl LightTable {
     /// Lays out already-sanitised lights for `falloff`.
     #[must_use]
     pub fn new(lights: &[Light], falloff: Falloff) -> Self {
-        let mut s = LightSoa::default();
-        for l in lights {
-            s.push(l, falloff);
-        }
-        s
+        LightTable { rec: lights.iter().map(|l| LightRec::new(l, falloff)).collect() }
     }
 
     /// Number of lights.
     #[must_use]
     pub fn len(&self) -> usize {
-        self.px.len()
+        self.rec.len()
     }
 
     /// True when there are no lights.
     #[must_use]
     pub fn is_empty(&self) -> bool {
-        self.px.is_empty()
+        self.rec.is_empty()
     }
 
     /// Appends light `i` of `other` (used to gather a tile's light list contiguously).
-    pub fn push_from(&mut self, other: &LightSoa, i: usize) {
-        self.px.push(other.px[i]);
-        self.py.push(other.py[i]);
-        self.pz.push(other.pz[i]);
-        self.w.push(other.w[i]);
-        self.cr.push(other.cr[i]);
-        self.cg.push(other.cg[i]);
-        self.cb.push(other.cb[i]);
-        self.lum.push(other.lum[i]);
-        self.fa.push(other.fa[i]);
-        self.fb.push(other.fb[i]);
-        self.sx.push(other.sx[i]);
-        self.sy.push(other.sy[i]);
-        self.sz.push(other.sz[i]);
-        self.cs.push(other.cs[i]);
-        self.co.push(other.co[i]);
+    pub fn push_from(&mut self, other: &LightTable, i: usize) {
+        self.rec.push(other.rec[i]);
     }
 
-    /// Empties the arrays, keeping their capacity.
+    /// Empties the list, keeping its capacity.
     pub fn clear(&mut self) {
-        for v in [
-            &mut self.px,
-            &mut self.py,
-            &mut self.pz,
-            &mut self.w,
-            &mut self.cr,
-            &mut self.cg,
-            &mut self.cb,
-            &mut self.lum,
-            &mut self.fa,
-            &mut self.fb,
-            &mut self.sx,
-            &mut self.sy,
-            &mut self.sz,
-            &mut self.cs,
-            &mut self.co,
-        ] {
-            v.clear();
-        }
+        self.rec.clear();
     }
+}
 
-    fn push(&mut self, l: &Light, falloff: Falloff) {
+impl LightRec {
+    /// The constants of an already-sanitised light for `falloff`.
+    #[must_use]
+    pub fn new(l: &Light, falloff: Falloff) -> Self {
         let (pos, w) = match l.kind {
             LightKind::Directional { direction } => (-direction, 0.0),
             _ => (l.position, 1.0),
@@ -187,21 +167,27 @@ impl LightSoa {
             }
             _ => (Vec3::ZERO, 0.0, 1.0),
         };
-        self.px.push(pos.x);
-        self.py.push(pos.y);
-        self.pz.push(pos.z);
-        self.w.push(w);
-        self.cr.push(c.x);
-        self.cg.push(c.y);
-        self.cb.push(c.z);
-        self.lum.push(c.dot(LUMA));
-        self.fa.push(fa);
-        self.fb.push(fb);
-        self.sx.push(axis.x);
-        self.sy.push(axis.y);
-        self.sz.push(axis.z);
-        self.cs.push(cs);
-        self.co.push(co);
+        LightRec {
+            px: pos.x,
+            py: pos.y,
+            pz: pos.z,
+            w,
+            cr: c.x,
+            cg: c.y,
+            cb: c.z,
+            lum: c.dot(LUMA),
+            fa,
+            fb,
+            sx: axis.x,
+            sy: axis.y,
+            sz: axis.z,
+            cs,
+            co,
+            r2: {
+                let r = light_sphere(l).1;
+                r * r
+            },
+        }
     }
 }
 
@@ -234,10 +220,11 @@ mod tests {
             ..Light::point(Vec3::ZERO, Vec3::ONE, 3.0, 1.0)
         };
         let c = sanitize(&[d]);
-        let s = LightSoa::new(&c.lights, Falloff::Linear);
-        assert_eq!((s.px[0], s.py[0], s.pz[0], s.w[0]), (0.0, 1.0, 0.0, 0.0));
-        assert_eq!((s.fa[0], s.fb[0]), (1.0, 0.0));
-        assert_eq!((s.cs[0], s.co[0]), (0.0, 1.0));
-        assert_eq!(s.cr[0], 3.0);
+        let s = &LightTable::new(&c.lights, Falloff::Linear).rec[0];
+        assert_eq!((s.px, s.py, s.pz, s.w), (0.0, 1.0, 0.0, 0.0));
+        assert_eq!((s.fa, s.fb), (1.0, 0.0));
+        assert_eq!((s.cs, s.co), (0.0, 1.0));
+        assert_eq!(s.cr, 3.0);
+        assert_eq!(std::mem::size_of::<LightRec>(), 64);
     }
 }

@@ -21,6 +21,7 @@ pub mod kernel;
 pub mod lights;
 pub mod reference;
 pub mod schedule;
+pub mod simd;
 pub mod surface;
 
 pub use config::{Brdf, Culling, Falloff, ResolveConfig, Schedule, DEFAULT_DEPTH_SLICES, DEFAULT_TILE_SIZE};
@@ -104,31 +105,19 @@ pub fn resolve(gb: &GBuffer, lights: &[Light], mask: &EdgeMask, cfg: &ResolveCon
     let t_prep = t_start.elapsed();
 
     let t_par = Instant::now();
-    let tiles = schedule::run_tiles(&frame);
-    let par_wall = t_par.elapsed();
-
     let mut image = HdrImage::new(gb.width, gb.height);
     let mut heat = vec![0u32; gb.pixel_count()];
-    let mut stats = ResolveStats { lights: clean.lights.len() as u64, tiles: tiles.len() as u64, ..Default::default() };
+    let t = schedule::run_tiles(&frame, &mut image.rgb, &mut heat);
+    let par_wall = t_par.elapsed();
+
+    let mut stats = ResolveStats { lights: clean.lights.len() as u64, tiles: t.tiles, ..Default::default() };
+    stats.sanitized = t.sanitized;
     stats.sanitized.lights = clean.dropped;
-    let (mut tg, mut tc, mut tsh) = (Duration::ZERO, Duration::ZERO, Duration::ZERO);
-    let mut edge_pixels = 0u64;
-    for t in &tiles {
-        for row in 0..t.h {
-            let src = (row * t.w) as usize..((row + 1) * t.w) as usize;
-            let dst = ((t.y0 + row) * gb.width + t.x0) as usize;
-            image.rgb[dst..dst + t.w as usize].copy_from_slice(&t.rgb[src.clone()]);
-            heat[dst..dst + t.w as usize].copy_from_slice(&t.heat[src]);
-        }
-        stats.light_pairs_tested += t.tested;
-        stats.light_pairs_lit += t.lit;
-        stats.shading_evaluations += t.evaluations;
-        stats.sanitized.add(&t.sanitized);
-        edge_pixels += t.edge_pixels;
-        tg += t.t_gather;
-        tc += t.t_cull;
-        tsh += t.t_shade;
-    }
+    stats.light_pairs_tested = t.tested;
+    stats.light_pairs_lit = t.lit;
+    stats.shading_evaluations = t.evaluations;
+    let edge_pixels = t.edge_pixels;
+    let (tg, tc, tsh) = (t.t_gather, t.t_cull, t.t_shade);
     for c in &mut image.rgb {
         if !c.is_finite() {
             *c = glam::Vec3::ZERO;

@@ -9,8 +9,8 @@
 
 use super::config::{Culling, ResolveConfig, Schedule};
 use super::culling::{light_sphere, quad_rects, Bounds};
-use super::kernel::{finish_prepass, shade, Items, QuadSoa, Variant};
-use super::lights::LightSoa;
+use super::kernel::{finish_prepass, shade, Items, QuadSoa, Variant, LANES, PAD_PIXEL};
+use super::lights::LightTable;
 use super::surface::{SanitizedCounts, SurfaceReader};
 use crate::detect::EdgeMask;
 use crate::light::Light;
@@ -27,7 +27,7 @@ pub struct Frame<'a> {
     /// Sanitised lights.
     pub lights: &'a [Light],
     /// Their kernel constants.
-    pub soa: LightSoa,
+    pub table: LightTable,
     /// Culling spheres: centres and grown radii.
     pub spheres: Spheres,
     /// Quad rectangles (quad culling only).
@@ -53,7 +53,7 @@ impl<'a> Frame<'a> {
     /// Prepares the per-light data for `cfg`.
     #[must_use]
     pub fn new(reader: SurfaceReader<'a>, mask: &'a EdgeMask, lights: &'a [Light], cfg: ResolveConfig) -> Self {
-        let soa = LightSoa::new(lights, cfg.falloff);
+        let table = LightTable::new(lights, cfg.falloff);
         let mut spheres = Spheres::default();
         for l in lights {
             let (c, r) = light_sphere(l);
@@ -63,25 +63,15 @@ impl<'a> Frame<'a> {
             spheres.r.push(r);
         }
         let quads = if cfg.culling == Culling::Quad { quad_rects(lights) } else { QuadSoa::default() };
-        Frame { reader, mask, lights, soa, spheres, quads, cfg }
+        Frame { reader, mask, lights, table, spheres, quads, cfg }
     }
 }
 
-/// The result of one tile.
+/// Work counts and thread time of a group of tiles (summed).
 #[derive(Clone, Debug, Default)]
-pub struct TileOut {
-    /// Left pixel column.
-    pub x0: u32,
-    /// Top pixel row.
-    pub y0: u32,
-    /// Width in pixels.
-    pub w: u32,
-    /// Height in pixels.
-    pub h: u32,
-    /// Pixel colours, row-major within the tile.
-    pub rgb: Vec<Vec3>,
-    /// Light evaluations per pixel (sum over its shaded samples).
-    pub heat: Vec<u32>,
+pub struct TileStats {
+    /// Tiles processed.
+    pub tiles: u64,
     /// Light-sample pairs that reached the shading loop.
     pub tested: u64,
     /// Pairs with a nonzero contribution.
@@ -92,7 +82,7 @@ pub struct TileOut {
     pub edge_pixels: u64,
     /// Values sanitised while reading.
     pub sanitized: SanitizedCounts,
-    /// Time building the work list.
+    /// Time building work lists.
     pub t_gather: Duration,
     /// Time culling.
     pub t_cull: Duration,
@@ -100,47 +90,167 @@ pub struct TileOut {
     pub t_shade: Duration,
 }
 
+impl TileStats {
+    /// Sum of two.
+    #[must_use]
+    pub fn merged(mut self, o: TileStats) -> TileStats {
+        self.tiles += o.tiles;
+        self.tested += o.tested;
+        self.lit += o.lit;
+        self.evaluations += o.evaluations;
+        self.edge_pixels += o.edge_pixels;
+        self.sanitized.add(&o.sanitized);
+        self.t_gather += o.t_gather;
+        self.t_cull += o.t_cull;
+        self.t_shade += o.t_shade;
+        self
+    }
+}
+
+/// One tile's place in its band of rows.
+#[derive(Clone, Copy, Debug)]
+struct Tile {
+    x0: u32,
+    y0: u32,
+    w: u32,
+    h: u32,
+}
+
 /// Per-thread scratch buffers, reused from tile to tile.
 #[derive(Default)]
 struct Scratch {
     items: Items,
     sorted: Items,
-    lights: LightSoa,
+    lights: LightTable,
     quads: QuadSoa,
     tile_lights: Vec<u32>,
     mask: Vec<u8>,
     order: Vec<usize>,
+    /// Flat sample index of each work-list item.
+    src: Vec<usize>,
 }
 
-/// Runs every tile of `frame` in parallel (on the current rayon pool) and returns the tile results in row-major
-/// tile order.
-pub fn run_tiles(frame: &Frame<'_>) -> Vec<TileOut> {
+/// Runs every tile of `frame`, writing pixel colours into `rgb` and light evaluations per pixel into `heat`
+/// (both row-major, `width × height`). Bands of one tile row run in parallel on the current rayon pool; each band
+/// walks its tiles left to right (fetching the next tile's rows ahead) and owns its rows of the outputs, so the
+/// result does not depend on the thread count.
+pub fn run_tiles(frame: &Frame<'_>, rgb: &mut [Vec3], heat: &mut [u32]) -> TileStats {
     let gb = frame.reader.gbuffer();
     let ts = frame.cfg.tile_size;
-    let (nx, ny) = (gb.width.div_ceil(ts), gb.height.div_ceil(ts));
-    (0..nx * ny)
-        .into_par_iter()
-        .map_init(Scratch::default, |scratch, t| {
-            let (x0, y0) = ((t % nx) * ts, (t / nx) * ts);
-            let (w, h) = (ts.min(gb.width - x0), ts.min(gb.height - y0));
-            run_tile(frame, x0, y0, w, h, scratch)
+    let band_len = (gb.width * ts) as usize;
+    if band_len == 0 {
+        return TileStats::default();
+    }
+    rgb.par_chunks_mut(band_len)
+        .zip(heat.par_chunks_mut(band_len))
+        .enumerate()
+        .map_init(Scratch::default, |sc, (band, (rgb, heat))| {
+            let y0 = band as u32 * ts;
+            #[cfg(target_arch = "x86_64")]
+            {
+                if std::is_x86_feature_detected!("avx512f") {
+                    // SAFETY: the CPU has the features the function is compiled for (checked just above).
+                    return unsafe { run_band_avx512(frame, y0, sc, rgb, heat) };
+                }
+                if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+                    // SAFETY: as above.
+                    return unsafe { run_band_avx2(frame, y0, sc, rgb, heat) };
+                }
+            }
+            run_band(frame, y0, sc, rgb, heat)
         })
-        .collect()
+        .reduce(TileStats::default, TileStats::merged)
 }
 
-fn run_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32, sc: &mut Scratch) -> TileOut {
-    let t0 = Instant::now();
-    let mut out = TileOut { x0, y0, w, h, ..Default::default() };
-    gather(frame, &mut out, sc);
-    let t1 = Instant::now();
-    out.t_gather = t1 - t0;
-    let n_real = sc.items.len();
-    out.rgb = vec![Vec3::ZERO; (w * h) as usize];
-    out.heat = vec![0; (w * h) as usize];
-    if n_real == 0 {
-        return out;
+/// One band of tiles starting at row `y0`, left to right. Compiled once per instruction set (below) so the
+/// work-list build and the box filter vectorise too; the shading kernel dispatches on its own.
+#[inline(always)]
+fn run_band(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat: &mut [u32]) -> TileStats {
+    let gb = frame.reader.gbuffer();
+    let ts = frame.cfg.tile_size;
+    let h = ts.min(gb.height - y0);
+    let mut st = TileStats::default();
+    let mut x0 = 0;
+    while x0 < gb.width {
+        let w = ts.min(gb.width - x0);
+        let next = x0 + w;
+        if next < gb.width {
+            prefetch_tile(frame, next, y0, ts.min(gb.width - next), h);
+        }
+        run_tile(frame, Tile { x0, y0, w, h }, sc, rgb, heat, &mut st);
+        x0 = next;
     }
-    sc.items.pad_to_lanes(n_real - 1);
+    st
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+fn run_band_avx512(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat: &mut [u32]) -> TileStats {
+    run_band(frame, y0, sc, rgb, heat)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn run_band_avx2(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat: &mut [u32]) -> TileStats {
+    run_band(frame, y0, sc, rgb, heat)
+}
+
+/// Asks the CPU to start loading the G-buffer rows of a tile into cache (a hint: it never faults, and only
+/// addresses inside the planes are formed). A tile's 16 row segments of 7 or so planes are too many short streams
+/// for the hardware prefetcher; without this the work-list build waits on memory.
+fn prefetch_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T1};
+        fn rows<T>(plane: Option<&[T]>, gb: &crate::gbuffer::GBuffer, x0: u32, y0: u32, w: u32, h: u32) {
+            let Some(plane) = plane else { return };
+            for y in y0..y0 + h {
+                let a = gb.index(x0, y, 0);
+                let b = gb.index(x0 + w - 1, y, gb.samples - 1);
+                let row = &plane[a..=b];
+                let bytes = std::mem::size_of_val(row);
+                let base = row.as_ptr().cast::<i8>();
+                let mut off = 0;
+                while off < bytes {
+                    // SAFETY: `base + off` lies inside `row` (off < its byte length); prefetch has no other effect.
+                    unsafe { _mm_prefetch::<_MM_HINT_T1>(base.add(off)) };
+                    off += 64;
+                }
+                // The last line, in case the row does not start on a line boundary.
+                // SAFETY: as above.
+                unsafe { _mm_prefetch::<_MM_HINT_T1>(base.add(bytes - 1)) };
+            }
+        }
+        let gb = frame.reader.gbuffer();
+        if w == 0 || h == 0 || gb.samples == 0 {
+            return;
+        }
+        rows(Some(&gb.coverage[..]), gb, x0, y0, w, h);
+        match &gb.position {
+            Some(p) => rows(Some(&p[..]), gb, x0, y0, w, h),
+            None => rows(gb.depth.as_deref(), gb, x0, y0, w, h),
+        }
+        rows(gb.normal.as_deref(), gb, x0, y0, w, h);
+        rows(gb.albedo.as_deref(), gb, x0, y0, w, h);
+        for plane in [&gb.specular, &gb.specular_power, &gb.roughness, &gb.metallic] {
+            rows(plane.as_deref(), gb, x0, y0, w, h);
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (frame, x0, y0, w, h);
+}
+
+/// Gathers, culls and shades one tile, box-filtering into the band's rows `rgb` / `heat` (pixels with nothing
+/// to shade stay black) and adding the work to `st`.
+#[inline(always)]
+fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, rgb: &mut [Vec3], heat: &mut [u32], st: &mut TileStats) {
+    let t0 = Instant::now();
+    st.tiles += 1;
+    let n_real = gather(frame, tile, sc, st);
+    st.t_gather += t0.elapsed();
+    if n_real == 0 {
+        return;
+    }
     let n = sc.items.len();
     let variant = Variant {
         brdf: frame.cfg.brdf,
@@ -153,7 +263,7 @@ fn run_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32, sc: &mut Scratc
     let items = match frame.cfg.culling {
         Culling::None => {
             let t = Instant::now();
-            shade(&mut sc.items, 0..n, &frame.soa, &frame.quads, variant);
+            shade(&mut sc.items, 0..n, &frame.table, &frame.quads, variant);
             t_shade += t.elapsed();
             &mut sc.items
         }
@@ -198,66 +308,126 @@ fn run_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32, sc: &mut Scratc
         finish_prepass(items, frame.cfg.brdf);
     }
     for j in 0..n_real {
+        // `pixel` is the index within the tile; the band's rows start at the tile's top row.
         let px = items.pixel[j] as usize;
         let c = Vec3::new(items.or[j], items.og[j], items.ob[j]) * items.weight[j];
-        out.rgb[px] += c;
-        out.heat[px] += items.tested[j];
-        out.tested += u64::from(items.tested[j]);
-        out.lit += u64::from(items.lit[j]);
+        rgb[px] += c;
+        let (tested, lit) = (items.tested[j] as u32, items.lit[j] as u32);
+        heat[px] += tested;
+        st.tested += u64::from(tested);
+        st.lit += u64::from(lit);
     }
-    out.evaluations = n_real as u64;
+    st.evaluations += n_real as u64;
     t_shade += t.elapsed();
-    out.t_cull = t_cull;
-    out.t_shade = t_shade;
-    out
+    st.t_cull += t_cull;
+    st.t_shade += t_shade;
 }
 
 /// Builds the tile's work list: first the single samples of non-edge pixels, then the packed samples of edge
-/// pixels.
-fn gather(frame: &Frame<'_>, out: &mut TileOut, sc: &mut Scratch) {
+/// pixels. Positions are read pixel by pixel (they decide which samples are shaded); the other attributes are
+/// then read plane by plane for the whole list.
+#[inline(always)]
+fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -> usize {
     let gb = frame.reader.gbuffer();
     let samples = gb.samples;
     let weight = 1.0 / samples as f32;
-    sc.items.clear();
-    let counts = &mut out.sanitized;
+    let it = &mut sc.items;
+    it.clear();
+    sc.src.clear();
+    let counts = &mut st.sanitized;
+    let push = |it: &mut Items, src: &mut Vec<usize>, p: glam::Vec3, i: usize, local: u32, w: f32| {
+        it.px.push(p.x);
+        it.py.push(p.y);
+        it.pz.push(p.z);
+        it.pixel.push(local);
+        it.weight.push(w);
+        src.push(i);
+    };
     for pass_edges in [false, true] {
-        for y in out.y0..out.y0 + out.h {
-            for x in out.x0..out.x0 + out.w {
+        for y in tile.y0..tile.y0 + tile.h {
+            for x in tile.x0..tile.x0 + tile.w {
                 let p = y as usize * gb.width as usize + x as usize;
-                let local = (y - out.y0) * out.w + (x - out.x0);
+                // Index within the band's rows of the output.
+                let local = ((y - tile.y0) as usize * gb.width as usize + x as usize) as u32;
                 let edge = frame.mask.is_edge(p);
                 if edge != pass_edges {
                     continue;
                 }
+                let first = p * samples as usize;
                 if edge {
-                    let before = sc.items.len();
+                    let before = sc.src.len();
                     for s in 0..samples {
-                        if let Some(surf) = frame.reader.read(x, y, s, counts) {
-                            sc.items.push(&surf, local, weight);
+                        let i = first + s as usize;
+                        if let Some(pos) = frame.reader.position(x, y, s, i, counts) {
+                            push(it, &mut sc.src, pos, i, local, weight);
                         }
                     }
-                    out.edge_pixels += u64::from(sc.items.len() > before);
-                } else if let Some(surf) = (0..samples).find_map(|s| frame.reader.read(x, y, s, counts)) {
-                    sc.items.push(&surf, local, 1.0);
+                    st.edge_pixels += u64::from(sc.src.len() > before);
+                } else {
+                    for s in 0..samples {
+                        let i = first + s as usize;
+                        if let Some(pos) = frame.reader.position(x, y, s, i, counts) {
+                            push(it, &mut sc.src, pos, i, local, 1.0);
+                            break;
+                        }
+                    }
                 }
             }
         }
     }
+    let n_real = sc.src.len();
+    if n_real > 0 {
+        // Pad to whole vectors with copies of the last item that go nowhere (weight 0).
+        while !sc.src.len().is_multiple_of(LANES) {
+            let (i, p) = (sc.src[n_real - 1], glam::Vec3::new(it.px[n_real - 1], it.py[n_real - 1], it.pz[n_real - 1]));
+            push(it, &mut sc.src, p, i, PAD_PIXEL, 0.0);
+        }
+        frame.reader.fill_attributes(&sc.src, it, counts);
+    }
+    n_real
 }
 
-/// Tests every light's sphere against `bounds` (branch-free over lights), writing survivors' indices into
-/// `sc.tile_lights`.
+/// Tests every light's sphere against `bounds` (branch-free over lights, vectorised for the CPU at hand), writing
+/// survivors' indices into `sc.tile_lights`.
 fn cull_tile_list(frame: &Frame<'_>, b: &Bounds, sc: &mut Scratch) {
     let s = &frame.spheres;
-    let n = s.x.len();
     sc.mask.clear();
-    sc.mask.resize(n, 0);
-    let probe = |c: Vec3, r: f32| b.may_touch(c, r);
-    for (i, m) in sc.mask.iter_mut().enumerate() {
-        *m = u8::from(probe(Vec3::new(s.x[i], s.y[i], s.z[i]), s.r[i]));
+    sc.mask.resize(s.x.len(), 0);
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has the features the function is compiled for (checked just above).
+            unsafe { sphere_mask_avx512(b, s, &mut sc.mask) };
+        } else if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+            // SAFETY: as above.
+            unsafe { sphere_mask_avx2(b, s, &mut sc.mask) };
+        } else {
+            sphere_mask(b, s, &mut sc.mask);
+        }
     }
+    #[cfg(not(target_arch = "x86_64"))]
+    sphere_mask(b, s, &mut sc.mask);
     sc.tile_lights.clear();
     sc.tile_lights.extend(sc.mask.iter().enumerate().filter(|(_, &m)| m != 0).map(|(i, _)| i as u32));
+}
+
+#[inline(always)]
+fn sphere_mask(b: &Bounds, s: &Spheres, mask: &mut [u8]) {
+    for ((((m, &x), &y), &z), &r) in mask.iter_mut().zip(&s.x).zip(&s.y).zip(&s.z).zip(&s.r) {
+        *m = u8::from(b.may_touch(Vec3::new(x, y, z), r));
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+fn sphere_mask_avx512(b: &Bounds, s: &Spheres, mask: &mut [u8]) {
+    sphere_mask(b, s, mask);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn sphere_mask_avx2(b: &Bounds, s: &Spheres, mask: &mut [u8]) {
+    sphere_mask(b, s, mask);
 }
 
 /// Culls lights (all, or only those in `subset`) against `b` and gathers the survivors' constants into
@@ -267,7 +437,7 @@ fn cull_into(frame: &Frame<'_>, b: &Bounds, subset: Option<&[u32]>, sc: &mut Scr
     sc.quads.clear();
     let quad = frame.cfg.culling == Culling::Quad;
     let keep = |i: usize, sc: &mut Scratch| {
-        sc.lights.push_from(&frame.soa, i);
+        sc.lights.push_from(&frame.table, i);
         if quad {
             sc.quads.push_from(&frame.quads, i);
         }
@@ -308,7 +478,7 @@ fn sort_by_slice(b: &Bounds, slices: u32, n_real: usize, sc: &mut Scratch) -> Ve
     let scale = if ratio > 1e-6 && ratio.is_finite() { slices as f32 / ratio } else { 0.0 };
     let mut members: Vec<Vec<usize>> = vec![Vec::new(); slices as usize];
     for j in 0..n_real {
-        let k = (((sc.items.dep[j] / b.d0).ln() * scale) as u32).min(slices - 1);
+        let k = (((sc.items.depth(j) / b.d0).ln() * scale) as u32).min(slices - 1);
         members[k as usize].push(j);
     }
     sc.sorted.clear();

@@ -11,6 +11,7 @@
 //! specular amount [`DEFAULT_SPECULAR`], specular power [`DEFAULT_SPECULAR_POWER`], metallic 0; roughness, when
 //! absent, is mapped from the specular power (see [`roughness_from_power`]).
 
+use super::kernel::{Items, LANES};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::gbuffer::GBuffer;
@@ -32,6 +33,7 @@ pub const MIN_VIEW_DEPTH: f32 = 1e-6;
 /// Perceptual roughness equivalent to a Blinn-Phong power: Beckmann-matched `α² = 2 / (p + 2)`, and glTF's
 /// `α = roughness²`, so `roughness = (2 / (p + 2))^¼`. Power 0 gives roughness ≈ 1; power 10⁴ about 0.12.
 #[must_use]
+#[inline(always)]
 pub fn roughness_from_power(p: f32) -> f32 {
     (2.0 / (p.max(0.0) + 2.0)).sqrt().sqrt()
 }
@@ -112,6 +114,8 @@ pub struct Surface {
 pub struct SurfaceReader<'a> {
     gb: &'a GBuffer,
     camera: Option<Camera>,
+    /// `(tan(fov/2) · aspect, tan(fov/2))`: the camera's ray slopes, computed once.
+    slopes: Vec2,
 }
 
 impl<'a> SurfaceReader<'a> {
@@ -127,7 +131,11 @@ impl<'a> SurfaceReader<'a> {
                     .into(),
             ));
         }
-        Ok(SurfaceReader { gb, camera: gb.camera })
+        let slopes = gb.camera.map_or(Vec2::ZERO, |c| {
+            let ray = c.view_ray(Vec2::ZERO, 2, 2);
+            Vec2::new(-ray.x, ray.y)
+        });
+        Ok(SurfaceReader { gb, camera: gb.camera, slopes })
     }
 
     /// The G-buffer being read.
@@ -139,17 +147,27 @@ impl<'a> SurfaceReader<'a> {
     /// Sample `s` of pixel (`x`, `y`); `None` for background (or an unusable position, counted).
     #[inline]
     pub fn read(&self, x: u32, y: u32, s: u32, counts: &mut SanitizedCounts) -> Option<Surface> {
+        let i = self.gb.index(x, y, s);
+        let p = self.position(x, y, s, i, counts)?;
+        Some(self.attributes(i, p, counts))
+    }
+
+    /// View-space position of sample `s` of pixel (`x`, `y`) (flat index `i`); `None` for background or an
+    /// unusable position (counted).
+    #[inline(always)]
+    pub fn position(&self, x: u32, y: u32, s: u32, i: usize, counts: &mut SanitizedCounts) -> Option<Vec3> {
         let gb = self.gb;
-        let i = gb.index(x, y, s);
         if !gb.coverage[i] {
             return None;
         }
         let p = match (&gb.position, &gb.depth, &self.camera) {
             (Some(pos), _, _) => pos[i],
-            (None, Some(depth), Some(cam)) => {
+            (None, Some(depth), Some(_)) => {
+                // Camera::view_position with the ray slopes hoisted.
                 let o = gb.sample_positions[s as usize];
-                let px = Vec2::new(x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y);
-                cam.view_position(px, depth[i], gb.width, gb.height)
+                let ndc_x = (x as f32 + 0.5 + o.x) / gb.width as f32 * 2.0 - 1.0;
+                let ndc_y = 1.0 - (y as f32 + 0.5 + o.y) / gb.height as f32 * 2.0;
+                Vec3::new(ndc_x * self.slopes.x, ndc_y * self.slopes.y, -1.0) * depth[i]
             }
             _ => Vec3::NAN,
         };
@@ -157,28 +175,15 @@ impl<'a> SurfaceReader<'a> {
             counts.position += 1;
             return None;
         }
-        let n = match &gb.normal {
-            Some(nn) => match nn[i].try_normalize() {
-                Some(n) => n,
-                None => {
-                    counts.normal += 1;
-                    Vec3::Z
-                }
-            },
-            None => Vec3::Z,
-        };
-        let albedo = match &gb.albedo {
-            Some(a) => {
-                let a = a[i];
-                if a.is_finite() && a.min_element() >= 0.0 {
-                    a
-                } else {
-                    counts.albedo += 1;
-                    Vec3::new(clean(a.x, 0.0), clean(a.y, 0.0), clean(a.z, 0.0)).max(Vec3::ZERO)
-                }
-            }
-            None => Vec3::splat(DEFAULT_ALBEDO),
-        };
+        Some(p)
+    }
+
+    /// The attributes of sample `i` (position `p` already read), with defaults and sanitisation.
+    #[inline]
+    fn attributes(&self, i: usize, p: Vec3, counts: &mut SanitizedCounts) -> Surface {
+        let gb = self.gb;
+        let n = gb.normal.as_ref().map_or(Vec3::Z, |nn| clean_normal(nn[i], &mut counts.normal));
+        let albedo = gb.albedo.as_ref().map_or(Vec3::splat(DEFAULT_ALBEDO), |a| clean_albedo(a[i], &mut counts.albedo));
         let specular = scalar(gb.specular.as_deref(), i, DEFAULT_SPECULAR, 0.0, f32::MAX, &mut counts.specular);
         let power = scalar(
             gb.specular_power.as_deref(),
@@ -193,31 +198,147 @@ impl<'a> SurfaceReader<'a> {
             None => roughness_from_power(power),
         };
         let metallic = scalar(gb.metallic.as_deref(), i, 0.0, 0.0, 1.0, &mut counts.metallic);
-        Some(Surface { p, n, albedo, specular, power, roughness, metallic })
+        Surface { p, n, albedo, specular, power, roughness, metallic }
+    }
+
+    /// Batch form of [`SurfaceReader::read`]'s attribute part for a work list: the positions, pixels and weights
+    /// of `it` are set and `src[j]` is item `j`'s flat sample index (`src.len()` a multiple of [`LANES`]); fills
+    /// every other surface array of `it` with the same defaults, sanitisation and counts as `read`. Works a vector
+    /// of items at a time: the inputs of a vector whose samples are consecutive (a tile row at one sample per
+    /// pixel) are one slice copy, other vectors gather; the sanitising arithmetic has no branches.
+    #[inline(always)]
+    pub fn fill_attributes(&self, src: &[usize], it: &mut Items, counts: &mut SanitizedCounts) {
+        let gb = self.gb;
+        let n = src.len();
+        debug_assert!(it.len() == n && n.is_multiple_of(LANES));
+        it.resize(n);
+        let mut bad = SanitizedCounts::default();
+        for (c, idx) in src.chunks_exact(LANES).enumerate() {
+            let r = c * LANES..(c + 1) * LANES;
+            let run = idx.windows(2).all(|w| w[1] == w[0] + 1);
+            match &gb.normal {
+                Some(plane) => {
+                    let v = gather(plane, idx, run);
+                    let (x, y, z) = (&mut it.nx[r.clone()], &mut it.ny[r.clone()], &mut it.nz[r.clone()]);
+                    for k in 0..LANES {
+                        let (n, ok) = normalized(v[k]);
+                        bad.normal += u64::from(!ok);
+                        (x[k], y[k], z[k]) = (n.x, n.y, n.z);
+                    }
+                }
+                None => {
+                    it.nx[r.clone()].fill(0.0);
+                    it.ny[r.clone()].fill(0.0);
+                    it.nz[r.clone()].fill(1.0);
+                }
+            }
+            match &gb.albedo {
+                Some(plane) => {
+                    let v = gather(plane, idx, run);
+                    let (x, y, z) = (&mut it.ar[r.clone()], &mut it.ag[r.clone()], &mut it.ab[r.clone()]);
+                    for k in 0..LANES {
+                        let (a, ok) = albedo_clamped(v[k]);
+                        bad.albedo += u64::from(!ok);
+                        (x[k], y[k], z[k]) = (a.x, a.y, a.z);
+                    }
+                }
+                None => {
+                    it.ar[r.clone()].fill(DEFAULT_ALBEDO);
+                    it.ag[r.clone()].fill(DEFAULT_ALBEDO);
+                    it.ab[r.clone()].fill(DEFAULT_ALBEDO);
+                }
+            }
+            let scalars = |out: &mut [f32], plane: Option<&Vec<f32>>, dflt: &[f32; LANES], lo, hi, count: &mut u64| {
+                let Some(plane) = plane else {
+                    out.copy_from_slice(dflt);
+                    return;
+                };
+                let v = gather(plane, idx, run);
+                for k in 0..LANES {
+                    let (x, ok) = clamped(v[k], dflt[k], lo, hi);
+                    *count += u64::from(!ok);
+                    out[k] = x;
+                }
+            };
+            let spec = [DEFAULT_SPECULAR; LANES];
+            scalars(&mut it.spec[r.clone()], gb.specular.as_ref(), &spec, 0.0, f32::MAX, &mut bad.specular);
+            let power = [DEFAULT_SPECULAR_POWER; LANES];
+            let p_hi = MAX_SPECULAR_POWER;
+            scalars(&mut it.pw[r.clone()], gb.specular_power.as_ref(), &power, 0.0, p_hi, &mut bad.specular_power);
+            let mut rough = [0.0; LANES];
+            for (o, &p) in rough.iter_mut().zip(&it.pw[r.clone()]) {
+                *o = roughness_from_power(p);
+            }
+            scalars(&mut it.rough[r.clone()], gb.roughness.as_ref(), &rough, 0.0, 1.0, &mut bad.roughness);
+            scalars(&mut it.metal[r], gb.metallic.as_ref(), &[0.0; LANES], 0.0, 1.0, &mut bad.metallic);
+        }
+        counts.add(&bad);
     }
 }
 
-fn clean(v: f32, default: f32) -> f32 {
-    if v.is_finite() {
-        v
+/// Values `plane[idx[k]]` for one vector of items: a slice copy when the indices are consecutive.
+#[inline(always)]
+fn gather<T: Copy + Default>(plane: &[T], idx: &[usize], consecutive: bool) -> [T; LANES] {
+    let mut out = [T::default(); LANES];
+    if consecutive {
+        out.copy_from_slice(&plane[idx[0]..idx[0] + LANES]);
     } else {
-        default
+        for (o, &i) in out.iter_mut().zip(idx) {
+            *o = plane[i];
+        }
     }
+    out
+}
+
+/// `n` made unit length and true; `(+Z, false)` when that is impossible (NaN/Inf or zero length). The same
+/// arithmetic as `Vec3::try_normalize`, without a branch.
+#[inline(always)]
+fn normalized(n: Vec3) -> (Vec3, bool) {
+    let rcp = 1.0 / n.length();
+    let ok = rcp.is_finite() & (rcp > 0.0);
+    (if ok { n * rcp } else { Vec3::Z }, ok)
+}
+
+/// Albedo with NaN/Inf and negative components replaced by 0, and whether it was already clean.
+#[inline(always)]
+fn albedo_clamped(a: Vec3) -> (Vec3, bool) {
+    let c = |v: f32| if v.is_finite() & (v >= 0.0) { v } else { 0.0 };
+    let out = Vec3::new(c(a.x), c(a.y), c(a.z));
+    let ok = a.x.is_finite() & a.y.is_finite() & a.z.is_finite() & (a.min_element() >= 0.0);
+    (out, ok)
+}
+
+/// A scalar: NaN/Inf → `default`, out of `[lo, hi]` → clamped; and whether it was already clean.
+#[inline(always)]
+fn clamped(v: f32, default: f32, lo: f32, hi: f32) -> (f32, bool) {
+    let c = v.max(lo).min(hi);
+    let finite = v.is_finite();
+    (if finite { c } else { default }, finite & (c == v))
+}
+
+/// A stored normal made unit length; NaN/Inf or zero length → `+Z` (facing the camera), counted.
+#[inline]
+fn clean_normal(n: Vec3, count: &mut u64) -> Vec3 {
+    let (v, ok) = normalized(n);
+    *count += u64::from(!ok);
+    v
+}
+
+/// A stored albedo with NaN/Inf components → 0 and negative ones clamped to 0, counted once per sample.
+#[inline]
+fn clean_albedo(a: Vec3, count: &mut u64) -> Vec3 {
+    let (v, ok) = albedo_clamped(a);
+    *count += u64::from(!ok);
+    v
 }
 
 /// Value `i` of an optional plane: the default when absent; NaN/Inf → default and out-of-range → clamped, both
 /// counted.
+#[inline]
 fn scalar(plane: Option<&[f32]>, i: usize, default: f32, lo: f32, hi: f32, count: &mut u64) -> f32 {
     let Some(plane) = plane else { return default };
-    let v = plane[i];
-    if !v.is_finite() {
-        *count += 1;
-        return default;
-    }
-    if v < lo || v > hi {
-        *count += 1;
-        return v.clamp(lo, hi);
-    }
+    let (v, ok) = clamped(plane[i], default, lo, hi);
+    *count += u64::from(!ok);
     v
 }
 
