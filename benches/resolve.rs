@@ -12,9 +12,7 @@
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use gbuf::detect::{detect, Detector, DetectorConfig};
-use gbuf::light::Light;
 use gbuf::resolve::{fixture, resolve, uniform_mask, Culling, ResolveConfig};
-use gbuf::GBuffer;
 
 const W: u32 = 1280;
 const H: u32 = 720;
@@ -22,29 +20,10 @@ const LIGHTS: usize = 1024;
 /// Lights per sample after tile culling that the light range is tuned for.
 const TARGET_LIGHTS_PER_SAMPLE: f64 = 40.0;
 
-/// Finds the light range giving about `TARGET_LIGHTS_PER_SAMPLE` tile-culled lights per sample (bisection on a
-/// quarter-size frame, then checked at full size).
-fn tuned_lights(gb: &GBuffer) -> Vec<Light> {
-    let small = fixture::room(W / 4, H / 4, 1).expect("fixture");
-    let mask = uniform_mask(&small, false);
-    let (mut lo, mut hi) = (0.05f32, 8.0f32);
-    for _ in 0..18 {
-        let mid = (lo * hi).sqrt();
-        let lights = fixture::lights_on_surfaces(&small, LIGHTS, mid, 7);
-        let r = resolve(&small, &lights, &mask, &ResolveConfig { tile_size: 4, ..Default::default() }).unwrap();
-        if r.stats.lights_per_sample < TARGET_LIGHTS_PER_SAMPLE {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    fixture::lights_on_surfaces(gb, LIGHTS, (lo * hi).sqrt(), 7)
-}
-
 fn benches(c: &mut Criterion) {
     let gb1 = fixture::room(W, H, 1).expect("fixture");
     let gb4 = fixture::room(W, H, 4).expect("fixture");
-    let lights = tuned_lights(&gb1);
+    let lights = fixture::lights_for_density(W, H, LIGHTS, TARGET_LIGHTS_PER_SAMPLE, 7).expect("lights");
     let mask1 = uniform_mask(&gb1, false);
     let mask4 = detect(&gb4, Detector::Lauritzen, &DetectorConfig::default()).expect("detect");
     let ssaa4 = uniform_mask(&gb4, true);

@@ -147,6 +147,30 @@ pub fn lights_on_surfaces(gb: &GBuffer, n: usize, range: f32, seed: u64) -> Vec<
         .collect()
 }
 
+/// [`lights_on_surfaces`] with the range chosen so that tile culling leaves about `per_sample` lights per
+/// shaded sample of `gb` (one sample per pixel): a bisection on the range, measured with the resolve itself on a
+/// quarter-size copy of the frame (4-pixel tiles, so the tile frusta match the full frame's 16-pixel ones).
+///
+/// # Errors
+/// When the quarter-size frame cannot be built or resolved.
+pub fn lights_for_density(width: u32, height: u32, n: usize, per_sample: f64, seed: u64) -> Result<Vec<Light>> {
+    use super::{resolve, uniform_mask, ResolveConfig};
+    let small = room((width / 4).max(1), (height / 4).max(1), 1)?;
+    let mask = uniform_mask(&small, false);
+    let cfg = ResolveConfig { tile_size: 4, ..Default::default() };
+    let (mut lo, mut hi) = (0.05f32, 8.0f32);
+    for _ in 0..18 {
+        let mid = (lo * hi).sqrt();
+        let lights = lights_on_surfaces(&small, n, mid, seed);
+        if resolve(&small, &lights, &mask, &cfg)?.stats.lights_per_sample < per_sample {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Ok(lights_on_surfaces(&room(width, height, 1)?, n, (lo * hi).sqrt(), seed))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,11 +1,12 @@
-//! The batched shading kernel: a packed work list of samples (structure of arrays) against a list of lights
-//! (structure of arrays). The outer loop walks lights, the inner loop walks samples with no branches, so the
-//! compiler vectorises it; on x86_64 a copy compiled for AVX-512 or AVX2+FMA is picked at run time.
+//! The batched shading kernel: a packed work list of samples (structure of arrays, 16-item vectors) against a list
+//! of lights (one cache-line record each). The outer loop walks vectors, the next loop lights; the lanes of a vector
+//! are one [`Lanes`] value, so the kernel is written once and compiled for AVX-512, for AVX2+FMA and for any other
+//! CPU, picked at run time ([`instruction_set`]).
 //!
 //! The formulas are those of `brdf.rs` / `falloff.rs` in f32, with per-light and per-sample constants hoisted.
-//! Every light's contribution to a sample is added in light-index order whatever the culling, so a culled light
-//! (whose contribution is exactly 0) changes nothing: the image is bit-identical across culling methods, tile
-//! sizes and thread counts.
+//! Every light's contribution to a sample is added in light-index order whatever the culling, and a light that
+//! cannot reach a sample adds exactly 0 (it may be skipped for a whole vector), so the image is bit-identical across
+//! culling methods, tile sizes and thread counts.
 
 use super::brdf::{DIELECTRIC_F0, MIN_ALPHA, MIN_HALF_LENGTH, MIN_NDOTV};
 use super::config::{Brdf, Falloff};
