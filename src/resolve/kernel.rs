@@ -15,8 +15,8 @@ use super::fastmath::POW_MIN_BASE;
 use super::lights::{LightTable, LUMA};
 #[cfg(target_arch = "x86_64")]
 use super::simd::Avx512;
-pub use super::simd::LANES;
-use super::simd::{Lanes, Portable};
+use super::simd::{Lanes, Pair, Portable};
+pub use super::simd::{BLOCK, LANES};
 use super::surface::Surface;
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
@@ -115,10 +115,10 @@ impl Items {
         self.px.is_empty()
     }
 
-    /// Pads the list to a multiple of [`LANES`] with copies of item `template` that go nowhere (`pixel` =
+    /// Pads the list to a multiple of [`BLOCK`] with copies of item `template` that go nowhere (`pixel` =
     /// [`PAD_PIXEL`], weight 0): the kernel then runs whole vectors only, with no scalar remainder loop.
     pub fn pad_to_lanes(&mut self, template: usize) {
-        while !self.len().is_multiple_of(LANES) {
+        while !self.len().is_multiple_of(BLOCK) {
             self.push_copy(template);
             let last = self.len() - 1;
             self.pixel[last] = PAD_PIXEL;
@@ -229,7 +229,7 @@ fn run_avx512<const B: u8, const F: u8, const Q: bool, const P: bool>(
     lights: &LightTable,
     quad: &QuadSoa,
 ) {
-    run::<Avx512, B, F, Q, P>(it, range, lights, quad);
+    run::<Pair<Avx512>, B, F, Q, P>(it, range, lights, quad);
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -250,11 +250,11 @@ fn run<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
     lights: &LightTable,
     quad: &QuadSoa,
 ) {
-    debug_assert!(range.len().is_multiple_of(LANES), "work lists are padded to whole vectors");
+    debug_assert!(range.len().is_multiple_of(V::N), "work lists are padded to whole vectors");
     let mut c = range.start;
-    while c + LANES <= range.end {
+    while c + V::N <= range.end {
         run_chunk::<V, B, F, Q, P>(it, c, lights, quad);
-        c += LANES;
+        c += V::N;
     }
 }
 
@@ -334,7 +334,7 @@ fn load_chunk<V: Lanes, const B: u8, const Q: bool>(it: &Items, c: usize) -> Chu
     k
 }
 
-/// Shades one vector of `LANES` items against every light: per-sample constants and accumulators stay in
+/// Shades one vector of `V::N` items against every light: per-sample constants and accumulators stay in
 /// registers across the light loop; a light whose energy is zero for all lanes skips the specular part (its
 /// contribution would be exactly 0).
 #[inline(always)]

@@ -9,7 +9,7 @@
 
 use super::config::{Culling, ResolveConfig, Schedule};
 use super::culling::{light_sphere, quad_rects, Bounds};
-use super::kernel::{finish_prepass, shade, Items, QuadSoa, Variant, LANES, PAD_PIXEL};
+use super::kernel::{finish_prepass, shade, Items, QuadSoa, Variant, BLOCK, PAD_PIXEL};
 use super::lights::LightTable;
 use super::surface::{SanitizedCounts, SurfaceReader};
 use crate::detect::EdgeMask;
@@ -378,7 +378,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
     let n_real = sc.src.len();
     if n_real > 0 {
         // Pad to whole vectors with copies of the last item that go nowhere (weight 0).
-        while !sc.src.len().is_multiple_of(LANES) {
+        while !sc.src.len().is_multiple_of(BLOCK) {
             let (i, p) = (sc.src[n_real - 1], glam::Vec3::new(it.px[n_real - 1], it.py[n_real - 1], it.pz[n_real - 1]));
             push(it, &mut sc.src, p, i, PAD_PIXEL, 0.0);
         }

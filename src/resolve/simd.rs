@@ -15,8 +15,10 @@
 use super::fastmath;
 use std::ops::{Add, Mul, Sub};
 
-/// Lanes per vector.
+/// Lanes per machine vector of the base types ([`Portable`], [`Avx512`]).
 pub const LANES: usize = 16;
+/// Work lists are padded to a multiple of this many items: the widest kernel step ([`Pair`] of 16-lane vectors).
+pub const BLOCK: usize = 2 * LANES;
 
 /// Relative error bound of [`Lanes::rsqrt`] on normal positive inputs (the refined `vrsqrt14ps` path; the portable
 /// path is `1/√x`, within 2 ulp).
@@ -24,13 +26,15 @@ pub const RSQRT_MAX_REL_ERROR: f32 = 4e-7;
 
 /// A vector of [`LANES`] f32 lanes with the operations the shading kernel needs.
 pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> {
+    /// Number of lanes.
+    const N: usize;
     /// Lane mask (the result of a comparison).
     type Mask: Copy;
     /// Every lane `x`.
     fn splat(x: f32) -> Self;
-    /// Lanes `a[0..16]` (panics if `a` is shorter).
+    /// Lanes `a[0..N]` (panics if `a` is shorter).
     fn load(a: &[f32]) -> Self;
-    /// Writes the lanes to `a[0..16]` (panics if `a` is shorter).
+    /// Writes the lanes to `a[0..N]` (panics if `a` is shorter).
     fn store(self, a: &mut [f32]);
     /// `self · b + c` (fused where the CPU has FMA).
     fn mul_add(self, b: Self, c: Self) -> Self;
@@ -134,6 +138,7 @@ impl<const FMA: bool> Portable<FMA> {
 }
 
 impl<const FMA: bool> Lanes for Portable<FMA> {
+    const N: usize = LANES;
     type Mask = [bool; LANES];
     #[inline(always)]
     fn splat(x: f32) -> Self {
@@ -231,6 +236,115 @@ impl<const FMA: bool> Lanes for Portable<FMA> {
     }
 }
 
+/// Two vectors shaded side by side: a light's constants are loaded and its skip test run once for twice the
+/// samples, and the two halves' dependency chains interleave.
+#[derive(Clone, Copy, Debug)]
+pub struct Pair<V>(pub V, pub V);
+
+impl<V: Lanes> Add for Pair<V> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Pair(self.0 + o.0, self.1 + o.1)
+    }
+}
+impl<V: Lanes> Sub for Pair<V> {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Pair(self.0 - o.0, self.1 - o.1)
+    }
+}
+impl<V: Lanes> Mul for Pair<V> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        Pair(self.0 * o.0, self.1 * o.1)
+    }
+}
+
+impl<V: Lanes> Lanes for Pair<V> {
+    const N: usize = 2 * V::N;
+    type Mask = (V::Mask, V::Mask);
+    #[inline(always)]
+    fn splat(x: f32) -> Self {
+        Pair(V::splat(x), V::splat(x))
+    }
+    #[inline(always)]
+    fn load(a: &[f32]) -> Self {
+        Pair(V::load(a), V::load(&a[V::N..]))
+    }
+    #[inline(always)]
+    fn store(self, a: &mut [f32]) {
+        self.0.store(a);
+        self.1.store(&mut a[V::N..]);
+    }
+    #[inline(always)]
+    fn mul_add(self, b: Self, c: Self) -> Self {
+        Pair(self.0.mul_add(b.0, c.0), self.1.mul_add(b.1, c.1))
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        Pair(self.0.max(o.0), self.1.max(o.1))
+    }
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        Pair(self.0.min(o.0), self.1.min(o.1))
+    }
+    #[inline(always)]
+    fn rsqrt(self) -> Self {
+        Pair(self.0.rsqrt(), self.1.rsqrt())
+    }
+    #[inline(always)]
+    fn recip(self) -> Self {
+        Pair(self.0.recip(), self.1.recip())
+    }
+    #[inline(always)]
+    fn log2(self) -> Self {
+        Pair(self.0.log2(), self.1.log2())
+    }
+    #[inline(always)]
+    fn exp2(self) -> Self {
+        Pair(self.0.exp2(), self.1.exp2())
+    }
+    #[inline(always)]
+    fn gt(self, o: Self) -> Self::Mask {
+        (self.0.gt(o.0), self.1.gt(o.1))
+    }
+    #[inline(always)]
+    fn ge(self, o: Self) -> Self::Mask {
+        (self.0.ge(o.0), self.1.ge(o.1))
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> Self::Mask {
+        (self.0.le(o.0), self.1.le(o.1))
+    }
+    #[inline(always)]
+    fn and(a: Self::Mask, b: Self::Mask) -> Self::Mask {
+        (V::and(a.0, b.0), V::and(a.1, b.1))
+    }
+    #[inline(always)]
+    fn keep(self, m: Self::Mask) -> Self {
+        Pair(self.0.keep(m.0), self.1.keep(m.1))
+    }
+    #[inline(always)]
+    fn count(self, m: Self::Mask) -> Self {
+        Pair(self.0.count(m.0), self.1.count(m.1))
+    }
+    #[inline(always)]
+    fn any(m: Self::Mask) -> bool {
+        V::any(m.0) | V::any(m.1)
+    }
+    #[inline(always)]
+    fn hmin(self) -> f32 {
+        self.0.hmin().min(self.1.hmin())
+    }
+    #[inline(always)]
+    fn hmax(self) -> f32 {
+        self.0.hmax().max(self.1.hmax())
+    }
+}
+
 #[cfg(target_arch = "x86_64")]
 pub use avx512::Avx512;
 
@@ -273,6 +387,7 @@ mod avx512 {
     }
 
     impl Lanes for Avx512 {
+        const N: usize = LANES;
         type Mask = __mmask16;
         #[inline(always)]
         fn splat(x: f32) -> Self {
@@ -403,59 +518,60 @@ mod tests {
     /// Checks every operation of `V` against f64 on random lanes.
     fn check<V: Lanes>() {
         let mut rng = SplitMix64::new(11);
-        let mut out = [0.0f32; LANES];
+        let mut out = vec![0.0f32; V::N];
         let pos = inputs(&mut rng, 1e-6, 1e6);
-        for c in pos.chunks(LANES) {
+        for c in pos.chunks(V::N) {
             V::load(c).rsqrt().store(&mut out);
-            for (x, y) in c.iter().zip(out) {
+            for (x, y) in c.iter().zip(out.iter().copied()) {
                 let want = 1.0 / f64::from(*x).sqrt();
                 assert!(((f64::from(y) - want) / want).abs() < f64::from(RSQRT_MAX_REL_ERROR), "rsqrt({x}) = {y}");
             }
             V::load(c).recip().store(&mut out);
-            for (x, y) in c.iter().zip(out) {
+            for (x, y) in c.iter().zip(out.iter().copied()) {
                 let want = 1.0 / f64::from(*x);
                 assert!(((f64::from(y) - want) / want).abs() < 3e-7, "recip({x}) = {y}");
             }
             V::load(c).log2().store(&mut out);
-            for (x, y) in c.iter().zip(out) {
+            for (x, y) in c.iter().zip(out.iter().copied()) {
                 let want = f64::from(*x).log2();
                 let tol = f64::from(fastmath::LOG2_MAX_ABS_ERROR) + want.abs() * f64::from(f32::EPSILON);
                 assert!((f64::from(y) - want).abs() < tol, "log2({x}) = {y}, want {want}");
             }
         }
         let ex = inputs(&mut rng, -130.0, 130.0);
-        for c in ex.chunks(LANES) {
+        for c in ex.chunks(V::N) {
             V::load(c).exp2().store(&mut out);
-            for (x, y) in c.iter().zip(out) {
+            for (x, y) in c.iter().zip(out.iter().copied()) {
                 let want = f64::from(x.clamp(-126.0, 126.0)).exp2();
                 let rel = (f64::from(y) - want).abs() / want;
                 assert!(rel < f64::from(fastmath::EXP2_MAX_REL_ERROR), "exp2({x}) = {y}, want {want}");
             }
         }
-        let a = V::load(&ex[..LANES]);
-        let b = V::load(&ex[LANES..2 * LANES]);
+        let a = V::load(&ex[..V::N]);
+        let b = V::load(&ex[V::N..2 * V::N]);
         a.mul_add(b, a).store(&mut out);
-        for j in 0..LANES {
-            let want = f64::from(ex[j]) * f64::from(ex[LANES + j]) + f64::from(ex[j]);
+        for j in 0..V::N {
+            let want = f64::from(ex[j]) * f64::from(ex[V::N + j]) + f64::from(ex[j]);
             assert!((f64::from(out[j]) - want).abs() <= want.abs() * 1e-6 + 1e-3, "mul_add");
         }
         a.keep(a.gt(b)).store(&mut out);
         V::splat(0.0).count(a.le(b)).count(V::and(a.ge(b), a.le(b))).store(&mut out);
-        for j in 0..LANES {
-            let (x, y) = (ex[j], ex[LANES + j]);
+        for j in 0..V::N {
+            let (x, y) = (ex[j], ex[V::N + j]);
             assert_eq!(out[j], f32::from(u8::from(x <= y)) + f32::from(u8::from(x == y)));
         }
         assert!(V::any(V::splat(1.0).gt(V::splat(0.0))));
         assert!(!V::any(V::splat(1.0).gt(V::splat(1.0))));
-        assert_eq!(a.hmin(), ex[..LANES].iter().fold(f32::INFINITY, |m, &x| m.min(x)));
-        assert_eq!(a.hmax(), ex[..LANES].iter().fold(f32::NEG_INFINITY, |m, &x| m.max(x)));
+        assert_eq!(a.hmin(), ex[..V::N].iter().fold(f32::INFINITY, |m, &x| m.min(x)));
+        assert_eq!(a.hmax(), ex[..V::N].iter().fold(f32::NEG_INFINITY, |m, &x| m.max(x)));
         V::splat(-3.0).saturate().store(&mut out);
-        assert_eq!(out, [0.0; LANES]);
+        assert!(out.iter().all(|&x| x == 0.0));
     }
 
     #[test]
     fn portable_lanes_are_accurate() {
         check::<Portable<false>>();
+        check::<Pair<Portable<true>>>();
     }
 
     #[test]
@@ -465,6 +581,7 @@ mod tests {
             #[target_feature(enable = "avx512f")]
             fn run() {
                 check::<Avx512>();
+                check::<Pair<Avx512>>();
             }
             // SAFETY: the CPU has AVX-512F (checked above).
             unsafe {
