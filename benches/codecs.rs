@@ -1,48 +1,123 @@
 //! Encode and decode throughput of every normal scheme over 1,000,000 normals, beside a plain memcpy of the same
-//! bytes in the same run (`memcpy/normals-12B` copies the f32×3 input, `memcpy/codes-8B` the u64 codes).
+//! bytes in the same run, on one thread and on all threads (rayon).
 //!
-//! Names: `encode/<codec>/1M`, `decode/<codec>/1M`; throughput in normals/s. Run briefly with
-//! `cargo bench --bench codecs -- --warm-up-time 1 --measurement-time 2`. Each scheme is benched at its
-//! first default sweep size (8 bits per component, or its f16 size); speed barely depends on the bit count.
+//! First a ratio table is printed (best of 9 passes each): normals/s of each codec's slice path on one thread
+//! (`encode_slice`/`decode_slice`, vectorised) and on all threads (`simd::par_encode_normals` /
+//! `par_decode_normals`), and the ratio of its time to a memcpy of the 12-byte f32×3 normals (one thread:
+//! `copy_from_slice`; all threads: the same copy split over the pool). Then criterion measures the same
+//! operations: `memcpy/normals-12B/1M`, `memcpy-par/...`, `encode/<codec>/1M`, `decode/<codec>/1M`,
+//! `encode-par/<codec>/1M`, `decode-par/<codec>/1M`; throughput in normals/s. Run briefly with
+//! `cargo bench --bench codecs -- --warm-up-time 1 --measurement-time 2`. Each scheme is benched at its first
+//! default sweep size (8 bits per component, or its f16 size); speed barely depends on the bit count.
 
-use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use gbuf::codec::eval::random_unit_vectors;
-use gbuf::codec::NormalScheme;
+use criterion::{black_box, BenchmarkId, Criterion, Throughput};
+use gbuf::codec::eval::{best_time, random_unit_vectors};
+use gbuf::codec::simd::{par_decode_normals, par_encode_normals, Isa, PAR_CHUNK};
+use gbuf::codec::{NormalCodec, NormalScheme};
 use glam::Vec3;
+use rayon::prelude::*;
 
 const COUNT: usize = 1_000_000;
 const SEED: u64 = 0x5eed;
+/// Passes per entry of the ratio table (the fastest counts).
+const REPS: usize = 9;
 
-fn bench(c: &mut Criterion) {
-    let normals = random_unit_vectors(COUNT, SEED);
+fn par_copy(dst: &mut [Vec3], src: &[Vec3]) {
+    dst.par_chunks_mut(PAR_CHUNK).zip(src.par_chunks(PAR_CHUNK)).for_each(|(d, s)| d.copy_from_slice(s));
+}
+
+fn codecs() -> Vec<Box<dyn NormalCodec>> {
+    NormalScheme::ALL.iter().map(|s| s.codec(s.sweep_bits()[0]).expect("sweep bits are valid")).collect()
+}
+
+/// The ratio table (see the module doc).
+fn ratio_table(normals: &[Vec3]) {
+    let mut copy = vec![Vec3::ZERO; COUNT];
+    let memcpy = |copy: &mut Vec<Vec3>| best_time(REPS, || copy.copy_from_slice(black_box(normals)));
+    let memcpy_par = |copy: &mut Vec<Vec3>| best_time(REPS, || par_copy(copy, black_box(normals)));
+    let (m1, mp) = (memcpy(&mut copy), memcpy_par(&mut copy));
+    let threads = rayon::current_num_threads();
+    println!(
+        "\n{COUNT} normals; {} slice path; memcpy of the 12-byte normals: 1 thread {:.2} ns/normal ({:.0} M/s), \
+         {threads} threads {:.2} ns/normal ({:.0} M/s)",
+        Isa::detect().name(),
+        m1 * 1e9 / COUNT as f64,
+        COUNT as f64 / m1 / 1e6,
+        mp * 1e9 / COUNT as f64,
+        COUNT as f64 / mp / 1e6
+    );
+    println!(
+        "{:<20} {:>10} {:>7} {:>10} {:>7} | {:>10} {:>7} {:>10} {:>7}",
+        "codec", "enc M/s", "×memcpy", "dec M/s", "×memcpy", "enc-par", "×memcpy", "dec-par", "×memcpy"
+    );
+    let mut codes = vec![0u64; COUNT];
+    let mut out = vec![Vec3::ZERO; COUNT];
+    for c in codecs() {
+        let e1 = best_time(REPS, || c.encode_slice(black_box(normals), &mut codes));
+        let d1 = best_time(REPS, || c.decode_slice(black_box(&codes), &mut out));
+        let ep = best_time(REPS, || par_encode_normals(c.as_ref(), black_box(normals), &mut codes));
+        let dp = best_time(REPS, || par_decode_normals(c.as_ref(), black_box(&codes), &mut out));
+        let rate = |t: f64| COUNT as f64 / t / 1e6;
+        println!(
+            "{:<20} {:>10.0} {:>7.2} {:>10.0} {:>7.2} | {:>10.0} {:>7.2} {:>10.0} {:>7.2}",
+            c.name(),
+            rate(e1),
+            e1 / m1,
+            rate(d1),
+            d1 / m1,
+            rate(ep),
+            ep / mp,
+            rate(dp),
+            dp / mp
+        );
+    }
+    // The memcpy once more at the end: if the machine got busier, the ratios above are suspect.
+    let (m1b, mpb) = (memcpy(&mut copy), memcpy_par(&mut copy));
+    println!(
+        "memcpy again after the table: 1 thread {:.2} ns/normal, {threads} threads {:.2} ns/normal (was {:.2}, {:.2})\n",
+        m1b * 1e9 / COUNT as f64,
+        mpb * 1e9 / COUNT as f64,
+        m1 * 1e9 / COUNT as f64,
+        mp * 1e9 / COUNT as f64
+    );
+}
+
+fn bench(c: &mut Criterion, normals: &[Vec3]) {
     let mut group = c.benchmark_group("codecs");
     group.throughput(Throughput::Elements(COUNT as u64));
     group.sample_size(10);
 
     let mut copy = vec![Vec3::ZERO; COUNT];
     group.bench_function(BenchmarkId::new("memcpy", "normals-12B/1M"), |b| {
-        b.iter(|| copy.copy_from_slice(black_box(&normals)));
+        b.iter(|| copy.copy_from_slice(black_box(normals)));
     });
-    let codes_src: Vec<u64> = (0..COUNT as u64).collect();
-    let mut codes_dst = vec![0u64; COUNT];
-    group.bench_function(BenchmarkId::new("memcpy", "codes-8B/1M"), |b| {
-        b.iter(|| codes_dst.copy_from_slice(black_box(&codes_src)));
+    group.bench_function(BenchmarkId::new("memcpy-par", "normals-12B/1M"), |b| {
+        b.iter(|| par_copy(&mut copy, black_box(normals)));
     });
-
-    for scheme in NormalScheme::ALL {
-        let codec = scheme.codec(scheme.sweep_bits()[0]).expect("sweep bits are valid");
+    for codec in codecs() {
         let name = codec.name();
         let mut codes = vec![0u64; COUNT];
         group.bench_function(BenchmarkId::new("encode", format!("{name}/1M")), |b| {
-            b.iter(|| codec.encode_slice(black_box(&normals), black_box(&mut codes)));
+            b.iter(|| codec.encode_slice(black_box(normals), black_box(&mut codes)));
         });
         let mut out = vec![Vec3::ZERO; COUNT];
         group.bench_function(BenchmarkId::new("decode", format!("{name}/1M")), |b| {
             b.iter(|| codec.decode_slice(black_box(&codes), black_box(&mut out)));
         });
+        group.bench_function(BenchmarkId::new("encode-par", format!("{name}/1M")), |b| {
+            b.iter(|| par_encode_normals(codec.as_ref(), black_box(normals), black_box(&mut codes)));
+        });
+        group.bench_function(BenchmarkId::new("decode-par", format!("{name}/1M")), |b| {
+            b.iter(|| par_decode_normals(codec.as_ref(), black_box(&codes), black_box(&mut out)));
+        });
     }
     group.finish();
 }
 
-criterion_group!(benches, bench);
-criterion_main!(benches);
+fn main() {
+    let normals = random_unit_vectors(COUNT, SEED);
+    ratio_table(&normals);
+    let mut c = Criterion::default().configure_from_args();
+    bench(&mut c, &normals);
+    c.final_summary();
+}

@@ -1,12 +1,20 @@
-//! Whole-G-buffer pack and unpack (rayon-parallel) for a few layouts at 1280×720×4, beside a memcpy of the same
-//! number of packed bytes. Run: `cargo bench --bench pack -- --warm-up-time 1 --measurement-time 2`.
+//! Whole-G-buffer pack and unpack (rayon-parallel over blocks of rows, each field through its codec's slice path)
+//! for a few layouts at 1280×720×4, beside a memcpy of the same number of packed bytes in the same run.
+//!
+//! First a ratio table (best of 7 passes each): pack and unpack time on one thread (a one-thread rayon pool) and
+//! on all threads, and the ratio to a memcpy of the packed bytes (one thread: `copy_from_slice`; all threads:
+//! the copy split over the pool). Pack and unpack include allocating their output (and for destiny-96 building
+//! the material table; for unpack, re-deriving position from depth). Then criterion measures the all-thread
+//! operations. Run: `cargo bench --bench pack -- --warm-up-time 1 --measurement-time 2`.
 
-use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
+use criterion::{black_box, Criterion, Throughput};
+use gbuf::codec::eval::best_time;
 use gbuf::gbuffer::GBuffer;
 use gbuf::layout::Layout;
 use gbuf::util::SplitMix64;
 use gbuf::Camera;
 use glam::{Vec2, Vec3};
+use rayon::prelude::*;
 
 const W: u32 = 1280;
 const H: u32 = 720;
@@ -40,11 +48,66 @@ fn gbuffer() -> GBuffer {
     gb
 }
 
-fn bench(c: &mut Criterion) {
-    let gb = gbuffer();
+const LAYOUTS: [&str; 5] = ["fat-20", "lauritzen-15", "destiny-96", "bevy-deferred", "reference-f32"];
+/// Passes per entry of the ratio table (the fastest counts).
+const REPS: usize = 7;
+/// Bytes per parallel memcpy work item.
+const COPY_CHUNK: usize = 1 << 20;
+
+fn par_copy(dst: &mut [u8], src: &[u8]) {
+    dst.par_chunks_mut(COPY_CHUNK).zip(src.par_chunks(COPY_CHUNK)).for_each(|(d, s)| d.copy_from_slice(s));
+}
+
+/// The ratio table (see the module doc).
+fn ratio_table(gb: &GBuffer) {
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a one-thread pool");
+    let threads = rayon::current_num_threads();
+    println!("\n{W}×{H}×{S} samples; times in ms; ratio = time / memcpy of the packed bytes (same thread count)");
+    println!(
+        "{:<14} {:>6} {:>8} {:>8} {:>6} {:>8} {:>6} | {:>8} {:>8} {:>6} {:>8} {:>6}",
+        "layout", "MB", "memcpy1", "pack1", "×", "unpack1", "×", "memcpyN", "packN", "×", "unpackN", "×"
+    );
+    for name in LAYOUTS {
+        let layout = Layout::by_name(name).unwrap();
+        let bytes = gb.len() * layout.bytes_per_sample();
+        let src = vec![0x5au8; bytes];
+        let mut dst = vec![0u8; bytes];
+        let packed = layout.pack(gb).unwrap();
+        let pack = || black_box(layout.pack(black_box(gb)).unwrap());
+        let unpack = || black_box(layout.unpack(black_box(&packed), gb).unwrap());
+        let (m1, p1, u1) = one.install(|| {
+            (
+                best_time(REPS, || dst.copy_from_slice(black_box(&src))),
+                best_time(REPS, || drop(pack())),
+                best_time(REPS, || drop(unpack())),
+            )
+        });
+        let mn = best_time(REPS, || par_copy(&mut dst, black_box(&src)));
+        let pn = best_time(REPS, || drop(pack()));
+        let un = best_time(REPS, || drop(unpack()));
+        let ms = |t: f64| t * 1e3;
+        println!(
+            "{name:<14} {:>6.1} {:>8.2} {:>8.2} {:>6.1} {:>8.2} {:>6.1} | {:>8.2} {:>8.2} {:>6.1} {:>8.2} {:>6.1}",
+            bytes as f64 / 1e6,
+            ms(m1),
+            ms(p1),
+            p1 / m1,
+            ms(u1),
+            u1 / m1,
+            ms(mn),
+            ms(pn),
+            pn / mn,
+            ms(un),
+            un / mn
+        );
+    }
+    println!("(N = {threads} threads)\n");
+}
+
+fn bench(c: &mut Criterion, gb: &GBuffer) {
     let mut group = c.benchmark_group("pack");
     group.sample_size(10);
-    for name in ["fat-20", "lauritzen-15", "destiny-96", "bevy-deferred", "reference-f32"] {
+    for name in LAYOUTS {
         let layout = Layout::by_name(name).unwrap();
         let bytes = gb.len() * layout.bytes_per_sample();
         group.throughput(Throughput::Bytes(bytes as u64));
@@ -56,14 +119,19 @@ fn bench(c: &mut Criterion) {
                 black_box(&dst);
             })
         });
-        group.bench_function(format!("pack/{name}/{W}x{H}x{S}"), |b| b.iter(|| layout.pack(black_box(&gb)).unwrap()));
-        let packed = layout.pack(&gb).unwrap();
+        group.bench_function(format!("pack/{name}/{W}x{H}x{S}"), |b| b.iter(|| layout.pack(black_box(gb)).unwrap()));
+        let packed = layout.pack(gb).unwrap();
         group.bench_function(format!("unpack/{name}/{W}x{H}x{S}"), |b| {
-            b.iter(|| layout.unpack(black_box(&packed), &gb).unwrap())
+            b.iter(|| layout.unpack(black_box(&packed), gb).unwrap())
         });
     }
     group.finish();
 }
 
-criterion_group!(benches, bench);
-criterion_main!(benches);
+fn main() {
+    let gb = gbuffer();
+    ratio_table(&gb);
+    let mut c = Criterion::default().configure_from_args();
+    bench(&mut c, &gb);
+    c.final_summary();
+}

@@ -168,6 +168,62 @@ fn unpack_is_bit_exact_with_the_codecs_applied_one_by_one() {
     }
 }
 
+/// Large enough for many parallel row blocks (a row is 303 × 2 samples; blocks are whole rows) and a short last
+/// block: every 11th sample of every field still equals the codecs applied by hand.
+#[test]
+fn unpack_is_bit_exact_across_parallel_row_blocks() {
+    let gb = synthetic(303, 31, 2, 5);
+    for layout in Layout::builtins() {
+        let packed = layout.pack(&gb).unwrap();
+        let back = layout.unpack(&packed, &gb).unwrap();
+        for field in layout.fields().iter().filter(|f| !matches!(f.slot, Slot::Reserved | Slot::MaterialIndex)) {
+            for i in (0..gb.len()).step_by(11).filter(|&i| gb.coverage[i]) {
+                let want = by_hand(&layout, &gb, packed.depth_range, field.slot, &field.codec, i);
+                assert_eq!(
+                    unpacked_bits(&back, field.slot, i),
+                    want,
+                    "{}: {} at {i}",
+                    layout.name(),
+                    field.slot.name()
+                );
+            }
+        }
+        // Background texels are cleared in every target.
+        let bg: Vec<usize> = (0..gb.len()).filter(|&i| !gb.coverage[i]).collect();
+        for t in &packed.targets {
+            let size = t.format.bytes();
+            assert!(bg.iter().all(|&i| t.bytes[i * size..(i + 1) * size].iter().all(|b| *b == 0)), "{}", t.name);
+        }
+    }
+}
+
+/// fat-20 stores motion as two snorm-8 over ±32 pixels (Killzone 2's 2 × 8-bit motion).
+#[test]
+fn fat_20_stores_signed_8_bit_motion() {
+    let mut gb = synthetic(8, 4, 2, 9);
+    let specials = [(-31.7f32, 12.25f32), (40.0, -1e9), (f32::NAN, -0.0), (0.126, -32.0)];
+    let covered: Vec<usize> = (0..gb.len()).filter(|&i| gb.coverage[i]).collect();
+    for (&i, &(x, y)) in covered.iter().zip(&specials) {
+        gb.motion.as_mut().unwrap()[i] = Vec2::new(x, y);
+    }
+    let layout = Layout::by_name("fat-20").unwrap();
+    let fields: Vec<_> = layout.fields().iter().filter(|f| f.slot.attribute() == Some(Attribute::Motion)).collect();
+    assert_eq!(fields.len(), 2);
+    assert!(fields.iter().all(|f| f.codec == "snorm-8:32" && f.bits == 8));
+    let back = layout.roundtrip(&gb).unwrap();
+    let c = codec::scalar_codec("snorm-8:32").unwrap();
+    let (m, b) = (gb.motion.as_ref().unwrap(), back.motion.as_ref().unwrap());
+    for &i in &covered {
+        for k in 0..2 {
+            let v = m[i][k];
+            let want = if v.is_nan() { 0.0 } else { v.clamp(-32.0, 32.0) };
+            assert!((b[i][k] - want).abs() <= c.error_bound(want), "{i}.{k}: {v} → {}", b[i][k]);
+        }
+    }
+    assert_eq!(b[covered[1]], Vec2::new(32.0, -32.0), "out-of-range motion clamps to ±32 px");
+    assert_eq!(b[covered[2]], Vec2::ZERO, "NaN motion reads as 0");
+}
+
 #[test]
 fn packed_words_hold_the_codec_output_at_the_field_offset() {
     let gb = synthetic(5, 4, 2, 3);

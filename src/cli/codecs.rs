@@ -22,7 +22,8 @@ pub struct Args {
     /// Skip the exhaustive decode → re-encode check of code spaces ≤ 2^24.
     #[arg(long)]
     pub no_exhaustive: bool,
-    /// Normals per timing pass (0: skip timing).
+    /// Normals per timing pass (0: skip timing). Timing goes through the codecs' slice paths
+    /// (`encode_slice`/`decode_slice`) on one thread.
     #[arg(long, value_name = "N", default_value_t = 1 << 20)]
     pub timing_samples: usize,
     /// Machine-readable output on stdout.
@@ -116,6 +117,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 fn print_table(rows: &[CodecRow], samples: usize) -> anyhow::Result<()> {
     let mut out = std::io::stdout().lock();
     writeln!(out, "{samples} vectors (Fibonacci sweep + seeded random + stiff); errors in degrees")?;
+    writeln!(
+        out,
+        "enc/dec ns: per normal through the slice path (encode_slice/decode_slice), one thread, {}",
+        gbuf::codec::Isa::detect().name()
+    )?;
     writeln!(
         out,
         "{:<22} {:>4} {:>10} {:>10} {:>10} {:>10} {:>9} {:>9}  exhaustive",

@@ -170,7 +170,9 @@ pub fn exhaustive(codec: &dyn NormalCodec) -> Option<Exhaustive> {
     Some(total)
 }
 
-/// Nanoseconds per normal for encode and for decode over `inputs` (single thread, best of `reps` passes).
+/// Nanoseconds per normal for encode and for decode over `inputs`, through the slice path
+/// ([`NormalCodec::encode_slice`] / [`NormalCodec::decode_slice`]: one thread, vectorised with the widest
+/// instruction set the CPU has), best of `reps` passes.
 #[must_use]
 pub fn time_codec(codec: &dyn NormalCodec, inputs: &[Vec3], reps: usize) -> (f64, f64) {
     let mut codes = vec![0u64; inputs.len()];
@@ -188,6 +190,18 @@ pub fn time_codec(codec: &dyn NormalCodec, inputs: &[Vec3], reps: usize) -> (f64
     }
     let n = inputs.len().max(1) as f64;
     (enc * 1e9 / n, dec * 1e9 / n)
+}
+
+/// Seconds of the fastest of `reps` runs of `f` (at least one): the timer the benches use for their ratio
+/// tables, where the minimum is the least disturbed by other processes.
+pub fn best_time(reps: usize, mut f: impl FnMut()) -> f64 {
+    let mut best = f64::INFINITY;
+    for _ in 0..reps.max(1) {
+        let t = Instant::now();
+        f();
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    best
 }
 
 /// One row of the `gbuf codecs` table.
@@ -215,9 +229,9 @@ pub struct CodecRow {
     pub samples: usize,
     /// The exhaustive check, where the code space is ≤ 2^24 and it was requested.
     pub exhaustive: Option<Exhaustive>,
-    /// Nanoseconds per normal to encode (single thread).
+    /// Nanoseconds per normal to encode through the slice path, one thread (see [`time_codec`]).
     pub encode_ns: f64,
-    /// Nanoseconds per normal to decode (single thread).
+    /// Nanoseconds per normal to decode through the slice path, one thread (see [`time_codec`]).
     pub decode_ns: f64,
 }
 

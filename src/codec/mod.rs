@@ -75,12 +75,12 @@ pub trait NormalCodec: Send + Sync {
     /// [`Self::encode`] in a loop; the cheap codecs override it with a vectorised body.
     fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
         assert_eq!(input.len(), out.len(), "encode_slice: {} normals into {} codes", input.len(), out.len());
-        simd::run(isa, simd::MapKernel { input, out, f: |n: &Vec3| self.encode(*n) });
+        simd::run(isa, simd::MapKernel { input, out, f: simd::NormalEnc(self) });
     }
     /// [`Self::decode_slice`] compiled for `isa` (see [`Self::encode_slice_isa`]).
     fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Vec3]) {
         assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} normals", codes.len(), out.len());
-        simd::run(isa, simd::MapKernel { input: codes, out, f: |c: &u64| self.decode(*c) });
+        simd::run(isa, simd::MapKernel { input: codes, out, f: simd::NormalDec(self) });
     }
 }
 
@@ -116,12 +116,12 @@ pub trait ScalarCodec: Send + Sync {
     /// [`Self::encode`] in a loop; the cheap codecs override it with a vectorised body.
     fn encode_slice_isa(&self, isa: Isa, input: &[f32], out: &mut [u64]) {
         assert_eq!(input.len(), out.len(), "encode_slice: {} values into {} codes", input.len(), out.len());
-        simd::run(isa, simd::MapKernel { input, out, f: |v: &f32| self.encode(*v) });
+        simd::run(isa, simd::MapKernel { input, out, f: simd::ScalarEnc(self) });
     }
     /// [`Self::decode_slice`] compiled for `isa` (see [`Self::encode_slice_isa`]).
     fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [f32]) {
         assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} values", codes.len(), out.len());
-        simd::run(isa, simd::MapKernel { input: codes, out, f: |c: &u64| self.decode(*c) });
+        simd::run(isa, simd::MapKernel { input: codes, out, f: simd::ScalarDec(self) });
     }
 }
 
@@ -167,12 +167,12 @@ pub trait ColorCodec: Send + Sync {
     /// [`Self::encode`] in a loop; the cheap codecs override it with a vectorised body.
     fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
         assert_eq!(input.len(), out.len(), "encode_slice: {} colours into {} codes", input.len(), out.len());
-        simd::run(isa, simd::MapKernel { input, out, f: |v: &Vec3| self.encode(*v) });
+        simd::run(isa, simd::MapKernel { input, out, f: simd::ColorEnc(self) });
     }
     /// [`Self::decode_slice`] compiled for `isa` (see [`Self::encode_slice_isa`]).
     fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Vec3]) {
         assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} colours", codes.len(), out.len());
-        simd::run(isa, simd::MapKernel { input: codes, out, f: |c: &u64| self.decode(*c) });
+        simd::run(isa, simd::MapKernel { input: codes, out, f: simd::ColorDec(self) });
     }
 }
 
@@ -208,12 +208,12 @@ pub trait DepthCodec: Send + Sync {
     /// [`Self::encode`] in a loop; the cheap codecs override it with a vectorised body.
     fn encode_slice_isa(&self, isa: Isa, input: &[f32], out: &mut [u64]) {
         assert_eq!(input.len(), out.len(), "encode_slice: {} depths into {} codes", input.len(), out.len());
-        simd::run(isa, simd::MapKernel { input, out, f: |v: &f32| self.encode(*v) });
+        simd::run(isa, simd::MapKernel { input, out, f: simd::DepthEnc(self) });
     }
     /// [`Self::decode_slice`] compiled for `isa` (see [`Self::encode_slice_isa`]).
     fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [f32]) {
         assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} depths", codes.len(), out.len());
-        simd::run(isa, simd::MapKernel { input: codes, out, f: |c: &u64| self.decode(*c) });
+        simd::run(isa, simd::MapKernel { input: codes, out, f: simd::DepthDec(self) });
     }
 }
 

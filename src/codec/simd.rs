@@ -116,8 +116,17 @@ pub fn run<K: Kernel>(isa: Isa, k: K) {
     }
 }
 
-/// The default slice body: `out[i] = f(&input[i])`, run under [`run`] (no vectorisation promised; it saves the
-/// per-element virtual call and lets the callee's body be compiled for the wider instruction set).
+/// A per-element function for [`MapKernel`]: implemented by small wrappers around a codec reference whose
+/// `apply` is `#[inline(always)]`, so the codec's per-element body is compiled into the `#[target_feature]`
+/// wrapper (a closure would stay an out-of-line call there).
+pub trait Element<A, B> {
+    /// The function.
+    fn apply(&self, a: &A) -> B;
+}
+
+/// The default slice body: `out[i] = f.apply(&input[i])`, run under [`run`] (it saves the per-element virtual
+/// call and compiles the codec's body for the wider instruction set; it vectorises when that body is
+/// branch-free).
 pub struct MapKernel<'a, A, B, F> {
     /// Input elements.
     pub input: &'a [A],
@@ -127,14 +136,61 @@ pub struct MapKernel<'a, A, B, F> {
     pub f: F,
 }
 
-impl<A, B, F: Fn(&A) -> B> Kernel for MapKernel<'_, A, B, F> {
+impl<A, B, F: Element<A, B>> Kernel for MapKernel<'_, A, B, F> {
     #[inline(always)]
     fn run(self) {
         for (o, i) in self.out.iter_mut().zip(self.input) {
-            *o = (self.f)(i);
+            *o = self.f.apply(i);
         }
     }
 }
+
+macro_rules! element {
+    ($(#[$doc:meta])* $name:ident, $codec:ident, $a:ty, $b:ty, |$c:ident, $v:ident| $body:expr) => {
+        $(#[$doc])*
+        pub struct $name<'c, C: ?Sized>(pub &'c C);
+        impl<C: $codec + ?Sized> Element<$a, $b> for $name<'_, C> {
+            #[inline(always)]
+            fn apply(&self, $v: &$a) -> $b {
+                let $c = self.0;
+                $body
+            }
+        }
+    };
+}
+
+element!(
+    /// [`NormalCodec::encode`] as an [`Element`].
+    NormalEnc, NormalCodec, Vec3, u64, |c, v| c.encode(*v)
+);
+element!(
+    /// [`NormalCodec::decode`] as an [`Element`].
+    NormalDec, NormalCodec, u64, Vec3, |c, v| c.decode(*v)
+);
+element!(
+    /// [`ScalarCodec::encode`] as an [`Element`].
+    ScalarEnc, ScalarCodec, f32, u64, |c, v| c.encode(*v)
+);
+element!(
+    /// [`ScalarCodec::decode`] as an [`Element`].
+    ScalarDec, ScalarCodec, u64, f32, |c, v| c.decode(*v)
+);
+element!(
+    /// [`ColorCodec::encode`] as an [`Element`].
+    ColorEnc, ColorCodec, Vec3, u64, |c, v| c.encode(*v)
+);
+element!(
+    /// [`ColorCodec::decode`] as an [`Element`].
+    ColorDec, ColorCodec, u64, Vec3, |c, v| c.decode(*v)
+);
+element!(
+    /// [`DepthCodec::encode`] as an [`Element`].
+    DepthEnc, DepthCodec, f32, u64, |c, v| c.encode(*v)
+);
+element!(
+    /// [`DepthCodec::decode`] as an [`Element`].
+    DepthDec, DepthCodec, u64, f32, |c, v| c.decode(*v)
+);
 
 /// Elements per block of the blocked kernels: input is copied into stack arrays of this many lanes (SoA) so the
 /// arithmetic loop has unit-stride operands; a multiple of every vector width.

@@ -55,7 +55,8 @@ fn fat_20() -> LayoutSpec {
                     "motion_specular",
                     "rgba8",
                     vec![
-                        reserved(0, 16, "motion vectors, 2 × 8 bits (not modelled: no signed 8-bit codec)"),
+                        f("motion.x", "snorm-8:32", 0, 8),
+                        f("motion.y", "snorm-8:32", 8, 8),
                         f("specular_power", "log2-unorm-8", 16, 8),
                         f("specular", "unorm-8", 24, 8),
                     ],

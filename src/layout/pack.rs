@@ -1,9 +1,11 @@
 //! Packing a G-buffer into render-target bytes and reading it back.
 //!
-//! [`Layout::pack`] encodes every covered sample field by field, ORs the codes into the target's texel word and
-//! writes it little-endian (background samples are a cleared texel: all zero bits). [`Layout::unpack`] reads the
-//! words back, extracts each field's bits and decodes them; it is bit-exact with calling each codec's
-//! `decode(encode(x))` by hand. Both run in parallel (rayon) over chunks of samples.
+//! [`Layout::pack`] encodes every sample field by field, ORs the codes into the target's texel word and writes it
+//! little-endian (background samples are a cleared texel: all zero bits). [`Layout::unpack`] reads the words
+//! back, extracts each field's bits and decodes them; it is bit-exact with calling each codec's
+//! `decode(encode(x))` by hand. Both run in parallel (rayon) over blocks of whole rows, and inside a block each
+//! field goes through its codec's slice path (`encode_slice` / `decode_slice`: vectorised, bit-identical to the
+//! per-element codec), so a block costs one virtual call per field rather than one per sample.
 
 use super::bits::{extract, insert, load_le, mask, store_le};
 use super::coder::{encode_id, Coder, Slot};
@@ -14,8 +16,15 @@ use crate::gbuffer::{Attribute, GBuffer};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-/// Samples per parallel work item: big enough to amortize scheduling, small enough for several per thread.
+/// Samples per parallel work item (rounded to whole rows): big enough to amortize scheduling and the per-field
+/// slice calls, small enough for several per thread and for the block's scratch buffers to stay in L1/L2.
 const CHUNK: usize = 4096;
+
+/// Samples per work item for a G-buffer with `row` samples per row: a whole number of rows, at least one.
+fn rows_chunk(row: usize) -> usize {
+    let row = row.max(1);
+    row * (CHUNK / row).max(1)
+}
 
 /// One render target's bytes.
 #[derive(Clone, Debug, PartialEq)]
@@ -86,19 +95,141 @@ fn source<'a>(gb: &'a GBuffer, slot: Slot, index: &'a [u32]) -> Src<'a> {
     }
 }
 
-#[inline]
-fn encode(coder: &Coder, src: &Src<'_>, i: usize) -> u64 {
+/// Encodes samples `base..base + codes.len()` of `src` with `coder` into `codes` (slice paths; `tmp` is scratch
+/// for gathering one component of a vector plane).
+fn encode_block(coder: &Coder, src: &Src<'_>, base: usize, codes: &mut [u64], tmp: &mut Vec<f32>) {
+    let r = base..base + codes.len();
     match (coder, src) {
-        (Coder::Normal(c), Src::V3(p)) => c.encode(p[i]),
-        (Coder::Color(c), Src::V3(p)) => c.encode(p[i]),
-        (Coder::Depth(c), Src::F32(p)) => c.encode(p[i]),
-        (Coder::Scalar(c), Src::F32(p)) => c.encode(p[i]),
-        (Coder::Scalar(c), Src::V3c(p, k)) => c.encode(p[i][*k]),
-        (Coder::Scalar(c), Src::V2c(p, k)) => c.encode(p[i][*k]),
-        (Coder::Id(bits), Src::U32(p)) => encode_id(p[i], *bits),
-        (Coder::None, Src::U32(p)) => u64::from(p[i]),
-        _ => 0,
+        (Coder::Normal(c), Src::V3(p)) => c.encode_slice(&p[r.clone()], codes),
+        (Coder::Color(c), Src::V3(p)) => c.encode_slice(&p[r.clone()], codes),
+        (Coder::Depth(c), Src::F32(p)) => c.encode_slice(&p[r.clone()], codes),
+        (Coder::Scalar(c), Src::F32(p)) => c.encode_slice(&p[r.clone()], codes),
+        (Coder::Scalar(c), Src::V3c(p, k)) => c.encode_slice(gather(tmp, &p[r.clone()], |v| v[*k]), codes),
+        (Coder::Scalar(c), Src::V2c(p, k)) => c.encode_slice(gather(tmp, &p[r.clone()], |v| v[*k]), codes),
+        (Coder::Id(bits), Src::U32(p)) => {
+            for (o, v) in codes.iter_mut().zip(&p[r.clone()]) {
+                *o = encode_id(*v, *bits);
+            }
+        }
+        (Coder::None, Src::U32(p)) => {
+            for (o, v) in codes.iter_mut().zip(&p[r.clone()]) {
+                *o = u64::from(*v);
+            }
+        }
+        _ => codes.fill(0),
     }
+}
+
+/// One component of each vector, into `tmp`.
+fn gather<'t, T>(tmp: &'t mut Vec<f32>, src: &[T], f: impl Fn(&T) -> f32) -> &'t [f32] {
+    tmp.clear();
+    tmp.extend(src.iter().map(f));
+    tmp
+}
+
+/// A texel word: `u64` for formats of ≤ 8 bytes, `u128` for the 16-byte ones.
+trait Word: Copy + Default + Send + Sync {
+    /// ORs the low `bits` bits of `code` in at `offset`.
+    fn put(&mut self, offset: u32, bits: u32, code: u64);
+    /// The `bits` bits at `offset`.
+    fn get(self, offset: u32, bits: u32) -> u64;
+    /// Little-endian load of `src.len()` bytes.
+    fn load(src: &[u8]) -> Self;
+    /// Little-endian store of the low `out.len()` bytes.
+    fn store(self, out: &mut [u8]);
+}
+
+impl Word for u64 {
+    #[inline(always)]
+    fn put(&mut self, offset: u32, bits: u32, code: u64) {
+        debug_assert!(offset + bits <= 64);
+        *self |= (code & mask(bits)) << offset;
+    }
+    #[inline(always)]
+    fn get(self, offset: u32, bits: u32) -> u64 {
+        (self >> offset) & mask(bits)
+    }
+    #[inline(always)]
+    fn load(src: &[u8]) -> Self {
+        let mut b = [0u8; 8];
+        b[..src.len()].copy_from_slice(src);
+        u64::from_le_bytes(b)
+    }
+    #[inline(always)]
+    fn store(self, out: &mut [u8]) {
+        out.copy_from_slice(&self.to_le_bytes()[..out.len()]);
+    }
+}
+
+impl Word for u128 {
+    #[inline(always)]
+    fn put(&mut self, offset: u32, bits: u32, code: u64) {
+        insert(self, offset, bits, code);
+    }
+    #[inline(always)]
+    fn get(self, offset: u32, bits: u32) -> u64 {
+        extract(self, offset, bits)
+    }
+    #[inline(always)]
+    fn load(src: &[u8]) -> Self {
+        load_le(src)
+    }
+    #[inline(always)]
+    fn store(self, out: &mut [u8]) {
+        store_le(self, out);
+    }
+}
+
+/// Stores `words` as texels of `N` bytes (a constant, so the copies compile to single moves).
+#[inline(always)]
+fn store_words<W: Word, const N: usize>(words: &[W], out: &mut [u8]) {
+    for (w, t) in words.iter().zip(out.chunks_exact_mut(N)) {
+        w.store(t);
+    }
+}
+
+/// Extracts the field at `offset`/`bits` of every texel of `N` bytes in `bytes` into `codes`.
+#[inline(always)]
+fn load_codes<W: Word, const N: usize>(bytes: &[u8], offset: u32, bits: u32, codes: &mut [u64]) {
+    for (c, t) in codes.iter_mut().zip(bytes.chunks_exact(N)) {
+        *c = W::load(t).get(offset, bits);
+    }
+}
+
+/// Packs one target's bytes: blocks of whole rows in parallel, each field through its codec's slice path.
+fn pack_target<W: Word>(fields: &[(&Field, &Coder, Src<'_>)], cov: &[bool], size: usize, row: usize, bytes: &mut [u8]) {
+    let chunk = rows_chunk(row);
+    bytes.par_chunks_mut(chunk * size).enumerate().for_each(|(ci, out)| {
+        let base = ci * chunk;
+        let len = out.len() / size;
+        let mut words = vec![W::default(); len];
+        let mut codes = vec![0u64; len];
+        let mut tmp = Vec::with_capacity(len);
+        for (f, coder, src) in fields {
+            encode_block(coder, src, base, &mut codes, &mut tmp);
+            for (w, c) in words.iter_mut().zip(&codes) {
+                w.put(f.offset, f.bits, *c);
+            }
+        }
+        // Background samples are a cleared texel.
+        for (w, c) in words.iter_mut().zip(&cov[base..base + len]) {
+            if !*c {
+                *w = W::default();
+            }
+        }
+        match size {
+            1 => store_words::<W, 1>(&words, out),
+            2 => store_words::<W, 2>(&words, out),
+            4 => store_words::<W, 4>(&words, out),
+            8 => store_words::<W, 8>(&words, out),
+            16 => store_words::<W, 16>(&words, out),
+            _ => {
+                for (w, t) in words.iter().zip(out.chunks_exact_mut(size)) {
+                    w.store(t);
+                }
+            }
+        }
+    });
 }
 
 impl Layout {
@@ -146,20 +277,12 @@ impl Layout {
                 .filter(|(_, _, s)| !matches!(s, Src::Absent))
                 .collect();
             let mut bytes = vec![0u8; n * size];
-            bytes.par_chunks_mut(CHUNK * size).enumerate().for_each(|(chunk, out)| {
-                let base = chunk * CHUNK;
-                for (j, texel) in out.chunks_exact_mut(size).enumerate() {
-                    let i = base + j;
-                    if !gb.coverage[i] {
-                        continue;
-                    }
-                    let mut word = 0u128;
-                    for (f, coder, src) in &fields {
-                        insert(&mut word, f.offset, f.bits, encode(coder, src, i));
-                    }
-                    store_le(word, texel);
-                }
-            });
+            let row = gb.width as usize * gb.samples as usize;
+            if size <= 8 {
+                pack_target::<u64>(&fields, &gb.coverage, size, row, &mut bytes);
+            } else {
+                pack_target::<u128>(&fields, &gb.coverage, size, row, &mut bytes);
+            }
             targets.push(TargetPlane { name: tspec.name.clone(), format: *format, bytes });
         }
         let present = self.stored_attributes().into_iter().filter(|a| gb.has(*a)).collect();
@@ -193,46 +316,46 @@ impl Layout {
             coverage: like.coverage.clone(),
             ..GBuffer::default()
         };
+        let row = like.width as usize * like.samples as usize;
         let mut index: Vec<u32> = Vec::new();
         for (f, coder) in self.fields().iter().zip(&coders) {
             let t = &packed.targets[f.target];
-            let (bytes, size) = (&t.bytes[..], t.format.bytes());
-            let (off, bits) = (f.offset, f.bits);
-            let code = move |w: u128| extract(w, off, bits);
+            let src = Texels { bytes: &t.bytes[..], size: t.format.bytes(), offset: f.offset, bits: f.bits, cov, row };
+            let ids = |cs: &[u64], o: &mut [u32]| {
+                for (o, c) in o.iter_mut().zip(cs) {
+                    *o = *c as u32;
+                }
+            };
             match (f.slot, coder) {
                 (Slot::Reserved, _) => {}
                 (Slot::MaterialIndex, _) => {
                     index = vec![0; n];
-                    fill(&mut index, bytes, size, cov, |d, w| *d = code(w) as u32);
+                    src.fill(&mut index, ids, whole);
                 }
                 (Slot::Whole(a), _) if !packed.present.contains(&a) => {}
                 (Slot::Component(a, _), _) if !packed.present.contains(&a) => {}
                 (Slot::Whole(Attribute::Normal), Coder::Normal(c)) => {
-                    fill(out.normal.get_or_insert_with(|| vec![Vec3::ZERO; n]), bytes, size, cov, |d, w| {
-                        *d = c.decode(code(w));
-                    });
+                    let plane = out.normal.get_or_insert_with(|| vec![Vec3::ZERO; n]);
+                    src.fill(plane, |cs, o| c.decode_slice(cs, o), whole);
                 }
                 (Slot::Whole(Attribute::Albedo), Coder::Color(c)) => {
-                    fill(out.albedo.get_or_insert_with(|| vec![Vec3::ZERO; n]), bytes, size, cov, |d, w| {
-                        *d = c.decode(code(w));
-                    });
+                    let plane = out.albedo.get_or_insert_with(|| vec![Vec3::ZERO; n]);
+                    src.fill(plane, |cs, o| c.decode_slice(cs, o), whole);
                 }
                 (Slot::Whole(Attribute::Depth), Coder::Depth(c)) => {
-                    fill(out.depth.get_or_insert_with(|| vec![0.0; n]), bytes, size, cov, |d, w| {
-                        *d = c.decode(code(w));
-                    });
+                    let plane = out.depth.get_or_insert_with(|| vec![0.0; n]);
+                    src.fill(plane, |cs, o| c.decode_slice(cs, o), whole);
                 }
                 (Slot::Whole(a), Coder::Scalar(c)) => {
-                    fill(scalar_plane(&mut out, a, n)?, bytes, size, cov, |d, w| *d = c.decode(code(w)));
+                    src.fill(scalar_plane(&mut out, a, n)?, |cs, o| c.decode_slice(cs, o), whole);
                 }
                 (Slot::Whole(a), Coder::Id(_)) => {
-                    fill(id_plane(&mut out, a, n)?, bytes, size, cov, |d, w| *d = code(w) as u32);
+                    src.fill(id_plane(&mut out, a, n)?, ids, whole);
                 }
                 (Slot::Component(a, k), Coder::Scalar(c)) => match a {
                     Attribute::Motion => {
-                        fill(out.motion.get_or_insert_with(|| vec![Vec2::ZERO; n]), bytes, size, cov, |d, w| {
-                            d[k] = c.decode(code(w));
-                        });
+                        let plane = out.motion.get_or_insert_with(|| vec![Vec2::ZERO; n]);
+                        src.fill(plane, |cs, o| c.decode_slice(cs, o), |d: &mut Vec2, v| d[k] = v);
                     }
                     _ => {
                         let plane = match a {
@@ -240,9 +363,8 @@ impl Layout {
                             Attribute::Albedo => &mut out.albedo,
                             _ => &mut out.position,
                         };
-                        fill(plane.get_or_insert_with(|| vec![Vec3::ZERO; n]), bytes, size, cov, |d, w| {
-                            d[k] = c.decode(code(w));
-                        });
+                        let plane = plane.get_or_insert_with(|| vec![Vec3::ZERO; n]);
+                        src.fill(plane, |cs, o| c.decode_slice(cs, o), |d: &mut Vec3, v| d[k] = v);
                     }
                 },
                 (slot, _) => {
@@ -307,15 +429,58 @@ impl Layout {
     }
 }
 
-/// Decodes into `dst` in parallel: `f(dst[i], texel word)` for covered samples; others keep their value.
-fn fill<T: Send>(dst: &mut [T], bytes: &[u8], size: usize, cov: &[bool], f: impl Fn(&mut T, u128) + Sync) {
-    dst.par_chunks_mut(CHUNK).zip(bytes.par_chunks(CHUNK * size)).zip(cov.par_chunks(CHUNK)).for_each(|((d, b), c)| {
-        for ((d, texel), &covered) in d.iter_mut().zip(b.chunks_exact(size)).zip(c) {
-            if covered {
-                f(d, load_le(texel));
-            }
-        }
-    });
+/// The `set` of [`Texels::fill`] for a whole-value field.
+fn whole<T>(d: &mut T, v: T) {
+    *d = v;
+}
+
+/// One field of one packed target, read back block by block.
+struct Texels<'a> {
+    bytes: &'a [u8],
+    size: usize,
+    offset: u32,
+    bits: u32,
+    cov: &'a [bool],
+    row: usize,
+}
+
+impl Texels<'_> {
+    /// Decodes the field into `dst` in parallel over blocks of whole rows: the block's codes are extracted, turned
+    /// into values by `decode` (a codec's slice path), and `set(dst[i], value)` runs for covered samples; the
+    /// others keep their value.
+    fn fill<T: Send, V: Copy + Default + Send>(
+        &self,
+        dst: &mut [T],
+        decode: impl Fn(&[u64], &mut [V]) + Sync,
+        set: impl Fn(&mut T, V) + Sync,
+    ) {
+        let (size, offset, bits) = (self.size, self.offset, self.bits);
+        let chunk = rows_chunk(self.row);
+        dst.par_chunks_mut(chunk).zip(self.bytes.par_chunks(chunk * size)).zip(self.cov.par_chunks(chunk)).for_each(
+            |((d, b), c)| {
+                let mut codes = vec![0u64; d.len()];
+                match size {
+                    1 => load_codes::<u64, 1>(b, offset, bits, &mut codes),
+                    2 => load_codes::<u64, 2>(b, offset, bits, &mut codes),
+                    4 => load_codes::<u64, 4>(b, offset, bits, &mut codes),
+                    8 => load_codes::<u64, 8>(b, offset, bits, &mut codes),
+                    16 => load_codes::<u128, 16>(b, offset, bits, &mut codes),
+                    _ => {
+                        for (code, t) in codes.iter_mut().zip(b.chunks_exact(size)) {
+                            *code = extract(load_le(t), offset, bits);
+                        }
+                    }
+                }
+                let mut vals = vec![V::default(); d.len()];
+                decode(&codes, &mut vals);
+                for ((d, v), &covered) in d.iter_mut().zip(vals).zip(c) {
+                    if covered {
+                        set(d, v);
+                    }
+                }
+            },
+        );
+    }
 }
 
 fn scalar_plane(gb: &mut GBuffer, a: Attribute, n: usize) -> Result<&mut Vec<f32>> {

@@ -12,7 +12,7 @@
 //! Fold lines (x = 0 or y = 0 with z < 0) and −0.0 use `signNotZero`, so −0.0 folds like +0.0.
 
 use super::{finish, sanitize, sign_not_zero, NormalCodec, Planar, Projection, Quant};
-use crate::codec::mask;
+use crate::codec::{mask, Isa};
 use glam::{Vec2, Vec3};
 
 /// The octahedral projection (plane coordinates in [−1, 1]², snorm or f16).
@@ -119,6 +119,11 @@ impl NormalCodec for OctPrecise {
     }
     fn max_error_deg(&self) -> f32 {
         self.plain.max_error_deg()
+    }
+    fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Vec3]) {
+        // The same decoder as plain snorm octahedral, so its vectorised slice path (the encode search stays
+        // scalar: the precise variant does not need to be cheap).
+        self.plain.decode_slice_isa(isa, codes, out);
     }
 }
 
