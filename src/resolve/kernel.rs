@@ -166,13 +166,29 @@ pub struct Variant {
 /// Shades items `range` of `it` (a whole number of vectors) against every light of `lights` (and, for quad
 /// culling, `quad`), overwriting the items' outputs.
 pub fn shade(it: &mut Items, range: std::ops::Range<usize>, lights: &LightTable, quad: &QuadSoa, v: Variant) {
+    shade_with(false, it, range, lights, quad, v);
+}
+
+/// [`shade`] on the portable path whatever the CPU (to compare the vector paths against it).
+pub fn shade_portable(it: &mut Items, range: std::ops::Range<usize>, lights: &LightTable, quad: &QuadSoa, v: Variant) {
+    shade_with(true, it, range, lights, quad, v);
+}
+
+fn shade_with(
+    portable: bool,
+    it: &mut Items,
+    range: std::ops::Range<usize>,
+    lights: &LightTable,
+    quad: &QuadSoa,
+    v: Variant,
+) {
     macro_rules! pick {
         ($b:literal, $f:literal) => {
             match (v.quad, v.prepass) {
-                (false, false) => dispatch::<$b, $f, false, false>(it, range, lights, quad),
-                (true, false) => dispatch::<$b, $f, true, false>(it, range, lights, quad),
-                (false, true) => dispatch::<$b, $f, false, true>(it, range, lights, quad),
-                (true, true) => dispatch::<$b, $f, true, true>(it, range, lights, quad),
+                (false, false) => dispatch::<$b, $f, false, false>(portable, it, range, lights, quad),
+                (true, false) => dispatch::<$b, $f, true, false>(portable, it, range, lights, quad),
+                (false, true) => dispatch::<$b, $f, false, true>(portable, it, range, lights, quad),
+                (true, true) => dispatch::<$b, $f, true, true>(portable, it, range, lights, quad),
             }
         };
     }
@@ -202,13 +218,14 @@ pub fn instruction_set() -> &'static str {
 }
 
 fn dispatch<const B: u8, const F: u8, const Q: bool, const P: bool>(
+    portable: bool,
     it: &mut Items,
     range: std::ops::Range<usize>,
     lights: &LightTable,
     quad: &QuadSoa,
 ) {
     #[cfg(target_arch = "x86_64")]
-    {
+    if !portable {
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the features the function was compiled for (checked just above).
             return unsafe { run_avx512::<B, F, Q, P>(it, range, lights, quad) };
@@ -493,5 +510,92 @@ pub fn finish_prepass(it: &mut Items, brdf: Brdf) {
             }
         };
         (it.or[j], it.og[j], it.ob[j]) = (c.x, c.y, c.z);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::light::Light;
+    use crate::resolve::culling::quad_rects;
+    use crate::util::SplitMix64;
+
+    /// Relative difference allowed between the vector paths and the portable one: rsqrt/recip differ by ~4e-7 and
+    /// log2 by up to 2·2e-6 absolute, which Blinn-Phong's pow multiplies by p·ln 2 (p ≤ 128 here): ≲ 4e-4.
+    const PATH_TOLERANCE: f32 = 1e-3;
+
+    fn random_frame(rng: &mut SplitMix64) -> (Items, Vec<Light>) {
+        let mut it = Items::default();
+        for j in 0..4 * BLOCK {
+            let p = Vec3::new(rng.range_f32(-3.0, 3.0), rng.range_f32(-2.0, 2.0), rng.range_f32(-12.0, -1.0));
+            let n = Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.range_f32(-0.2, 1.0));
+            let s = Surface {
+                p,
+                n: n.try_normalize().unwrap_or(Vec3::Z),
+                albedo: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()),
+                specular: rng.next_f32(),
+                power: rng.range_f32(0.0, 128.0),
+                roughness: rng.next_f32(),
+                metallic: rng.next_f32(),
+            };
+            it.push(&s, j as u32, 1.0);
+        }
+        let mut lights = Vec::new();
+        for k in 0..40 {
+            let c = Vec3::new(rng.range_f32(-4.0, 4.0), rng.range_f32(-3.0, 3.0), rng.range_f32(-13.0, 0.0));
+            let colour = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+            let mut l = Light::point(c, colour, rng.range_f32(0.5, 20.0), rng.range_f32(0.5, 6.0));
+            l.begin = l.range * rng.next_f32();
+            if k % 7 == 3 {
+                l.kind = crate::light::LightKind::Spot {
+                    direction: Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), -1.0),
+                    inner_cone_angle: 0.2,
+                    outer_cone_angle: 0.6,
+                };
+            }
+            if k == 11 {
+                l.kind = crate::light::LightKind::Directional { direction: Vec3::new(0.3, -1.0, -0.5) };
+            }
+            lights.push(l);
+        }
+        (it, crate::resolve::lights::sanitize(&lights).lights)
+    }
+
+    #[test]
+    fn vector_paths_agree_with_the_portable_path() {
+        let mut rng = SplitMix64::new(5);
+        for round in 0..4 {
+            let (items, lights) = random_frame(&mut rng);
+            for brdf in [Brdf::Lambert, Brdf::BlinnPhong, Brdf::Ggx] {
+                for falloff in [Falloff::Gltf, Falloff::Linear] {
+                    for (quad, prepass) in [(false, false), (true, false), (false, true), (true, true)] {
+                        let table = LightTable::new(&lights, falloff);
+                        let rects = if quad { quad_rects(&lights) } else { QuadSoa::default() };
+                        let v = Variant { brdf, falloff, quad, prepass };
+                        let (mut a, mut b) = (items.clone(), items.clone());
+                        let n = items.len();
+                        shade(&mut a, 0..n, &table, &rects, v);
+                        shade_portable(&mut b, 0..n, &table, &rects, v);
+                        let (mut lit_a, mut lit_b) = (0.0, 0.0);
+                        for j in 0..n {
+                            for (x, y) in
+                                [(a.or[j], b.or[j]), (a.og[j], b.og[j]), (a.ob[j], b.ob[j]), (a.ls[j], b.ls[j])]
+                            {
+                                let scale = x.abs().max(y.abs()).max(1e-6);
+                                assert!(
+                                    (x - y).abs() <= PATH_TOLERANCE * scale,
+                                    "round {round} {v:?} item {j}: {x} vs {y} ({})",
+                                    instruction_set()
+                                );
+                                assert!(x.is_finite());
+                            }
+                            assert!((a.tested[j] - b.tested[j]).abs() <= 1.0, "{v:?} tested");
+                            (lit_a, lit_b) = (lit_a + a.lit[j], lit_b + b.lit[j]);
+                        }
+                        assert!((lit_a - lit_b).abs() <= 1e-3 * lit_b.max(1.0), "{v:?}: lit {lit_a} vs {lit_b}");
+                    }
+                }
+            }
+        }
     }
 }
