@@ -31,6 +31,14 @@ const SCALARS: &[&str] = &[
     "log2-unorm-16",
     "specpow-unorm-8",
     "specpow-unorm-16",
+    "snorm-2",
+    "snorm-8",
+    "snorm-10",
+    "snorm-16",
+    "snorm-24",
+    "snorm-8:32",
+    "snorm-12:0.001",
+    "snorm-16:1000000",
 ];
 const COLORS: &[&str] =
     &["unorm8", "unorm-1", "unorm-5", "unorm-10", "unorm-16", "srgb8", "r11g11b10f", "rgb9e5", "f16", "f32"];

@@ -14,9 +14,10 @@
 //! patterns of the float formats decode to the largest finite value / 0).
 
 use super::normal::{f16_to_finite, F16_MAX};
-use super::simd::f32_to_f16_bits;
+use super::simd::{f32_to_f16_bits, run, Element, Isa, MapKernel};
 use super::{mask, split_bits, ColorCodec};
 use glam::Vec3;
+use std::sync::OnceLock;
 
 /// Every valid name pattern (for error messages).
 pub const VALID_NAMES: &[&str] = &["unorm8", "unorm-N (1..=16)", "srgb8", "r11g11b10f", "rgb9e5", "f16", "f32"];
@@ -76,6 +77,56 @@ pub struct UnormRgb {
     srgb: bool,
 }
 
+impl UnormRgb {
+    #[inline(always)]
+    fn encode_with<const SRGB: bool>(&self, c: Vec3) -> u64 {
+        let m = mask(self.bits) as f32;
+        let q = |v: f32| {
+            let v = clean(v, 0.0, 1.0);
+            let v = if SRGB { linear_to_srgb(v) } else { v };
+            // ≤ 65535: i32 lanes hold it (and vectorise).
+            (v * m).round() as i32 as u64
+        };
+        q(c.x) | (q(c.y) << self.bits) | (q(c.z) << (2 * self.bits))
+    }
+    #[inline(always)]
+    fn decode_with<const SRGB: bool>(&self, code: u64) -> Vec3 {
+        let m = mask(self.bits) as f32;
+        let d = |c: u64| {
+            let c = c & mask(self.bits);
+            if SRGB {
+                // srgb8 only: the curve of each of the 256 codes, computed once by the formula below.
+                srgb8_decode_table()[c as usize & 0xff]
+            } else {
+                c as u32 as f32 / m
+            }
+        };
+        Vec3::new(d(code), d(code >> self.bits), d(code >> (2 * self.bits)))
+    }
+}
+
+/// `srgb_to_linear(c / 255)` for every 8-bit code (what the srgb8 decoder returns, bit for bit).
+fn srgb8_decode_table() -> &'static [f32; 256] {
+    static TABLE: OnceLock<[f32; 256]> = OnceLock::new();
+    TABLE.get_or_init(|| std::array::from_fn(|c| srgb_to_linear(c as f32 / 255.0)))
+}
+
+struct UnormRgbEnc<const SRGB: bool>(UnormRgb);
+impl<const SRGB: bool> Element<Vec3, u64> for UnormRgbEnc<SRGB> {
+    #[inline(always)]
+    fn apply(&self, c: &Vec3) -> u64 {
+        self.0.encode_with::<SRGB>(*c)
+    }
+}
+
+struct UnormRgbDec<const SRGB: bool>(UnormRgb);
+impl<const SRGB: bool> Element<u64, Vec3> for UnormRgbDec<SRGB> {
+    #[inline(always)]
+    fn apply(&self, c: &u64) -> Vec3 {
+        self.0.decode_with::<SRGB>(*c)
+    }
+}
+
 impl ColorCodec for UnormRgb {
     fn name(&self) -> String {
         match (self.srgb, self.bits) {
@@ -89,27 +140,36 @@ impl ColorCodec for UnormRgb {
     }
     #[inline(always)]
     fn encode(&self, c: Vec3) -> u64 {
-        let m = mask(self.bits) as f32;
-        let q = |v: f32| {
-            let v = clean(v, 0.0, 1.0);
-            let v = if self.srgb { linear_to_srgb(v) } else { v };
-            // ≤ 65535: i32 lanes hold it (and vectorise).
-            (v * m).round() as i32 as u64
-        };
-        q(c.x) | (q(c.y) << self.bits) | (q(c.z) << (2 * self.bits))
+        if self.srgb {
+            self.encode_with::<true>(c)
+        } else {
+            self.encode_with::<false>(c)
+        }
     }
     #[inline(always)]
     fn decode(&self, code: u64) -> Vec3 {
-        let m = mask(self.bits) as f32;
-        let d = |c: u64| {
-            let v = (c & mask(self.bits)) as f32 / m;
-            if self.srgb {
-                srgb_to_linear(v)
-            } else {
-                v
-            }
-        };
-        Vec3::new(d(code), d(code >> self.bits), d(code >> (2 * self.bits)))
+        if self.srgb {
+            self.decode_with::<true>(code)
+        } else {
+            self.decode_with::<false>(code)
+        }
+    }
+    fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
+        assert_eq!(input.len(), out.len(), "encode_slice: {} colours into {} codes", input.len(), out.len());
+        // One loop per curve, so the linear one has no libm call in it and vectorises.
+        if self.srgb {
+            run(isa, MapKernel { input, out, f: UnormRgbEnc::<true>(*self) });
+        } else {
+            run(isa, MapKernel { input, out, f: UnormRgbEnc::<false>(*self) });
+        }
+    }
+    fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Vec3]) {
+        assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} colours", codes.len(), out.len());
+        if self.srgb {
+            run(isa, MapKernel { input: codes, out, f: UnormRgbDec::<true>(*self) });
+        } else {
+            run(isa, MapKernel { input: codes, out, f: UnormRgbDec::<false>(*self) });
+        }
     }
     fn domain(&self) -> (f32, f32) {
         (0.0, 1.0)

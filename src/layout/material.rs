@@ -11,6 +11,7 @@ use crate::gbuffer::{Attribute, GBuffer, PlaneRef};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 
 /// The most parameters a table holds (every scalar material attribute).
 pub const MAX_PARAMETERS: usize = 4;
@@ -23,6 +24,35 @@ pub const LLOYD_ITERATIONS: usize = 4;
 pub const LLOYD_WORK_LIMIT: u64 = 2_000_000_000;
 
 type Key = [u32; MAX_PARAMETERS];
+
+/// Samples per parallel work item when counting tuples.
+const COUNT_CHUNK: usize = 1 << 16;
+
+/// A multiply-rotate hasher (the FxHash of rustc) for [`Key`]s: a few f32 bit patterns from our own buffers need no
+/// protection against adversarial collisions, and SipHash was most of the table's build time.
+#[derive(Default)]
+struct KeyHasher(u64);
+
+impl Hasher for KeyHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for c in bytes.chunks(8) {
+            let mut b = [0u8; 8];
+            b[..c.len()].copy_from_slice(c);
+            self.write_u64(u64::from_le_bytes(b));
+        }
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    fn write_usize(&mut self, v: usize) {
+        self.write_u64(v as u64);
+    }
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+type KeyMap<V> = HashMap<Key, V, BuildHasherDefault<KeyHasher>>;
 
 /// The parameter table a packed G-buffer carries, with how well it represents the input.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -75,10 +105,22 @@ impl MaterialTable {
             }
             k
         };
-        let mut counts: HashMap<Key, u64> = HashMap::new();
-        for i in (0..gb.len()).filter(|&i| gb.coverage[i]) {
-            *counts.entry(key_at(i)).or_insert(0) += 1;
-        }
+        // Counts per chunk in parallel, merged (integer counts: the result does not depend on the split).
+        let counts = (0..gb.len())
+            .into_par_iter()
+            .with_min_len(COUNT_CHUNK)
+            .fold(KeyMap::<u64>::default, |mut m, i| {
+                if gb.coverage[i] {
+                    *m.entry(key_at(i)).or_insert(0) += 1;
+                }
+                m
+            })
+            .reduce(KeyMap::<u64>::default, |mut a, b| {
+                for (k, c) in b {
+                    *a.entry(k).or_insert(0) += c;
+                }
+                a
+            });
         let mut keys: Vec<(Key, u64)> = counts.into_iter().collect();
         keys.sort_unstable_by_key(|(k, _)| *k);
         let np = planes.len();
@@ -91,7 +133,7 @@ impl MaterialTable {
             let weights: Vec<u64> = keys.iter().map(|(_, c)| *c).collect();
             cluster(&pts, &weights, capacity)
         };
-        let lookup: HashMap<Key, u32> = keys.iter().map(|(k, _)| *k).zip(assign).collect();
+        let lookup: KeyMap<u32> = keys.iter().map(|(k, _)| *k).zip(assign).collect();
         let index: Vec<u32> =
             (0..gb.len()).into_par_iter().map(|i| if gb.coverage[i] { lookup[&key_at(i)] } else { 0 }).collect();
         let mut max_abs = vec![0f32; np];
