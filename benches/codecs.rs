@@ -1,10 +1,11 @@
 //! Encode and decode throughput of every normal scheme over 1,000,000 normals, beside a plain memcpy of the same
 //! bytes in the same run, on one thread and on all threads (rayon).
 //!
-//! First a ratio table is printed (best of 9 passes each): normals/s of each codec's slice path on one thread
+//! First two ratio tables are printed (best of 9 passes each): normals/s of each codec's slice path on one thread
 //! (`encode_slice`/`decode_slice`, vectorised) and on all threads (`simd::par_encode_normals` /
 //! `par_decode_normals`), and the ratio of its time to a memcpy of the 12-byte f32×3 normals (one thread:
-//! `copy_from_slice`; all threads: the same copy split over the pool). Then criterion measures the same
+//! `copy_from_slice`; all threads: the same copy split over the pool); then the same on one thread for a few
+//! scalar, depth and colour codecs against a memcpy of their input. Then criterion measures the same
 //! operations: `memcpy/normals-12B/1M`, `memcpy-par/...`, `encode/<codec>/1M`, `decode/<codec>/1M`,
 //! `encode-par/<codec>/1M`, `decode-par/<codec>/1M`; throughput in normals/s. Run briefly with
 //! `cargo bench --bench codecs -- --warm-up-time 1 --measurement-time 2`. Each scheme is benched at its first
@@ -13,7 +14,8 @@
 use criterion::{black_box, BenchmarkId, Criterion, Throughput};
 use gbuf::codec::eval::{best_time, random_unit_vectors};
 use gbuf::codec::simd::{par_decode_normals, par_encode_normals, Isa, PAR_CHUNK};
-use gbuf::codec::{NormalCodec, NormalScheme};
+use gbuf::codec::{color_codec, depth_codec, scalar_codec, NormalCodec, NormalScheme};
+use gbuf::util::SplitMix64;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -82,6 +84,48 @@ fn ratio_table(normals: &[Vec3]) {
     );
 }
 
+/// One thread, slice paths of the scalar, depth and colour codecs over a million values, against a memcpy of the
+/// input (4-byte f32 values, 12-byte colours).
+fn other_codecs_table() {
+    let mut rng = SplitMix64::new(SEED);
+    let values: Vec<f32> = (0..COUNT).map(|_| rng.range_f32(-0.1, 1.1)).collect();
+    let depths: Vec<f32> = (0..COUNT).map(|_| rng.range_f32(0.05, 120.0)).collect();
+    let colors: Vec<Vec3> = (0..COUNT).map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32())).collect();
+    let mut codes = vec![0u64; COUNT];
+    let (mut fout, mut vout) = (vec![0f32; COUNT], vec![Vec3::ZERO; COUNT]);
+    let m4 = best_time(REPS, || fout.copy_from_slice(black_box(&values)));
+    let m12 = best_time(REPS, || vout.copy_from_slice(black_box(&colors)));
+    println!(
+        "other codecs, 1 thread; memcpy of the input: f32 {:.2} ns/value, rgb f32×3 {:.2} ns/colour",
+        m4 * 1e9 / COUNT as f64,
+        m12 * 1e9 / COUNT as f64
+    );
+    println!("{:<24} {:>10} {:>7} {:>10} {:>7}", "codec", "enc M/s", "×memcpy", "dec M/s", "×memcpy");
+    let rate = |t: f64| COUNT as f64 / t / 1e6;
+    let row = |name: String, e: f64, d: f64, m: f64| {
+        println!("{name:<24} {:>10.0} {:>7.2} {:>10.0} {:>7.2}", rate(e), e / m, rate(d), d / m);
+    };
+    for name in ["unorm-8", "unorm-16", "snorm-8:32", "f16", "log2-unorm-8"] {
+        let c = scalar_codec(name).expect("a scalar codec");
+        let e = best_time(REPS, || c.encode_slice(black_box(&values), &mut codes));
+        let d = best_time(REPS, || c.decode_slice(black_box(&codes), &mut fout));
+        row(format!("scalar {name}"), e, d, m4);
+    }
+    for name in ["unorm24", "unorm24-reversed", "unorm16", "f32-reversed", "f32", "f16"] {
+        let c = depth_codec(name, 0.1, 100.0).expect("a depth codec");
+        let e = best_time(REPS, || c.encode_slice(black_box(&depths), &mut codes));
+        let d = best_time(REPS, || c.decode_slice(black_box(&codes), &mut fout));
+        row(format!("depth {name}"), e, d, m4);
+    }
+    for name in ["unorm8", "srgb8", "f16", "r11g11b10f", "rgb9e5"] {
+        let c = color_codec(name).expect("a colour codec");
+        let e = best_time(REPS, || c.encode_slice(black_box(&colors), &mut codes));
+        let d = best_time(REPS, || c.decode_slice(black_box(&codes), &mut vout));
+        row(format!("colour {name}"), e, d, m12);
+    }
+    println!();
+}
+
 fn bench(c: &mut Criterion, normals: &[Vec3]) {
     let mut group = c.benchmark_group("codecs");
     group.throughput(Throughput::Elements(COUNT as u64));
@@ -117,6 +161,7 @@ fn bench(c: &mut Criterion, normals: &[Vec3]) {
 fn main() {
     let normals = random_unit_vectors(COUNT, SEED);
     ratio_table(&normals);
+    other_codecs_table();
     let mut c = Criterion::default().configure_from_args();
     bench(&mut c, &normals);
     c.final_summary();

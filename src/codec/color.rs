@@ -13,7 +13,7 @@
 //! floats take negatives to 0, never to NaN or Inf). Decoders return finite values for every code (Inf/NaN bit
 //! patterns of the float formats decode to the largest finite value / 0).
 
-use super::normal::{f16_to_finite, F16_MAX};
+use super::normal::{f16_to_finite, round_in_range, F16_MAX};
 use super::simd::{f32_to_f16_bits, run, Element, Isa, MapKernel};
 use super::{mask, split_bits, ColorCodec};
 use glam::Vec3;
@@ -85,7 +85,7 @@ impl UnormRgb {
             let v = clean(v, 0.0, 1.0);
             let v = if SRGB { linear_to_srgb(v) } else { v };
             // ≤ 65535: i32 lanes hold it (and vectorise).
-            (v * m).round() as i32 as u64
+            round_in_range(v * m) as u64
         };
         q(c.x) | (q(c.y) << self.bits) | (q(c.z) << (2 * self.bits))
     }

@@ -18,7 +18,7 @@
 //! plane clamp to it; zero, negative depths and −Inf clamp to the near plane (linear codecs: to their smallest
 //! positive value). Every decode is finite and positive.
 
-use super::normal::{f16_to_finite, F16_MAX};
+use super::normal::{f16_to_finite, round_in_range_f64, F16_MAX};
 use super::simd::f32_to_f16_bits;
 use super::{mask, DepthCodec};
 use crate::camera::Camera;
@@ -207,7 +207,7 @@ impl DepthCodec for PostProjection {
         let d = self.d_of(self.clamp_depth(depth));
         match self.storage {
             // d·mask < 2^24: i32 lanes hold it (and vectorise).
-            DepthStorage::Unorm(k) => (d * mask(k) as f64).round() as i32 as u64,
+            DepthStorage::Unorm(k) => round_in_range_f64(d * mask(k) as f64) as u64,
             DepthStorage::F32 => u64::from((d as f32).to_bits()),
         }
     }

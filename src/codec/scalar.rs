@@ -16,7 +16,7 @@
 //! magnitudes below 2^-25 flush to ±0. Decoders only ever return finite values (f16 Inf/NaN codes decode to
 //! ±65504 / 0).
 
-use super::normal::f16_to_finite;
+use super::normal::{f16_to_finite, round_in_range_f64};
 use super::simd::f32_to_f16_bits;
 use super::{mask, split_bits, ScalarCodec};
 
@@ -125,7 +125,7 @@ impl ScalarCodec for Snorm {
     fn encode(&self, v: f32) -> u64 {
         let t = if v.is_nan() { 0.0 } else { (v / self.range).clamp(-1.0, 1.0) };
         // f64 so that 24-bit codes round exactly (halves away from zero, like D3D).
-        let s = (f64::from(t) * self.max_code()).round() as i32;
+        let s = round_in_range_f64(f64::from(t) * self.max_code());
         (s as u32 as u64) & mask(self.bits)
     }
     #[inline(always)]
@@ -154,7 +154,7 @@ impl ScalarCodec for Unorm {
     fn encode(&self, v: f32) -> u64 {
         let t = if v.is_nan() { 0.0 } else { ((v - self.lo) / (self.hi - self.lo)).clamp(0.0, 1.0) };
         // f64 so that 24-bit codes round exactly; the code is < 2^24, so i32 lanes hold it (and vectorise).
-        (f64::from(t) * self.max_code()).round() as i32 as u64
+        round_in_range_f64(f64::from(t) * self.max_code()) as u64
     }
     #[inline(always)]
     fn decode(&self, code: u64) -> f32 {

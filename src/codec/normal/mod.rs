@@ -447,10 +447,35 @@ pub fn round_half_away(v: f32) -> i32 {
     t + i32::from(f >= 0.5) - i32::from(f <= -0.5)
 }
 
+/// `v.round() as i32` for f64 with |v| < 2^31 (saturating beyond, NaN → 0, like `as`): `f64::round` has no x86
+/// instruction and stays a libm call even inside vectorised loops; truncating and looking at the exact fraction
+/// `v − trunc(v)` gives the same integer and vectorises.
+#[inline(always)]
+#[must_use]
+pub fn round_half_away_f64(v: f64) -> i32 {
+    let t = v as i32;
+    let f = v - f64::from(t);
+    t + i32::from(f >= 0.5) - i32::from(f <= -0.5)
+}
+
+/// [`round_half_away_f64`] for a value the caller has clamped to |v| ≤ 2^24 (a unorm/snorm/depth code before
+/// rounding): the truncation skips the saturating checks of `as`, which otherwise turn the vectorised loop back
+/// into one scalar conversion per element. Equal to [`round_half_away_f64`] on that range (tested).
+#[inline(always)]
+#[must_use]
+pub fn round_in_range_f64(v: f64) -> i32 {
+    debug_assert!(v.abs() <= 16_777_216.0, "{v}");
+    // SAFETY: callers pass a finite value clamped to |v| ≤ 2^24 (NaN replaced first), whose truncation fits an
+    // i32.
+    let t: i32 = unsafe { v.to_int_unchecked() };
+    let f = v - f64::from(t);
+    t + i32::from(f >= 0.5) - i32::from(f <= -0.5)
+}
+
 /// [`round_half_away`] for a value already known to be finite with |v| ≤ 2^16 (a clamped, scaled coordinate):
 /// the truncation skips the saturating checks of `as`, which keeps the vectorised loop at one conversion.
 #[inline(always)]
-fn round_in_range(v: f32) -> i32 {
+pub(crate) fn round_in_range(v: f32) -> i32 {
     debug_assert!(v.abs() <= 65536.0, "{v}");
     // SAFETY: callers pass a value clamped to [−(2^16−1), 2^16−1] after replacing NaN, so it is finite and its
     // truncation fits in an i32.
@@ -753,6 +778,23 @@ mod tests {
         for _ in 0..100_000 {
             let v = rng.range_f32(-70_000.0, 70_000.0);
             assert_eq!(round_half_away(v), v.round() as i32, "{v}");
+        }
+    }
+
+    #[test]
+    fn round_half_away_f64_matches_round() {
+        let mut rng = crate::util::SplitMix64::new(6);
+        let specials =
+            [0.5f64, -0.5, 1.5, -2.5, 0.499_999_999_999_999_94, 16_777_214.5, 16_777_215.0, 8_388_606.5, 0.0];
+        for v in specials.into_iter().chain([-0.0, 1e-300, -8_388_607.5]) {
+            assert_eq!(round_half_away_f64(v), v.round() as i32, "{v}");
+        }
+        for _ in 0..100_000 {
+            let v = f64::from(rng.range_f32(-1.0, 1.0)) * f64::from(rng.range_f32(0.0, 16_777_215.0));
+            assert_eq!(round_half_away_f64(v), v.round() as i32, "{v}");
+            assert_eq!(round_in_range_f64(v), v.round() as i32, "{v}");
+            let k = (rng.next_u64() % (1 << 24)) as f64 + 0.5;
+            assert_eq!(round_half_away_f64(k), k.round() as i32, "{k}");
         }
     }
 
