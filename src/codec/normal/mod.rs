@@ -526,18 +526,28 @@ impl<P: Projection> Planar<P> {
 }
 
 impl<P: Projection> Planar<P> {
-    /// The per-element encode body shared by the scalar and slice paths.
+    /// The per-element encode body shared by the scalar and slice paths (two coordinates of ≤ 16 bits: the
+    /// code fits in 32 bits, which keeps the vectorised loop in 32-bit lanes).
     #[inline(always)]
-    fn encode_with<Q: Quantizer>(proj: P, q: Q, n: Vec3) -> u64 {
+    fn encode32<Q: Quantizer>(proj: P, q: Q, n: Vec3) -> u32 {
         let p = proj.encode_plane(sanitize(n));
-        u64::from(q.enc(p.x) | (q.enc(p.y) << q.bits()))
+        q.enc(p.x) | (q.enc(p.y) << q.bits())
     }
 
-    /// The per-element decode body shared by the scalar and slice paths.
+    #[inline(always)]
+    fn encode_with<Q: Quantizer>(proj: P, q: Q, n: Vec3) -> u64 {
+        u64::from(Self::encode32(proj, q, n))
+    }
+
+    /// The per-element decode body shared by the scalar and slice paths (only the low 32 bits matter).
+    #[inline(always)]
+    fn decode32<Q: Quantizer>(proj: P, q: Q, c: u32) -> Vec3 {
+        finish(proj.decode_plane(Vec2::new(q.dec(c), q.dec(c >> q.bits()))))
+    }
+
     #[inline(always)]
     fn decode_with<Q: Quantizer>(proj: P, q: Q, code: u64) -> Vec3 {
-        let c = code as u32;
-        finish(proj.decode_plane(Vec2::new(q.dec(c), q.dec(c >> q.bits()))))
+        Self::decode32(proj, q, code as u32)
     }
 }
 
@@ -558,8 +568,13 @@ impl<P: Projection, Q: Quantizer> Kernel for PlanarEncode<'_, P, Q> {
         let mut outs = self.out.chunks_exact_mut(BLOCK);
         for (i, o) in (&mut ins).zip(&mut outs) {
             let (x, y, z) = split_block(i);
+            // 32-bit codes first (16 f32 lanes per AVX-512 vector instead of 8), widened afterwards.
+            let mut c = [0u32; BLOCK];
             for j in 0..BLOCK {
-                o[j] = Planar::encode_with(proj, q, Vec3::new(x[j], y[j], z[j]));
+                c[j] = Planar::encode32(proj, q, Vec3::new(x[j], y[j], z[j]));
+            }
+            for j in 0..BLOCK {
+                o[j] = u64::from(c[j]);
             }
         }
         for (n, o) in ins.remainder().iter().zip(outs.into_remainder()) {
@@ -583,9 +598,13 @@ impl<P: Projection, Q: Quantizer> Kernel for PlanarDecode<'_, P, Q> {
         let mut ins = self.codes.chunks_exact(BLOCK);
         let mut outs = self.out.chunks_exact_mut(BLOCK);
         for (c, o) in (&mut ins).zip(&mut outs) {
+            let mut c32 = [0u32; BLOCK];
+            for j in 0..BLOCK {
+                c32[j] = c[j] as u32;
+            }
             let (mut x, mut y, mut z) = ([0f32; BLOCK], [0f32; BLOCK], [0f32; BLOCK]);
             for j in 0..BLOCK {
-                let v = Planar::decode_with(proj, q, c[j]);
+                let v = Planar::decode32(proj, q, c32[j]);
                 (x[j], y[j], z[j]) = (v.x, v.y, v.z);
             }
             join_block(&x, &y, &z, o);

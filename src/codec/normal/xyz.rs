@@ -66,21 +66,40 @@ fn stored_to_n(unorm: bool, v: f32) -> f32 {
     }
 }
 
-/// The per-element encode body shared by the scalar and slice paths.
+/// The per-element encode body shared by the scalar and slice paths: the three component codes (each ≤ 16 bits,
+/// in 32-bit lanes so the vectorised loop stays 16 lanes wide).
 #[inline(always)]
-fn encode_with<Q: Quantizer>(q: Q, unorm: bool, n: Vec3) -> u64 {
+fn encode3<Q: Quantizer>(q: Q, unorm: bool, n: Vec3) -> [u32; 3] {
     let n = sanitize(n);
-    let k = q.bits();
-    let e = |v: f32| u64::from(q.enc(n_to_stored(unorm, v)));
-    e(n.x) | (e(n.y) << k) | (e(n.z) << (2 * k))
+    let e = |v: f32| q.enc(n_to_stored(unorm, v));
+    [e(n.x), e(n.y), e(n.z)]
 }
 
-/// The per-element decode body shared by the scalar and slice paths.
+#[inline(always)]
+fn join3(k: u32, c: [u32; 3]) -> u64 {
+    u64::from(c[0]) | (u64::from(c[1]) << k) | (u64::from(c[2]) << (2 * k))
+}
+
+#[inline(always)]
+fn encode_with<Q: Quantizer>(q: Q, unorm: bool, n: Vec3) -> u64 {
+    join3(q.bits(), encode3(q, unorm, n))
+}
+
+/// The per-element decode body shared by the scalar and slice paths, from the three component codes.
+#[inline(always)]
+fn decode3<Q: Quantizer>(q: Q, unorm: bool, c: [u32; 3]) -> Vec3 {
+    let d = |c: u32| stored_to_n(unorm, q.dec(c));
+    finish(Vec3::new(d(c[0]), d(c[1]), d(c[2])))
+}
+
+#[inline(always)]
+fn split3(k: u32, code: u64) -> [u32; 3] {
+    [code as u32, (code >> k) as u32, (code >> (2 * k)) as u32]
+}
+
 #[inline(always)]
 fn decode_with<Q: Quantizer>(q: Q, unorm: bool, code: u64) -> Vec3 {
-    let k = q.bits();
-    let d = |c: u64| stored_to_n(unorm, q.dec(c as u32));
-    finish(Vec3::new(d(code), d(code >> k), d(code >> (2 * k))))
+    decode3(q, unorm, split3(q.bits(), code))
 }
 
 struct XyzEncode<'a, Q> {
@@ -96,10 +115,15 @@ impl<Q: Quantizer> Kernel for XyzEncode<'_, Q> {
         let (q, unorm) = (self.q, self.unorm);
         let mut ins = self.input.chunks_exact(BLOCK);
         let mut outs = self.out.chunks_exact_mut(BLOCK);
+        let k = q.bits();
         for (i, o) in (&mut ins).zip(&mut outs) {
             let (x, y, z) = split_block(i);
+            let (mut cx, mut cy, mut cz) = ([0u32; BLOCK], [0u32; BLOCK], [0u32; BLOCK]);
             for j in 0..BLOCK {
-                o[j] = encode_with(q, unorm, Vec3::new(x[j], y[j], z[j]));
+                [cx[j], cy[j], cz[j]] = encode3(q, unorm, Vec3::new(x[j], y[j], z[j]));
+            }
+            for j in 0..BLOCK {
+                o[j] = join3(k, [cx[j], cy[j], cz[j]]);
             }
         }
         for (n, o) in ins.remainder().iter().zip(outs.into_remainder()) {
@@ -121,10 +145,15 @@ impl<Q: Quantizer> Kernel for XyzDecode<'_, Q> {
         let (q, unorm) = (self.q, self.unorm);
         let mut ins = self.codes.chunks_exact(BLOCK);
         let mut outs = self.out.chunks_exact_mut(BLOCK);
+        let k = q.bits();
         for (c, o) in (&mut ins).zip(&mut outs) {
+            let (mut cx, mut cy, mut cz) = ([0u32; BLOCK], [0u32; BLOCK], [0u32; BLOCK]);
+            for j in 0..BLOCK {
+                [cx[j], cy[j], cz[j]] = split3(k, c[j]);
+            }
             let (mut x, mut y, mut z) = ([0f32; BLOCK], [0f32; BLOCK], [0f32; BLOCK]);
             for j in 0..BLOCK {
-                let v = decode_with(q, unorm, c[j]);
+                let v = decode3(q, unorm, [cx[j], cy[j], cz[j]]);
                 (x[j], y[j], z[j]) = (v.x, v.y, v.z);
             }
             join_block(&x, &y, &z, o);
