@@ -28,6 +28,9 @@ fn json_rows_carry_the_documented_fields_and_sane_values() {
         );
         assert!(mean <= max && dom <= bound, "{r}");
         assert!(r["encode_ns"].as_f64().unwrap() > 0.0, "{r}");
+        let timing = r["timing"].as_str().unwrap();
+        assert!(timing.starts_with("slice, 1 thread, "), "{r}");
+        assert!(["baseline", "avx2", "avx512"].iter().any(|i| timing.ends_with(i)), "{r}");
     }
     let oct = rows.iter().find(|r| r["codec"] == "oct-16").unwrap();
     assert_eq!(oct["exhaustive"]["codes"], 65536);

@@ -6,7 +6,7 @@
 //! Errors are angles computed in f64 ([`angle_deg`]).
 
 use super::normal::{angle_deg, sanitize};
-use super::NormalCodec;
+use super::{Isa, NormalCodec};
 use crate::util::SplitMix64;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -233,6 +233,8 @@ pub struct CodecRow {
     pub encode_ns: f64,
     /// Nanoseconds per normal to decode through the slice path, one thread (see [`time_codec`]).
     pub decode_ns: f64,
+    /// How `encode_ns`/`decode_ns` were measured, e.g. `slice, 1 thread, avx512` (empty when timing was off).
+    pub timing: String,
 }
 
 /// What to run for each codec.
@@ -278,6 +280,11 @@ pub fn evaluate(codec: &dyn NormalCodec, scheme: &str, inputs: &[Vec3], opts: &E
         exhaustive: ex,
         encode_ns,
         decode_ns,
+        timing: if opts.timing_samples > 0 {
+            format!("slice, 1 thread, {}", Isa::detect().name())
+        } else {
+            String::new()
+        },
     }
 }
 
