@@ -20,6 +20,24 @@ fn cpu_seconds() -> Option<f64> {
     Some(ticks / 100.0) // USER_HZ is 100 on Linux
 }
 
+/// CPU seconds used so far by each thread of this process whose name starts with `prefix`.
+fn thread_cpu(prefix: &str) -> Vec<f64> {
+    let Ok(dir) = std::fs::read_dir("/proc/self/task") else { return Vec::new() };
+    let mut out: Vec<f64> = dir
+        .filter_map(|e| {
+            let stat = std::fs::read_to_string(e.ok()?.path().join("stat")).ok()?;
+            let (head, rest) = stat.rsplit_once(')')?;
+            if !head.split_once('(')?.1.starts_with(prefix) {
+                return None;
+            }
+            let f: Vec<&str> = rest.split_whitespace().collect();
+            Some((f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?) / 100.0)
+        })
+        .collect();
+    out.sort_by(f64::total_cmp);
+    out
+}
+
 fn env<T: std::str::FromStr>(name: &str) -> Option<T> {
     std::env::var(name).ok().and_then(|s| s.parse().ok())
 }
@@ -38,7 +56,11 @@ fn time_per_frame() {
     let lights = fixture::lights_for_density(w, h, 1024, density, 7).unwrap();
     let mask1 = uniform_mask(&gb1, false);
     let mask4 = detect(&gb4, Detector::Lauritzen, &DetectorConfig::default()).unwrap();
-    let pools: Vec<_> = [1, 2].map(|n| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap()).into();
+    let pools: Vec<_> = [1, 2]
+        .map(|n| {
+            rayon::ThreadPoolBuilder::new().num_threads(n).thread_name(move |i| format!("p{n}-{i}")).build().unwrap()
+        })
+        .into();
     println!("kernel instruction set: {}", gbuf::resolve::kernel::instruction_set());
     for (name, gb, mask, cfg) in [
         ("tiled 1x", &gb1, &mask1, ResolveConfig::default()),
@@ -49,9 +71,10 @@ fn time_per_frame() {
             continue;
         }
         let warm = pools[0].install(|| resolve(gb, &lights, mask, &cfg)).unwrap();
+        let before2 = thread_cpu("p2-");
         let mut best = [f64::INFINITY; 2];
         let mut split = [0.0f64; 3];
-        let mut cpu = 0.0;
+        let (mut cpu, mut cpu2) = (0.0, 0.0);
         for (t, pool) in pools.iter().enumerate() {
             let c0 = cpu_seconds().unwrap_or(0.0);
             for _ in 0..frames {
@@ -66,13 +89,25 @@ fn time_per_frame() {
             }
             if t == 0 {
                 cpu = (cpu_seconds().unwrap_or(0.0) - c0) / f64::from(frames);
+            } else {
+                cpu2 = (cpu_seconds().unwrap_or(0.0) - c0) / f64::from(frames);
             }
         }
+        // How the 2-thread frames' work divided between the pool's threads (CPU seconds each): on a machine whose
+        // other core is busy the wall-time ratio says nothing, but an even split shows the work is parallel.
+        let split2: Vec<String> = thread_cpu("p2-")
+            .iter()
+            .zip(before2.iter().chain(std::iter::repeat(&0.0)))
+            .map(|(a, b)| format!("{:.0}", (a - b) * 1e3 / f64::from(frames)))
+            .collect();
         let s = &warm.stats;
         println!(
-            "{name}: {:.1} ms CPU/frame on 1 thread; best wall {:.1} ms on 1 thread, {:.1} ms on 2 (×{:.2}); \
+            "{name}: {:.1} ms CPU/frame on 1 thread ({:.1} on 2, per thread {} ms); best wall {:.1} ms on 1 thread, \
+             {:.1} ms on 2 (×{:.2}); \
              {} pairs tested ({:.1}/sample, {:.0}% lit); 1-thread split gather {:.1} cull {:.1} shade {:.1} ms",
             cpu * 1e3,
+            cpu2 * 1e3,
+            split2.join(" + "),
             best[0] * 1e3,
             best[1] * 1e3,
             best[0] / best[1],
