@@ -22,7 +22,6 @@ use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 /// `pixel` of padding items.
 pub const PAD_PIXEL: u32 = u32::MAX;
-const SKIP_DARK: bool = true;
 
 /// Per-light screen rectangle (tangent units x/d, y/d) and depth bounds for quad culling.
 #[derive(Clone, Debug, Default)]
@@ -421,7 +420,8 @@ fn run_chunk<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
             acc_b = cb.mul_add(e, acc_b);
             continue;
         }
-        if SKIP_DARK && !V::any(on) {
+        if !V::any(on) {
+            // No lane receives light: the specular term would be multiplied by 0 everywhere.
             continue;
         }
         // H = normalize(L̂ + V): |L̂ + V|² = 2 + 2 L̂·V, N·H = (N·L̂ + N·V)/|H|, V·H = (L̂·V + 1)/|H|.
