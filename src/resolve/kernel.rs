@@ -18,6 +18,7 @@ use super::simd::Avx512;
 use super::simd::{Lanes, Portable};
 pub use super::simd::{BLOCK, LANES};
 use super::surface::Surface;
+use crate::codec::simd::Isa;
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 /// `pixel` of padding items.
@@ -201,19 +202,11 @@ fn shade_with(
     }
 }
 
-/// The instruction set the kernel runs with on this CPU: `avx512`, `avx2+fma` or `portable`.
+/// The instruction set the kernel runs with on this CPU ([`Isa::detect`], shared with the codecs' slice paths):
+/// `avx512`, `avx2` (with FMA) or `baseline` (the portable kernel).
 #[must_use]
 pub fn instruction_set() -> &'static str {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::is_x86_feature_detected!("avx512f") {
-            return "avx512";
-        }
-        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-            return "avx2+fma";
-        }
-    }
-    "portable"
+    Isa::detect().name()
 }
 
 fn dispatch<const B: u8, const F: u8, const Q: bool, const P: bool>(
@@ -225,13 +218,12 @@ fn dispatch<const B: u8, const F: u8, const Q: bool, const P: bool>(
 ) {
     #[cfg(target_arch = "x86_64")]
     if !portable {
-        if std::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU supports the features the function was compiled for (checked just above).
-            return unsafe { run_avx512::<B, F, Q, P>(it, range, lights, quad) };
-        }
-        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+        match Isa::detect() {
+            // SAFETY: `Isa::detect` found the features the function was compiled for on this CPU.
+            Isa::Avx512 => return unsafe { run_avx512::<B, F, Q, P>(it, range, lights, quad) },
             // SAFETY: as above.
-            return unsafe { run_avx2::<B, F, Q, P>(it, range, lights, quad) };
+            Isa::Avx2 => return unsafe { run_avx2::<B, F, Q, P>(it, range, lights, quad) },
+            Isa::Baseline => {}
         }
     }
     run::<Portable<false>, B, F, Q, P>(it, range, lights, quad);

@@ -12,6 +12,8 @@ use super::culling::{light_sphere, quad_rects, Bounds};
 use super::kernel::{finish_prepass, shade, Items, QuadSoa, Variant, BLOCK, PAD_PIXEL};
 use super::lights::LightTable;
 use super::surface::{SanitizedCounts, SurfaceReader};
+#[cfg(target_arch = "x86_64")]
+use crate::codec::simd::Isa;
 use crate::detect::EdgeMask;
 use crate::light::Light;
 use glam::Vec3;
@@ -147,15 +149,12 @@ pub fn run_tiles(frame: &Frame<'_>, rgb: &mut [Vec3], heat: &mut [u32]) -> TileS
         .map_init(Scratch::default, |sc, (band, (rgb, heat))| {
             let y0 = band as u32 * ts;
             #[cfg(target_arch = "x86_64")]
-            {
-                if std::is_x86_feature_detected!("avx512f") {
-                    // SAFETY: the CPU has the features the function is compiled for (checked just above).
-                    return unsafe { run_band_avx512(frame, y0, sc, rgb, heat) };
-                }
-                if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-                    // SAFETY: as above.
-                    return unsafe { run_band_avx2(frame, y0, sc, rgb, heat) };
-                }
+            match Isa::detect() {
+                // SAFETY: `Isa::detect` found the features the function is compiled for on this CPU.
+                Isa::Avx512 => return unsafe { run_band_avx512(frame, y0, sc, rgb, heat) },
+                // SAFETY: as above.
+                Isa::Avx2 => return unsafe { run_band_avx2(frame, y0, sc, rgb, heat) },
+                Isa::Baseline => {}
             }
             run_band(frame, y0, sc, rgb, heat)
         })
@@ -394,16 +393,12 @@ fn cull_tile_list(frame: &Frame<'_>, b: &Bounds, sc: &mut Scratch) {
     sc.mask.clear();
     sc.mask.resize(s.x.len(), 0);
     #[cfg(target_arch = "x86_64")]
-    {
-        if std::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has the features the function is compiled for (checked just above).
-            unsafe { sphere_mask_avx512(b, s, &mut sc.mask) };
-        } else if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-            // SAFETY: as above.
-            unsafe { sphere_mask_avx2(b, s, &mut sc.mask) };
-        } else {
-            sphere_mask(b, s, &mut sc.mask);
-        }
+    match Isa::detect() {
+        // SAFETY: `Isa::detect` found the features the function is compiled for on this CPU.
+        Isa::Avx512 => unsafe { sphere_mask_avx512(b, s, &mut sc.mask) },
+        // SAFETY: as above.
+        Isa::Avx2 => unsafe { sphere_mask_avx2(b, s, &mut sc.mask) },
+        Isa::Baseline => sphere_mask(b, s, &mut sc.mask),
     }
     #[cfg(not(target_arch = "x86_64"))]
     sphere_mask(b, s, &mut sc.mask);
