@@ -12,10 +12,10 @@ use super::brdf::{DIELECTRIC_F0, MIN_ALPHA, MIN_HALF_LENGTH, MIN_NDOTV};
 use super::config::{Brdf, Falloff};
 use super::falloff::MIN_DISTANCE;
 use super::fastmath::POW_MIN_BASE;
-use super::lights::{LightTable, LUMA};
+use super::lights::{LightRec, LightTable, LUMA};
 #[cfg(target_arch = "x86_64")]
 use super::simd::Avx512;
-use super::simd::{Lanes, Portable};
+use super::simd::{Lanes, Portable, Two};
 pub use super::simd::{BLOCK, LANES};
 use super::surface::Surface;
 use crate::codec::simd::Isa;
@@ -259,9 +259,10 @@ fn run<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
     quad: &QuadSoa,
 ) {
     debug_assert!(range.len().is_multiple_of(V::N), "work lists are padded to whole vectors");
+    let mut live = Vec::with_capacity(lights.len());
     let mut c = range.start;
     while c + V::N <= range.end {
-        run_chunk::<V, B, F, Q, P>(it, c, lights, quad);
+        run_chunk::<V, B, F, Q, P>(it, c, lights, quad, &mut live);
         c += V::N;
     }
 }
@@ -344,131 +345,293 @@ fn load_chunk<V: Lanes, const B: u8, const Q: bool>(it: &Items, c: usize) -> Chu
     k
 }
 
-/// Shades one vector of `V::N` items against every light: per-sample constants and accumulators stay in
-/// registers across the light loop; a light whose energy is zero for all lanes skips the specular part (its
-/// contribution would be exactly 0).
+/// One light's constants as vectors (for [`Two`], two lights', one per half).
+struct LightK<V> {
+    p: [V; 3],
+    w: V,
+    fa: V,
+    fb: V,
+    axis: [V; 3],
+    cs: V,
+    co: V,
+    c: [V; 3],
+    lum: V,
+    /// Quad culling's rectangle and depth range (`x0, x1, y0, y1, z0, z1`).
+    q: [V; 6],
+    /// The light is a spot light (for [`Two`]: either is).
+    spot: bool,
+}
+
+#[inline(always)]
+fn light_k<V: Lanes, const Q: bool>(r: &LightRec, quad: &QuadSoa, l: usize) -> LightK<V> {
+    let s = V::splat;
+    let zero = s(0.0);
+    LightK {
+        p: [s(r.px), s(r.py), s(r.pz)],
+        w: s(r.w),
+        fa: s(r.fa),
+        fb: s(r.fb),
+        axis: [s(r.sx), s(r.sy), s(r.sz)],
+        cs: s(r.cs),
+        co: s(r.co),
+        c: [s(r.cr), s(r.cg), s(r.cb)],
+        lum: s(r.lum),
+        q: if Q {
+            [s(quad.x0[l]), s(quad.x1[l]), s(quad.y0[l]), s(quad.y1[l]), s(quad.z0[l]), s(quad.z1[l])]
+        } else {
+            [zero; 6]
+        },
+        spot: r.cs != 0.0,
+    }
+}
+
+/// Two lights' constants side by side.
+#[inline(always)]
+fn light_pair<V: Lanes>(a: LightK<V>, b: LightK<V>) -> LightK<Two<V>> {
+    let t3 = |x: [V; 3], y: [V; 3]| [Two(x[0], y[0]), Two(x[1], y[1]), Two(x[2], y[2])];
+    LightK {
+        p: t3(a.p, b.p),
+        w: Two(a.w, b.w),
+        fa: Two(a.fa, b.fa),
+        fb: Two(a.fb, b.fb),
+        axis: t3(a.axis, b.axis),
+        cs: Two(a.cs, b.cs),
+        co: Two(a.co, b.co),
+        c: t3(a.c, b.c),
+        lum: Two(a.lum, b.lum),
+        q: [
+            Two(a.q[0], b.q[0]),
+            Two(a.q[1], b.q[1]),
+            Two(a.q[2], b.q[2]),
+            Two(a.q[3], b.q[3]),
+            Two(a.q[4], b.q[4]),
+            Two(a.q[5], b.q[5]),
+        ],
+        spot: a.spot || b.spot,
+    }
+}
+
+/// What one light gives one vector of samples, before its colour: the energy `e` (falloff · N·L · cone, 0 outside
+/// a quad), the lanes it lights and (quad culling) tests, and the BRDF's factors: Blinn-Phong `x[0]` = the
+/// specular factor; GGX `x` = the three lobes (`x[0]` = F·D·V for the pre-pass).
+struct Step<V: Lanes> {
+    e: V,
+    on: V::Mask,
+    inside: V::Mask,
+    x: [V; 3],
+}
+
+impl<V: Lanes> Step<Two<V>> {
+    #[inline(always)]
+    fn split(self) -> (Step<V>, Step<V>) {
+        let x = self.x;
+        (
+            Step { e: self.e.0, on: self.on.0, inside: self.inside.0, x: [x[0].0, x[1].0, x[2].0] },
+            Step { e: self.e.1, on: self.on.1, inside: self.inside.1, x: [x[0].1, x[1].1, x[2].1] },
+        )
+    }
+}
+
+/// Accumulators of one vector of samples.
+struct Acc<V> {
+    rgb: [V; 3],
+    s: V,
+    tested: V,
+    lit: V,
+}
+
+/// Adds one light's step to the accumulators (in light order: the sums do not depend on how the lights were
+/// grouped into steps).
+#[inline(always)]
+fn accumulate<V: Lanes, const B: u8, const Q: bool, const P: bool>(acc: &mut Acc<V>, st: &Step<V>, c: &[V; 3], lum: V) {
+    if Q {
+        acc.tested = acc.tested.count(st.inside);
+    }
+    acc.lit = acc.lit.count(st.on);
+    let e = st.e;
+    if B == 0 || P {
+        for (a, &cc) in acc.rgb.iter_mut().zip(c) {
+            *a = cc.mul_add(e, *a);
+        }
+        if B != 0 {
+            acc.s = (lum * e).mul_add(st.x[0], acc.s);
+        }
+    } else if B == 1 {
+        let kk = e.mul_add(st.x[0], e);
+        for (a, &cc) in acc.rgb.iter_mut().zip(c) {
+            *a = cc.mul_add(kk, *a);
+        }
+    } else {
+        for ((a, &cc), &o) in acc.rgb.iter_mut().zip(c).zip(&st.x) {
+            *a = (cc * e).mul_add(o, *a);
+        }
+    }
+}
+
+/// The per-sample constants in both halves.
+#[inline(always)]
+fn both<V: Lanes>(k: &Chunk<V>) -> Chunk<Two<V>> {
+    let b = Two::both;
+    let b3 = |x: [V; 3]| [b(x[0]), b(x[1]), b(x[2])];
+    Chunk {
+        p: b3(k.p),
+        n: b3(k.n),
+        v: b3(k.v),
+        nv_raw: b(k.nv_raw),
+        nv: b(k.nv),
+        sn: b(k.sn),
+        pw: b(k.pw),
+        a2: b(k.a2),
+        gv: b(k.gv),
+        f0: b3(k.f0),
+        cd: b3(k.cd),
+        t: b3(k.t),
+    }
+}
+
+/// One light (or, for [`Two`], two) against one vector of samples. A light that cannot reach a lane gives
+/// exactly `e = 0` there, and every factor of `x` is finite, so its contribution is exactly 0.
+#[inline(always)]
+fn step<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(k: &Chunk<V>, l: &LightK<V>) -> Step<V> {
+    let s = V::splat;
+    let zero = s(0.0);
+    let w = zero - l.w;
+    let lv = [k.p[0].mul_add(w, l.p[0]), k.p[1].mul_add(w, l.p[1]), k.p[2].mul_add(w, l.p[2])];
+    // d = max(|L|, MIN_DISTANCE): clamping d² first keeps rsqrt away from 0.
+    let d2 = dot(&lv, &lv).max(s(MIN_DISTANCE * MIN_DISTANCE));
+    // The dot products with L̂ are taken with the unnormalised L, then scaled by 1/|L|: they need not wait for the
+    // reciprocal square root (a shorter dependency chain; the light loop is latency-bound).
+    let ndl_l = dot(&k.n, &lv);
+    let ldv_l = dot(&lv, &k.v);
+    let inv = d2.rsqrt();
+    let ndl_raw = ndl_l * inv;
+    let ndl = ndl_raw.max(zero);
+    let atten = if F == 0 {
+        let win = (zero - d2 * d2).mul_add(l.fa, s(1.0)).saturate();
+        win * win * (inv * inv)
+    } else {
+        (d2 * inv).mul_add(zero - l.fb, l.fa).saturate()
+    };
+    let mut e = atten * ndl;
+    if l.spot {
+        // Non-spot lights have scale 0 and offset 1: a factor of exactly 1.
+        let sl = dot(&l.axis, &lv) * inv;
+        let cone = sl.mul_add(zero - l.cs, l.co).saturate();
+        e = e * (cone * cone);
+    }
+    let inside = if Q {
+        let t = &k.t;
+        let inside = V::and(
+            V::and(V::and(t[0].ge(l.q[0]), t[0].le(l.q[1])), V::and(t[1].ge(l.q[2]), t[1].le(l.q[3]))),
+            V::and(t[2].ge(l.q[4]), t[2].le(l.q[5])),
+        );
+        e = e.keep(inside);
+        inside
+    } else {
+        zero.gt(zero)
+    };
+    let on = e.gt(zero);
+    let mut x = [zero; 3];
+    if B == 0 {
+        return Step { e, on, inside, x };
+    }
+    // H = normalize(L̂ + V): |L̂ + V|² = 2 + 2 L̂·V, N·H = (N·L̂ + N·V)/|H|, V·H = (L̂·V + 1)/|H|.
+    let ldv = ldv_l * inv;
+    let h2 = ldv.mul_add(s(2.0), s(2.0)).max(s(MIN_HALF_LENGTH * MIN_HALF_LENGTH));
+    let hinv = h2.rsqrt();
+    let ndh = ((ndl_raw + k.nv_raw) * hinv).max(zero);
+    if B == 1 {
+        x[0] = k.sn * (k.pw * ndh.max(s(POW_MIN_BASE)).log2()).exp2();
+        return Step { e, on, inside, x };
+    }
+    let vdh = ((ldv + s(1.0)) * hinv).max(zero);
+    let a2 = k.a2;
+    let t = (ndh * ndh).mul_add(a2 - s(1.0), s(1.0));
+    let gl2 = (ndl * ndl).mul_add(s(1.0) - a2, a2);
+    let vis_den = ndl.mul_add(k.gv, k.nv * (gl2 * gl2.rsqrt())).max(s(1e-12));
+    let dv = a2 * s(0.5 * FRAC_1_PI) * (t * t * vis_den).recip();
+    let m = s(1.0) - vdh;
+    let m2 = m * m;
+    let m5 = m2 * m2 * m;
+    if P {
+        let f0 = k.f0[0].mul_add(s(LUMA.x), k.f0[1].mul_add(s(LUMA.y), k.f0[2] * s(LUMA.z)));
+        x[0] = (s(1.0) - f0).mul_add(m5, f0) * dv;
+    } else {
+        x = [lobe(k.f0[0], k.cd[0], m5, dv), lobe(k.f0[1], k.cd[1], m5, dv), lobe(k.f0[2], k.cd[2], m5, dv)];
+    }
+    Step { e, on, inside, x }
+}
+
+/// GGX's lobe for one colour channel: Schlick's `F = F0 + (1 − F0)(1 − V·H)⁵` (`m5` = the fifth power), then
+/// `(1 − F) c_diff/π + F·D·V`.
+#[inline(always)]
+fn lobe<V: Lanes>(f0: V, cd: V, m5: V, dv: V) -> V {
+    let one = V::splat(1.0);
+    let f = (one - f0).mul_add(m5, f0);
+    (one - f).mul_add(cd, f * dv)
+}
+
+/// Shades one vector of `V::N` items against every light. First the lights that can reach the vector at all
+/// are listed (16 lights at a time against the vector's bounding box; a light whose sphere misses it adds exactly
+/// 0 to every lane, and its pair still counts as tested: tile culling passed it — quad culling counts its own
+/// tests, so it keeps every light); then the listed lights are shaded two at a time ([`Two`]), the last one alone,
+/// with per-sample constants and accumulators in registers. Each light's contribution is added in light order, so
+/// the sums do not depend on which lights were listed.
 #[inline(always)]
 fn run_chunk<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
     it: &mut Items,
     c: usize,
     lights: &LightTable,
     quad: &QuadSoa,
+    live: &mut Vec<u32>,
 ) {
     let s = V::splat;
     let k = load_chunk::<V, B, Q>(it, c);
     let zero = s(0.0);
-    let (mut acc_r, mut acc_g, mut acc_b, mut acc_s) = (zero, zero, zero, zero);
-    let (mut tested, mut lit) = (zero, zero);
-    let min_d2 = s(MIN_DISTANCE * MIN_DISTANCE);
-    let min_h2 = s(MIN_HALF_LENGTH * MIN_HALF_LENGTH);
-    // The vector's bounding box: a light whose sphere misses it adds exactly 0 to every lane and is skipped (the
-    // pair still counts as tested: tile culling passed it). Quad culling counts its own tests, so it runs all.
-    let lo = [k.p[0].hmin(), k.p[1].hmin(), k.p[2].hmin()];
-    let hi = [k.p[0].hmax(), k.p[1].hmax(), k.p[2].hmax()];
-    for (l, rec) in lights.rec.iter().enumerate() {
-        if !Q {
-            let (gx, gy, gz) = (gap(rec.px, lo[0], hi[0]), gap(rec.py, lo[1], hi[1]), gap(rec.pz, lo[2], hi[2]));
-            if gx * gx + gy * gy + gz * gz > rec.r2 {
-                continue;
-            }
-        }
-        let w = s(-rec.w);
-        let lv = [k.p[0].mul_add(w, s(rec.px)), k.p[1].mul_add(w, s(rec.py)), k.p[2].mul_add(w, s(rec.pz))];
-        // d = max(|L|, MIN_DISTANCE): clamping d² first keeps rsqrt away from 0.
-        let d2 = dot(&lv, &lv).max(min_d2);
-        let inv = d2.rsqrt();
-        let l_hat = [lv[0] * inv, lv[1] * inv, lv[2] * inv];
-        let ndl_raw = dot(&k.n, &l_hat);
-        let ndl = ndl_raw.max(zero);
-        let atten = if F == 0 {
-            let win = (zero - d2 * d2).mul_add(s(rec.fa), s(1.0)).saturate();
-            win * win * (inv * inv)
-        } else {
-            (d2 * inv).mul_add(s(-rec.fb), s(rec.fa)).saturate()
-        };
-        let mut e = atten * ndl;
-        if rec.cs != 0.0 {
-            let sl = dot(&[s(rec.sx), s(rec.sy), s(rec.sz)], &l_hat);
-            let cone = sl.mul_add(s(-rec.cs), s(rec.co)).saturate();
-            e = e * (cone * cone);
-        }
-        if Q {
-            let inside = V::and(
-                V::and(
-                    V::and(k.t[0].ge(s(quad.x0[l])), k.t[0].le(s(quad.x1[l]))),
-                    V::and(k.t[1].ge(s(quad.y0[l])), k.t[1].le(s(quad.y1[l]))),
-                ),
-                V::and(k.t[2].ge(s(quad.z0[l])), k.t[2].le(s(quad.z1[l]))),
-            );
-            tested = tested.count(inside);
-            e = e.keep(inside);
-        }
-        let on = e.gt(zero);
-        lit = lit.count(on);
-        let (cr, cg, cb) = (s(rec.cr), s(rec.cg), s(rec.cb));
-        if B == 0 {
-            acc_r = cr.mul_add(e, acc_r);
-            acc_g = cg.mul_add(e, acc_g);
-            acc_b = cb.mul_add(e, acc_b);
-            continue;
-        }
-        if !V::any(on) {
-            // No lane receives light: the specular term would be multiplied by 0 everywhere.
-            continue;
-        }
-        // H = normalize(L̂ + V): |L̂ + V|² = 2 + 2 L̂·V, N·H = (N·L̂ + N·V)/|H|, V·H = (L̂·V + 1)/|H|.
-        let ldv = dot(&l_hat, &k.v);
-        let h2 = ldv.mul_add(s(2.0), s(2.0)).max(min_h2);
-        let hinv = h2.rsqrt();
-        let ndh = ((ndl_raw + k.nv_raw) * hinv).max(zero);
-        if B == 1 {
-            let spec = k.sn * (k.pw * ndh.max(s(POW_MIN_BASE)).log2()).exp2();
-            if P {
-                acc_r = cr.mul_add(e, acc_r);
-                acc_g = cg.mul_add(e, acc_g);
-                acc_b = cb.mul_add(e, acc_b);
-                acc_s = (s(rec.lum) * e).mul_add(spec, acc_s);
-            } else {
-                let kk = e.mul_add(spec, e);
-                acc_r = cr.mul_add(kk, acc_r);
-                acc_g = cg.mul_add(kk, acc_g);
-                acc_b = cb.mul_add(kk, acc_b);
-            }
-        } else {
-            let vdh = ((ldv + s(1.0)) * hinv).max(zero);
-            let a2 = k.a2;
-            let t = (ndh * ndh).mul_add(a2 - s(1.0), s(1.0));
-            let gl2 = (ndl * ndl).mul_add(s(1.0) - a2, a2);
-            let vis_den = ndl.mul_add(k.gv, k.nv * (gl2 * gl2.rsqrt())).max(s(1e-12));
-            let dv = a2 * s(0.5 * FRAC_1_PI) * (t * t * vis_den).recip();
-            let m = s(1.0) - vdh;
-            let m2 = m * m;
-            let m5 = m2 * m2 * m;
-            if P {
-                let f0 = k.f0[0].mul_add(s(LUMA.x), k.f0[1].mul_add(s(LUMA.y), k.f0[2] * s(LUMA.z)));
-                acc_r = cr.mul_add(e, acc_r);
-                acc_g = cg.mul_add(e, acc_g);
-                acc_b = cb.mul_add(e, acc_b);
-                let fres = (s(1.0) - f0).mul_add(m5, f0);
-                acc_s = (s(rec.lum) * e).mul_add(fres * dv, acc_s);
-            } else {
-                let lobe = |f0: V, cd: V| {
-                    let f = (s(1.0) - f0).mul_add(m5, f0);
-                    (s(1.0) - f).mul_add(cd, f * dv)
-                };
-                let out = [lobe(k.f0[0], k.cd[0]), lobe(k.f0[1], k.cd[1]), lobe(k.f0[2], k.cd[2])];
-                let ee = [cr * e, cg * e, cb * e];
-                acc_r = ee[0].mul_add(out[0], acc_r);
-                acc_g = ee[1].mul_add(out[1], acc_g);
-                acc_b = ee[2].mul_add(out[2], acc_b);
-            }
-        }
+    live.clear();
+    if Q {
+        live.extend(0..lights.len() as u32);
+    } else {
+        list_reaching(&k, lights, live);
     }
-    if !Q {
-        tested = s(lights.len() as f32);
+    let mut acc = Acc { rgb: [zero; 3], s: zero, tested: zero, lit: zero };
+    let k2 = both(&k);
+    let k4 = both(&k2);
+    let mut quads = live.chunks_exact(4);
+    for q in &mut quads {
+        let (i0, i1, i2, i3) = (q[0] as usize, q[1] as usize, q[2] as usize, q[3] as usize);
+        let l0 = light_k::<V, Q>(&lights.rec[i0], quad, i0);
+        let l1 = light_k::<V, Q>(&lights.rec[i1], quad, i1);
+        let l2 = light_k::<V, Q>(&lights.rec[i2], quad, i2);
+        let l3 = light_k::<V, Q>(&lights.rec[i3], quad, i3);
+        let (c0, c1, c2, c3) = (l0.c, l1.c, l2.c, l3.c);
+        let (u0, u1, u2, u3) = (l0.lum, l1.lum, l2.lum, l3.lum);
+        let lk = light_pair(light_pair(l0, l1), light_pair(l2, l3));
+        let (s01, s23) = step::<Two<Two<V>>, B, F, Q, P>(&k4, &lk).split();
+        let (s0, s1) = s01.split();
+        let (s2, s3) = s23.split();
+        accumulate::<V, B, Q, P>(&mut acc, &s0, &c0, u0);
+        accumulate::<V, B, Q, P>(&mut acc, &s1, &c1, u1);
+        accumulate::<V, B, Q, P>(&mut acc, &s2, &c2, u2);
+        accumulate::<V, B, Q, P>(&mut acc, &s3, &c3, u3);
     }
+    let mut pairs = quads.remainder().chunks_exact(2);
+    for pair in &mut pairs {
+        let (a, b) = (pair[0] as usize, pair[1] as usize);
+        let (la, lb) = (light_k::<V, Q>(&lights.rec[a], quad, a), light_k::<V, Q>(&lights.rec[b], quad, b));
+        let (ca, cb, luma, lumb) = (la.c, lb.c, la.lum, lb.lum);
+        let (sa, sb) = step::<Two<V>, B, F, Q, P>(&k2, &light_pair(la, lb)).split();
+        accumulate::<V, B, Q, P>(&mut acc, &sa, &ca, luma);
+        accumulate::<V, B, Q, P>(&mut acc, &sb, &cb, lumb);
+    }
+    if let [a] = *pairs.remainder() {
+        let la = light_k::<V, Q>(&lights.rec[a as usize], quad, a as usize);
+        let sa = step::<V, B, F, Q, P>(&k, &la);
+        accumulate::<V, B, Q, P>(&mut acc, &sa, &la.c, la.lum);
+    }
+    let tested = if Q { acc.tested } else { s(lights.len() as f32) };
     // Lambert and Blinn-Phong accumulate light only; the albedo (and Lambert's 1/π) multiplies the sum.
-    let (mut r, mut g, mut b) = (acc_r, acc_g, acc_b);
+    let [mut r, mut g, mut b] = acc.rgb;
     if B == 0 {
         (r, g, b) = (r * s(FRAC_1_PI), g * s(FRAC_1_PI), b * s(FRAC_1_PI));
     }
@@ -479,15 +642,49 @@ fn run_chunk<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
     r.store(&mut it.or[c..]);
     g.store(&mut it.og[c..]);
     b.store(&mut it.ob[c..]);
-    acc_s.store(&mut it.ls[c..]);
+    acc.s.store(&mut it.ls[c..]);
     tested.store(&mut it.tested[c..]);
-    lit.store(&mut it.lit[c..]);
+    acc.lit.store(&mut it.lit[c..]);
 }
 
-/// Distance from `c` to the interval `[lo, hi]` (0 inside).
+/// Lists (in increasing order) the lights of `lights` whose culling sphere touches the bounding box of the
+/// vector's positions.
 #[inline(always)]
-fn gap(c: f32, lo: f32, hi: f32) -> f32 {
-    (lo - c).max(c - hi).max(0.0)
+fn list_reaching<V: Lanes>(k: &Chunk<V>, lights: &LightTable, live: &mut Vec<u32>) {
+    let s = V::splat;
+    let lo = [s(k.p[0].hmin()), s(k.p[1].hmin()), s(k.p[2].hmin())];
+    let hi = [s(k.p[0].hmax()), s(k.p[1].hmax()), s(k.p[2].hmax())];
+    let n = lights.len();
+    let mut base = 0;
+    while base + V::N <= n {
+        let ld = |a: &[f32]| V::load(&a[base..]);
+        reach_bits(&lo, &hi, [ld(&lights.x), ld(&lights.y), ld(&lights.z)], ld(&lights.r2), base, live);
+        base += V::N;
+    }
+    if base < n {
+        // The last partial group, padded with lights that reach nothing (r² = −1).
+        let mut t = [[0.0f32; 64]; 4];
+        t[3] = [-1.0; 64];
+        for (dst, src) in t.iter_mut().zip([&lights.x, &lights.y, &lights.z, &lights.r2]) {
+            dst[..n - base].copy_from_slice(&src[base..n]);
+        }
+        reach_bits(&lo, &hi, [V::load(&t[0]), V::load(&t[1]), V::load(&t[2])], V::load(&t[3]), base, live);
+    }
+}
+
+/// Appends to `live` the lights `base..base + N` whose sphere (centre `c`, squared radius `r2`) touches the box
+/// `lo..hi`.
+#[inline(always)]
+fn reach_bits<V: Lanes>(lo: &[V; 3], hi: &[V; 3], c: [V; 3], r2: V, base: usize, live: &mut Vec<u32>) {
+    let zero = V::splat(0.0);
+    let gap = |i: usize| (lo[i] - c[i]).max(c[i] - hi[i]).max(zero);
+    let (gx, gy, gz) = (gap(0), gap(1), gap(2));
+    let d2 = gx * gx + gy * gy + gz * gz;
+    let mut bits = V::bits(d2.le(r2));
+    while bits != 0 {
+        live.push((base + bits.trailing_zeros() as usize) as u32);
+        bits &= bits - 1;
+    }
 }
 
 /// Light pre-pass second pass: turns the buffers (diffuse light `D` in `or..ob`, monochrome specular `S` in `ls`)

@@ -102,11 +102,20 @@ pub struct LightRec {
     pub r2: f32,
 }
 
-/// The kernel's light list: one [`LightRec`] per light, same order as the input.
+/// The kernel's light list: one [`LightRec`] per light, same order as the input, and the culling spheres again
+/// as structure of arrays (the kernel tests 16 lights at a time against a vector of samples' bounding box).
 #[derive(Clone, Debug, Default)]
 pub struct LightTable {
     /// The records.
     pub rec: Vec<LightRec>,
+    /// `rec[i].px`.
+    pub x: Vec<f32>,
+    /// `rec[i].py`.
+    pub y: Vec<f32>,
+    /// `rec[i].pz`.
+    pub z: Vec<f32>,
+    /// `rec[i].r2`.
+    pub r2: Vec<f32>,
 }
 
 /// Rec. 709 luminance weights, used to make the light pre-pass specular monochromatic.
@@ -116,7 +125,11 @@ impl LightTable {
     /// Lays out already-sanitised lights for `falloff`.
     #[must_use]
     pub fn new(lights: &[Light], falloff: Falloff) -> Self {
-        LightTable { rec: lights.iter().map(|l| LightRec::new(l, falloff)).collect() }
+        let mut t = LightTable::default();
+        for l in lights {
+            t.push(LightRec::new(l, falloff));
+        }
+        t
     }
 
     /// Number of lights.
@@ -133,12 +146,24 @@ impl LightTable {
 
     /// Appends light `i` of `other` (used to gather a tile's light list contiguously).
     pub fn push_from(&mut self, other: &LightTable, i: usize) {
-        self.rec.push(other.rec[i]);
+        self.push(other.rec[i]);
+    }
+
+    /// Appends a record.
+    pub fn push(&mut self, r: LightRec) {
+        self.rec.push(r);
+        self.x.push(r.px);
+        self.y.push(r.py);
+        self.z.push(r.pz);
+        self.r2.push(r.r2);
     }
 
     /// Empties the list, keeping its capacity.
     pub fn clear(&mut self) {
         self.rec.clear();
+        for v in [&mut self.x, &mut self.y, &mut self.z, &mut self.r2] {
+            v.clear();
+        }
     }
 }
 

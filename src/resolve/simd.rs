@@ -48,7 +48,8 @@ pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = S
     fn recip(self) -> Self;
     /// `log2` of positive normal lanes (error bound of [`fastmath::log2`]).
     fn log2(self) -> Self;
-    /// `2^self`, clamped to [−126, 126] (error bound of [`fastmath::exp2`]).
+    /// `2^self` for `self ≤ 126` (larger lanes give 2¹²⁶), within the relative error bound of [`fastmath::exp2`]
+    /// on [−126, 126]; below −126 any value in [0, 2⁻¹²⁶].
     fn exp2(self) -> Self;
     /// Lanes where `self > o`.
     fn gt(self, o: Self) -> Self::Mask;
@@ -64,6 +65,8 @@ pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = S
     fn count(self, m: Self::Mask) -> Self;
     /// True when some lane of `m` is set.
     fn any(m: Self::Mask) -> bool;
+    /// The mask as bits (lane `j` → bit `j`).
+    fn bits(m: Self::Mask) -> u64;
     /// Smallest lane.
     fn hmin(self) -> f32;
     /// Largest lane.
@@ -227,12 +230,146 @@ impl<const FMA: bool> Lanes for Portable<FMA> {
         m.iter().fold(false, |a, &b| a | b)
     }
     #[inline(always)]
+    fn bits(m: Self::Mask) -> u64 {
+        let mut b = 0u64;
+        for (j, &x) in m.iter().enumerate() {
+            b |= u64::from(x) << j;
+        }
+        b
+    }
+    #[inline(always)]
     fn hmin(self) -> f32 {
         self.0.iter().fold(f32::INFINITY, |a, &b| a.min(b))
     }
     #[inline(always)]
     fn hmax(self) -> f32 {
         self.0.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b))
+    }
+}
+
+/// Two vectors that step together: the kernel shades two lights at once, one per half, so the two lights'
+/// independent dependency chains are interleaved instruction by instruction (the light loop is latency-bound:
+/// one light's chain — rsqrt, log2, exp2 — is far longer than its throughput cost). Per-sample values are
+/// `Two(x, x)`: both halves are the same register. Every operation applies to both halves; the lane count is the
+/// base type's (`N` is per half).
+#[derive(Clone, Copy, Debug)]
+pub struct Two<V>(pub V, pub V);
+
+impl<V: Lanes> Add for Two<V> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Two(self.0 + o.0, self.1 + o.1)
+    }
+}
+impl<V: Lanes> Sub for Two<V> {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Two(self.0 - o.0, self.1 - o.1)
+    }
+}
+impl<V: Lanes> Mul for Two<V> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        Two(self.0 * o.0, self.1 * o.1)
+    }
+}
+
+impl<V: Lanes> Two<V> {
+    /// The same vector in both halves.
+    #[inline(always)]
+    pub fn both(v: V) -> Self {
+        Two(v, v)
+    }
+}
+
+impl<V: Lanes> Lanes for Two<V> {
+    const N: usize = V::N;
+    type Mask = (V::Mask, V::Mask);
+    #[inline(always)]
+    fn splat(x: f32) -> Self {
+        Two::both(V::splat(x))
+    }
+    /// Both halves from `a` (the same lanes).
+    #[inline(always)]
+    fn load(a: &[f32]) -> Self {
+        Two::both(V::load(a))
+    }
+    /// The first half (the second is the other light's).
+    #[inline(always)]
+    fn store(self, a: &mut [f32]) {
+        self.0.store(a);
+    }
+    #[inline(always)]
+    fn mul_add(self, b: Self, c: Self) -> Self {
+        Two(self.0.mul_add(b.0, c.0), self.1.mul_add(b.1, c.1))
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        Two(self.0.max(o.0), self.1.max(o.1))
+    }
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        Two(self.0.min(o.0), self.1.min(o.1))
+    }
+    #[inline(always)]
+    fn rsqrt(self) -> Self {
+        Two(self.0.rsqrt(), self.1.rsqrt())
+    }
+    #[inline(always)]
+    fn recip(self) -> Self {
+        Two(self.0.recip(), self.1.recip())
+    }
+    #[inline(always)]
+    fn log2(self) -> Self {
+        Two(self.0.log2(), self.1.log2())
+    }
+    #[inline(always)]
+    fn exp2(self) -> Self {
+        Two(self.0.exp2(), self.1.exp2())
+    }
+    #[inline(always)]
+    fn gt(self, o: Self) -> Self::Mask {
+        (self.0.gt(o.0), self.1.gt(o.1))
+    }
+    #[inline(always)]
+    fn ge(self, o: Self) -> Self::Mask {
+        (self.0.ge(o.0), self.1.ge(o.1))
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> Self::Mask {
+        (self.0.le(o.0), self.1.le(o.1))
+    }
+    #[inline(always)]
+    fn and(a: Self::Mask, b: Self::Mask) -> Self::Mask {
+        (V::and(a.0, b.0), V::and(a.1, b.1))
+    }
+    #[inline(always)]
+    fn keep(self, m: Self::Mask) -> Self {
+        Two(self.0.keep(m.0), self.1.keep(m.1))
+    }
+    #[inline(always)]
+    fn count(self, m: Self::Mask) -> Self {
+        Two(self.0.count(m.0), self.1.count(m.1))
+    }
+    #[inline(always)]
+    fn any(m: Self::Mask) -> bool {
+        V::any(m.0) || V::any(m.1)
+    }
+    /// The first half's bits.
+    #[inline(always)]
+    fn bits(m: Self::Mask) -> u64 {
+        V::bits(m.0)
+    }
+    #[inline(always)]
+    fn hmin(self) -> f32 {
+        self.0.hmin().min(self.1.hmin())
+    }
+    #[inline(always)]
+    fn hmax(self) -> f32 {
+        self.0.hmax().max(self.1.hmax())
     }
 }
 
@@ -246,6 +383,56 @@ mod avx512 {
     use super::{Lanes, LANES};
     use std::arch::x86_64::*;
     use std::ops::{Add, Mul, Sub};
+
+    /// `1/c` (rounded to f32) for the 32 sub-intervals of [0.75, 1.5) that [`Avx512::log2`] indexes by bits 22..18
+    /// of the mantissa: entries 0–15 cover [1, 1.5) in steps of 1/32, 16–31 cover [0.75, 1) in steps of 1/64; `c`
+    /// is each sub-interval's centre. Checked against f64 by a test.
+    pub(super) const LOG2_INV_C: [f32; 32] = [
+        0.9846154, 0.95522386, 0.92753625, 0.90140843, 0.8767123, 0.85333335, 0.83116883, 0.8101266, 0.79012346,
+        0.7710843, 0.7529412, 0.7356322, 0.71910113, 0.7032967, 0.68817204, 0.67368424, 1.3195876, 1.2929293,
+        1.2673267, 1.2427185, 1.2190477, 1.1962616, 1.1743119, 1.1531532, 1.1327434, 1.1130434, 1.0940171, 1.0756303,
+        1.0578512, 1.0406504, 1.024, 1.007874,
+    ];
+    /// `−log2` of each [`LOG2_INV_C`] entry, rounded to f32.
+    pub(super) const LOG2_T: [f32; 32] = [
+        0.02236781,
+        0.06608922,
+        0.10852443,
+        0.14974715,
+        0.18982457,
+        0.22881866,
+        0.26678655,
+        0.3037807,
+        0.33984998,
+        0.3750395,
+        0.4093909,
+        0.4429435,
+        0.47573343,
+        0.5077946,
+        0.5391588,
+        0.5698556,
+        -0.40008712,
+        -0.37064338,
+        -0.3417885,
+        -0.31349948,
+        -0.28575453,
+        -0.25853297,
+        -0.2318156,
+        -0.20558417,
+        -0.17982103,
+        -0.15450989,
+        -0.12963535,
+        -0.10518231,
+        -0.0811367,
+        -0.057485443,
+        -0.034215786,
+        -0.011315308,
+    ];
+    /// `log2(1 + r)/r ≈ q0 + q1 r + q2 r² + q3 r³` on |r| ≤ 1/32 (minimax, relative error 3e-8).
+    pub(super) const LOG2_Q: [f32; 4] = [std::f32::consts::LOG2_E, -0.721_347_45, 0.481_191_7, -0.360_967_15];
+    /// `2^f ≈ Σ cₖ fᵏ` on |f| ≤ ½ (minimax, relative error 7.5e-8 in exact arithmetic).
+    pub(super) const EXP2_P: [f32; 6] =
+        [1.000_000_1, 0.693_146_97, 0.240_221_2, 0.055_507_13, 0.009_675_542, 0.001_327_647_2];
 
     /// Sixteen lanes in one AVX-512 register.
     #[derive(Clone, Copy, Debug)]
@@ -328,40 +515,40 @@ mod avx512 {
         }
         #[inline(always)]
         fn log2(self) -> Self {
-            // x = m·2^e with m in [0.75, 1.5); log2 m = 2·atanh(s)/ln 2, s = (m − 1)/(m + 1), |s| ≤ 0.2.
+            // x = m·2^e with m in [0.75, 1.5) (vgetmantps) and e exact (vgetexpps); m's top five mantissa bits pick
+            // one of 32 sub-intervals of width 1/32 or 1/64 and its centre c (tables [`LOG2_INV_C`],
+            // [`LOG2_T`]): log2 m = −log2(1/c) + log2(1 + r), r = m·(1/c) − 1 exact to one rounding, |r| ≤ 1/64,
+            // and log2(1 + r) = r·q(r) with a degree-3 minimax q (relative error 3e-8).
             unsafe {
                 let m = _mm512_getmant_ps::<_MM_MANT_NORM_P75_1P5, _MM_MANT_SIGN_ZERO>(self.0);
                 // getexp(x) = floor(log2 x); getexp(m) is −1 when m < 1, which moved one factor 2 into e.
                 let e = _mm512_sub_ps(_mm512_getexp_ps(self.0), _mm512_getexp_ps(m));
-                let one = _mm512_set1_ps(1.0);
-                let s = Avx512(_mm512_sub_ps(m, one)) * Avx512(_mm512_add_ps(m, one)).recip();
-                let s2 = s * s;
+                // Bits 22..18 of m: 0iiii for m in [1, 1.5), 1iiii for [0.75, 1).
+                let idx = _mm512_srli_epi32::<18>(_mm512_castps_si512(m));
+                let lo = |t: &[f32; 32]| _mm512_loadu_ps(t.as_ptr());
+                let hi = |t: &[f32; 32]| _mm512_loadu_ps(t.as_ptr().add(16));
+                let inv_c = _mm512_permutex2var_ps(lo(&LOG2_INV_C), idx, hi(&LOG2_INV_C));
+                let t = _mm512_permutex2var_ps(lo(&LOG2_T), idx, hi(&LOG2_T));
+                let r = Avx512(_mm512_fmsub_ps(m, inv_c, _mm512_set1_ps(1.0)));
                 let c = |v: f32| Avx512::splat(v);
-                // Estrin's scheme (shorter dependency chain than Horner): 1 + s²/3 + s⁴/5 + s⁶/7 + s⁸/9.
-                let s4 = s2 * s2;
-                let lo = s2.mul_add(c(1.0 / 3.0), c(1.0));
-                let hi = s2.mul_add(c(1.0 / 7.0), c(1.0 / 5.0));
-                let poly = s4.mul_add(s4 * c(1.0 / 9.0), s4.mul_add(hi, lo));
-                let ln_m = (s + s) * poly;
-                ln_m.mul_add(c(std::f32::consts::LOG2_E), Avx512(e))
+                let [q0, q1, q2, q3] = LOG2_Q;
+                let q = (r * r).mul_add(r.mul_add(c(q3), c(q2)), r.mul_add(c(q1), c(q0)));
+                r.mul_add(q, Avx512(t)) + Avx512(e)
             }
         }
         #[inline(always)]
         fn exp2(self) -> Self {
-            // 2^x = 2^i · e^(f·ln 2), i = round(x), |f| ≤ ½; degree-7 Taylor series as fastmath::exp2.
+            // 2^x = 2^i · 2^f, i = round(x), |f| ≤ ½, 2^f by a degree-5 minimax polynomial (relative error 3e-7 in
+            // f32, Estrin's scheme); vscalefps applies 2^i and underflows to 0 (not 2^−126) far below −126.
             unsafe {
-                let x = _mm512_min_ps(_mm512_max_ps(self.0, _mm512_set1_ps(-126.0)), _mm512_set1_ps(126.0));
+                let x = _mm512_min_ps(self.0, _mm512_set1_ps(126.0));
                 let i = _mm512_roundscale_ps::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(x);
-                let f = Avx512(_mm512_sub_ps(x, i)) * Avx512::splat(std::f32::consts::LN_2);
+                let f = Avx512(_mm512_sub_ps(x, i));
                 let c = |v: f32| Avx512::splat(v);
-                // Estrin's scheme for Σ fᵏ/k!, k ≤ 7: pairs, then quads.
+                let [c0, c1, c2, c3, c4, c5] = EXP2_P;
                 let f2 = f * f;
-                let f4 = f2 * f2;
-                let p01 = f.mul_add(c(1.0), c(1.0));
-                let p23 = f.mul_add(c(1.0 / 6.0), c(0.5));
-                let p45 = f.mul_add(c(1.0 / 120.0), c(1.0 / 24.0));
-                let p67 = f.mul_add(c(1.0 / 5040.0), c(1.0 / 720.0));
-                let p = f4.mul_add(f2.mul_add(p67, p45), f2.mul_add(p23, p01));
+                let p = (f2 * f2)
+                    .mul_add(f.mul_add(c(c5), c(c4)), f2.mul_add(f.mul_add(c(c3), c(c2)), f.mul_add(c(c1), c(c0))));
                 Avx512(_mm512_scalef_ps(p.0, i))
             }
         }
@@ -392,6 +579,10 @@ mod avx512 {
         #[inline(always)]
         fn any(m: Self::Mask) -> bool {
             m != 0
+        }
+        #[inline(always)]
+        fn bits(m: Self::Mask) -> u64 {
+            u64::from(m)
         }
         #[inline(always)]
         fn hmin(self) -> f32 {
@@ -440,7 +631,12 @@ mod tests {
         for c in ex.chunks(V::N) {
             V::load(c).exp2().store(&mut out);
             for (x, y) in c.iter().zip(out.iter().copied()) {
-                let want = f64::from(x.clamp(-126.0, 126.0)).exp2();
+                if *x < -126.0 {
+                    // Below the clamp: anything in [0, 2^−126] (vscalefps underflows gradually to 0).
+                    assert!((0.0..=f32::MIN_POSITIVE).contains(&y), "exp2({x}) = {y}");
+                    continue;
+                }
+                let want = f64::from(x.min(126.0)).exp2();
                 let rel = (f64::from(y) - want).abs() / want;
                 assert!(rel < f64::from(fastmath::EXP2_MAX_REL_ERROR), "exp2({x}) = {y}, want {want}");
             }
@@ -466,9 +662,29 @@ mod tests {
         assert!(out.iter().all(|&x| x == 0.0));
     }
 
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn log2_tables_are_the_subinterval_centres() {
+        use super::avx512::{LOG2_INV_C, LOG2_T};
+        for i in 0..32 {
+            // Entries 0–15: [1 + i/32, 1 + (i+1)/32); 16–31: [0.75 + (i−16)/64, …).
+            let (lo, w) =
+                if i < 16 { (1.0 + i as f64 / 32.0, 1.0 / 32.0) } else { (0.75 + (i - 16) as f64 / 64.0, 1.0 / 64.0) };
+            let inv = (1.0 / (lo + w / 2.0)) as f32;
+            assert_eq!(LOG2_INV_C[i], inv, "1/c[{i}]");
+            assert_eq!(LOG2_T[i], (-f64::from(inv).log2()) as f32, "T[{i}]");
+            // The index the kernel computes (bits 22..18 of m) selects this sub-interval at both ends.
+            for m in [lo, lo + w * 0.999_99] {
+                assert_eq!(((m as f32).to_bits() >> 18) & 31, i as u32, "m = {m}");
+            }
+        }
+    }
+
     #[test]
     fn portable_lanes_are_accurate() {
         check::<Portable<false>>();
+        // `Two` applies every operation to both halves; `load` fills both, `store` writes the first.
+        check::<Two<Portable<false>>>();
     }
 
     #[test]
@@ -478,6 +694,7 @@ mod tests {
             #[target_feature(enable = "avx512f")]
             fn run() {
                 check::<Avx512>();
+                check::<Two<Avx512>>();
             }
             // SAFETY: the CPU has AVX-512F (checked above).
             unsafe {
