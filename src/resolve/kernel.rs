@@ -574,8 +574,10 @@ fn lobe<V: Lanes>(f0: V, cd: V, m5: V, dv: V) -> V {
 /// Shades one vector of `V::N` items against every light. First the lights that can reach the vector at all
 /// are listed (16 lights at a time against the vector's bounding box; a light whose sphere misses it adds exactly
 /// 0 to every lane, and its pair still counts as tested: tile culling passed it — quad culling counts its own
-/// tests, so it keeps every light); then the listed lights are shaded two at a time ([`Two`]), the last one alone,
-/// with per-sample constants and accumulators in registers. Each light's contribution is added in light order, so
+/// tests, so it keeps every light); then the listed lights are shaded four at a time (`Two<Two<V>>`: four
+/// independent dependency chains interleaved — one light's chain of rsqrt, log2, exp2 is far longer than its
+/// throughput cost, so one light at a time left the vector units mostly idle), the rest two or one at a time, with
+/// per-sample constants and accumulators in registers. Each light's contribution is added in light order, so
 /// the sums do not depend on which lights were listed.
 #[inline(always)]
 fn run_chunk<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
@@ -624,7 +626,7 @@ fn run_chunk<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
         accumulate::<V, B, Q, P>(&mut acc, &sa, &ca, luma);
         accumulate::<V, B, Q, P>(&mut acc, &sb, &cb, lumb);
     }
-    if let [a] = *pairs.remainder() {
+    for &a in pairs.remainder() {
         let la = light_k::<V, Q>(&lights.rec[a as usize], quad, a as usize);
         let sa = step::<V, B, F, Q, P>(&k, &la);
         accumulate::<V, B, Q, P>(&mut acc, &sa, &la.c, la.lum);
@@ -831,12 +833,29 @@ mod speed {
             let v = Variant { brdf, falloff: Falloff::Linear, quad: false, prepass: false };
             let n = it.len();
             let reps = 200;
-            let t = std::time::Instant::now();
-            for _ in 0..reps {
-                shade(&mut it, 0..n, &table, &QuadSoa::default(), v);
+            let q = QuadSoa::default();
+            let mut paths: Vec<(&str, Box<dyn Fn(&mut Items)>)> = Vec::new();
+            paths.push((instruction_set(), Box::new(|it: &mut Items| shade(it, 0..n, &table, &q, v))));
+            #[cfg(target_arch = "x86_64")]
+            if Isa::detect() == Isa::Avx512 {
+                // SAFETY: the CPU has AVX-512F, hence AVX2 and FMA.
+                paths.push((
+                    "avx2",
+                    Box::new(|it: &mut Items| unsafe { run_avx2::<1, 1, false, false>(it, 0..n, &table, &q) }),
+                ));
             }
-            let ns = t.elapsed().as_secs_f64() * 1e9 / (reps * n * lights.len()) as f64;
-            println!("{name}: {ns:.3} ns per pair ({}), lit {}", instruction_set(), it.lit[0]);
+            paths.push(("portable", Box::new(|it: &mut Items| shade_portable(it, 0..n, &table, &q, v))));
+            for (isa, f) in &paths {
+                if *isa == "avx2" && brdf != Brdf::BlinnPhong {
+                    continue;
+                }
+                let t = std::time::Instant::now();
+                for _ in 0..reps {
+                    f(&mut it);
+                }
+                let ns = t.elapsed().as_secs_f64() * 1e9 / (reps * n * lights.len()) as f64;
+                println!("{name}: {ns:.3} ns per pair ({isa}), lit {}", it.lit[0]);
+            }
         }
     }
 }
