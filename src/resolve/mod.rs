@@ -118,12 +118,6 @@ pub fn resolve(gb: &GBuffer, lights: &[Light], mask: &EdgeMask, cfg: &ResolveCon
     stats.shading_evaluations = t.evaluations;
     let edge_pixels = t.edge_pixels;
     let (tg, tc, tsh) = (t.t_gather, t.t_cull, t.t_shade);
-    for c in &mut image.rgb {
-        if !c.is_finite() {
-            *c = glam::Vec3::ZERO;
-            stats.sanitized.output += 1;
-        }
-    }
     let total_samples = gb.len() as f64;
     stats.shading_fraction = if total_samples > 0.0 { stats.shading_evaluations as f64 / total_samples } else { 0.0 };
     let pixels = gb.pixel_count() as f64;

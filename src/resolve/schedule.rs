@@ -130,6 +130,11 @@ struct Scratch {
     order: Vec<usize>,
     /// Flat sample index of each work-list item.
     src: Vec<usize>,
+    /// Edge pixels of the tile (column, row), listed by the first gather pass.
+    edge_px: Vec<(u32, u32)>,
+    /// The tile's box-filtered colour and light evaluations, tile-local rows (`w × h`).
+    acc: Vec<Vec3>,
+    acc_heat: Vec<u32>,
 }
 
 /// Runs every tile of `frame`, writing pixel colours into `rgb` and light evaluations per pixel into `heat`
@@ -247,7 +252,13 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, rgb: &mut [Vec3], h
     st.tiles += 1;
     let n_real = gather(frame, tile, sc, st);
     st.t_gather += t0.elapsed();
+    let area = (tile.w * tile.h) as usize;
+    sc.acc.clear();
+    sc.acc.resize(area, Vec3::ZERO);
+    sc.acc_heat.clear();
+    sc.acc_heat.resize(area, 0);
     if n_real == 0 {
+        write_tile(frame, tile, sc, rgb, heat, st);
         return;
     }
     let n = sc.items.len();
@@ -306,33 +317,64 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, rgb: &mut [Vec3], h
     if variant.prepass {
         finish_prepass(items, frame.cfg.brdf);
     }
+    let (acc, acc_heat) = (&mut sc.acc, &mut sc.acc_heat);
+    let (mut tested_sum, mut lit_sum) = (0u64, 0u64);
     for j in 0..n_real {
-        // `pixel` is the index within the tile; the band's rows start at the tile's top row.
+        // `pixel` is the index within the tile.
         let px = items.pixel[j] as usize;
         let c = Vec3::new(items.or[j], items.og[j], items.ob[j]) * items.weight[j];
-        rgb[px] += c;
+        acc[px] += c;
         let (tested, lit) = (items.tested[j] as u32, items.lit[j] as u32);
-        heat[px] += tested;
-        st.tested += u64::from(tested);
-        st.lit += u64::from(lit);
+        acc_heat[px] += tested;
+        tested_sum += u64::from(tested);
+        lit_sum += u64::from(lit);
     }
+    st.tested += tested_sum;
+    st.lit += lit_sum;
     st.evaluations += n_real as u64;
+    write_tile(frame, tile, sc, rgb, heat, st);
     t_shade += t.elapsed();
     st.t_cull += t_cull;
     st.t_shade += t_shade;
 }
 
-/// Builds the tile's work list: first the single samples of non-edge pixels, then the packed samples of edge
-/// pixels. Positions are read pixel by pixel (they decide which samples are shaded); the other attributes are
-/// then read plane by plane for the whole list.
+/// Copies the tile's filtered pixels into the band's rows of the outputs (every pixel of the tile is written, so
+/// the outputs need no clearing), replacing any non-finite colour by black (counted).
+#[inline(always)]
+fn write_tile(frame: &Frame<'_>, tile: Tile, sc: &Scratch, rgb: &mut [Vec3], heat: &mut [u32], st: &mut TileStats) {
+    let width = frame.reader.gbuffer().width as usize;
+    let tw = tile.w as usize;
+    let mut bad = 0u64;
+    for (r, (src, src_heat)) in sc.acc.chunks_exact(tw).zip(sc.acc_heat.chunks_exact(tw)).enumerate() {
+        let start = r * width + tile.x0 as usize;
+        for (o, &c) in rgb[start..start + tw].iter_mut().zip(src) {
+            let ok = c.is_finite();
+            bad += u64::from(!ok);
+            *o = if ok { c } else { Vec3::ZERO };
+        }
+        heat[start..start + tw].copy_from_slice(src_heat);
+    }
+    st.sanitized.output += bad;
+}
+
+/// Builds the tile's work list: first the single samples of non-edge pixels (in one pass over the tile, which
+/// also lists the edge pixels), then the packed samples of edge pixels. Positions are read pixel by pixel (they
+/// decide which samples are shaded); the other attributes are then read plane by plane for the whole list.
+/// `pixel` is the index within the tile (`row · w + column`).
 #[inline(always)]
 fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -> usize {
     let gb = frame.reader.gbuffer();
     let samples = gb.samples;
     let weight = 1.0 / samples as f32;
     let it = &mut sc.items;
-    it.clear();
+    // Only the arrays filled here are emptied: `fill_attributes` and the kernel overwrite the others, which keep
+    // their storage (no zero-filling per tile).
+    for v in [&mut it.px, &mut it.py, &mut it.pz, &mut it.weight] {
+        v.clear();
+    }
+    it.pixel.clear();
     sc.src.clear();
+    sc.edge_px.clear();
     let counts = &mut st.sanitized;
     let push = |it: &mut Items, src: &mut Vec<usize>, p: glam::Vec3, i: usize, local: u32, w: f32| {
         it.px.push(p.x);
@@ -342,37 +384,39 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
         it.weight.push(w);
         src.push(i);
     };
-    for pass_edges in [false, true] {
-        for y in tile.y0..tile.y0 + tile.h {
-            for x in tile.x0..tile.x0 + tile.w {
-                let p = y as usize * gb.width as usize + x as usize;
-                // Index within the band's rows of the output.
-                let local = ((y - tile.y0) as usize * gb.width as usize + x as usize) as u32;
-                let edge = frame.mask.is_edge(p);
-                if edge != pass_edges {
-                    continue;
-                }
-                let first = p * samples as usize;
-                if edge {
-                    let before = sc.src.len();
-                    for s in 0..samples {
-                        let i = first + s as usize;
-                        if let Some(pos) = frame.reader.position(x, y, s, i, counts) {
-                            push(it, &mut sc.src, pos, i, local, weight);
-                        }
-                    }
-                    st.edge_pixels += u64::from(sc.src.len() > before);
-                } else {
-                    for s in 0..samples {
-                        let i = first + s as usize;
-                        if let Some(pos) = frame.reader.position(x, y, s, i, counts) {
-                            push(it, &mut sc.src, pos, i, local, 1.0);
-                            break;
-                        }
-                    }
+    let width = gb.width as usize;
+    let (x0, tw) = (tile.x0 as usize, tile.w as usize);
+    for y in tile.y0..tile.y0 + tile.h {
+        let row = y as usize * width;
+        let local_row = (y - tile.y0) as usize * tw;
+        for (k, &count) in frame.mask.shade_count[row + x0..row + x0 + tw].iter().enumerate() {
+            let x = (x0 + k) as u32;
+            if count > 1 {
+                sc.edge_px.push((x, y));
+                continue;
+            }
+            // A non-edge pixel: its first usable sample stands for the whole pixel.
+            let first = (row + x0 + k) * samples as usize;
+            for s in 0..samples {
+                let i = first + s as usize;
+                if let Some(pos) = frame.reader.position(x, y, s, i, counts) {
+                    push(it, &mut sc.src, pos, i, (local_row + k) as u32, 1.0);
+                    break;
                 }
             }
         }
+    }
+    for &(x, y) in &sc.edge_px {
+        let first = (y as usize * width + x as usize) * samples as usize;
+        let local = ((y - tile.y0) as usize * tw + (x as usize - x0)) as u32;
+        let before = sc.src.len();
+        for s in 0..samples {
+            let i = first + s as usize;
+            if let Some(pos) = frame.reader.position(x, y, s, i, counts) {
+                push(it, &mut sc.src, pos, i, local, weight);
+            }
+        }
+        st.edge_pixels += u64::from(sc.src.len() > before);
     }
     let n_real = sc.src.len();
     if n_real > 0 {
