@@ -834,7 +834,8 @@ mod speed {
             let n = it.len();
             let reps = 200;
             let q = QuadSoa::default();
-            let mut paths: Vec<(&str, Box<dyn Fn(&mut Items)>)> = Vec::new();
+            type Path<'a> = (&'a str, Box<dyn Fn(&mut Items) + 'a>);
+            let mut paths: Vec<Path> = Vec::new();
             paths.push((instruction_set(), Box::new(|it: &mut Items| shade(it, 0..n, &table, &q, v))));
             #[cfg(target_arch = "x86_64")]
             if Isa::detect() == Isa::Avx512 {
