@@ -43,18 +43,28 @@ impl Bounds {
         if range.is_empty() {
             return None;
         }
-        let mut b = [f32::INFINITY, f32::NEG_INFINITY, f32::INFINITY, f32::NEG_INFINITY, f32::INFINITY, 0.0];
-        for j in range {
-            let d = -it.pz[j];
-            let (tx, ty) = (it.px[j] / d, it.py[j] / d);
-            b[0] = b[0].min(tx);
-            b[1] = b[1].max(tx);
-            b[2] = b[2].min(ty);
-            b[3] = b[3].max(ty);
-            b[4] = b[4].min(d);
-            b[5] = b[5].max(d);
+        // Sixteen running minima/maxima per quantity, folded at the end: the loop vectorises (positions are
+        // finite, so plain comparisons are enough).
+        const W: usize = 16;
+        let (px, py, pz) = (&it.px[range.clone()], &it.py[range.clone()], &it.pz[range]);
+        let mut lo = [[f32::INFINITY; W]; 3];
+        let mut hi = [[f32::NEG_INFINITY; W]; 3];
+        let min = |a: f32, b: f32| if b < a { b } else { a };
+        let max = |a: f32, b: f32| if b > a { b } else { a };
+        for ((x, y), z) in px.chunks(W).zip(py.chunks(W)).zip(pz.chunks(W)) {
+            for k in 0..x.len() {
+                let d = -z[k];
+                let v = [x[k] / d, y[k] / d, d];
+                for q in 0..3 {
+                    lo[q][k] = min(lo[q][k], v[q]);
+                    hi[q][k] = max(hi[q][k], v[q]);
+                }
+            }
         }
-        Some(Bounds::new(b[0], b[1], b[2], b[3], b[4], b[5]))
+        let fold_lo = |a: &[f32; W]| a.iter().fold(f32::INFINITY, |m, &v| min(m, v));
+        let fold_hi = |a: &[f32; W]| a.iter().fold(f32::NEG_INFINITY, |m, &v| max(m, v));
+        let d1 = fold_hi(&hi[2]).max(0.0);
+        Some(Bounds::new(fold_lo(&lo[0]), fold_hi(&hi[0]), fold_lo(&lo[1]), fold_hi(&hi[1]), fold_lo(&lo[2]), d1))
     }
 
     /// Bounds from explicit extents.

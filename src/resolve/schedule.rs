@@ -447,7 +447,21 @@ fn cull_tile_list(frame: &Frame<'_>, b: &Bounds, sc: &mut Scratch) {
     #[cfg(not(target_arch = "x86_64"))]
     sphere_mask(b, s, &mut sc.mask);
     sc.tile_lights.clear();
-    sc.tile_lights.extend(sc.mask.iter().enumerate().filter(|(_, &m)| m != 0).map(|(i, _)| i as u32));
+    // Few lights survive: skip eight mask bytes at a time while they are all zero.
+    let words = sc.mask.chunks_exact(8);
+    let tail = words.remainder();
+    for (w, word) in words.enumerate() {
+        let bits = u64::from_le_bytes(word.try_into().expect("8 bytes"));
+        if bits != 0 {
+            for (k, &m) in word.iter().enumerate() {
+                if m != 0 {
+                    sc.tile_lights.push((w * 8 + k) as u32);
+                }
+            }
+        }
+    }
+    let base = sc.mask.len() - tail.len();
+    sc.tile_lights.extend(tail.iter().enumerate().filter(|(_, &m)| m != 0).map(|(k, _)| (base + k) as u32));
 }
 
 #[inline(always)]
