@@ -6,11 +6,11 @@
 //! includes waiting for a core; this prints, per case, the process CPU time per frame on a one-thread pool (Linux
 //! `/proc/self/stat`, utime + stime: what one idle core needs) and the best wall time of the frames on one and on
 //! two threads (the best run is the one least disturbed by other processes). No assertion on time: it prints
-//! numbers for docs/RESOLVE.md. Environment: `GBUF_PERF_CASE` (prefix of the case names to run),
+//! numbers for docs/RESOLVE.md. Environment: `GBUF_PERF_CASE` (the name of the one case to run),
 //! `GBUF_PERF_SIZE` (`WxH`), `GBUF_PERF_FRAMES` (default 10), `GBUF_PERF_LIGHTS_PER_SAMPLE` (default 40).
 
 use gbuf::detect::{detect, Detector, DetectorConfig};
-use gbuf::resolve::{fixture, resolve, uniform_mask, Culling, ResolveConfig};
+use gbuf::resolve::{fixture, resolve, resolve_into, uniform_mask, Culling, ResolveConfig, ResolveStats, Resolved};
 use std::time::Instant;
 
 fn cpu_seconds() -> Option<f64> {
@@ -62,15 +62,28 @@ fn time_per_frame() {
         })
         .into();
     println!("kernel instruction set: {}", gbuf::resolve::kernel::instruction_set());
-    for (name, gb, mask, cfg) in [
-        ("tiled 1x", &gb1, &mask1, ResolveConfig::default()),
-        ("tiled 4x adaptive", &gb4, &mask4, ResolveConfig::default()),
-        ("none 1x", &gb1, &mask1, ResolveConfig { culling: Culling::None, ..Default::default() }),
+    for (name, gb, mask, cfg, reuse) in [
+        ("tiled 1x", &gb1, &mask1, ResolveConfig::default(), false),
+        ("tiled 1x reusing the output", &gb1, &mask1, ResolveConfig::default(), true),
+        ("tiled 4x adaptive", &gb4, &mask4, ResolveConfig::default(), false),
+        ("tiled 4x adaptive reusing the output", &gb4, &mask4, ResolveConfig::default(), true),
+        ("none 1x", &gb1, &mask1, ResolveConfig { culling: Culling::None, ..Default::default() }, false),
     ] {
-        if std::env::var("GBUF_PERF_CASE").is_ok_and(|c| !name.starts_with(c.as_str())) {
+        // `resolve` allocates the image and heatmap per frame; `resolve_into` reuses one `Resolved`, as a
+        // renderer keeps its render targets.
+        let mut out = Resolved::default();
+        let mut run = || -> ResolveStats {
+            if reuse {
+                resolve_into(gb, &lights, mask, &cfg, &mut out).unwrap();
+                out.stats.clone()
+            } else {
+                resolve(gb, &lights, mask, &cfg).unwrap().stats
+            }
+        };
+        if std::env::var("GBUF_PERF_CASE").is_ok_and(|c| c != name) {
             continue;
         }
-        let warm = pools[0].install(|| resolve(gb, &lights, mask, &cfg)).unwrap();
+        let warm = pools[0].install(&mut run);
         let before2 = thread_cpu("p2-");
         let mut best = [f64::INFINITY; 2];
         let mut split = [0.0f64; 3];
@@ -79,10 +92,10 @@ fn time_per_frame() {
             let c0 = cpu_seconds().unwrap_or(0.0);
             for _ in 0..frames {
                 let t0 = Instant::now();
-                let r = pool.install(|| resolve(gb, &lights, mask, &cfg)).unwrap();
+                let r = pool.install(&mut run);
                 best[t] = best[t].min(t0.elapsed().as_secs_f64());
                 if t == 0 {
-                    for (acc, v) in split.iter_mut().zip([r.stats.ms.gather, r.stats.ms.cull, r.stats.ms.shade]) {
+                    for (acc, v) in split.iter_mut().zip([r.ms.gather, r.ms.cull, r.ms.shade]) {
                         *acc += v / f64::from(frames);
                     }
                 }
@@ -100,7 +113,7 @@ fn time_per_frame() {
             .zip(before2.iter().chain(std::iter::repeat(&0.0)))
             .map(|(a, b)| format!("{:.0}", (a - b) * 1e3 / f64::from(frames)))
             .collect();
-        let s = &warm.stats;
+        let s = &warm;
         println!(
             "{name}: {:.1} ms CPU/frame on 1 thread ({:.1} on 2, per thread {} ms); best wall {:.1} ms on 1 thread, \
              {:.1} ms on 2 (×{:.2}); \

@@ -87,6 +87,21 @@ pub fn uniform_mask(gb: &GBuffer, per_sample: bool) -> EdgeMask {
 /// Lights `gb` with `lights`, shading per sample where `mask` says so, as configured by `cfg`. Runs on rayon's
 /// current thread pool (install a local pool to choose the thread count). Never returns NaN or Inf pixels.
 pub fn resolve(gb: &GBuffer, lights: &[Light], mask: &EdgeMask, cfg: &ResolveConfig) -> Result<Resolved> {
+    let mut out = Resolved::default();
+    resolve_into(gb, lights, mask, cfg, &mut out)?;
+    Ok(out)
+}
+
+/// [`resolve`] into `out`, reusing its image and heatmap storage: a renderer lighting frame after frame keeps one
+/// `Resolved` and pays no allocation (and no first-touch page faults of fresh pages) per frame. Every pixel and
+/// every statistic of `out` is overwritten; on error `out` is left unchanged.
+pub fn resolve_into(
+    gb: &GBuffer,
+    lights: &[Light],
+    mask: &EdgeMask,
+    cfg: &ResolveConfig,
+    out: &mut Resolved,
+) -> Result<()> {
     let t_start = Instant::now();
     cfg.validate()?;
     if mask.width != gb.width || mask.height != gb.height || mask.shade_count.len() != gb.pixel_count() {
@@ -105,8 +120,13 @@ pub fn resolve(gb: &GBuffer, lights: &[Light], mask: &EdgeMask, cfg: &ResolveCon
     let t_prep = t_start.elapsed();
 
     let t_par = Instant::now();
-    let mut image = HdrImage::new(gb.width, gb.height);
-    let mut heat = vec![0u32; gb.pixel_count()];
+    // Every pixel is written by its tile, so reused storage needs no clearing.
+    let n = gb.pixel_count();
+    let mut image = std::mem::take(&mut out.image);
+    (image.width, image.height) = (gb.width, gb.height);
+    image.rgb.resize(n, glam::Vec3::ZERO);
+    let mut heat = std::mem::take(&mut out.lights_per_pixel);
+    heat.resize(n, 0);
     let t = schedule::run_tiles(&frame, &mut image.rgb, &mut heat);
     let par_wall = t_par.elapsed();
 
@@ -133,5 +153,6 @@ pub fn resolve(gb: &GBuffer, lights: &[Light], mask: &EdgeMask, cfg: &ResolveCon
     stats.ms.cull = ms(t_prep) + share(tc);
     stats.ms.shade = share(tsh);
     stats.ms.total = ms(t_start.elapsed());
-    Ok(Resolved { image, stats, lights_per_pixel: heat })
+    *out = Resolved { image, stats, lights_per_pixel: heat };
+    Ok(())
 }
