@@ -597,36 +597,12 @@ fn run_chunk<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
         list_reaching(&k, lights, live);
     }
     let mut acc = Acc { rgb: [zero; 3], s: zero, tested: zero, lit: zero };
-    let k2 = both(&k);
-    let k4 = both(&k2);
-    let mut quads = live.chunks_exact(4);
-    for q in &mut quads {
-        let (i0, i1, i2, i3) = (q[0] as usize, q[1] as usize, q[2] as usize, q[3] as usize);
-        let l0 = light_k::<V, Q>(&lights.rec[i0], quad, i0);
-        let l1 = light_k::<V, Q>(&lights.rec[i1], quad, i1);
-        let l2 = light_k::<V, Q>(&lights.rec[i2], quad, i2);
-        let l3 = light_k::<V, Q>(&lights.rec[i3], quad, i3);
-        let (c0, c1, c2, c3) = (l0.c, l1.c, l2.c, l3.c);
-        let (u0, u1, u2, u3) = (l0.lum, l1.lum, l2.lum, l3.lum);
-        let lk = light_pair(light_pair(l0, l1), light_pair(l2, l3));
-        let (s01, s23) = step::<Two<Two<V>>, B, F, Q, P>(&k4, &lk).split();
-        let (s0, s1) = s01.split();
-        let (s2, s3) = s23.split();
-        accumulate::<V, B, Q, P>(&mut acc, &s0, &c0, u0);
-        accumulate::<V, B, Q, P>(&mut acc, &s1, &c1, u1);
-        accumulate::<V, B, Q, P>(&mut acc, &s2, &c2, u2);
-        accumulate::<V, B, Q, P>(&mut acc, &s3, &c3, u3);
+    let mut rest: &[u32] = live;
+    if V::INTERLEAVE >= 4 {
+        // A constant condition: the four-light code is only generated for lane types that use it.
+        rest = quads_of_lights::<V, B, F, Q, P>(&k, live, lights, quad, &mut acc);
     }
-    let mut pairs = quads.remainder().chunks_exact(2);
-    for pair in &mut pairs {
-        let (a, b) = (pair[0] as usize, pair[1] as usize);
-        let (la, lb) = (light_k::<V, Q>(&lights.rec[a], quad, a), light_k::<V, Q>(&lights.rec[b], quad, b));
-        let (ca, cb, luma, lumb) = (la.c, lb.c, la.lum, lb.lum);
-        let (sa, sb) = step::<Two<V>, B, F, Q, P>(&k2, &light_pair(la, lb)).split();
-        accumulate::<V, B, Q, P>(&mut acc, &sa, &ca, luma);
-        accumulate::<V, B, Q, P>(&mut acc, &sb, &cb, lumb);
-    }
-    for &a in pairs.remainder() {
+    for &a in rest {
         let la = light_k::<V, Q>(&lights.rec[a as usize], quad, a as usize);
         let sa = step::<V, B, F, Q, P>(&k, &la);
         accumulate::<V, B, Q, P>(&mut acc, &sa, &la.c, la.lum);
@@ -647,6 +623,47 @@ fn run_chunk<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
     acc.s.store(&mut it.ls[c..]);
     tested.store(&mut it.tested[c..]);
     acc.lit.store(&mut it.lit[c..]);
+}
+
+/// Shades `live` four lights at a time, then a pair; returns the lights left (at most one).
+#[inline(always)]
+fn quads_of_lights<'a, V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
+    k: &Chunk<V>,
+    live: &'a [u32],
+    lights: &LightTable,
+    quad: &QuadSoa,
+    acc: &mut Acc<V>,
+) -> &'a [u32] {
+    let k2 = both(k);
+    let k4 = both(&k2);
+    let mut quads = live.chunks_exact(4);
+    for q in &mut quads {
+        let (i0, i1, i2, i3) = (q[0] as usize, q[1] as usize, q[2] as usize, q[3] as usize);
+        let l0 = light_k::<V, Q>(&lights.rec[i0], quad, i0);
+        let l1 = light_k::<V, Q>(&lights.rec[i1], quad, i1);
+        let l2 = light_k::<V, Q>(&lights.rec[i2], quad, i2);
+        let l3 = light_k::<V, Q>(&lights.rec[i3], quad, i3);
+        let (c0, c1, c2, c3) = (l0.c, l1.c, l2.c, l3.c);
+        let (u0, u1, u2, u3) = (l0.lum, l1.lum, l2.lum, l3.lum);
+        let lk = light_pair(light_pair(l0, l1), light_pair(l2, l3));
+        let (s01, s23) = step::<Two<Two<V>>, B, F, Q, P>(&k4, &lk).split();
+        let (s0, s1) = s01.split();
+        let (s2, s3) = s23.split();
+        accumulate::<V, B, Q, P>(acc, &s0, &c0, u0);
+        accumulate::<V, B, Q, P>(acc, &s1, &c1, u1);
+        accumulate::<V, B, Q, P>(acc, &s2, &c2, u2);
+        accumulate::<V, B, Q, P>(acc, &s3, &c3, u3);
+    }
+    let mut pairs = quads.remainder().chunks_exact(2);
+    for pair in &mut pairs {
+        let (a, b) = (pair[0] as usize, pair[1] as usize);
+        let (la, lb) = (light_k::<V, Q>(&lights.rec[a], quad, a), light_k::<V, Q>(&lights.rec[b], quad, b));
+        let (ca, cb, luma, lumb) = (la.c, lb.c, la.lum, lb.lum);
+        let (sa, sb) = step::<Two<V>, B, F, Q, P>(&k2, &light_pair(la, lb)).split();
+        accumulate::<V, B, Q, P>(acc, &sa, &ca, luma);
+        accumulate::<V, B, Q, P>(acc, &sb, &cb, lumb);
+    }
+    pairs.remainder()
 }
 
 /// Lists (in increasing order) the lights of `lights` whose culling sphere touches the bounding box of the
