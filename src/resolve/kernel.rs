@@ -271,7 +271,8 @@ fn run<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
 struct Chunk<V> {
     p: [V; 3],
     n: [V; 3],
-    v: [V; 3],
+    /// Twice the unit vector to the eye, `2V` (`2 L·V` for the half vector in one dot product).
+    v2: [V; 3],
     /// Raw N·V (for N·H through the half-vector identity).
     nv_raw: V,
     /// N·V floored at [`MIN_NDOTV`] (GGX visibility).
@@ -303,12 +304,14 @@ fn load_chunk<V: Lanes, const B: u8, const Q: bool>(it: &Items, c: usize) -> Chu
     let m = s(0.0) - inv_len;
     let v = [p[0] * m, p[1] * m, p[2] * m];
     let nv_raw = dot(&n, &v);
+    let m2 = m + m;
+    let v2 = [p[0] * m2, p[1] * m2, p[2] * m2];
     let nv = nv_raw.max(s(MIN_NDOTV));
     let zero = s(0.0);
     let mut k = Chunk {
         p,
         n,
-        v,
+        v2,
         nv_raw,
         nv,
         sn: zero,
@@ -476,7 +479,7 @@ fn both<V: Lanes>(k: &Chunk<V>) -> Chunk<Two<V>> {
     Chunk {
         p: b3(k.p),
         n: b3(k.n),
-        v: b3(k.v),
+        v2: b3(k.v2),
         nv_raw: b(k.nv_raw),
         nv: b(k.nv),
         sn: b(k.sn),
@@ -495,28 +498,28 @@ fn both<V: Lanes>(k: &Chunk<V>) -> Chunk<Two<V>> {
 fn step<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(k: &Chunk<V>, l: &LightK<V>) -> Step<V> {
     let s = V::splat;
     let zero = s(0.0);
-    let w = zero - l.w;
-    let lv = [k.p[0].mul_add(w, l.p[0]), k.p[1].mul_add(w, l.p[1]), k.p[2].mul_add(w, l.p[2])];
+    // L = pos − w·p (w = 0 for directional lights).
+    let lv = [k.p[0].nmul_add(l.w, l.p[0]), k.p[1].nmul_add(l.w, l.p[1]), k.p[2].nmul_add(l.w, l.p[2])];
     // d = max(|L|, MIN_DISTANCE): clamping d² first keeps rsqrt away from 0.
     let d2 = dot(&lv, &lv).max(s(MIN_DISTANCE * MIN_DISTANCE));
     // The dot products with L̂ are taken with the unnormalised L, then scaled by 1/|L|: they need not wait for the
-    // reciprocal square root (a shorter dependency chain; the light loop is latency-bound).
+    // reciprocal square root (a shorter dependency chain).
     let ndl_l = dot(&k.n, &lv);
-    let ldv_l = dot(&lv, &k.v);
+    let ldv2_l = dot(&lv, &k.v2);
     let inv = d2.rsqrt();
     let ndl_raw = ndl_l * inv;
     let ndl = ndl_raw.max(zero);
     let atten = if F == 0 {
-        let win = (zero - d2 * d2).mul_add(l.fa, s(1.0)).saturate();
+        let win = (d2 * d2).nmul_add(l.fa, s(1.0)).saturate();
         win * win * (inv * inv)
     } else {
-        (d2 * inv).mul_add(zero - l.fb, l.fa).saturate()
+        (d2 * inv).nmul_add(l.fb, l.fa).saturate()
     };
     let mut e = atten * ndl;
     if l.spot {
         // Non-spot lights have scale 0 and offset 1: a factor of exactly 1.
         let sl = dot(&l.axis, &lv) * inv;
-        let cone = sl.mul_add(zero - l.cs, l.co).saturate();
+        let cone = sl.nmul_add(l.cs, l.co).saturate();
         e = e * (cone * cone);
     }
     let inside = if Q {
@@ -536,15 +539,16 @@ fn step<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(k: &Ch
         return Step { e, on, inside, x };
     }
     // H = normalize(L̂ + V): |L̂ + V|² = 2 + 2 L̂·V, N·H = (N·L̂ + N·V)/|H|, V·H = (L̂·V + 1)/|H|.
-    let ldv = ldv_l * inv;
-    let h2 = ldv.mul_add(s(2.0), s(2.0)).max(s(MIN_HALF_LENGTH * MIN_HALF_LENGTH));
-    let hinv = h2.rsqrt();
-    let ndh = ((ndl_raw + k.nv_raw) * hinv).max(zero);
+    let h2_raw = ldv2_l.mul_add(inv, s(2.0));
+    let hinv = h2_raw.max(s(MIN_HALF_LENGTH * MIN_HALF_LENGTH)).rsqrt();
+    let ndh_raw = (ndl_raw + k.nv_raw) * hinv;
     if B == 1 {
-        x[0] = k.sn * (k.pw * ndh.max(s(POW_MIN_BASE)).log2()).exp2();
+        // pow's floor POW_MIN_BASE also clamps N·H below at (about) 0.
+        x[0] = k.sn * (k.pw * ndh_raw.max(s(POW_MIN_BASE)).log2()).exp2();
         return Step { e, on, inside, x };
     }
-    let vdh = ((ldv + s(1.0)) * hinv).max(zero);
+    let ndh = ndh_raw.max(zero);
+    let vdh = (h2_raw * s(0.5) * hinv).max(zero);
     let a2 = k.a2;
     let t = (ndh * ndh).mul_add(a2 - s(1.0), s(1.0));
     let gl2 = (ndl * ndl).mul_add(s(1.0) - a2, a2);

@@ -42,6 +42,8 @@ pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = S
     fn store(self, a: &mut [f32]);
     /// `self · b + c` (fused where the CPU has FMA).
     fn mul_add(self, b: Self, c: Self) -> Self;
+    /// `c − self · b` (fused where the CPU has FMA).
+    fn nmul_add(self, b: Self, c: Self) -> Self;
     /// Lane-wise maximum (`max(NaN, x) = x` is not relied on: inputs are finite).
     fn max(self, o: Self) -> Self;
     /// Lane-wise minimum.
@@ -166,6 +168,14 @@ impl<const FMA: bool> Lanes for Portable<FMA> {
         let mut out = self.0;
         for ((o, &y), &z) in out.iter_mut().zip(&b.0).zip(&c.0) {
             *o = if FMA { o.mul_add(y, z) } else { *o * y + z };
+        }
+        Portable(out)
+    }
+    #[inline(always)]
+    fn nmul_add(self, b: Self, c: Self) -> Self {
+        let mut out = self.0;
+        for ((o, &y), &z) in out.iter_mut().zip(&b.0).zip(&c.0) {
+            *o = if FMA { (-*o).mul_add(y, z) } else { z - *o * y };
         }
         Portable(out)
     }
@@ -311,6 +321,10 @@ impl<V: Lanes> Lanes for Two<V> {
         Two(self.0.mul_add(b.0, c.0), self.1.mul_add(b.1, c.1))
     }
     #[inline(always)]
+    fn nmul_add(self, b: Self, c: Self) -> Self {
+        Two(self.0.nmul_add(b.0, c.0), self.1.nmul_add(b.1, c.1))
+    }
+    #[inline(always)]
     fn max(self, o: Self) -> Self {
         Two(self.0.max(o.0), self.1.max(o.1))
     }
@@ -388,52 +402,23 @@ mod avx512 {
     use std::arch::x86_64::*;
     use std::ops::{Add, Mul, Sub};
 
-    /// `1/c` (rounded to f32) for the 32 sub-intervals of [0.75, 1.5) that [`Avx512::log2`] indexes by bits 22..18
-    /// of the mantissa: entries 0–15 cover [1, 1.5) in steps of 1/32, 16–31 cover [0.75, 1) in steps of 1/64; `c`
-    /// is each sub-interval's centre. Checked against f64 by a test.
+    /// `1/c` (rounded to f32) for the 32 sub-intervals `[1 + i/32, 1 + (i+1)/32)` of [1, 2) that [`Avx512::log2`]
+    /// indexes by bits 22..18 of the mantissa; `c` is each sub-interval's centre. Checked against f64 by a test.
     pub(super) const LOG2_INV_C: [f32; 32] = [
         0.9846154, 0.95522386, 0.92753625, 0.90140843, 0.8767123, 0.85333335, 0.83116883, 0.8101266, 0.79012346,
-        0.7710843, 0.7529412, 0.7356322, 0.71910113, 0.7032967, 0.68817204, 0.67368424, 1.3195876, 1.2929293,
-        1.2673267, 1.2427185, 1.2190477, 1.1962616, 1.1743119, 1.1531532, 1.1327434, 1.1130434, 1.0940171, 1.0756303,
-        1.0578512, 1.0406504, 1.024, 1.007874,
+        0.7710843, 0.7529412, 0.7356322, 0.71910113, 0.7032967, 0.68817204, 0.67368424, 0.6597938, 0.64646465,
+        0.63366336, 0.6213592, 0.60952383, 0.5981308, 0.58715594, 0.5765766, 0.5663717, 0.5565217, 0.5470086,
+        0.53781515, 0.5289256, 0.5203252, 0.512, 0.503937,
     ];
     /// `−log2` of each [`LOG2_INV_C`] entry, rounded to f32.
     pub(super) const LOG2_T: [f32; 32] = [
-        0.02236781,
-        0.06608922,
-        0.10852443,
-        0.14974715,
-        0.18982457,
-        0.22881866,
-        0.26678655,
-        0.3037807,
-        0.33984998,
-        0.3750395,
-        0.4093909,
-        0.4429435,
-        0.47573343,
-        0.5077946,
-        0.5391588,
-        0.5698556,
-        -0.40008712,
-        -0.37064338,
-        -0.3417885,
-        -0.31349948,
-        -0.28575453,
-        -0.25853297,
-        -0.2318156,
-        -0.20558417,
-        -0.17982103,
-        -0.15450989,
-        -0.12963535,
-        -0.10518231,
-        -0.0811367,
-        -0.057485443,
-        -0.034215786,
-        -0.011315308,
+        0.02236781, 0.06608922, 0.10852443, 0.14974715, 0.18982457, 0.22881866, 0.26678655, 0.3037807, 0.33984998,
+        0.3750395, 0.4093909, 0.4429435, 0.47573343, 0.5077946, 0.5391588, 0.5698556, 0.5999129, 0.6293566, 0.6582115,
+        0.6865005, 0.71424544, 0.74146706, 0.76818436, 0.79441583, 0.820179, 0.8454901, 0.87036467, 0.8948177,
+        0.9188633, 0.94251454, 0.9657842, 0.9886847,
     ];
-    /// `log2(1 + r)/r ≈ q0 + q1 r + q2 r² + q3 r³` on |r| ≤ 1/32 (minimax, relative error 3e-8).
-    pub(super) const LOG2_Q: [f32; 4] = [std::f32::consts::LOG2_E, -0.721_347_45, 0.481_191_7, -0.360_967_15];
+    /// `log2(1 + r)/r ≈ q0 + q1 r + q2 r²` on |r| ≤ 1/64 (the Taylor terms: absolute error of `log2` ≤ 2.2e-8).
+    pub(super) const LOG2_Q: [f32; 3] = [std::f32::consts::LOG2_E, -0.721_347_5, 0.480_898_35];
     /// `2^f ≈ Σ cₖ fᵏ` on |f| ≤ ½ (minimax, relative error 7.5e-8 in exact arithmetic).
     pub(super) const EXP2_P: [f32; 6] =
         [1.000_000_1, 0.693_146_97, 0.240_221_2, 0.055_507_13, 0.009_675_542, 0.001_327_647_2];
@@ -491,6 +476,10 @@ mod avx512 {
             unsafe { Avx512(_mm512_fmadd_ps(self.0, b.0, c.0)) }
         }
         #[inline(always)]
+        fn nmul_add(self, b: Self, c: Self) -> Self {
+            unsafe { Avx512(_mm512_fnmadd_ps(self.0, b.0, c.0)) }
+        }
+        #[inline(always)]
         fn max(self, o: Self) -> Self {
             unsafe { Avx512(_mm512_max_ps(self.0, o.0)) }
         }
@@ -520,15 +509,15 @@ mod avx512 {
         }
         #[inline(always)]
         fn log2(self) -> Self {
-            // x = m·2^e with m in [0.75, 1.5) (vgetmantps) and e exact (vgetexpps); m's top five mantissa bits pick
-            // one of 32 sub-intervals of width 1/32 or 1/64 and its centre c (tables [`LOG2_INV_C`],
-            // [`LOG2_T`]): log2 m = −log2(1/c) + log2(1 + r), r = m·(1/c) − 1 exact to one rounding, |r| ≤ 1/64,
-            // and log2(1 + r) = r·q(r) with a degree-3 minimax q (relative error 3e-8).
+            // x = m·2^e with m in [1, 2) (vgetmantps) and e exact (vgetexpps); m's top five mantissa bits pick one
+            // of 32 sub-intervals of width 1/32 and its centre c (tables [`LOG2_INV_C`], [`LOG2_T`]):
+            // log2 m = −log2(1/c) + log2(1 + r), r = m·(1/c) − 1 exact to one rounding, |r| ≤ 1/64, and
+            // log2(1 + r) = r·q(r) with q of degree 2 (Horner: ten instructions in all). Just below 1 (m near 2,
+            // e = −1) the sum loses to cancellation about one rounding of a value near 1: ≈ 6e-8 absolute.
             unsafe {
-                let m = _mm512_getmant_ps::<_MM_MANT_NORM_P75_1P5, _MM_MANT_SIGN_ZERO>(self.0);
-                // getexp(x) = floor(log2 x); getexp(m) is −1 when m < 1, which moved one factor 2 into e.
-                let e = _mm512_sub_ps(_mm512_getexp_ps(self.0), _mm512_getexp_ps(m));
-                // Bits 22..18 of m: 0iiii for m in [1, 1.5), 1iiii for [0.75, 1).
+                let m = _mm512_getmant_ps::<_MM_MANT_NORM_1_2, _MM_MANT_SIGN_ZERO>(self.0);
+                let e = Avx512(_mm512_getexp_ps(self.0));
+                // Bits 22..18 of m; vpermt2ps reads only the low five bits of each index.
                 let idx = _mm512_srli_epi32::<18>(_mm512_castps_si512(m));
                 let lo = |t: &[f32; 32]| _mm512_loadu_ps(t.as_ptr());
                 let hi = |t: &[f32; 32]| _mm512_loadu_ps(t.as_ptr().add(16));
@@ -536,24 +525,22 @@ mod avx512 {
                 let t = _mm512_permutex2var_ps(lo(&LOG2_T), idx, hi(&LOG2_T));
                 let r = Avx512(_mm512_fmsub_ps(m, inv_c, _mm512_set1_ps(1.0)));
                 let c = |v: f32| Avx512::splat(v);
-                let [q0, q1, q2, q3] = LOG2_Q;
-                let q = (r * r).mul_add(r.mul_add(c(q3), c(q2)), r.mul_add(c(q1), c(q0)));
-                r.mul_add(q, Avx512(t)) + Avx512(e)
+                let [q0, q1, q2] = LOG2_Q;
+                let q = r.mul_add(r.mul_add(c(q2), c(q1)), c(q0));
+                r.mul_add(q, Avx512(t)) + e
             }
         }
         #[inline(always)]
         fn exp2(self) -> Self {
-            // 2^x = 2^i · 2^f, i = round(x), |f| ≤ ½, 2^f by a degree-5 minimax polynomial (relative error 3e-7 in
-            // f32, Estrin's scheme); vscalefps applies 2^i and underflows to 0 (not 2^−126) far below −126.
+            // 2^x = 2^i · 2^f, i = round(x), |f| ≤ ½, 2^f by a degree-5 minimax polynomial (Horner; relative error
+            // 3e-7 in f32); vscalefps applies 2^i and underflows to 0 (not 2^−126) far below −126.
             unsafe {
                 let x = _mm512_min_ps(self.0, _mm512_set1_ps(126.0));
                 let i = _mm512_roundscale_ps::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(x);
                 let f = Avx512(_mm512_sub_ps(x, i));
                 let c = |v: f32| Avx512::splat(v);
                 let [c0, c1, c2, c3, c4, c5] = EXP2_P;
-                let f2 = f * f;
-                let p = (f2 * f2)
-                    .mul_add(f.mul_add(c(c5), c(c4)), f2.mul_add(f.mul_add(c(c3), c(c2)), f.mul_add(c(c1), c(c0))));
+                let p = f.mul_add(c(c5), c(c4)).mul_add(f, c(c3)).mul_add(f, c(c2)).mul_add(f, c(c1)).mul_add(f, c(c0));
                 Avx512(_mm512_scalef_ps(p.0, i))
             }
         }
@@ -653,6 +640,11 @@ mod tests {
             let want = f64::from(ex[j]) * f64::from(ex[V::N + j]) + f64::from(ex[j]);
             assert!((f64::from(out[j]) - want).abs() <= want.abs() * 1e-6 + 1e-3, "mul_add");
         }
+        a.nmul_add(b, a).store(&mut out);
+        for j in 0..V::N {
+            let want = f64::from(ex[j]) - f64::from(ex[j]) * f64::from(ex[V::N + j]);
+            assert!((f64::from(out[j]) - want).abs() <= want.abs() * 1e-6 + 1e-3, "nmul_add");
+        }
         a.keep(a.gt(b)).store(&mut out);
         V::splat(0.0).count(a.le(b)).count(V::and(a.ge(b), a.le(b))).store(&mut out);
         for j in 0..V::N {
@@ -672,9 +664,7 @@ mod tests {
     fn log2_tables_are_the_subinterval_centres() {
         use super::avx512::{LOG2_INV_C, LOG2_T};
         for i in 0..32 {
-            // Entries 0–15: [1 + i/32, 1 + (i+1)/32); 16–31: [0.75 + (i−16)/64, …).
-            let (lo, w) =
-                if i < 16 { (1.0 + i as f64 / 32.0, 1.0 / 32.0) } else { (0.75 + (i - 16) as f64 / 64.0, 1.0 / 64.0) };
+            let (lo, w) = (1.0 + i as f64 / 32.0, 1.0 / 32.0);
             let inv = (1.0 / (lo + w / 2.0)) as f32;
             assert_eq!(LOG2_INV_C[i], inv, "1/c[{i}]");
             assert_eq!(LOG2_T[i], (-f64::from(inv).log2()) as f32, "T[{i}]");
