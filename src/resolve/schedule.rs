@@ -11,7 +11,7 @@ use super::config::{Culling, ResolveConfig, Schedule};
 use super::culling::{light_sphere, quad_rects, Bounds};
 use super::kernel::{finish_prepass, shade, Items, QuadSoa, Variant, BLOCK, PAD_PIXEL};
 use super::lights::LightTable;
-use super::surface::{SanitizedCounts, SurfaceReader};
+use super::surface::{Reads, SanitizedCounts, SurfaceReader, MIN_VIEW_DEPTH};
 #[cfg(target_arch = "x86_64")]
 use crate::codec::simd::Isa;
 use crate::detect::EdgeMask;
@@ -229,6 +229,17 @@ fn prefetch_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32) {
         if w == 0 || h == 0 || gb.samples == 0 {
             return;
         }
+        // The edge mask: one byte per pixel.
+        let width = gb.width as usize;
+        for y in y0..y0 + h {
+            let at = y as usize * width + x0 as usize;
+            let row = &frame.mask.shade_count[at..at + w as usize];
+            // SAFETY: both addresses lie inside `row` (w ≥ 1); prefetch has no other effect.
+            unsafe {
+                _mm_prefetch::<_MM_HINT_T1>(row.as_ptr().cast::<i8>());
+                _mm_prefetch::<_MM_HINT_T1>(row.as_ptr().add(row.len() - 1).cast::<i8>());
+            }
+        }
         rows(Some(&gb.coverage[..]), gb, x0, y0, w, h);
         match &gb.position {
             Some(p) => rows(Some(&p[..]), gb, x0, y0, w, h),
@@ -236,8 +247,16 @@ fn prefetch_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32) {
         }
         rows(gb.normal.as_deref(), gb, x0, y0, w, h);
         rows(gb.albedo.as_deref(), gb, x0, y0, w, h);
-        for plane in [&gb.specular, &gb.specular_power, &gb.roughness, &gb.metallic] {
-            rows(plane.as_deref(), gb, x0, y0, w, h);
+        let reads = Reads::of(frame.cfg.brdf);
+        for (plane, read) in [
+            (&gb.specular, reads.specular),
+            (&gb.specular_power, reads.power),
+            (&gb.roughness, reads.metal_rough),
+            (&gb.metallic, reads.metal_rough),
+        ] {
+            if read {
+                rows(plane.as_deref(), gb, x0, y0, w, h);
+            }
         }
     }
     #[cfg(not(target_arch = "x86_64"))]
@@ -386,6 +405,13 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
     };
     let width = gb.width as usize;
     let (x0, tw) = (tile.x0 as usize, tile.w as usize);
+    let cap = (tile.w * tile.h * samples) as usize + BLOCK;
+    for v in [&mut it.px, &mut it.py, &mut it.pz, &mut it.weight] {
+        v.reserve(cap);
+    }
+    it.pixel.reserve(cap);
+    sc.src.reserve(cap);
+    let plane = gb.position.as_deref();
     for y in tile.y0..tile.y0 + tile.h {
         let row = y as usize * width;
         let local_row = (y - tile.y0) as usize * tw;
@@ -397,6 +423,15 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
             }
             // A non-edge pixel: its first usable sample stands for the whole pixel.
             let first = (row + x0 + k) * samples as usize;
+            if let Some(plane) = plane {
+                // The common case first: sample 0 covered, with a usable stored position (else the loop below
+                // looks at every sample again, counting what it must).
+                let p = plane[first];
+                if gb.coverage[first] && p.is_finite() && -p.z > MIN_VIEW_DEPTH {
+                    push(it, &mut sc.src, p, first, (local_row + k) as u32, 1.0);
+                    continue;
+                }
+            }
             for s in 0..samples {
                 let i = first + s as usize;
                 if let Some(pos) = frame.reader.position(x, y, s, i, counts) {
@@ -425,7 +460,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
             let (i, p) = (sc.src[n_real - 1], glam::Vec3::new(it.px[n_real - 1], it.py[n_real - 1], it.pz[n_real - 1]));
             push(it, &mut sc.src, p, i, PAD_PIXEL, 0.0);
         }
-        frame.reader.fill_attributes(&sc.src, it, counts);
+        frame.reader.fill_attributes(&sc.src, it, frame.cfg.brdf, counts);
     }
     n_real
 }

@@ -11,6 +11,7 @@
 //! specular amount [`DEFAULT_SPECULAR`], specular power [`DEFAULT_SPECULAR_POWER`], metallic 0; roughness, when
 //! absent, is mapped from the specular power (see [`roughness_from_power`]).
 
+use super::config::Brdf;
 use super::kernel::{Items, LANES};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
@@ -203,12 +204,15 @@ impl<'a> SurfaceReader<'a> {
 
     /// Batch form of [`SurfaceReader::read`]'s attribute part for a work list: the positions, pixels and weights
     /// of `it` are set and `src[j]` is item `j`'s flat sample index (`src.len()` a multiple of [`LANES`]); fills
-    /// every other surface array of `it` with the same defaults, sanitisation and counts as `read`. Works a vector
+    /// the other surface arrays `brdf` reads (see [`Reads`]) with the same defaults, sanitisation and counts as
+    /// `read`; the arrays it does not read keep whatever they held, and their planes are neither read nor counted.
+    /// Works a vector
     /// of items at a time: the inputs of a vector whose samples are consecutive (a tile row at one sample per
     /// pixel) are one slice copy, other vectors gather; the sanitising arithmetic has no branches.
     #[inline(always)]
-    pub fn fill_attributes(&self, src: &[usize], it: &mut Items, counts: &mut SanitizedCounts) {
+    pub fn fill_attributes(&self, src: &[usize], it: &mut Items, brdf: Brdf, counts: &mut SanitizedCounts) {
         let gb = self.gb;
+        let reads = Reads::of(brdf);
         let n = src.len();
         debug_assert!(it.len() == n && n.is_multiple_of(LANES));
         it.resize(n);
@@ -260,19 +264,50 @@ impl<'a> SurfaceReader<'a> {
                     out[k] = x;
                 }
             };
-            let spec = [DEFAULT_SPECULAR; LANES];
-            scalars(&mut it.spec[r.clone()], gb.specular.as_ref(), &spec, 0.0, f32::MAX, &mut bad.specular);
-            let power = [DEFAULT_SPECULAR_POWER; LANES];
-            let p_hi = MAX_SPECULAR_POWER;
-            scalars(&mut it.pw[r.clone()], gb.specular_power.as_ref(), &power, 0.0, p_hi, &mut bad.specular_power);
-            let mut rough = [0.0; LANES];
-            for (o, &p) in rough.iter_mut().zip(&it.pw[r.clone()]) {
-                *o = roughness_from_power(p);
+            if reads.specular {
+                let spec = [DEFAULT_SPECULAR; LANES];
+                scalars(&mut it.spec[r.clone()], gb.specular.as_ref(), &spec, 0.0, f32::MAX, &mut bad.specular);
             }
-            scalars(&mut it.rough[r.clone()], gb.roughness.as_ref(), &rough, 0.0, 1.0, &mut bad.roughness);
-            scalars(&mut it.metal[r], gb.metallic.as_ref(), &[0.0; LANES], 0.0, 1.0, &mut bad.metallic);
+            if reads.power {
+                let power = [DEFAULT_SPECULAR_POWER; LANES];
+                let p_hi = MAX_SPECULAR_POWER;
+                scalars(&mut it.pw[r.clone()], gb.specular_power.as_ref(), &power, 0.0, p_hi, &mut bad.specular_power);
+            }
+            if reads.metal_rough {
+                let mut rough = [0.0; LANES];
+                for (o, &p) in rough.iter_mut().zip(&it.pw[r.clone()]) {
+                    *o = roughness_from_power(p);
+                }
+                scalars(&mut it.rough[r.clone()], gb.roughness.as_ref(), &rough, 0.0, 1.0, &mut bad.roughness);
+                scalars(&mut it.metal[r], gb.metallic.as_ref(), &[0.0; LANES], 0.0, 1.0, &mut bad.metallic);
+            }
         }
         counts.add(&bad);
+    }
+}
+
+/// Which scalar attributes a BRDF reads (all read the normal and the albedo). The resolve reads, sanitises and
+/// counts only these: Lambert none, Blinn-Phong the specular amount and power, GGX roughness and metallic (and the
+/// specular power, from which a missing roughness is mapped).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Reads {
+    /// Specular amount.
+    pub specular: bool,
+    /// Specular power.
+    pub power: bool,
+    /// Roughness and metallic.
+    pub metal_rough: bool,
+}
+
+impl Reads {
+    /// What `brdf` reads.
+    #[must_use]
+    pub fn of(brdf: Brdf) -> Self {
+        match brdf {
+            Brdf::Lambert => Reads { specular: false, power: false, metal_rough: false },
+            Brdf::BlinnPhong => Reads { specular: true, power: true, metal_rough: false },
+            Brdf::Ggx => Reads { specular: false, power: true, metal_rough: true },
+        }
     }
 }
 
