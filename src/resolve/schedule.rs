@@ -269,7 +269,7 @@ fn prefetch_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32) {
 fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, rgb: &mut [Vec3], heat: &mut [u32], st: &mut TileStats) {
     let t0 = Instant::now();
     st.tiles += 1;
-    let n_real = gather(frame, tile, sc, st);
+    let (n_single, n_real) = gather(frame, tile, sc, st);
     st.t_gather += t0.elapsed();
     let area = (tile.w * tile.h) as usize;
     sc.acc.clear();
@@ -336,20 +336,22 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, rgb: &mut [Vec3], h
     if variant.prepass {
         finish_prepass(items, frame.cfg.brdf);
     }
+    // The box filter (`pixel` is the index within the tile). Items `0..n_single` are the only sample of their
+    // pixel (weight 1): stored. The rest are edge samples, added.
     let (acc, acc_heat) = (&mut sc.acc, &mut sc.acc_heat);
-    let (mut tested_sum, mut lit_sum) = (0u64, 0u64);
-    for j in 0..n_real {
-        // `pixel` is the index within the tile.
+    for j in 0..n_single {
         let px = items.pixel[j] as usize;
-        let c = Vec3::new(items.or[j], items.og[j], items.ob[j]) * items.weight[j];
-        acc[px] += c;
-        let (tested, lit) = (items.tested[j] as u32, items.lit[j] as u32);
-        acc_heat[px] += tested;
-        tested_sum += u64::from(tested);
-        lit_sum += u64::from(lit);
+        acc[px] = Vec3::new(items.or[j], items.og[j], items.ob[j]);
+        acc_heat[px] = items.tested[j] as u32;
     }
-    st.tested += tested_sum;
-    st.lit += lit_sum;
+    for j in n_single..n_real {
+        let px = items.pixel[j] as usize;
+        acc[px] += Vec3::new(items.or[j], items.og[j], items.ob[j]) * items.weight[j];
+        acc_heat[px] += items.tested[j] as u32;
+    }
+    // Counts are whole numbers (exact in f32 below 2²⁴), summed as integers.
+    st.tested += items.tested[..n_real].iter().map(|&t| t as u64).sum::<u64>();
+    st.lit += items.lit[..n_real].iter().map(|&t| t as u64).sum::<u64>();
     st.evaluations += n_real as u64;
     write_tile(frame, tile, sc, rgb, heat, st);
     t_shade += t.elapsed();
@@ -379,9 +381,10 @@ fn write_tile(frame: &Frame<'_>, tile: Tile, sc: &Scratch, rgb: &mut [Vec3], hea
 /// Builds the tile's work list: first the single samples of non-edge pixels (in one pass over the tile, which
 /// also lists the edge pixels), then the packed samples of edge pixels. Positions are read pixel by pixel (they
 /// decide which samples are shaded); the other attributes are then read plane by plane for the whole list.
-/// `pixel` is the index within the tile (`row · w + column`).
+/// `pixel` is the index within the tile (`row · w + column`). Returns how many items are the only sample of their
+/// pixel (they come first) and how many are real (the rest pad the list to whole vectors).
 #[inline(always)]
-fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -> usize {
+fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -> (usize, usize) {
     let gb = frame.reader.gbuffer();
     let samples = gb.samples;
     let weight = 1.0 / samples as f32;
@@ -441,6 +444,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
             }
         }
     }
+    let n_single = sc.src.len();
     for &(x, y) in &sc.edge_px {
         let first = (y as usize * width + x as usize) * samples as usize;
         let local = ((y - tile.y0) as usize * tw + (x as usize - x0)) as u32;
@@ -462,7 +466,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
         }
         frame.reader.fill_attributes(&sc.src, it, frame.cfg.brdf, counts);
     }
-    n_real
+    (n_single, n_real)
 }
 
 /// Tests every light's sphere against `bounds` (branch-free over lights, vectorised for the CPU at hand), writing
