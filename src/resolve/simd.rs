@@ -23,6 +23,8 @@ pub const BLOCK: usize = LANES;
 /// Relative error bound of [`Lanes::rsqrt`] on normal positive inputs (the refined `vrsqrt14ps` path; the portable
 /// path is `1/√x`, within 2 ulp).
 pub const RSQRT_MAX_REL_ERROR: f32 = 4e-7;
+/// Relative error bound of [`Lanes::rsqrt_approx`] (`vrsqrt14ps`: 2⁻¹⁴).
+pub const RSQRT_APPROX_REL_ERROR: f32 = 1.0 / 16384.0;
 
 /// A vector of [`LANES`] f32 lanes with the operations the shading kernel needs.
 pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> {
@@ -50,12 +52,16 @@ pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = S
     fn min(self, o: Self) -> Self;
     /// `1/√self` for positive finite lanes.
     fn rsqrt(self) -> Self;
+    /// `1/√self` for positive finite lanes to within [`RSQRT_APPROX_REL_ERROR`] (AVX-512: the hardware estimate,
+    /// one instruction; the portable lanes compute it exactly).
+    fn rsqrt_approx(self) -> Self;
     /// `1/self` for positive finite lanes, accurate to about 1 ulp.
     fn recip(self) -> Self;
     /// `log2` of positive normal lanes (error bound of [`fastmath::log2`]).
     fn log2(self) -> Self;
-    /// `2^self` for `self ≤ 126` (larger lanes give 2¹²⁶), within the relative error bound of [`fastmath::exp2`]
-    /// on [−126, 126]; below −126 any value in [0, 2⁻¹²⁶].
+    /// `2^self` for finite `self`, within the relative error bound of [`fastmath::exp2`] on [−126, 126]; below −126
+    /// any value in [0, 2⁻¹²⁶], above 126 any value ≥ 2¹²⁶ (the portable lanes clamp there, AVX-512 overflows to
+    /// +∞ above 128).
     fn exp2(self) -> Self;
     /// Lanes where `self > o`.
     fn gt(self, o: Self) -> Self::Mask;
@@ -190,6 +196,10 @@ impl<const FMA: bool> Lanes for Portable<FMA> {
     #[inline(always)]
     fn rsqrt(self) -> Self {
         self.each(|x| 1.0 / x.sqrt())
+    }
+    #[inline(always)]
+    fn rsqrt_approx(self) -> Self {
+        self.rsqrt()
     }
     #[inline(always)]
     fn recip(self) -> Self {
@@ -335,6 +345,10 @@ impl<V: Lanes> Lanes for Two<V> {
     #[inline(always)]
     fn rsqrt(self) -> Self {
         Two(self.0.rsqrt(), self.1.rsqrt())
+    }
+    #[inline(always)]
+    fn rsqrt_approx(self) -> Self {
+        Two(self.0.rsqrt_approx(), self.1.rsqrt_approx())
     }
     #[inline(always)]
     fn recip(self) -> Self {
@@ -499,6 +513,10 @@ mod avx512 {
             }
         }
         #[inline(always)]
+        fn rsqrt_approx(self) -> Self {
+            unsafe { Avx512(_mm512_rsqrt14_ps(self.0)) }
+        }
+        #[inline(always)]
         fn recip(self) -> Self {
             // y ≈ 1/x to 2⁻¹⁴; Newton y + y·(1 − x·y).
             unsafe {
@@ -535,7 +553,7 @@ mod avx512 {
             // 2^x = 2^i · 2^f, i = round(x), |f| ≤ ½, 2^f by a degree-5 minimax polynomial (Horner; relative error
             // 3e-7 in f32); vscalefps applies 2^i and underflows to 0 (not 2^−126) far below −126.
             unsafe {
-                let x = _mm512_min_ps(self.0, _mm512_set1_ps(126.0));
+                let x = self.0;
                 let i = _mm512_roundscale_ps::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(x);
                 let f = Avx512(_mm512_sub_ps(x, i));
                 let c = |v: f32| Avx512::splat(v);
@@ -607,6 +625,14 @@ mod tests {
                 let want = 1.0 / f64::from(*x).sqrt();
                 assert!(((f64::from(y) - want) / want).abs() < f64::from(RSQRT_MAX_REL_ERROR), "rsqrt({x}) = {y}");
             }
+            V::load(c).rsqrt_approx().store(&mut out);
+            for (x, y) in c.iter().zip(out.iter().copied()) {
+                let want = 1.0 / f64::from(*x).sqrt();
+                assert!(
+                    ((f64::from(y) - want) / want).abs() <= f64::from(RSQRT_APPROX_REL_ERROR),
+                    "rsqrt_approx({x}) = {y}"
+                );
+            }
             V::load(c).recip().store(&mut out);
             for (x, y) in c.iter().zip(out.iter().copied()) {
                 let want = 1.0 / f64::from(*x);
@@ -628,7 +654,11 @@ mod tests {
                     assert!((0.0..=f32::MIN_POSITIVE).contains(&y), "exp2({x}) = {y}");
                     continue;
                 }
-                let want = f64::from(x.min(126.0)).exp2();
+                if *x > 126.0 {
+                    assert!(y >= 2f32.powi(126), "exp2({x}) = {y}");
+                    continue;
+                }
+                let want = f64::from(*x).exp2();
                 let rel = (f64::from(y) - want).abs() / want;
                 assert!(rel < f64::from(fastmath::EXP2_MAX_REL_ERROR), "exp2({x}) = {y}, want {want}");
             }
