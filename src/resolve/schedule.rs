@@ -132,9 +132,12 @@ struct Scratch {
     src: Vec<usize>,
     /// Edge pixels of the tile (column, row), listed by the first gather pass.
     edge_px: Vec<(u32, u32)>,
-    /// The tile's box-filtered colour and light evaluations, tile-local rows (`w × h`).
-    acc: Vec<Vec3>,
-    acc_heat: Vec<u32>,
+    /// Pixels of the tile with no usable sample (band-relative index), listed by the first gather pass.
+    blank_px: Vec<u32>,
+    /// The band's box-filtered colour and light evaluations (the band's rows of the outputs, in cache: tiles write
+    /// here, and the band is copied to the outputs in one sequential pass).
+    band_rgb: Vec<Vec3>,
+    band_heat: Vec<u32>,
 }
 
 /// Runs every tile of `frame`, writing pixel colours into `rgb` and light evaluations per pixel into `heat`
@@ -174,6 +177,10 @@ fn run_band(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat
     let ts = frame.cfg.tile_size;
     let h = ts.min(gb.height - y0);
     let mut st = TileStats::default();
+    // Every pixel of the band is written by its tile: no clearing.
+    let n = rgb.len();
+    sc.band_rgb.resize(n, Vec3::ZERO);
+    sc.band_heat.resize(n, 0);
     let mut x0 = 0;
     while x0 < gb.width {
         let w = ts.min(gb.width - x0);
@@ -181,9 +188,18 @@ fn run_band(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat
         if next < gb.width {
             prefetch_tile(frame, next, y0, ts.min(gb.width - next), h);
         }
-        run_tile(frame, Tile { x0, y0, w, h }, sc, rgb, heat, &mut st);
+        run_tile(frame, Tile { x0, y0, w, h }, sc, &mut st);
         x0 = next;
     }
+    // To the outputs, replacing any non-finite colour by black (counted).
+    let mut bad = 0u64;
+    for (o, &c) in rgb.iter_mut().zip(&sc.band_rgb[..n]) {
+        let ok = c.is_finite();
+        bad += u64::from(!ok);
+        *o = if ok { c } else { Vec3::ZERO };
+    }
+    heat.copy_from_slice(&sc.band_heat[..n]);
+    st.sanitized.output += bad;
     st
 }
 
@@ -263,21 +279,26 @@ fn prefetch_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32) {
     let _ = (frame, x0, y0, w, h);
 }
 
-/// Gathers, culls and shades one tile, box-filtering into the band's rows `rgb` / `heat` (pixels with nothing
-/// to shade stay black) and adding the work to `st`.
+/// Gathers, culls and shades one tile, box-filtering into the band's buffers (every pixel of the tile is
+/// written; pixels with nothing to shade are black) and adding the work to `st`.
 #[inline(always)]
-fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, rgb: &mut [Vec3], heat: &mut [u32], st: &mut TileStats) {
+fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) {
     let t0 = Instant::now();
     st.tiles += 1;
     let (n_single, n_real) = gather(frame, tile, sc, st);
     st.t_gather += t0.elapsed();
-    let area = (tile.w * tile.h) as usize;
-    sc.acc.clear();
-    sc.acc.resize(area, Vec3::ZERO);
-    sc.acc_heat.clear();
-    sc.acc_heat.resize(area, 0);
+    // Pixels with no sample are black; edge pixels add their samples from 0.
+    let width = frame.reader.gbuffer().width as usize;
+    for &px in &sc.blank_px {
+        sc.band_rgb[px as usize] = Vec3::ZERO;
+        sc.band_heat[px as usize] = 0;
+    }
+    for &(x, y) in &sc.edge_px {
+        let px = (y - tile.y0) as usize * width + x as usize;
+        sc.band_rgb[px] = Vec3::ZERO;
+        sc.band_heat[px] = 0;
+    }
     if n_real == 0 {
-        write_tile(frame, tile, sc, rgb, heat, st);
         return;
     }
     let n = sc.items.len();
@@ -336,9 +357,9 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, rgb: &mut [Vec3], h
     if variant.prepass {
         finish_prepass(items, frame.cfg.brdf);
     }
-    // The box filter (`pixel` is the index within the tile). Items `0..n_single` are the only sample of their
-    // pixel (weight 1): stored. The rest are edge samples, added.
-    let (acc, acc_heat) = (&mut sc.acc, &mut sc.acc_heat);
+    // The box filter into the band's buffers (`pixel` indexes them). Items `0..n_single` are the only sample of
+    // their pixel (weight 1): stored. The rest are edge samples, added.
+    let (acc, acc_heat) = (&mut sc.band_rgb, &mut sc.band_heat);
     for j in 0..n_single {
         let px = items.pixel[j] as usize;
         acc[px] = Vec3::new(items.or[j], items.og[j], items.ob[j]);
@@ -353,36 +374,17 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, rgb: &mut [Vec3], h
     st.tested += items.tested[..n_real].iter().map(|&t| t as u64).sum::<u64>();
     st.lit += items.lit[..n_real].iter().map(|&t| t as u64).sum::<u64>();
     st.evaluations += n_real as u64;
-    write_tile(frame, tile, sc, rgb, heat, st);
     t_shade += t.elapsed();
     st.t_cull += t_cull;
     st.t_shade += t_shade;
 }
 
-/// Copies the tile's filtered pixels into the band's rows of the outputs (every pixel of the tile is written, so
-/// the outputs need no clearing), replacing any non-finite colour by black (counted).
-#[inline(always)]
-fn write_tile(frame: &Frame<'_>, tile: Tile, sc: &Scratch, rgb: &mut [Vec3], heat: &mut [u32], st: &mut TileStats) {
-    let width = frame.reader.gbuffer().width as usize;
-    let tw = tile.w as usize;
-    let mut bad = 0u64;
-    for (r, (src, src_heat)) in sc.acc.chunks_exact(tw).zip(sc.acc_heat.chunks_exact(tw)).enumerate() {
-        let start = r * width + tile.x0 as usize;
-        for (o, &c) in rgb[start..start + tw].iter_mut().zip(src) {
-            let ok = c.is_finite();
-            bad += u64::from(!ok);
-            *o = if ok { c } else { Vec3::ZERO };
-        }
-        heat[start..start + tw].copy_from_slice(src_heat);
-    }
-    st.sanitized.output += bad;
-}
-
 /// Builds the tile's work list: first the single samples of non-edge pixels (in one pass over the tile, which
 /// also lists the edge pixels), then the packed samples of edge pixels. Positions are read pixel by pixel (they
 /// decide which samples are shaded); the other attributes are then read plane by plane for the whole list.
-/// `pixel` is the index within the tile (`row · w + column`). Returns how many items are the only sample of their
-/// pixel (they come first) and how many are real (the rest pad the list to whole vectors).
+/// `pixel` is the index within the band's rows (`(y − band top) · width + x`); pixels with no usable sample are
+/// listed in `blank_px`. Returns how many items are the only sample of their pixel (they come first) and how many
+/// are real (the rest pad the list to whole vectors).
 #[inline(always)]
 fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -> (usize, usize) {
     let gb = frame.reader.gbuffer();
@@ -397,6 +399,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
     it.pixel.clear();
     sc.src.clear();
     sc.edge_px.clear();
+    sc.blank_px.clear();
     let counts = &mut st.sanitized;
     let push = |it: &mut Items, src: &mut Vec<usize>, p: glam::Vec3, i: usize, local: u32, w: f32| {
         it.px.push(p.x);
@@ -417,7 +420,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
     let plane = gb.position.as_deref();
     for y in tile.y0..tile.y0 + tile.h {
         let row = y as usize * width;
-        let local_row = (y - tile.y0) as usize * tw;
+        let local_row = (y - tile.y0) as usize * width + x0;
         for (k, &count) in frame.mask.shade_count[row + x0..row + x0 + tw].iter().enumerate() {
             let x = (x0 + k) as u32;
             if count > 1 {
@@ -435,19 +438,23 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
                     continue;
                 }
             }
-            for s in 0..samples {
+            let found = (0..samples).any(|s| {
                 let i = first + s as usize;
-                if let Some(pos) = frame.reader.position(x, y, s, i, counts) {
+                let pos = frame.reader.position(x, y, s, i, counts);
+                if let Some(pos) = pos {
                     push(it, &mut sc.src, pos, i, (local_row + k) as u32, 1.0);
-                    break;
                 }
+                pos.is_some()
+            });
+            if !found {
+                sc.blank_px.push((local_row + k) as u32);
             }
         }
     }
     let n_single = sc.src.len();
     for &(x, y) in &sc.edge_px {
         let first = (y as usize * width + x as usize) * samples as usize;
-        let local = ((y - tile.y0) as usize * tw + (x as usize - x0)) as u32;
+        let local = ((y - tile.y0) as usize * width + x as usize) as u32;
         let before = sc.src.len();
         for s in 0..samples {
             let i = first + s as usize;
