@@ -418,10 +418,34 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
     it.pixel.reserve(cap);
     sc.src.reserve(cap);
     let plane = gb.position.as_deref();
+    let stride = samples as usize;
     for y in tile.y0..tile.y0 + tile.h {
         let row = y as usize * width;
         let local_row = (y - tile.y0) as usize * width + x0;
-        for (k, &count) in frame.mask.shade_count[row + x0..row + x0 + tw].iter().enumerate() {
+        let counts_row = &frame.mask.shade_count[row + x0..row + x0 + tw];
+        if let Some(plane) = plane {
+            // The common case first, a whole row at once: no edge pixel, and every pixel's sample 0 covered with a
+            // usable stored position (checked without branches). Otherwise pixel by pixel below.
+            let first = (row + x0) * stride;
+            let end = first + (tw - 1) * stride + 1;
+            let (pos, cov) = (&plane[first..end], &gb.coverage[first..end]);
+            let single = counts_row.iter().fold(true, |a, &c| a & (c <= 1));
+            let usable = pos
+                .iter()
+                .step_by(stride)
+                .zip(cov.iter().step_by(stride))
+                .fold(true, |a, (p, &c)| a & c & p.is_finite() & (-p.z > MIN_VIEW_DEPTH));
+            if single && usable {
+                it.px.extend(pos.iter().step_by(stride).map(|p| p.x));
+                it.py.extend(pos.iter().step_by(stride).map(|p| p.y));
+                it.pz.extend(pos.iter().step_by(stride).map(|p| p.z));
+                it.pixel.extend(local_row as u32..(local_row + tw) as u32);
+                it.weight.extend(std::iter::repeat_n(1.0, tw));
+                sc.src.extend((first..end).step_by(stride));
+                continue;
+            }
+        }
+        for (k, &count) in counts_row.iter().enumerate() {
             let x = (x0 + k) as u32;
             if count > 1 {
                 sc.edge_px.push((x, y));
