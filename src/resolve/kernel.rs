@@ -365,12 +365,12 @@ struct LightK<V> {
     lum: V,
     /// Quad culling's rectangle and depth range (`x0, x1, y0, y1, z0, z1`).
     q: [V; 6],
-    /// The light is a spot light (for [`Two`]: either is).
+    /// Evaluate the cone factor ([`LightTable::any_spot`]: the same for every light of the list).
     spot: bool,
 }
 
 #[inline(always)]
-fn light_k<V: Lanes, const Q: bool>(r: &LightRec, quad: &QuadSoa, l: usize) -> LightK<V> {
+fn light_k<V: Lanes, const Q: bool>(r: &LightRec, quad: &QuadSoa, l: usize, spot: bool) -> LightK<V> {
     let s = V::splat;
     let zero = s(0.0);
     LightK {
@@ -388,7 +388,7 @@ fn light_k<V: Lanes, const Q: bool>(r: &LightRec, quad: &QuadSoa, l: usize) -> L
         } else {
             [zero; 6]
         },
-        spot: r.cs != 0.0,
+        spot,
     }
 }
 
@@ -618,8 +618,9 @@ fn run_chunk<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
         // A constant condition: the four-light code is only generated for lane types that use it.
         rest = quads_of_lights::<V, B, F, Q, P>(&k, live, lights, quad, &mut acc);
     }
+    let spot = lights.any_spot;
     for &a in rest {
-        let la = light_k::<V, Q>(&lights.rec[a as usize], quad, a as usize);
+        let la = light_k::<V, Q>(&lights.rec[a as usize], quad, a as usize, spot);
         let sa = step::<V, B, F, Q, P>(&k, &la);
         accumulate::<V, B, Q, P>(&mut acc, &sa, &la.c, la.lum);
     }
@@ -652,13 +653,14 @@ fn quads_of_lights<'a, V: Lanes, const B: u8, const F: u8, const Q: bool, const 
 ) -> &'a [u32] {
     let k2 = both(k);
     let k4 = both(&k2);
+    let spot = lights.any_spot;
     let mut quads = live.chunks_exact(4);
     for q in &mut quads {
         let (i0, i1, i2, i3) = (q[0] as usize, q[1] as usize, q[2] as usize, q[3] as usize);
-        let l0 = light_k::<V, Q>(&lights.rec[i0], quad, i0);
-        let l1 = light_k::<V, Q>(&lights.rec[i1], quad, i1);
-        let l2 = light_k::<V, Q>(&lights.rec[i2], quad, i2);
-        let l3 = light_k::<V, Q>(&lights.rec[i3], quad, i3);
+        let l0 = light_k::<V, Q>(&lights.rec[i0], quad, i0, spot);
+        let l1 = light_k::<V, Q>(&lights.rec[i1], quad, i1, spot);
+        let l2 = light_k::<V, Q>(&lights.rec[i2], quad, i2, spot);
+        let l3 = light_k::<V, Q>(&lights.rec[i3], quad, i3, spot);
         let (c0, c1, c2, c3) = (l0.c, l1.c, l2.c, l3.c);
         let (u0, u1, u2, u3) = (l0.lum, l1.lum, l2.lum, l3.lum);
         let lk = light_pair(light_pair(l0, l1), light_pair(l2, l3));
@@ -673,7 +675,7 @@ fn quads_of_lights<'a, V: Lanes, const B: u8, const F: u8, const Q: bool, const 
     let mut pairs = quads.remainder().chunks_exact(2);
     for pair in &mut pairs {
         let (a, b) = (pair[0] as usize, pair[1] as usize);
-        let (la, lb) = (light_k::<V, Q>(&lights.rec[a], quad, a), light_k::<V, Q>(&lights.rec[b], quad, b));
+        let (la, lb) = (light_k::<V, Q>(&lights.rec[a], quad, a, spot), light_k::<V, Q>(&lights.rec[b], quad, b, spot));
         let (ca, cb, luma, lumb) = (la.c, lb.c, la.lum, lb.lum);
         let (sa, sb) = step::<Two<V>, B, F, Q, P>(&k2, &light_pair(la, lb)).split();
         accumulate::<V, B, Q, P>(acc, &sa, &ca, luma);

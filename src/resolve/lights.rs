@@ -116,6 +116,9 @@ pub struct LightTable {
     pub z: Vec<f32>,
     /// `rec[i].r2`.
     pub r2: Vec<f32>,
+    /// Some light is a spot light (the kernel then evaluates the cone factor for every light of the list: exactly 1
+    /// for the others; without spot lights it never does, and the light loop has no branch on the light kind).
+    pub any_spot: bool,
 }
 
 /// Rec. 709 luminance weights, used to make the light pre-pass specular monochromatic.
@@ -156,6 +159,7 @@ impl LightTable {
         self.y.push(r.py);
         self.z.push(r.pz);
         self.r2.push(r.r2);
+        self.any_spot |= r.cs != 0.0;
     }
 
     /// Empties the list, keeping its capacity.
@@ -164,6 +168,7 @@ impl LightTable {
         for v in [&mut self.x, &mut self.y, &mut self.z, &mut self.r2] {
             v.clear();
         }
+        self.any_spot = false;
     }
 }
 

@@ -283,10 +283,17 @@ fn prefetch_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32) {
 /// written; pixels with nothing to shade are black) and adding the work to `st`.
 #[inline(always)]
 fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) {
-    let t0 = Instant::now();
+    // One clock reading per stage boundary (`lap`: the time since the previous one).
+    let mut last = Instant::now();
+    let mut lap = || {
+        let now = Instant::now();
+        let d = now - last;
+        last = now;
+        d
+    };
     st.tiles += 1;
     let (n_single, n_real) = gather(frame, tile, sc, st);
-    st.t_gather += t0.elapsed();
+    st.t_gather += lap();
     // Pixels with no sample are black; edge pixels add their samples from 0.
     let width = frame.reader.gbuffer().width as usize;
     for &px in &sc.blank_px {
@@ -308,41 +315,35 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats)
         quad: frame.cfg.culling == Culling::Quad,
         prepass: frame.cfg.schedule == Schedule::LightPrepass,
     };
-    let mut t_cull = Duration::ZERO;
+    let mut t_cull = lap();
     let mut t_shade = Duration::ZERO;
     let items = match frame.cfg.culling {
         Culling::None => {
-            let t = Instant::now();
             shade(&mut sc.items, 0..n, &frame.table, &frame.quads, variant);
-            t_shade += t.elapsed();
+            t_shade += lap();
             &mut sc.items
         }
         Culling::Tiled | Culling::Quad => {
-            let t = Instant::now();
             let bounds = Bounds::of_items(&sc.items, 0..n).expect("nonempty");
             cull_into(frame, &bounds, None, sc);
-            t_cull += t.elapsed();
-            let t = Instant::now();
+            t_cull += lap();
             shade(&mut sc.items, 0..n, &sc.lights, &sc.quads, variant);
-            t_shade += t.elapsed();
+            t_shade += lap();
             &mut sc.items
         }
         Culling::Clustered => {
-            let t = Instant::now();
             let bounds = Bounds::of_items(&sc.items, 0..n).expect("nonempty");
             cull_tile_list(frame, &bounds, sc);
             let ranges = sort_by_slice(&bounds, frame.cfg.depth_slices, n_real, sc);
-            t_cull += t.elapsed();
+            t_cull += lap();
             for range in ranges {
-                let t = Instant::now();
                 let b = Bounds::of_items(&sc.sorted, range.clone()).expect("nonempty slice");
                 let list = std::mem::take(&mut sc.tile_lights);
                 cull_into(frame, &b, Some(&list), sc);
                 sc.tile_lights = list;
-                t_cull += t.elapsed();
-                let t = Instant::now();
+                t_cull += lap();
                 shade(&mut sc.sorted, range, &sc.lights, &sc.quads, variant);
-                t_shade += t.elapsed();
+                t_shade += lap();
             }
             // Back to tile order, so the box filter adds samples in the same order whatever the culling.
             let (it, so) = (&mut sc.items, &sc.sorted);
@@ -353,7 +354,6 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats)
             &mut sc.items
         }
     };
-    let t = Instant::now();
     if variant.prepass {
         finish_prepass(items, frame.cfg.brdf);
     }
@@ -374,7 +374,7 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats)
     st.tested += items.tested[..n_real].iter().map(|&t| t as u64).sum::<u64>();
     st.lit += items.lit[..n_real].iter().map(|&t| t as u64).sum::<u64>();
     st.evaluations += n_real as u64;
-    t_shade += t.elapsed();
+    t_shade += lap();
     st.t_cull += t_cull;
     st.t_shade += t_shade;
 }

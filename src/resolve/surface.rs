@@ -40,7 +40,8 @@ pub fn roughness_from_power(p: f32) -> f32 {
 }
 
 /// How many values were replaced because they were NaN, infinite or out of range (per attribute), plus lights
-/// dropped and output pixels that had to be zeroed.
+/// dropped and output pixels that had to be zeroed. The resolve counts only the attributes its BRDF reads
+/// ([`Reads`]); [`SurfaceReader::read`] (the reference) reads and counts every attribute.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct SanitizedCounts {
     /// Covered samples treated as background: position NaN/Inf or not in front of the camera.
