@@ -430,17 +430,35 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
             let end = first + (tw - 1) * stride + 1;
             let (pos, cov) = (&plane[first..end], &gb.coverage[first..end]);
             let single = counts_row.iter().fold(true, |a, &c| a & (c <= 1));
-            let usable = pos
-                .iter()
-                .step_by(stride)
-                .zip(cov.iter().step_by(stride))
-                .fold(true, |a, (p, &c)| a & c & p.is_finite() & (-p.z > MIN_VIEW_DEPTH));
-            if single && usable {
-                it.px.extend(pos.iter().step_by(stride).map(|p| p.x));
-                it.py.extend(pos.iter().step_by(stride).map(|p| p.y));
-                it.pz.extend(pos.iter().step_by(stride).map(|p| p.z));
+            // `abs() < ∞` is `is_finite` without a branch per component (the loops vectorise).
+            let usable = |a: bool, (p, &c): (&Vec3, &bool)| {
+                a & c & (p.x.abs() < f32::INFINITY)
+                    & (p.y.abs() < f32::INFINITY)
+                    & (p.z.abs() < f32::INFINITY)
+                    & (-p.z > MIN_VIEW_DEPTH)
+            };
+            let ok = if stride == 1 {
+                pos.iter().zip(cov).fold(single, usable)
+            } else {
+                pos.iter().step_by(stride).zip(cov.iter().step_by(stride)).fold(single, usable)
+            };
+            if ok {
+                let n = it.px.len();
+                for v in [&mut it.px, &mut it.py, &mut it.pz] {
+                    v.resize(n + tw, 0.0);
+                }
+                let (dx, dy, dz) = (&mut it.px[n..], &mut it.py[n..], &mut it.pz[n..]);
+                if stride == 1 {
+                    for (((p, x), y), z) in pos.iter().zip(dx).zip(dy).zip(dz) {
+                        (*x, *y, *z) = (p.x, p.y, p.z);
+                    }
+                } else {
+                    for (((p, x), y), z) in pos.iter().step_by(stride).zip(dx).zip(dy).zip(dz) {
+                        (*x, *y, *z) = (p.x, p.y, p.z);
+                    }
+                }
                 it.pixel.extend(local_row as u32..(local_row + tw) as u32);
-                it.weight.extend(std::iter::repeat_n(1.0, tw));
+                it.weight.resize(n + tw, 1.0);
                 sc.src.extend((first..end).step_by(stride));
                 continue;
             }
