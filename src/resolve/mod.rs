@@ -59,7 +59,8 @@ pub struct ResolveStats {
     /// What was sanitised (G-buffer values among the samples read, lights dropped, output pixels zeroed).
     pub sanitized: SanitizedCounts,
     /// Milliseconds per stage (`decode` and `detect` are left 0 for the caller). `gather`, `cull` and `shade` run
-    /// interleaved in parallel: the parallel section's wall time is split in proportion to their thread time.
+    /// interleaved in parallel: the parallel section's wall time is split in proportion to their thread time (measured on
+    /// one tile in eight).
     pub ms: StageMs,
 }
 

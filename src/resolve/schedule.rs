@@ -84,11 +84,11 @@ pub struct TileStats {
     pub edge_pixels: u64,
     /// Values sanitised while reading.
     pub sanitized: SanitizedCounts,
-    /// Time building work lists.
+    /// Time building work lists (measured on one tile in [`TIME_EVERY`]: use as a share of the three).
     pub t_gather: Duration,
-    /// Time culling.
+    /// Time culling (sampled as `t_gather`).
     pub t_cull: Duration,
-    /// Time shading and filtering.
+    /// Time shading and filtering (sampled as `t_gather`).
     pub t_shade: Duration,
 }
 
@@ -108,6 +108,9 @@ impl TileStats {
         self
     }
 }
+
+/// The stage times are measured on one tile in this many (a sample of every band).
+const TIME_EVERY: u64 = 8;
 
 /// One tile's place in its band of rows.
 #[derive(Clone, Copy, Debug)]
@@ -137,7 +140,9 @@ struct Scratch {
     /// The band's box-filtered colour and light evaluations (the band's rows of the outputs, in cache: tiles write
     /// here, and the band is copied to the outputs in one sequential pass).
     band_rgb: Vec<Vec3>,
-    band_heat: Vec<u32>,
+    /// Light evaluations in f32 (whole numbers, exact below 2²⁴ like the kernel's counts), converted when the band
+    /// is copied out.
+    band_heat: Vec<f32>,
 }
 
 /// Runs every tile of `frame`, writing pixel colours into `rgb` and light evaluations per pixel into `heat`
@@ -180,7 +185,7 @@ fn run_band(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat
     // Every pixel of the band is written by its tile: no clearing.
     let n = rgb.len();
     sc.band_rgb.resize(n, Vec3::ZERO);
-    sc.band_heat.resize(n, 0);
+    sc.band_heat.resize(n, 0.0);
     let mut x0 = 0;
     while x0 < gb.width {
         let w = ts.min(gb.width - x0);
@@ -198,7 +203,9 @@ fn run_band(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat
         bad += u64::from(!ok);
         *o = if ok { c } else { Vec3::ZERO };
     }
-    heat.copy_from_slice(&sc.band_heat[..n]);
+    for (o, &h) in heat.iter_mut().zip(&sc.band_heat[..n]) {
+        *o = h as u32;
+    }
     st.sanitized.output += bad;
     st
 }
@@ -283,12 +290,15 @@ fn prefetch_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32) {
 /// written; pixels with nothing to shade are black) and adding the work to `st`.
 #[inline(always)]
 fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) {
-    // One clock reading per stage boundary (`lap`: the time since the previous one).
-    let mut last = Instant::now();
+    // One clock reading per stage boundary (`lap`: the time since the previous one), on one tile in
+    // [`TIME_EVERY`]: the readings cost about 2% of the frame on every tile, and the stage times are only used as
+    // shares of the parallel section's wall time.
+    let mut last = st.tiles.is_multiple_of(TIME_EVERY).then(Instant::now);
     let mut lap = || {
+        let Some(l) = &mut last else { return Duration::ZERO };
         let now = Instant::now();
-        let d = now - last;
-        last = now;
+        let d = now - *l;
+        *l = now;
         d
     };
     st.tiles += 1;
@@ -298,12 +308,12 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats)
     let width = frame.reader.gbuffer().width as usize;
     for &px in &sc.blank_px {
         sc.band_rgb[px as usize] = Vec3::ZERO;
-        sc.band_heat[px as usize] = 0;
+        sc.band_heat[px as usize] = 0.0;
     }
     for &(x, y) in &sc.edge_px {
         let px = (y - tile.y0) as usize * width + x as usize;
         sc.band_rgb[px] = Vec3::ZERO;
-        sc.band_heat[px] = 0;
+        sc.band_heat[px] = 0.0;
     }
     if n_real == 0 {
         return;
@@ -360,15 +370,18 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats)
     // The box filter into the band's buffers (`pixel` indexes them). Items `0..n_single` are the only sample of
     // their pixel (weight 1): stored. The rest are edge samples, added.
     let (acc, acc_heat) = (&mut sc.band_rgb, &mut sc.band_heat);
-    for j in 0..n_single {
-        let px = items.pixel[j] as usize;
-        acc[px] = Vec3::new(items.or[j], items.og[j], items.ob[j]);
-        acc_heat[px] = items.tested[j] as u32;
+    let out = |r: std::ops::Range<usize>| {
+        let it = &*items;
+        let cols = it.or[r.clone()].iter().zip(&it.og[r.clone()]).zip(&it.ob[r.clone()]);
+        it.pixel[r.clone()].iter().zip(cols).zip(&it.tested[r.clone()]).zip(&it.weight[r])
+    };
+    for (((&px, ((&r, &g), &b)), &t), _) in out(0..n_single) {
+        acc[px as usize] = Vec3::new(r, g, b);
+        acc_heat[px as usize] = t;
     }
-    for j in n_single..n_real {
-        let px = items.pixel[j] as usize;
-        acc[px] += Vec3::new(items.or[j], items.og[j], items.ob[j]) * items.weight[j];
-        acc_heat[px] += items.tested[j] as u32;
+    for (((&px, ((&r, &g), &b)), &t), &w) in out(n_single..n_real) {
+        acc[px as usize] += Vec3::new(r, g, b) * w;
+        acc_heat[px as usize] += t;
     }
     // Counts are whole numbers (exact in f32 below 2²⁴), summed as integers.
     st.tested += items.tested[..n_real].iter().map(|&t| t as u64).sum::<u64>();
@@ -432,7 +445,8 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
             let single = counts_row.iter().fold(true, |a, &c| a & (c <= 1));
             // `abs() < ∞` is `is_finite` without a branch per component (the loops vectorise).
             let usable = |a: bool, (p, &c): (&Vec3, &bool)| {
-                a & c & (p.x.abs() < f32::INFINITY)
+                a & c
+                    & (p.x.abs() < f32::INFINITY)
                     & (p.y.abs() < f32::INFINITY)
                     & (p.z.abs() < f32::INFINITY)
                     & (-p.z > MIN_VIEW_DEPTH)
