@@ -14,6 +14,8 @@
 use super::config::Brdf;
 use super::kernel::{Items, LANES};
 use crate::camera::Camera;
+#[cfg(target_arch = "x86_64")]
+use crate::codec::simd::Isa;
 use crate::error::{Error, Result};
 use crate::gbuffer::GBuffer;
 use glam::{Vec2, Vec3};
@@ -218,9 +220,70 @@ impl<'a> SurfaceReader<'a> {
         debug_assert!(it.len() == n && n.is_multiple_of(LANES));
         it.resize(n);
         let mut bad = SanitizedCounts::default();
+        #[cfg(target_arch = "x86_64")]
+        let avx512 = Isa::detect() == Isa::Avx512;
         for (c, idx) in src.chunks_exact(LANES).enumerate() {
             let r = c * LANES..(c + 1) * LANES;
             let run = idx.windows(2).all(|w| w[1] == w[0] + 1);
+            // Consecutive samples on an AVX-512 CPU: whole vectors (the same arithmetic, see `avx512`).
+            #[cfg(target_arch = "x86_64")]
+            if run && avx512 {
+                let at = idx[0]..idx[0] + LANES;
+                fn part<'p, T>(plane: &'p Option<Vec<T>>, at: &std::ops::Range<usize>) -> Option<&'p [T]> {
+                    plane.as_deref().map(|p| &p[at.clone()])
+                }
+                let v3 = |p| part(p, &at);
+                let v1 = |p| part(p, &at);
+                // SAFETY: the CPU has AVX-512F (`Isa::detect`).
+                unsafe {
+                    avx512::normals(
+                        v3(&gb.normal),
+                        [&mut it.nx[r.clone()], &mut it.ny[r.clone()], &mut it.nz[r.clone()]],
+                        &mut bad.normal,
+                    );
+                    avx512::albedo(
+                        v3(&gb.albedo),
+                        [&mut it.ar[r.clone()], &mut it.ag[r.clone()], &mut it.ab[r.clone()]],
+                        &mut bad.albedo,
+                    );
+                    if reads.specular {
+                        let range = (DEFAULT_SPECULAR, 0.0, f32::MAX);
+                        avx512::clamped(v1(&gb.specular), &mut it.spec[r.clone()], range, &mut bad.specular);
+                    }
+                    if reads.power {
+                        let range = (DEFAULT_SPECULAR_POWER, 0.0, MAX_SPECULAR_POWER);
+                        avx512::clamped(v1(&gb.specular_power), &mut it.pw[r.clone()], range, &mut bad.specular_power);
+                    }
+                }
+                if reads.metal_rough {
+                    // GGX's roughness default depends on the power: the lane-by-lane code below.
+                    let mut rough = [0.0; LANES];
+                    for (o, &p) in rough.iter_mut().zip(&it.pw[r.clone()]) {
+                        *o = roughness_from_power(p);
+                    }
+                    fill_scalars(
+                        &mut it.rough[r.clone()],
+                        gb.roughness.as_ref(),
+                        idx,
+                        run,
+                        &rough,
+                        0.0,
+                        1.0,
+                        &mut bad.roughness,
+                    );
+                    fill_scalars(
+                        &mut it.metal[r],
+                        gb.metallic.as_ref(),
+                        idx,
+                        run,
+                        &[0.0; LANES],
+                        0.0,
+                        1.0,
+                        &mut bad.metallic,
+                    );
+                }
+                continue;
+            }
             match &gb.normal {
                 Some(plane) => {
                     let v = gather(plane, idx, run);
@@ -254,16 +317,7 @@ impl<'a> SurfaceReader<'a> {
                 }
             }
             let scalars = |out: &mut [f32], plane: Option<&Vec<f32>>, dflt: &[f32; LANES], lo, hi, count: &mut u64| {
-                let Some(plane) = plane else {
-                    out.copy_from_slice(dflt);
-                    return;
-                };
-                let v = gather(plane, idx, run);
-                for k in 0..LANES {
-                    let (x, ok) = clamped(v[k], dflt[k], lo, hi);
-                    *count += u64::from(!ok);
-                    out[k] = x;
-                }
+                fill_scalars(out, plane, idx, run, dflt, lo, hi, count);
             };
             if reads.specular {
                 let spec = [DEFAULT_SPECULAR; LANES];
@@ -309,6 +363,31 @@ impl Reads {
             Brdf::BlinnPhong => Reads { specular: true, power: true, metal_rough: false },
             Brdf::Ggx => Reads { specular: false, power: true, metal_rough: true },
         }
+    }
+}
+
+/// One vector of a scalar attribute: `plane[idx[k]]` sanitised into `out` ([`clamped`]), or the defaults.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn fill_scalars(
+    out: &mut [f32],
+    plane: Option<&Vec<f32>>,
+    idx: &[usize],
+    run: bool,
+    dflt: &[f32; LANES],
+    lo: f32,
+    hi: f32,
+    count: &mut u64,
+) {
+    let Some(plane) = plane else {
+        out.copy_from_slice(dflt);
+        return;
+    };
+    let v = gather(plane, idx, run);
+    for k in 0..LANES {
+        let (x, ok) = clamped(v[k], dflt[k], lo, hi);
+        *count += u64::from(!ok);
+        out[k] = x;
     }
 }
 
@@ -378,6 +457,121 @@ fn scalar(plane: Option<&[f32]>, i: usize, default: f32, lo: f32, hi: f32, count
     v
 }
 
+/// The attribute sanitising of [`SurfaceReader::fill_attributes`] for 16 consecutive samples in AVX-512 vectors:
+/// the same IEEE operations in the same order as [`normalized`], [`albedo_clamped`] and [`clamped`] (a test checks
+/// the two paths agree on every kind of bad value).
+#[cfg(target_arch = "x86_64")]
+mod avx512 {
+    use super::{Vec3, LANES};
+    use std::arch::x86_64::*;
+
+    /// Lane `k` of component `q` of 16 `Vec3` sits at float `3k + q`: `permutex2var` indices taking what lies in
+    /// the first two registers (floats 0..32), then the rest from the third.
+    const fn indices(q: usize) -> ([i32; 16], [i32; 16]) {
+        let (mut a, mut b) = ([0i32; 16], [0i32; 16]);
+        let mut k = 0;
+        while k < 16 {
+            let f = 3 * k + q;
+            if f < 32 {
+                a[k] = f as i32;
+                b[k] = k as i32;
+            } else {
+                b[k] = (16 + f - 32) as i32;
+            }
+            k += 1;
+        }
+        (a, b)
+    }
+    const IDX: [([i32; 16], [i32; 16]); 3] = [indices(0), indices(1), indices(2)];
+
+    /// The x, y, z components of 16 `Vec3`.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    unsafe fn load3(v: &[Vec3]) -> [__m512; 3] {
+        let v = &v[..LANES];
+        // SAFETY (this function and the ones below): `Vec3` is three f32 (`#[repr(C)]`), so 16 of them are 48
+        // floats, read by three unaligned loads; stores go to slices checked to hold 16 lanes.
+        let f = v.as_ptr().cast::<f32>();
+        let (r0, r1, r2) = (_mm512_loadu_ps(f), _mm512_loadu_ps(f.add(16)), _mm512_loadu_ps(f.add(32)));
+        IDX.map(|(a, b)| {
+            let t = _mm512_permutex2var_ps(r0, _mm512_loadu_si512(a.as_ptr().cast()), r1);
+            _mm512_permutex2var_ps(t, _mm512_loadu_si512(b.as_ptr().cast()), r2)
+        })
+    }
+
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    unsafe fn store(v: __m512, out: &mut [f32]) {
+        _mm512_storeu_ps(out[..LANES].as_mut_ptr(), v);
+    }
+
+    /// `v` finite and ≥ 0 (false for NaN).
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    unsafe fn finite_nonneg(v: __m512) -> __mmask16 {
+        _mm512_cmp_ps_mask::<_CMP_GE_OQ>(v, _mm512_setzero_ps())
+            & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(v, _mm512_set1_ps(f32::INFINITY))
+    }
+
+    /// Normals made unit length; NaN/Inf or zero length → +Z, counted. Absent plane: +Z.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub unsafe fn normals(plane: Option<&[Vec3]>, out: [&mut [f32]; 3], count: &mut u64) {
+        let [ox, oy, oz] = out;
+        let Some(plane) = plane else {
+            store(_mm512_setzero_ps(), ox);
+            store(_mm512_setzero_ps(), oy);
+            store(_mm512_set1_ps(1.0), oz);
+            return;
+        };
+        let [x, y, z] = load3(plane);
+        // (x·x + y·y) + z·z, as glam's `dot` (no fused multiply-add), then 1/√.
+        let len2 = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(x, x), _mm512_mul_ps(y, y)), _mm512_mul_ps(z, z));
+        let rcp = _mm512_div_ps(_mm512_set1_ps(1.0), _mm512_sqrt_ps(len2));
+        let ok = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(rcp, _mm512_setzero_ps())
+            & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(rcp, _mm512_set1_ps(f32::INFINITY));
+        *count += u64::from((!ok).count_ones());
+        store(_mm512_maskz_mov_ps(ok, _mm512_mul_ps(x, rcp)), ox);
+        store(_mm512_maskz_mov_ps(ok, _mm512_mul_ps(y, rcp)), oy);
+        store(_mm512_mask_mov_ps(_mm512_set1_ps(1.0), ok, _mm512_mul_ps(z, rcp)), oz);
+    }
+
+    /// Albedo with NaN/Inf and negative components → 0, counted once per sample. Absent plane: the default grey.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub unsafe fn albedo(plane: Option<&[Vec3]>, out: [&mut [f32]; 3], count: &mut u64) {
+        let Some(plane) = plane else {
+            for o in out {
+                store(_mm512_set1_ps(super::DEFAULT_ALBEDO), o);
+            }
+            return;
+        };
+        let mut all = 0xffff;
+        for (v, o) in load3(plane).into_iter().zip(out) {
+            let ok = finite_nonneg(v);
+            all &= ok;
+            store(_mm512_maskz_mov_ps(ok, v), o);
+        }
+        *count += u64::from((!all).count_ones());
+    }
+
+    /// A scalar: NaN/Inf → default, out of `[lo, hi]` → clamped, both counted. Absent plane: the default.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub unsafe fn clamped(plane: Option<&[f32]>, out: &mut [f32], (default, lo, hi): (f32, f32, f32), count: &mut u64) {
+        let Some(plane) = plane else {
+            store(_mm512_set1_ps(default), out);
+            return;
+        };
+        let v = _mm512_loadu_ps(plane[..LANES].as_ptr());
+        let c = _mm512_min_ps(_mm512_max_ps(v, _mm512_set1_ps(lo)), _mm512_set1_ps(hi));
+        let finite = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(_mm512_abs_ps(v), _mm512_set1_ps(f32::INFINITY));
+        let ok = finite & _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(c, v);
+        *count += u64::from((!ok).count_ones());
+        store(_mm512_mask_mov_ps(_mm512_set1_ps(default), finite, c), out);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -433,6 +627,71 @@ mod tests {
         let r = SurfaceReader::new(&g).unwrap();
         let s = r.read(1, 0, 0, &mut SanitizedCounts::default()).unwrap();
         assert!((s.p.z + 3.0).abs() < 1e-6 && s.p.x > 0.0 && s.p.y > 0.0, "{}", s.p);
+    }
+
+    #[test]
+    fn batch_fill_matches_read_for_every_kind_of_value() {
+        // 48 samples in a row; the work list takes two runs of 16 consecutive samples (the whole-vector path on
+        // AVX-512 CPUs) and one shuffled vector (the lane-by-lane path).
+        let n = 48;
+        let mut g = GBuffer::new(n as u32, 1, 1).unwrap();
+        g.coverage = vec![true; n];
+        g.position = Some(vec![Vec3::new(0.0, 0.0, -2.0); n]);
+        let (nan, inf) = (f32::NAN, f32::INFINITY);
+        let pick = |i: usize, v: &[f32]| v[i % v.len()];
+        let normals = [
+            Vec3::new(0.3, -0.2, 0.9),
+            Vec3::ZERO,
+            Vec3::new(nan, 0.0, 1.0),
+            Vec3::new(inf, 1.0, 0.0),
+            Vec3::new(1e-30, 0.0, 0.0),
+            Vec3::new(-2.0, 5.0, 1e3),
+        ];
+        g.normal = Some((0..n).map(|i| normals[i % normals.len()]).collect());
+        let al = [0.5, -0.1, nan, inf, -0.0, 2.0, -inf];
+        g.albedo = Some((0..n).map(|i| Vec3::new(pick(i, &al), pick(i + 1, &al), pick(i + 3, &al))).collect());
+        g.specular = Some((0..n).map(|i| pick(i, &[0.5, -1.0, nan, inf, 1e38, -0.0, 3.0])).collect());
+        g.specular_power = Some((0..n).map(|i| pick(i, &[16.0, 2e6, nan, -3.0, 0.0, -inf, 1e4, 7.5])).collect());
+        g.roughness = Some((0..n).map(|i| pick(i, &[0.5, 1.5, nan, -0.2, inf])).collect());
+        g.metallic = Some((0..n).map(|i| pick(i, &[1.0, 0.0, nan, 7.0, -inf, 0.25])).collect());
+        let r = SurfaceReader::new(&g).unwrap();
+        let mut src: Vec<usize> = (0..32).collect();
+        src.extend([47, 33, 34, 35, 36, 37, 38, 39, 40, 41, 42, 43, 44, 45, 46, 32]);
+        for brdf in [Brdf::Lambert, Brdf::BlinnPhong, Brdf::Ggx] {
+            let reads = Reads::of(brdf);
+            let mut it = Items::default();
+            it.resize(src.len());
+            let mut got = SanitizedCounts::default();
+            r.fill_attributes(&src, &mut it, brdf, &mut got);
+            let mut want = SanitizedCounts::default();
+            for (j, &i) in src.iter().enumerate() {
+                let s = r.read(i as u32, 0, 0, &mut want).unwrap();
+                let ctx = format!("{brdf:?} item {j} (sample {i})");
+                // `==`: a clamped −0 may come out as +0 on one path (no effect on the lighting).
+                assert!(Vec3::new(it.nx[j], it.ny[j], it.nz[j]) == s.n, "{ctx}: normal");
+                assert!(Vec3::new(it.ar[j], it.ag[j], it.ab[j]) == s.albedo, "{ctx}: albedo");
+                if reads.specular {
+                    assert!(it.spec[j] == s.specular, "{ctx}: specular");
+                }
+                if reads.power {
+                    assert!(it.pw[j] == s.power, "{ctx}: power");
+                }
+                if reads.metal_rough {
+                    assert!(it.rough[j] == s.roughness && it.metal[j] == s.metallic, "{ctx}: roughness/metallic");
+                }
+            }
+            assert_eq!((got.normal, got.albedo), (want.normal, want.albedo), "{brdf:?}");
+            assert!(got.normal > 0 && got.albedo > 0 && want.specular > 0, "the data has bad values of every kind");
+            if reads.specular {
+                assert_eq!(got.specular, want.specular, "{brdf:?}");
+            }
+            if reads.power {
+                assert_eq!(got.specular_power, want.specular_power, "{brdf:?}");
+            }
+            if reads.metal_rough {
+                assert_eq!((got.roughness, got.metallic), (want.roughness, want.metallic), "{brdf:?}");
+            }
+        }
     }
 
     #[test]
