@@ -53,8 +53,10 @@ impl Bounds {
         let max = |a: f32, b: f32| if b > a { b } else { a };
         for ((x, y), z) in px.chunks(W).zip(py.chunks(W)).zip(pz.chunks(W)) {
             for k in 0..x.len() {
+                // One division: x·(1/d) is within an ulp or two of x/d, far inside the culling margin.
                 let d = -z[k];
-                let v = [x[k] / d, y[k] / d, d];
+                let inv = 1.0 / d;
+                let v = [x[k] * inv, y[k] * inv, d];
                 for q in 0..3 {
                     lo[q][k] = min(lo[q][k], v[q]);
                     hi[q][k] = max(hi[q][k], v[q]);
