@@ -259,7 +259,8 @@ fn run<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
     quad: &QuadSoa,
 ) {
     debug_assert!(range.len().is_multiple_of(V::N), "work lists are padded to whole vectors");
-    let mut live = Vec::with_capacity(lights.len());
+    // The lights reaching a vector: a buffer long enough for every light plus one vector's compressing store.
+    let mut live = vec![0u32; lights.len() + V::N];
     let mut c = range.start;
     while c + V::N <= range.end {
         run_chunk::<V, B, F, Q, P>(it, c, lights, quad, &mut live);
@@ -601,17 +602,20 @@ fn run_chunk<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
     c: usize,
     lights: &LightTable,
     quad: &QuadSoa,
-    live: &mut Vec<u32>,
+    live: &mut [u32],
 ) {
     let s = V::splat;
     let k = load_chunk::<V, B, Q>(it, c);
     let zero = s(0.0);
-    live.clear();
-    if Q {
-        live.extend(0..lights.len() as u32);
+    let n = if Q {
+        for (i, l) in live[..lights.len()].iter_mut().enumerate() {
+            *l = i as u32;
+        }
+        lights.len()
     } else {
-        list_reaching(&k, lights, live);
-    }
+        list_reaching(&k, lights, live)
+    };
+    let live = &live[..n];
     let mut acc = Acc { rgb: [zero; 3], s: zero, tested: zero, lit: zero };
     let mut rest: &[u32] = live;
     if V::INTERLEAVE >= 4 {
@@ -687,15 +691,17 @@ fn quads_of_lights<'a, V: Lanes, const B: u8, const F: u8, const Q: bool, const 
 /// Lists (in increasing order) the lights of `lights` whose culling sphere touches the bounding box of the
 /// vector's positions.
 #[inline(always)]
-fn list_reaching<V: Lanes>(k: &Chunk<V>, lights: &LightTable, live: &mut Vec<u32>) {
+fn list_reaching<V: Lanes>(k: &Chunk<V>, lights: &LightTable, live: &mut [u32]) -> usize {
     let s = V::splat;
     let lo = [s(k.p[0].hmin()), s(k.p[1].hmin()), s(k.p[2].hmin())];
     let hi = [s(k.p[0].hmax()), s(k.p[1].hmax()), s(k.p[2].hmax())];
     let n = lights.len();
+    let mut len = 0;
     let mut base = 0;
     while base + V::N <= n {
         let ld = |a: &[f32]| V::load(&a[base..]);
-        reach_bits(&lo, &hi, [ld(&lights.x), ld(&lights.y), ld(&lights.z)], ld(&lights.r2), base, live);
+        len +=
+            reach_bits(&lo, &hi, [ld(&lights.x), ld(&lights.y), ld(&lights.z)], ld(&lights.r2), base, &mut live[len..]);
         base += V::N;
     }
     if base < n {
@@ -705,23 +711,27 @@ fn list_reaching<V: Lanes>(k: &Chunk<V>, lights: &LightTable, live: &mut Vec<u32
         for (dst, src) in t.iter_mut().zip([&lights.x, &lights.y, &lights.z, &lights.r2]) {
             dst[..n - base].copy_from_slice(&src[base..n]);
         }
-        reach_bits(&lo, &hi, [V::load(&t[0]), V::load(&t[1]), V::load(&t[2])], V::load(&t[3]), base, live);
+        len += reach_bits(
+            &lo,
+            &hi,
+            [V::load(&t[0]), V::load(&t[1]), V::load(&t[2])],
+            V::load(&t[3]),
+            base,
+            &mut live[len..],
+        );
     }
+    len
 }
 
-/// Appends to `live` the lights `base..base + N` whose sphere (centre `c`, squared radius `r2`) touches the box
-/// `lo..hi`.
+/// Writes to the start of `live` the lights `base..base + N` whose sphere (centre `c`, squared radius `r2`)
+/// touches the box `lo..hi`; returns how many.
 #[inline(always)]
-fn reach_bits<V: Lanes>(lo: &[V; 3], hi: &[V; 3], c: [V; 3], r2: V, base: usize, live: &mut Vec<u32>) {
+fn reach_bits<V: Lanes>(lo: &[V; 3], hi: &[V; 3], c: [V; 3], r2: V, base: usize, live: &mut [u32]) -> usize {
     let zero = V::splat(0.0);
     let gap = |i: usize| (lo[i] - c[i]).max(c[i] - hi[i]).max(zero);
     let (gx, gy, gz) = (gap(0), gap(1), gap(2));
     let d2 = gx * gx + gy * gy + gz * gz;
-    let mut bits = V::bits(d2.le(r2));
-    while bits != 0 {
-        live.push((base + bits.trailing_zeros() as usize) as u32);
-        bits &= bits - 1;
-    }
+    V::compress_indices(d2.le(r2), base as u32, live)
 }
 
 /// Light pre-pass second pass: turns the buffers (diffuse light `D` in `or..ob`, monochrome specular `S` in `ls`)

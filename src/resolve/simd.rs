@@ -79,6 +79,19 @@ pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = S
     fn any(m: Self::Mask) -> bool;
     /// The mask as bits (lane `j` → bit `j`).
     fn bits(m: Self::Mask) -> u64;
+    /// Writes `base + j` for every lane `j` set in `m`, in increasing order, to the start of `out` (at least `N`
+    /// long); returns how many.
+    #[inline(always)]
+    fn compress_indices(m: Self::Mask, base: u32, out: &mut [u32]) -> usize {
+        let mut bits = Self::bits(m);
+        let mut n = 0;
+        while bits != 0 {
+            out[n] = base + bits.trailing_zeros();
+            n += 1;
+            bits &= bits - 1;
+        }
+        n
+    }
     /// Smallest lane.
     fn hmin(self) -> f32;
     /// Largest lane.
@@ -595,6 +608,18 @@ mod avx512 {
             u64::from(m)
         }
         #[inline(always)]
+        fn compress_indices(m: Self::Mask, base: u32, out: &mut [u32]) -> usize {
+            // One compressing store instead of a loop over the set bits (whose trip count the branch predictor
+            // cannot know).
+            let out = &mut out[..LANES];
+            unsafe {
+                let iota = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+                let idx = _mm512_add_epi32(_mm512_set1_epi32(base as i32), iota);
+                _mm512_mask_compressstoreu_epi32(out.as_mut_ptr().cast(), m, idx);
+            }
+            m.count_ones() as usize
+        }
+        #[inline(always)]
         fn hmin(self) -> f32 {
             unsafe { _mm512_reduce_min_ps(self.0) }
         }
@@ -681,6 +706,11 @@ mod tests {
             let (x, y) = (ex[j], ex[V::N + j]);
             assert_eq!(out[j], f32::from(u8::from(x <= y)) + f32::from(u8::from(x == y)));
         }
+        let m = a.gt(b);
+        let mut idx = [0u32; 64];
+        let n = V::compress_indices(m, 100, &mut idx);
+        let want: Vec<u32> = (0..V::N).filter(|&j| ex[j] > ex[V::N + j]).map(|j| 100 + j as u32).collect();
+        assert_eq!(&idx[..n], &want[..], "compress_indices");
         assert!(V::any(V::splat(1.0).gt(V::splat(0.0))));
         assert!(!V::any(V::splat(1.0).gt(V::splat(1.0))));
         assert_eq!(a.hmin(), ex[..V::N].iter().fold(f32::INFINITY, |m, &x| m.min(x)));
