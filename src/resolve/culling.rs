@@ -12,6 +12,7 @@
 //! the tests cannot drop a light whose rounded contribution is not exactly 0.
 
 use super::kernel::{Items, QuadSoa};
+use super::simd::Lanes;
 use crate::light::Light;
 use glam::Vec3;
 
@@ -97,6 +98,35 @@ impl Bounds {
             & (f.dot(c) >= -r)
     }
 
+    /// Appends to `out` the indices of the spheres (centres `x, y, z`, radii `r`) for which [`Bounds::may_touch`]
+    /// holds, in increasing order: the same arithmetic, [`Lanes::N`] spheres at a time, the survivors written by
+    /// [`Lanes::compress_indices`] (no branch per sphere). No closures: they are not inlined into the vector code.
+    #[inline(always)]
+    pub fn touching<V: Lanes>(&self, x: &[f32], y: &[f32], z: &[f32], r: &[f32], out: &mut Vec<u32>) {
+        let n = x.len();
+        let start = out.len();
+        out.resize(start + n + V::N, 0);
+        let mut len = start;
+        let p = TouchPlanes::<V>::new(self);
+        let mut base = 0;
+        while base + V::N <= n {
+            let c = [V::load(&x[base..]), V::load(&y[base..]), V::load(&z[base..])];
+            len += p.group(c, V::load(&r[base..]), base, &mut out[len..]);
+            base += V::N;
+        }
+        if base < n {
+            // The last partial group, padded with spheres of radius −∞ (never touching).
+            let mut t = [[0.0f32; 64]; 4];
+            t[3] = [f32::NEG_INFINITY; 64];
+            for (dst, src) in t.iter_mut().zip([x, y, z, r]) {
+                dst[..n - base].copy_from_slice(&src[base..n]);
+            }
+            let c = [V::load(&t[0]), V::load(&t[1]), V::load(&t[2])];
+            len += p.group(c, V::load(&t[3]), base, &mut out[len..]);
+        }
+        out.truncate(len);
+    }
+
     /// Does a quad rectangle (light `i` of `q`) overlap these bounds (rectangle and depth)?
     #[inline]
     #[must_use]
@@ -108,6 +138,45 @@ impl Bounds {
             && q.z0[i] <= self.d1
             && q.z1[i] >= self.d0
     }
+}
+
+/// [`Bounds`] as vectors, for [`Bounds::touching`].
+struct TouchPlanes<V> {
+    planes: [[V; 3]; 4],
+    d0: V,
+    d1: V,
+}
+
+impl<V: Lanes> TouchPlanes<V> {
+    #[inline(always)]
+    fn new(b: &Bounds) -> Self {
+        let s = V::splat;
+        let p = |i: usize| [s(b.planes[i].x), s(b.planes[i].y), s(b.planes[i].z)];
+        TouchPlanes { planes: [p(0), p(1), p(2), p(3)], d0: s(b.d0), d1: s(b.d1) }
+    }
+
+    /// [`Bounds::may_touch`] for `N` spheres; their indices (`base + lane`) written to `out`, the count returned.
+    #[inline(always)]
+    fn group(&self, c: [V; 3], r: V, base: usize, out: &mut [u32]) -> usize {
+        let zero = V::splat(0.0);
+        let depth = zero - c[2];
+        let neg_r = zero - r;
+        let [a, b, e, f] = &self.planes;
+        let m = V::and(
+            V::and((depth + r).ge(self.d0), (depth - r).le(self.d1)),
+            V::and(
+                V::and(dot3(a, &c).ge(neg_r), dot3(b, &c).ge(neg_r)),
+                V::and(dot3(e, &c).ge(neg_r), dot3(f, &c).ge(neg_r)),
+            ),
+        );
+        V::compress_indices(m, base as u32, out)
+    }
+}
+
+/// `Vec3::dot` lane by lane: (x·x' + y·y') + z·z', no fused multiply-add.
+#[inline(always)]
+fn dot3<V: Lanes>(p: &[V; 3], c: &[V; 3]) -> V {
+    p[0] * c[0] + p[1] * c[1] + p[2] * c[2]
 }
 
 /// Culling sphere of a (sanitised) light: centre and grown radius (∞ for directional / unbounded lights).

@@ -11,6 +11,9 @@ use super::config::{Culling, ResolveConfig, Schedule};
 use super::culling::{light_sphere, quad_rects, Bounds};
 use super::kernel::{finish_prepass, shade, Items, QuadSoa, Variant, BLOCK, PAD_PIXEL};
 use super::lights::LightTable;
+#[cfg(target_arch = "x86_64")]
+use super::simd::Avx512;
+use super::simd::Portable;
 use super::surface::{Reads, SanitizedCounts, SurfaceReader, MIN_VIEW_DEPTH};
 #[cfg(target_arch = "x86_64")]
 use crate::codec::simd::Isa;
@@ -129,7 +132,6 @@ struct Scratch {
     lights: LightTable,
     quads: QuadSoa,
     tile_lights: Vec<u32>,
-    mask: Vec<u8>,
     order: Vec<usize>,
     /// Flat sample index of each work-list item.
     src: Vec<usize>,
@@ -536,53 +538,29 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
 /// survivors' indices into `sc.tile_lights`.
 fn cull_tile_list(frame: &Frame<'_>, b: &Bounds, sc: &mut Scratch) {
     let s = &frame.spheres;
-    sc.mask.clear();
-    sc.mask.resize(s.x.len(), 0);
+    sc.tile_lights.clear();
     #[cfg(target_arch = "x86_64")]
     match Isa::detect() {
         // SAFETY: `Isa::detect` found the features the function is compiled for on this CPU.
-        Isa::Avx512 => unsafe { sphere_mask_avx512(b, s, &mut sc.mask) },
+        Isa::Avx512 => unsafe { touching_avx512(b, s, &mut sc.tile_lights) },
         // SAFETY: as above.
-        Isa::Avx2 => unsafe { sphere_mask_avx2(b, s, &mut sc.mask) },
-        Isa::Baseline => sphere_mask(b, s, &mut sc.mask),
+        Isa::Avx2 => unsafe { touching_avx2(b, s, &mut sc.tile_lights) },
+        Isa::Baseline => b.touching::<Portable<false>>(&s.x, &s.y, &s.z, &s.r, &mut sc.tile_lights),
     }
     #[cfg(not(target_arch = "x86_64"))]
-    sphere_mask(b, s, &mut sc.mask);
-    sc.tile_lights.clear();
-    // Few lights survive: skip eight mask bytes at a time while they are all zero.
-    let words = sc.mask.chunks_exact(8);
-    let tail = words.remainder();
-    for (w, word) in words.enumerate() {
-        let bits = u64::from_le_bytes(word.try_into().expect("8 bytes"));
-        if bits != 0 {
-            for (k, &m) in word.iter().enumerate() {
-                if m != 0 {
-                    sc.tile_lights.push((w * 8 + k) as u32);
-                }
-            }
-        }
-    }
-    let base = sc.mask.len() - tail.len();
-    sc.tile_lights.extend(tail.iter().enumerate().filter(|(_, &m)| m != 0).map(|(k, _)| (base + k) as u32));
-}
-
-#[inline(always)]
-fn sphere_mask(b: &Bounds, s: &Spheres, mask: &mut [u8]) {
-    for ((((m, &x), &y), &z), &r) in mask.iter_mut().zip(&s.x).zip(&s.y).zip(&s.z).zip(&s.r) {
-        *m = u8::from(b.may_touch(Vec3::new(x, y, z), r));
-    }
+    b.touching::<Portable<false>>(&s.x, &s.y, &s.z, &s.r, &mut sc.tile_lights);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx2,fma")]
-fn sphere_mask_avx512(b: &Bounds, s: &Spheres, mask: &mut [u8]) {
-    sphere_mask(b, s, mask);
+fn touching_avx512(b: &Bounds, s: &Spheres, out: &mut Vec<u32>) {
+    b.touching::<Avx512>(&s.x, &s.y, &s.z, &s.r, out);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn sphere_mask_avx2(b: &Bounds, s: &Spheres, mask: &mut [u8]) {
-    sphere_mask(b, s, mask);
+fn touching_avx2(b: &Bounds, s: &Spheres, out: &mut Vec<u32>) {
+    b.touching::<Portable<true>>(&s.x, &s.y, &s.z, &s.r, out);
 }
 
 /// Culls lights (all, or only those in `subset`) against `b` and gathers the survivors' constants into
