@@ -70,6 +70,32 @@ impl Bounds {
         Some(Bounds::new(fold_lo(&lo[0]), fold_hi(&hi[0]), fold_lo(&lo[1]), fold_hi(&hi[1]), fold_lo(&lo[2]), d1))
     }
 
+    /// [`Bounds::of_items`] a vector of [`Lanes::N`] items at a time when `range` is a whole number of vectors (work
+    /// lists are padded to whole vectors with copies of a real item, which change no bound). `1/d` comes from
+    /// [`Lanes::recip`] (within an ulp or two of the division: far inside [`CULL_MARGIN`]).
+    #[inline(always)]
+    #[must_use]
+    pub fn of_items_in<V: Lanes>(it: &Items, range: std::ops::Range<usize>) -> Option<Bounds> {
+        if range.is_empty() || !range.len().is_multiple_of(V::N) {
+            return Bounds::of_items(it, range);
+        }
+        let s = V::splat;
+        let zero = s(0.0);
+        let (mut lo, mut hi) = ([s(f32::INFINITY); 3], [s(f32::NEG_INFINITY); 3]);
+        let mut c = range.start;
+        while c < range.end {
+            let d = zero - V::load(&it.pz[c..]);
+            let inv = d.recip();
+            let (tx, ty) = (V::load(&it.px[c..]) * inv, V::load(&it.py[c..]) * inv);
+            (lo[0], hi[0]) = (lo[0].min(tx), hi[0].max(tx));
+            (lo[1], hi[1]) = (lo[1].min(ty), hi[1].max(ty));
+            (lo[2], hi[2]) = (lo[2].min(d), hi[2].max(d));
+            c += V::N;
+        }
+        let d1 = hi[2].hmax().max(0.0);
+        Some(Bounds::new(lo[0].hmin(), hi[0].hmax(), lo[1].hmin(), hi[1].hmax(), lo[2].hmin(), d1))
+    }
+
     /// Bounds from explicit extents.
     #[must_use]
     pub fn new(tx0: f32, tx1: f32, ty0: f32, ty1: f32, d0: f32, d1: f32) -> Bounds {
@@ -226,6 +252,52 @@ pub fn quad_rects(lights: &[Light]) -> QuadSoa {
 mod tests {
     use super::*;
     use crate::util::SplitMix64;
+
+    #[test]
+    fn vector_bounds_and_light_lists_match_the_scalar_ones() {
+        use crate::resolve::simd::Portable;
+        let mut rng = SplitMix64::new(5);
+        let mut it = Items::default();
+        it.resize(48);
+        for j in 0..48 {
+            (it.px[j], it.py[j], it.pz[j]) =
+                (rng.range_f32(-5.0, 5.0), rng.range_f32(-3.0, 3.0), rng.range_f32(-40.0, -0.5));
+        }
+        let want = Bounds::of_items(&it, 0..48).unwrap();
+        assert_eq!(Bounds::of_items_in::<Portable<false>>(&it, 0..48), Some(want));
+        let (mut x, mut y, mut z, mut r) = (vec![], vec![], vec![], vec![]);
+        for _ in 0..1000 {
+            x.push(rng.range_f32(-20.0, 20.0));
+            y.push(rng.range_f32(-20.0, 20.0));
+            z.push(rng.range_f32(-60.0, 10.0));
+            r.push(if rng.next_f32() < 0.01 { f32::INFINITY } else { rng.range_f32(0.1, 8.0) });
+        }
+        let scalar: Vec<u32> = (0..1000u32)
+            .filter(|&i| want.may_touch(Vec3::new(x[i as usize], y[i as usize], z[i as usize]), r[i as usize]))
+            .collect();
+        assert!(!scalar.is_empty() && scalar.len() < 1000);
+        let mut list = vec![7];
+        want.touching::<Portable<false>>(&x, &y, &z, &r, &mut list);
+        assert_eq!(list[0], 7, "appends");
+        assert_eq!(&list[1..], &scalar[..]);
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx512f") {
+            use crate::resolve::simd::Avx512;
+            #[target_feature(enable = "avx512f")]
+            fn run(it: &Items, b: &Bounds, s: [&[f32]; 4], out: &mut Vec<u32>) -> Option<Bounds> {
+                b.touching::<Avx512>(s[0], s[1], s[2], s[3], out);
+                Bounds::of_items_in::<Avx512>(it, 0..48)
+            }
+            let mut list = Vec::new();
+            // SAFETY: the CPU has AVX-512F (checked above).
+            let got = unsafe { run(&it, &want, [&x, &y, &z, &r], &mut list) }.unwrap();
+            assert_eq!(list, scalar);
+            for (g, w) in [(got.tx0, want.tx0), (got.tx1, want.tx1), (got.ty0, want.ty0), (got.ty1, want.ty1)] {
+                assert!((g - w).abs() <= 1e-6 * w.abs().max(1e-3), "{got:?} vs {want:?}");
+            }
+            assert_eq!((got.d0, got.d1), (want.d0, want.d1));
+        }
+    }
 
     #[test]
     fn sphere_touching_a_sample_is_never_culled() {

@@ -336,7 +336,7 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats)
             &mut sc.items
         }
         Culling::Tiled | Culling::Quad => {
-            let bounds = Bounds::of_items(&sc.items, 0..n).expect("nonempty");
+            let bounds = tile_bounds(&sc.items, 0..n).expect("nonempty");
             cull_into(frame, &bounds, None, sc);
             t_cull += lap();
             shade(&mut sc.items, 0..n, &sc.lights, &sc.quads, variant);
@@ -344,12 +344,12 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats)
             &mut sc.items
         }
         Culling::Clustered => {
-            let bounds = Bounds::of_items(&sc.items, 0..n).expect("nonempty");
+            let bounds = tile_bounds(&sc.items, 0..n).expect("nonempty");
             cull_tile_list(frame, &bounds, sc);
             let ranges = sort_by_slice(&bounds, frame.cfg.depth_slices, n_real, sc);
             t_cull += lap();
             for range in ranges {
-                let b = Bounds::of_items(&sc.sorted, range.clone()).expect("nonempty slice");
+                let b = tile_bounds(&sc.sorted, range.clone()).expect("nonempty slice");
                 let list = std::mem::take(&mut sc.tile_lights);
                 cull_into(frame, &b, Some(&list), sc);
                 sc.tile_lights = list;
@@ -549,6 +549,20 @@ fn cull_tile_list(frame: &Frame<'_>, b: &Bounds, sc: &mut Scratch) {
     }
     #[cfg(not(target_arch = "x86_64"))]
     b.touching::<Portable<false>>(&s.x, &s.y, &s.z, &s.r, &mut sc.tile_lights);
+}
+
+/// [`Bounds::of_items_in`] with the vector lanes of this CPU.
+fn tile_bounds(it: &Items, range: std::ops::Range<usize>) -> Option<Bounds> {
+    #[cfg(target_arch = "x86_64")]
+    if Isa::detect() == Isa::Avx512 {
+        #[target_feature(enable = "avx512f,avx2,fma")]
+        fn avx512(it: &Items, range: std::ops::Range<usize>) -> Option<Bounds> {
+            Bounds::of_items_in::<Avx512>(it, range)
+        }
+        // SAFETY: `Isa::detect` found AVX-512F on this CPU.
+        return unsafe { avx512(it, range) };
+    }
+    Bounds::of_items(it, range)
 }
 
 #[cfg(target_arch = "x86_64")]
