@@ -87,7 +87,7 @@ pub struct TileStats {
     pub edge_pixels: u64,
     /// Values sanitised while reading.
     pub sanitized: SanitizedCounts,
-    /// Time building work lists (measured on one tile in [`TIME_EVERY`]: use as a share of the three).
+    /// Time building work lists (measured on one tile in eight: use it as a share of the three).
     pub t_gather: Duration,
     /// Time culling (sampled as `t_gather`).
     pub t_cull: Duration,
