@@ -209,9 +209,9 @@ impl<'a> SurfaceReader<'a> {
     /// of `it` are set and `src[j]` is item `j`'s flat sample index (`src.len()` a multiple of [`LANES`]); fills
     /// the other surface arrays `brdf` reads (see [`Reads`]) with the same defaults, sanitisation and counts as
     /// `read`; the arrays it does not read keep whatever they held, and their planes are neither read nor counted.
-    /// Works a vector
-    /// of items at a time: the inputs of a vector whose samples are consecutive (a tile row at one sample per
-    /// pixel) are one slice copy, other vectors gather; the sanitising arithmetic has no branches.
+    /// Works a vector of items at a time: a vector whose samples are consecutive (a tile row at one sample per
+    /// pixel) is read as one slice (in AVX-512 vectors where the CPU has them), other vectors gather; the sanitising
+    /// arithmetic has no branches.
     #[inline(always)]
     pub fn fill_attributes(&self, src: &[usize], it: &mut Items, brdf: Brdf, counts: &mut SanitizedCounts) {
         #[cfg(target_arch = "x86_64")]
@@ -235,119 +235,122 @@ impl<'a> SurfaceReader<'a> {
         for (c, idx) in src.chunks_exact(LANES).enumerate() {
             let r = c * LANES..(c + 1) * LANES;
             let run = idx.windows(2).all(|w| w[1] == w[0] + 1);
-            // Consecutive samples on an AVX-512 CPU: whole vectors (the same arithmetic, see `avx512`).
-            #[cfg(target_arch = "x86_64")]
-            if run && vector {
-                let at = idx[0]..idx[0] + LANES;
-                fn part<'p, T>(plane: &'p Option<Vec<T>>, at: &std::ops::Range<usize>) -> Option<&'p [T]> {
-                    plane.as_deref().map(|p| &p[at.clone()])
-                }
-                let v3 = |p| part(p, &at);
-                let v1 = |p| part(p, &at);
-                // SAFETY: `vector` is only set where the CPU has AVX-512F.
-                unsafe {
-                    avx512::normals(
-                        v3(&gb.normal),
-                        [&mut it.nx[r.clone()], &mut it.ny[r.clone()], &mut it.nz[r.clone()]],
-                        &mut bad.normal,
-                    );
-                    avx512::albedo(
-                        v3(&gb.albedo),
-                        [&mut it.ar[r.clone()], &mut it.ag[r.clone()], &mut it.ab[r.clone()]],
-                        &mut bad.albedo,
-                    );
-                    if reads.specular {
-                        let range = (DEFAULT_SPECULAR, 0.0, f32::MAX);
-                        avx512::clamped(v1(&gb.specular), &mut it.spec[r.clone()], range, &mut bad.specular);
+            // Consecutive samples on an AVX-512 CPU: whole vectors (the same arithmetic, see `avx512`); else lane
+            // by lane.
+            if !(run && vector && fill_run_avx512(gb, idx[0], reads, it, r.clone(), &mut bad)) {
+                match &gb.normal {
+                    Some(plane) => {
+                        let v = gather(plane, idx, run);
+                        let (x, y, z) = (&mut it.nx[r.clone()], &mut it.ny[r.clone()], &mut it.nz[r.clone()]);
+                        for k in 0..LANES {
+                            let (n, ok) = normalized(v[k]);
+                            bad.normal += u64::from(!ok);
+                            (x[k], y[k], z[k]) = (n.x, n.y, n.z);
+                        }
                     }
-                    if reads.power {
-                        let range = (DEFAULT_SPECULAR_POWER, 0.0, MAX_SPECULAR_POWER);
-                        avx512::clamped(v1(&gb.specular_power), &mut it.pw[r.clone()], range, &mut bad.specular_power);
+                    None => {
+                        it.nx[r.clone()].fill(0.0);
+                        it.ny[r.clone()].fill(0.0);
+                        it.nz[r.clone()].fill(1.0);
                     }
                 }
-                if reads.metal_rough {
-                    // GGX's roughness default depends on the power: the lane-by-lane code below.
-                    let mut rough = [0.0; LANES];
-                    for (o, &p) in rough.iter_mut().zip(&it.pw[r.clone()]) {
-                        *o = roughness_from_power(p);
+                match &gb.albedo {
+                    Some(plane) => {
+                        let v = gather(plane, idx, run);
+                        let (x, y, z) = (&mut it.ar[r.clone()], &mut it.ag[r.clone()], &mut it.ab[r.clone()]);
+                        for k in 0..LANES {
+                            let (a, ok) = albedo_clamped(v[k]);
+                            bad.albedo += u64::from(!ok);
+                            (x[k], y[k], z[k]) = (a.x, a.y, a.z);
+                        }
                     }
+                    None => {
+                        it.ar[r.clone()].fill(DEFAULT_ALBEDO);
+                        it.ag[r.clone()].fill(DEFAULT_ALBEDO);
+                        it.ab[r.clone()].fill(DEFAULT_ALBEDO);
+                    }
+                }
+                if reads.specular {
+                    let spec = [DEFAULT_SPECULAR; LANES];
                     fill_scalars(
-                        &mut it.rough[r.clone()],
-                        gb.roughness.as_ref(),
+                        &mut it.spec[r.clone()],
+                        gb.specular.as_ref(),
                         idx,
                         run,
-                        &rough,
+                        &spec,
                         0.0,
-                        1.0,
-                        &mut bad.roughness,
-                    );
-                    fill_scalars(
-                        &mut it.metal[r],
-                        gb.metallic.as_ref(),
-                        idx,
-                        run,
-                        &[0.0; LANES],
-                        0.0,
-                        1.0,
-                        &mut bad.metallic,
+                        f32::MAX,
+                        &mut bad.specular,
                     );
                 }
-                continue;
-            }
-            match &gb.normal {
-                Some(plane) => {
-                    let v = gather(plane, idx, run);
-                    let (x, y, z) = (&mut it.nx[r.clone()], &mut it.ny[r.clone()], &mut it.nz[r.clone()]);
-                    for k in 0..LANES {
-                        let (n, ok) = normalized(v[k]);
-                        bad.normal += u64::from(!ok);
-                        (x[k], y[k], z[k]) = (n.x, n.y, n.z);
-                    }
+                if reads.power {
+                    let power = [DEFAULT_SPECULAR_POWER; LANES];
+                    let p_hi = MAX_SPECULAR_POWER;
+                    let out = &mut it.pw[r.clone()];
+                    fill_scalars(out, gb.specular_power.as_ref(), idx, run, &power, 0.0, p_hi, &mut bad.specular_power);
                 }
-                None => {
-                    it.nx[r.clone()].fill(0.0);
-                    it.ny[r.clone()].fill(0.0);
-                    it.nz[r.clone()].fill(1.0);
-                }
-            }
-            match &gb.albedo {
-                Some(plane) => {
-                    let v = gather(plane, idx, run);
-                    let (x, y, z) = (&mut it.ar[r.clone()], &mut it.ag[r.clone()], &mut it.ab[r.clone()]);
-                    for k in 0..LANES {
-                        let (a, ok) = albedo_clamped(v[k]);
-                        bad.albedo += u64::from(!ok);
-                        (x[k], y[k], z[k]) = (a.x, a.y, a.z);
-                    }
-                }
-                None => {
-                    it.ar[r.clone()].fill(DEFAULT_ALBEDO);
-                    it.ag[r.clone()].fill(DEFAULT_ALBEDO);
-                    it.ab[r.clone()].fill(DEFAULT_ALBEDO);
-                }
-            }
-            let scalars = |out: &mut [f32], plane: Option<&Vec<f32>>, dflt: &[f32; LANES], lo, hi, count: &mut u64| {
-                fill_scalars(out, plane, idx, run, dflt, lo, hi, count);
-            };
-            if reads.specular {
-                let spec = [DEFAULT_SPECULAR; LANES];
-                scalars(&mut it.spec[r.clone()], gb.specular.as_ref(), &spec, 0.0, f32::MAX, &mut bad.specular);
-            }
-            if reads.power {
-                let power = [DEFAULT_SPECULAR_POWER; LANES];
-                let p_hi = MAX_SPECULAR_POWER;
-                scalars(&mut it.pw[r.clone()], gb.specular_power.as_ref(), &power, 0.0, p_hi, &mut bad.specular_power);
             }
             if reads.metal_rough {
                 let mut rough = [0.0; LANES];
                 for (o, &p) in rough.iter_mut().zip(&it.pw[r.clone()]) {
                     *o = roughness_from_power(p);
                 }
-                scalars(&mut it.rough[r.clone()], gb.roughness.as_ref(), &rough, 0.0, 1.0, &mut bad.roughness);
-                scalars(&mut it.metal[r], gb.metallic.as_ref(), &[0.0; LANES], 0.0, 1.0, &mut bad.metallic);
+                fill_scalars(
+                    &mut it.rough[r.clone()],
+                    gb.roughness.as_ref(),
+                    idx,
+                    run,
+                    &rough,
+                    0.0,
+                    1.0,
+                    &mut bad.roughness,
+                );
+                let zero = [0.0; LANES];
+                fill_scalars(&mut it.metal[r], gb.metallic.as_ref(), idx, run, &zero, 0.0, 1.0, &mut bad.metallic);
             }
         }
         counts.add(&bad);
+    }
+}
+
+/// The normal, albedo, specular and power of 16 consecutive samples from `start` into items `r` with the AVX-512
+/// vectors (the caller checked the CPU has them); returns true. Elsewhere returns false: the caller fills them
+/// lane by lane.
+#[inline(always)]
+fn fill_run_avx512(
+    gb: &GBuffer,
+    start: usize,
+    reads: Reads,
+    it: &mut Items,
+    r: std::ops::Range<usize>,
+    bad: &mut SanitizedCounts,
+) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        fn part<T>(plane: &Option<Vec<T>>, start: usize) -> Option<&[T]> {
+            plane.as_deref().map(|p| &p[start..start + LANES])
+        }
+        // SAFETY: the caller only asks where the CPU has AVX-512F.
+        unsafe {
+            let n = [&mut it.nx[r.clone()], &mut it.ny[r.clone()], &mut it.nz[r.clone()]];
+            avx512::normals(part(&gb.normal, start), n, &mut bad.normal);
+            let a = [&mut it.ar[r.clone()], &mut it.ag[r.clone()], &mut it.ab[r.clone()]];
+            avx512::albedo(part(&gb.albedo, start), a, &mut bad.albedo);
+            if reads.specular {
+                let range = (DEFAULT_SPECULAR, 0.0, f32::MAX);
+                avx512::clamped(part(&gb.specular, start), &mut it.spec[r.clone()], range, &mut bad.specular);
+            }
+            if reads.power {
+                let range = (DEFAULT_SPECULAR_POWER, 0.0, MAX_SPECULAR_POWER);
+                avx512::clamped(part(&gb.specular_power, start), &mut it.pw[r], range, &mut bad.specular_power);
+            }
+        }
+        true
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (gb, start, reads, it, r, bad);
+        false
     }
 }
 
