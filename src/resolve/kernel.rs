@@ -260,7 +260,13 @@ fn run<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
 ) {
     debug_assert!(range.len().is_multiple_of(V::N), "work lists are padded to whole vectors");
     // The lights reaching a vector: a buffer long enough for every light plus one vector's compressing store.
+    // Quad culling tests every light per sample: its list is all of them, written once.
     let mut live = vec![0u32; lights.len() + V::N];
+    if Q {
+        for (i, l) in live[..lights.len()].iter_mut().enumerate() {
+            *l = i as u32;
+        }
+    }
     let mut c = range.start;
     while c + V::N <= range.end {
         run_chunk::<V, B, F, Q, P>(it, c, lights, quad, &mut live);
@@ -607,14 +613,7 @@ fn run_chunk<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
     let s = V::splat;
     let k = load_chunk::<V, B, Q>(it, c);
     let zero = s(0.0);
-    let n = if Q {
-        for (i, l) in live[..lights.len()].iter_mut().enumerate() {
-            *l = i as u32;
-        }
-        lights.len()
-    } else {
-        list_reaching(&k, lights, live)
-    };
+    let n = if Q { lights.len() } else { list_reaching(&k, lights, live) };
     let live = &live[..n];
     let mut acc = Acc { rgb: [zero; 3], s: zero, tested: zero, lit: zero };
     let mut rest: &[u32] = live;
