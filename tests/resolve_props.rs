@@ -216,3 +216,72 @@ proptest! {
         }
     }
 }
+
+/// The resolve's result apart from its timings.
+fn without_times(mut r: gbuf::resolve::Resolved) -> gbuf::resolve::Resolved {
+    r.stats.ms = Default::default();
+    r
+}
+
+/// `gb` with sample-level damage the resolve must sanitise and count: NaN and Inf positions, normals and albedo,
+/// negative specular, uncovered first samples (the per-pixel slow path), at positions chosen by `seed`.
+fn damaged(mut gb: GBuffer, seed: u64) -> GBuffer {
+    let n = gb.len();
+    let mut at = seed | 1;
+    let mut next = || {
+        at = at.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (at >> 33) as usize % n
+    };
+    for _ in 0..n / 40 {
+        gb.coverage[next()] = false;
+        if let Some(p) = &mut gb.position {
+            p[next()] = Vec3::new(f32::NAN, 0.0, -1.0);
+            p[next()].z = f32::INFINITY;
+        }
+        if let Some(v) = &mut gb.normal {
+            v[next()] = Vec3::splat(f32::NAN);
+        }
+        if let Some(v) = &mut gb.albedo {
+            v[next()] = Vec3::new(-1.0, f32::INFINITY, 0.5);
+        }
+        if let Some(v) = &mut gb.specular {
+            v[next()] = -2.0;
+        }
+    }
+    gb
+}
+
+#[test]
+fn sample_major_order_gives_the_same_result_as_interleaved() {
+    use gbuf::detect::{detect, Detector, DetectorConfig};
+    use gbuf::resolve::SampleMajor;
+    for (samples, seed) in [(1, 3), (2, 5), (4, 7), (8, 9)] {
+        let mut gb = damaged(fixture::spheres(41, 27, samples).unwrap(), seed);
+        let lights = mixed_lights(&gb, seed);
+        let adaptive = detect(&gb, Detector::Lauritzen, &DetectorConfig::default()).unwrap();
+        assert!(samples == 1 || adaptive.shade_count.iter().any(|&c| c > 1), "{samples}x: no edge pixel");
+        for (mask, what) in [(adaptive, "adaptive"), (uniform_mask(&gb, true), "ssaa")] {
+            for &culling in Culling::ALL {
+                for &brdf in Brdf::ALL {
+                    let c = ResolveConfig { culling, tile_size: 7, ..cfg(culling, brdf, Falloff::Gltf) };
+                    let want = without_times(resolve(&gb, &lights, &mask, &c).unwrap());
+                    let sm = SampleMajor::new(&gb).unwrap();
+                    let got = without_times(resolve(&sm, &lights, &mask, &c).unwrap());
+                    let label = format!("{samples}x {what} {culling} {brdf}");
+                    assert_bit_identical(&want.image, &got.image, &label);
+                    assert_eq!(want.lights_per_pixel, got.lights_per_pixel, "{label}");
+                    assert_eq!(want.stats, got.stats, "{label}");
+                    assert!(want.stats.sanitized.total() > 0, "{label}: nothing was damaged");
+                }
+            }
+        }
+        // Positions from depth and the camera instead of a position plane.
+        gb.position = None;
+        let mask = uniform_mask(&gb, true);
+        let c = ResolveConfig::default();
+        let want = without_times(resolve(&gb, &lights, &mask, &c).unwrap());
+        let got = without_times(resolve(&SampleMajor::new(&gb).unwrap(), &lights, &mask, &c).unwrap());
+        assert_bit_identical(&want.image, &got.image, &format!("{samples}x from depth"));
+        assert_eq!(want.stats, got.stats);
+    }
+}

@@ -19,12 +19,14 @@ pub mod fastmath;
 pub mod fixture;
 pub mod kernel;
 pub mod lights;
+pub mod order;
 pub mod reference;
 pub mod schedule;
 pub mod simd;
 pub mod surface;
 
 pub use config::{Brdf, Culling, Falloff, ResolveConfig, Schedule, DEFAULT_DEPTH_SLICES, DEFAULT_TILE_SIZE};
+pub use order::{ResolveInput, SampleMajor};
 pub use reference::{reference, reference_per_sample};
 pub use surface::SanitizedCounts;
 
@@ -85,9 +87,15 @@ pub fn uniform_mask(gb: &GBuffer, per_sample: bool) -> EdgeMask {
     EdgeMask { width: gb.width, height: gb.height, samples: gb.samples, shade_count }
 }
 
-/// Lights `gb` with `lights`, shading per sample where `mask` says so, as configured by `cfg`. Runs on rayon's
-/// current thread pool (install a local pool to choose the thread count). Never returns NaN or Inf pixels.
-pub fn resolve(gb: &GBuffer, lights: &[Light], mask: &EdgeMask, cfg: &ResolveConfig) -> Result<Resolved> {
+/// Lights `gb` (a [`GBuffer`], or a [`SampleMajor`] copy of one: the same image, faster for MSAA) with `lights`,
+/// shading per sample where `mask` says so, as configured by `cfg`. Runs on rayon's current thread pool (install
+/// a local pool to choose the thread count). Never returns NaN or Inf pixels.
+pub fn resolve<'a>(
+    gb: impl Into<ResolveInput<'a>>,
+    lights: &[Light],
+    mask: &EdgeMask,
+    cfg: &ResolveConfig,
+) -> Result<Resolved> {
     let mut out = Resolved::default();
     resolve_into(gb, lights, mask, cfg, &mut out)?;
     Ok(out)
@@ -96,14 +104,15 @@ pub fn resolve(gb: &GBuffer, lights: &[Light], mask: &EdgeMask, cfg: &ResolveCon
 /// [`resolve`] into `out`, reusing its image and heatmap storage: a renderer lighting frame after frame keeps one
 /// `Resolved` and pays no allocation (and no first-touch page faults of fresh pages) per frame. Every pixel and
 /// every statistic of `out` is overwritten; on error `out` is left unchanged.
-pub fn resolve_into(
-    gb: &GBuffer,
+pub fn resolve_into<'a>(
+    gb: impl Into<ResolveInput<'a>>,
     lights: &[Light],
     mask: &EdgeMask,
     cfg: &ResolveConfig,
     out: &mut Resolved,
 ) -> Result<()> {
     let t_start = Instant::now();
+    let (gb, order) = gb.into().planes();
     cfg.validate()?;
     if mask.width != gb.width || mask.height != gb.height || mask.shade_count.len() != gb.pixel_count() {
         return Err(Error::Argument(format!(
@@ -115,7 +124,7 @@ pub fn resolve_into(
             gb.height
         )));
     }
-    let reader = surface::SurfaceReader::new(gb)?;
+    let reader = surface::SurfaceReader::with_order(gb, order)?;
     let clean = lights::sanitize(lights);
     let frame = schedule::Frame::new(reader, mask, &clean.lights, *cfg);
     let t_prep = t_start.elapsed();

@@ -231,12 +231,11 @@ fn prefetch_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32) {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T1};
-        fn rows<T>(plane: Option<&[T]>, gb: &crate::gbuffer::GBuffer, x0: u32, y0: u32, w: u32, h: u32) {
+        /// Prefetches rows `y0..y0 + h`, columns `x0..x0 + w`, samples `0..=last` of `plane`.
+        fn rows<T>(plane: Option<&[T]>, reader: &SurfaceReader<'_>, (x0, y0, w, h): (u32, u32, u32, u32), last: u32) {
             let Some(plane) = plane else { return };
             for y in y0..y0 + h {
-                let a = gb.index(x0, y, 0);
-                let b = gb.index(x0 + w - 1, y, gb.samples - 1);
-                let row = &plane[a..=b];
+                let row = &plane[reader.index(x0, y, 0)..=reader.index(x0 + w - 1, y, last)];
                 let bytes = std::mem::size_of_val(row);
                 let base = row.as_ptr().cast::<i8>();
                 let mut off = 0;
@@ -265,13 +264,18 @@ fn prefetch_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32) {
                 _mm_prefetch::<_MM_HINT_T1>(row.as_ptr().add(row.len() - 1).cast::<i8>());
             }
         }
-        rows(Some(&gb.coverage[..]), gb, x0, y0, w, h);
+        // Every sample of each pixel when they sit side by side; in sample-major order sample 0 only (the edge
+        // pixels' other samples are few and scattered).
+        let r = &frame.reader;
+        let last = if r.strides().1 == 1 { gb.samples - 1 } else { 0 };
+        let tile = (x0, y0, w, h);
+        rows(Some(&gb.coverage[..]), r, tile, last);
         match &gb.position {
-            Some(p) => rows(Some(&p[..]), gb, x0, y0, w, h),
-            None => rows(gb.depth.as_deref(), gb, x0, y0, w, h),
+            Some(p) => rows(Some(&p[..]), r, tile, last),
+            None => rows(gb.depth.as_deref(), r, tile, last),
         }
-        rows(gb.normal.as_deref(), gb, x0, y0, w, h);
-        rows(gb.albedo.as_deref(), gb, x0, y0, w, h);
+        rows(gb.normal.as_deref(), r, tile, last);
+        rows(gb.albedo.as_deref(), r, tile, last);
         let reads = Reads::of(frame.cfg.brdf);
         for (plane, read) in [
             (&gb.specular, reads.specular),
@@ -280,7 +284,7 @@ fn prefetch_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32) {
             (&gb.metallic, reads.metal_rough),
         ] {
             if read {
-                rows(plane.as_deref(), gb, x0, y0, w, h);
+                rows(plane.as_deref(), r, tile, last);
             }
         }
     }
@@ -433,7 +437,8 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
     it.pixel.reserve(cap);
     sc.src.reserve(cap);
     let plane = gb.position.as_deref();
-    let stride = samples as usize;
+    // Plane index = pixel number · `stride` + sample · `sample_stride` (either sample order).
+    let (stride, sample_stride) = frame.reader.strides();
     for y in tile.y0..tile.y0 + tile.h {
         let row = y as usize * width;
         let local_row = (y - tile.y0) as usize * width + x0;
@@ -486,7 +491,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
                 continue;
             }
             // A non-edge pixel: its first usable sample stands for the whole pixel.
-            let first = (row + x0 + k) * samples as usize;
+            let first = (row + x0 + k) * stride;
             if let Some(plane) = plane {
                 // The common case first: sample 0 covered, with a usable stored position (else the loop below
                 // looks at every sample again, counting what it must).
@@ -497,7 +502,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
                 }
             }
             let found = (0..samples).any(|s| {
-                let i = first + s as usize;
+                let i = first + s as usize * sample_stride;
                 let pos = frame.reader.position(x, y, s, i, counts);
                 if let Some(pos) = pos {
                     push(it, &mut sc.src, pos, i, (local_row + k) as u32, 1.0);
@@ -511,11 +516,11 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
     }
     let n_single = sc.src.len();
     for &(x, y) in &sc.edge_px {
-        let first = (y as usize * width + x as usize) * samples as usize;
+        let first = (y as usize * width + x as usize) * stride;
         let local = ((y - tile.y0) as usize * width + x as usize) as u32;
         let before = sc.src.len();
         for s in 0..samples {
-            let i = first + s as usize;
+            let i = first + s as usize * sample_stride;
             if let Some(pos) = frame.reader.position(x, y, s, i, counts) {
                 push(it, &mut sc.src, pos, i, local, weight);
             }

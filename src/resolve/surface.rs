@@ -114,18 +114,38 @@ pub struct Surface {
     pub metallic: f32,
 }
 
-/// Reads samples of one G-buffer (attribute planes resolved once).
+/// Reads samples of one G-buffer (attribute planes resolved once), whose planes are in either sample order (see
+/// [`SampleOrder`]).
 pub struct SurfaceReader<'a> {
     gb: &'a GBuffer,
     camera: Option<Camera>,
     /// `(tan(fov/2) · aspect, tan(fov/2))`: the camera's ray slopes, computed once.
     slopes: Vec2,
+    /// Plane index step from one pixel to the next (row-major).
+    pixel_stride: usize,
+    /// Plane index step from one sample of a pixel to the next.
+    sample_stride: usize,
+}
+
+/// The order of a G-buffer's planes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SampleOrder {
+    /// `(y·width + x)·samples + s`, a pixel's samples side by side: [`GBuffer`]'s own order.
+    Interleaved,
+    /// `s·width·height + y·width + x`: every pixel's sample 0 (a one-sample G-buffer), then every pixel's sample
+    /// 1, and so on. See [`super::SampleMajor`].
+    SampleMajor,
 }
 
 impl<'a> SurfaceReader<'a> {
-    /// Prepares to read `gb`. Fails when covered samples exist but no position can be formed (no position plane,
-    /// and not both depth and a camera).
+    /// Prepares to read `gb` (in [`GBuffer`]'s own, interleaved order). Fails when covered samples exist but no
+    /// position can be formed (no position plane, and not both depth and a camera).
     pub fn new(gb: &'a GBuffer) -> Result<Self> {
+        Self::with_order(gb, SampleOrder::Interleaved)
+    }
+
+    /// Prepares to read `gb`, whose planes are in `order`. Fails as [`SurfaceReader::new`].
+    pub fn with_order(gb: &'a GBuffer, order: SampleOrder) -> Result<Self> {
         gb.validate()?;
         let derivable = gb.depth.is_some() && gb.camera.is_some();
         if gb.position.is_none() && !derivable && gb.coverage.iter().any(|&c| c) {
@@ -139,7 +159,33 @@ impl<'a> SurfaceReader<'a> {
             let ray = c.view_ray(Vec2::ZERO, 2, 2);
             Vec2::new(-ray.x, ray.y)
         });
-        Ok(SurfaceReader { gb, camera: gb.camera, slopes })
+        let (pixel_stride, sample_stride) = match order {
+            SampleOrder::Interleaved => (gb.samples as usize, 1),
+            SampleOrder::SampleMajor => (1, gb.pixel_count()),
+        };
+        Ok(SurfaceReader { gb, camera: gb.camera, slopes, pixel_stride, sample_stride })
+    }
+
+    /// Plane index of sample `s` of pixel (`x`, `y`), in the reader's sample order.
+    #[inline(always)]
+    #[must_use]
+    pub fn index(&self, x: u32, y: u32, s: u32) -> usize {
+        debug_assert!(x < self.gb.width && y < self.gb.height && s < self.gb.samples);
+        self.pixel(x, y) * self.pixel_stride + s as usize * self.sample_stride
+    }
+
+    /// Row-major pixel number of (`x`, `y`).
+    #[inline(always)]
+    fn pixel(&self, x: u32, y: u32) -> usize {
+        y as usize * self.gb.width as usize + x as usize
+    }
+
+    /// `(pixel stride, sample stride)`: the plane index of sample `s` of pixel number `p` is
+    /// `p · pixel stride + s · sample stride`.
+    #[inline(always)]
+    #[must_use]
+    pub fn strides(&self) -> (usize, usize) {
+        (self.pixel_stride, self.sample_stride)
     }
 
     /// The G-buffer being read.
@@ -151,7 +197,7 @@ impl<'a> SurfaceReader<'a> {
     /// Sample `s` of pixel (`x`, `y`); `None` for background (or an unusable position, counted).
     #[inline]
     pub fn read(&self, x: u32, y: u32, s: u32, counts: &mut SanitizedCounts) -> Option<Surface> {
-        let i = self.gb.index(x, y, s);
+        let i = self.index(x, y, s);
         let p = self.position(x, y, s, i, counts)?;
         Some(self.attributes(i, p, counts))
     }
