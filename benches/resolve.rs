@@ -3,7 +3,8 @@
 //!
 //! - `resolve/tiled/1x/1280x720`: 1 sample per pixel, the < 15 ms target on 2 cores;
 //! - `resolve/tiled/4x-adaptive/1280x720`: 4× MSAA, lauritzen-style adaptive (edge pixels per sample), ≤ 1.5× the
-//!   1-sample cost; `resolve/tiled/4x-ssaa` for scale;
+//!   1-sample cost; `…/sample-major` the same frame in sample-major order ([`gbuf::resolve::SampleMajor`]: every
+//!   pixel's sample 0 in planes of their own); `resolve/tiled/4x-ssaa` for scale;
 //! - `resolve/none/1x/1280x720`: no culling, same lights;
 //! - `resolve/tiled/1x/1280x720/threads-1` and `threads-2`: thread scaling (local rayon pools).
 //!
@@ -12,7 +13,7 @@
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use gbuf::detect::{detect, Detector, DetectorConfig};
-use gbuf::resolve::{fixture, resolve, uniform_mask, Culling, ResolveConfig};
+use gbuf::resolve::{fixture, resolve, uniform_mask, Culling, ResolveConfig, SampleMajor};
 
 const W: u32 = 1280;
 const H: u32 = 720;
@@ -27,6 +28,7 @@ fn benches(c: &mut Criterion) {
     let mask1 = uniform_mask(&gb1, false);
     let mask4 = detect(&gb4, Detector::Lauritzen, &DetectorConfig::default()).expect("detect");
     let ssaa4 = uniform_mask(&gb4, true);
+    let sm4 = SampleMajor::new(&gb4).expect("reorder");
     let tiled = ResolveConfig::default();
     let none = ResolveConfig { culling: Culling::None, ..tiled };
 
@@ -50,6 +52,9 @@ fn benches(c: &mut Criterion) {
     });
     g.bench_function("tiled/4x-adaptive/1280x720", |b| {
         b.iter(|| resolve(black_box(&gb4), black_box(&lights), &mask4, &tiled).unwrap())
+    });
+    g.bench_function("tiled/4x-adaptive/1280x720/sample-major", |b| {
+        b.iter(|| resolve(black_box(&sm4), black_box(&lights), &mask4, &tiled).unwrap())
     });
     g.bench_function("tiled/4x-ssaa/1280x720", |b| {
         b.iter(|| resolve(black_box(&gb4), black_box(&lights), &ssaa4, &tiled).unwrap())

@@ -10,7 +10,10 @@
 //! `GBUF_PERF_SIZE` (`WxH`), `GBUF_PERF_FRAMES` (default 10), `GBUF_PERF_LIGHTS_PER_SAMPLE` (default 40).
 
 use gbuf::detect::{detect, Detector, DetectorConfig};
-use gbuf::resolve::{fixture, resolve, resolve_into, uniform_mask, Culling, ResolveConfig, ResolveStats, Resolved};
+use gbuf::resolve::{
+    fixture, resolve, resolve_into, uniform_mask, Culling, ResolveConfig, ResolveInput, ResolveStats, Resolved,
+    SampleMajor,
+};
 use std::time::Instant;
 
 fn cpu_seconds() -> Option<f64> {
@@ -55,19 +58,56 @@ fn time_per_frame() {
     let gb4 = fixture::room(w, h, 4).unwrap();
     let lights = fixture::lights_for_density(w, h, 1024, density, 7).unwrap();
     let mask1 = uniform_mask(&gb1, false);
+    let t0 = Instant::now();
     let mask4 = detect(&gb4, Detector::Lauritzen, &DetectorConfig::default()).unwrap();
+    let t_detect = t0.elapsed();
+    let t0 = Instant::now();
+    let sm4 = SampleMajor::new(&gb4).unwrap();
+    let t_reorder = t0.elapsed();
+    let t0 = Instant::now();
+    let copy = gb4.clone();
+    let t_copy = t0.elapsed();
+    drop(copy);
+    println!(
+        "4x: lauritzen edge detection {:.1} ms; reordering to sample-major {:.1} ms (once per G-buffer, current pool; \
+         a plain copy of the G-buffer: {:.1} ms)",
+        t_detect.as_secs_f64() * 1e3,
+        t_reorder.as_secs_f64() * 1e3,
+        t_copy.as_secs_f64() * 1e3
+    );
     let pools: Vec<_> = [1, 2]
         .map(|n| {
             rayon::ThreadPoolBuilder::new().num_threads(n).thread_name(move |i| format!("p{n}-{i}")).build().unwrap()
         })
         .into();
     println!("kernel instruction set: {}", gbuf::resolve::kernel::instruction_set());
+    // The bench frame has few edges (0.3% of pixels: sphere silhouettes); real frames have more. The same frame
+    // with pixels scattered at random (the worst case for locality) also shaded per sample, up to 10%.
+    let widened = |percent: u64| {
+        let mut m = mask4.clone();
+        for (p, c) in m.shade_count.iter_mut().enumerate() {
+            let h = (p as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40;
+            if h % 1000 < percent * 10 {
+                *c = 4;
+            }
+        }
+        m
+    };
+    let (mask4_5, mask4_10) = (widened(5), widened(10));
+    let (in1, in4, sm4): (ResolveInput, ResolveInput, ResolveInput) = ((&gb1).into(), (&gb4).into(), (&sm4).into());
+    let tiled = ResolveConfig::default();
     for (name, gb, mask, cfg, reuse) in [
-        ("tiled 1x", &gb1, &mask1, ResolveConfig::default(), false),
-        ("tiled 1x reusing the output", &gb1, &mask1, ResolveConfig::default(), true),
-        ("tiled 4x adaptive", &gb4, &mask4, ResolveConfig::default(), false),
-        ("tiled 4x adaptive reusing the output", &gb4, &mask4, ResolveConfig::default(), true),
-        ("none 1x", &gb1, &mask1, ResolveConfig { culling: Culling::None, ..Default::default() }, false),
+        ("tiled 1x", in1, &mask1, tiled, false),
+        ("tiled 1x reusing the output", in1, &mask1, tiled, true),
+        ("tiled 4x adaptive", in4, &mask4, tiled, false),
+        ("tiled 4x adaptive reusing the output", in4, &mask4, tiled, true),
+        ("tiled 4x adaptive sample-major", sm4, &mask4, tiled, false),
+        ("tiled 4x adaptive sample-major reusing the output", sm4, &mask4, tiled, true),
+        ("tiled 4x, +5% of pixels per sample", in4, &mask4_5, tiled, false),
+        ("tiled 4x, +5% of pixels per sample, sample-major", sm4, &mask4_5, tiled, false),
+        ("tiled 4x, +10% of pixels per sample", in4, &mask4_10, tiled, false),
+        ("tiled 4x, +10% of pixels per sample, sample-major", sm4, &mask4_10, tiled, false),
+        ("none 1x", in1, &mask1, ResolveConfig { culling: Culling::None, ..Default::default() }, false),
     ] {
         // `resolve` allocates the image and heatmap per frame; `resolve_into` reuses one `Resolved`, as a
         // renderer keeps its render targets.
@@ -117,7 +157,7 @@ fn time_per_frame() {
         println!(
             "{name}: {:.1} ms CPU/frame on 1 thread ({:.1} on 2, per thread {} ms); best wall {:.1} ms on 1 thread, \
              {:.1} ms on 2 (×{:.2}); \
-             {} pairs tested ({:.1}/sample, {:.0}% lit); 1-thread split gather {:.1} cull {:.1} shade {:.1} ms",
+             {} pairs tested ({:.1}/sample, {:.0}% lit); edge pixels {:.2}%, shading fraction {:.3}; 1-thread split gather {:.1} cull {:.1} shade {:.1} ms",
             cpu * 1e3,
             cpu2 * 1e3,
             split2.join(" + "),
@@ -127,6 +167,8 @@ fn time_per_frame() {
             s.light_pairs_tested,
             s.lights_per_sample,
             100.0 * s.light_pairs_lit as f64 / s.light_pairs_tested.max(1) as f64,
+            100.0 * s.edge_fraction,
+            s.shading_fraction,
             split[0],
             split[1],
             split[2]

@@ -12,6 +12,7 @@
 use super::surface::SampleOrder;
 use crate::error::Result;
 use crate::gbuffer::GBuffer;
+use rayon::prelude::*;
 
 /// A G-buffer's resolve attributes (coverage, depth, position, normal, albedo, specular, specular power,
 /// roughness, metallic) reordered sample-major, ready to be resolved any number of times (see the module docs).
@@ -23,19 +24,37 @@ pub struct SampleMajor {
 }
 
 impl SampleMajor {
-    /// Reorders `gb` (one pass over the planes the resolve reads; for one sample per pixel a plain copy). Fails
+    /// Reorders `gb` (one pass over the planes the resolve reads, in parallel on rayon's current pool; for one
+    /// sample per pixel a plain copy). Fails
     /// when `gb` is inconsistent (see [`GBuffer::validate`]).
     pub fn new(gb: &GBuffer) -> Result<Self> {
         gb.validate()?;
         let (p, s) = (gb.pixel_count(), gb.samples as usize);
-        fn reorder<T: Copy>(v: &[T], p: usize, s: usize) -> Vec<T> {
+        fn reorder<T: Copy + Default + Send + Sync>(v: &[T], p: usize, s: usize) -> Vec<T> {
             if s == 1 {
                 return v.to_vec();
             }
-            // Sample k of every pixel, k = 0..s: a strided read, a sequential write.
-            (0..s).flat_map(|k| v[k..].iter().step_by(s).copied().take(p)).collect()
+            // Pieces of pixels in parallel; each reads its pixels' samples in order (one pass over `v`) and writes
+            // sample k into plane k.
+            const PIECE: usize = 1 << 12;
+            let mut out = vec![T::default(); v.len()];
+            let mut pieces: Vec<Vec<&mut [T]>> = (0..p.div_ceil(PIECE)).map(|_| Vec::with_capacity(s)).collect();
+            for plane in out.chunks_mut(p) {
+                for (piece, part) in pieces.iter_mut().zip(plane.chunks_mut(PIECE)) {
+                    piece.push(part);
+                }
+            }
+            pieces.into_par_iter().enumerate().for_each(|(c, mut parts)| {
+                let n = parts[0].len();
+                for (j, px) in v[c * PIECE * s..].chunks_exact(s).take(n).enumerate() {
+                    for (part, &x) in parts.iter_mut().zip(px) {
+                        part[j] = x;
+                    }
+                }
+            });
+            out
         }
-        fn plane<T: Copy>(v: &Option<Vec<T>>, p: usize, s: usize) -> Option<Vec<T>> {
+        fn plane<T: Copy + Default + Send + Sync>(v: &Option<Vec<T>>, p: usize, s: usize) -> Option<Vec<T>> {
             v.as_deref().map(|v| reorder(v, p, s))
         }
         Ok(SampleMajor {

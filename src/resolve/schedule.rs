@@ -135,8 +135,9 @@ struct Scratch {
     order: Vec<usize>,
     /// Flat sample index of each work-list item.
     src: Vec<usize>,
-    /// Edge pixels of the tile (column, row), listed by the first gather pass.
-    edge_px: Vec<(u32, u32)>,
+    /// Edge pixels of the tile (column, row, whether sample 0 was taken by the first gather pass), listed by
+    /// that pass.
+    edge_px: Vec<(u32, u32, bool)>,
     /// Pixels of the tile with no usable sample (band-relative index), listed by the first gather pass.
     blank_px: Vec<u32>,
     /// The band's box-filtered colour and light evaluations (the band's rows of the outputs, in cache: tiles write
@@ -188,12 +189,19 @@ fn run_band(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat
     let n = rgb.len();
     sc.band_rgb.resize(n, Vec3::ZERO);
     sc.band_heat.resize(n, 0.0);
+    // The band's rows of the edge mask (one byte per pixel, a few kB) first: the prefetch of each next tile reads
+    // them.
+    let width = gb.width as usize;
+    for row in frame.mask.shade_count[y0 as usize * width..(y0 + h) as usize * width].chunks(64) {
+        std::hint::black_box(row[0]);
+    }
+    let planes = planes_read(frame);
     let mut x0 = 0;
     while x0 < gb.width {
         let w = ts.min(gb.width - x0);
         let next = x0 + w;
         if next < gb.width {
-            prefetch_tile(frame, next, y0, ts.min(gb.width - next), h);
+            prefetch_tile(frame, &planes, next, y0, ts.min(gb.width - next), h);
         }
         run_tile(frame, Tile { x0, y0, w, h }, sc, &mut st);
         x0 = next;
@@ -224,72 +232,74 @@ fn run_band_avx2(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3],
     run_band(frame, y0, sc, rgb, heat)
 }
 
-/// Asks the CPU to start loading the G-buffer rows of a tile into cache (a hint: it never faults, and only
-/// addresses inside the planes are formed). A tile's 16 row segments of 7 or so planes are too many short streams
-/// for the hardware prefetcher; without this the work-list build waits on memory.
-fn prefetch_tile(frame: &Frame<'_>, x0: u32, y0: u32, w: u32, h: u32) {
+/// The planes the resolve reads for `frame`'s BRDF, as (start, bytes per sample, samples): what
+/// [`prefetch_tile`] fetches.
+fn planes_read(frame: &Frame<'_>) -> [Option<(*const i8, usize, usize)>; 8] {
+    fn raw<T>(p: Option<&[T]>) -> Option<(*const i8, usize, usize)> {
+        p.map(|p| (p.as_ptr().cast::<i8>(), std::mem::size_of::<T>(), p.len()))
+    }
+    let gb = frame.reader.gbuffer();
+    let reads = Reads::of(frame.cfg.brdf);
+    let only = |read: bool, p: &Option<Vec<f32>>| if read { raw(p.as_deref()) } else { None };
+    [
+        raw(Some(&gb.coverage[..])),
+        if gb.position.is_some() { raw(gb.position.as_deref()) } else { raw(gb.depth.as_deref()) },
+        raw(gb.normal.as_deref()),
+        raw(gb.albedo.as_deref()),
+        only(reads.specular, &gb.specular),
+        only(reads.power, &gb.specular_power),
+        only(reads.metal_rough, &gb.roughness),
+        only(reads.metal_rough, &gb.metallic),
+    ]
+}
+
+/// Asks the CPU to start loading a tile's G-buffer samples into cache (a hint: prefetches never fault). A
+/// tile's 16 row segments of 7 or so planes are too many short streams for the hardware prefetcher; without this
+/// the work-list build waits on memory. Interleaved order: every sample of the tile's rows. Sample-major order:
+/// sample 0 of the rows, and the other samples of the edge pixels only (scattered lines, each its own miss: issued
+/// a tile ahead, they overlap).
+fn prefetch_tile(frame: &Frame<'_>, planes: &[Option<(*const i8, usize, usize)>], x0: u32, y0: u32, w: u32, h: u32) {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T1};
-        /// Prefetches rows `y0..y0 + h`, columns `x0..x0 + w`, samples `0..=last` of `plane`.
-        fn rows<T>(plane: Option<&[T]>, reader: &SurfaceReader<'_>, (x0, y0, w, h): (u32, u32, u32, u32), last: u32) {
-            let Some(plane) = plane else { return };
-            for y in y0..y0 + h {
-                let row = &plane[reader.index(x0, y, 0)..=reader.index(x0 + w - 1, y, last)];
-                let bytes = std::mem::size_of_val(row);
-                let base = row.as_ptr().cast::<i8>();
-                let mut off = 0;
-                while off < bytes {
-                    // SAFETY: `base + off` lies inside `row` (off < its byte length); prefetch has no other effect.
-                    unsafe { _mm_prefetch::<_MM_HINT_T1>(base.add(off)) };
-                    off += 64;
-                }
-                // The last line, in case the row does not start on a line boundary.
-                // SAFETY: as above.
-                unsafe { _mm_prefetch::<_MM_HINT_T1>(base.add(bytes - 1)) };
+        /// Prefetches bytes `a..b` (b > a) from `base`.
+        fn span(base: *const i8, a: usize, b: usize) {
+            let mut off = a & !63;
+            while off < b {
+                // SAFETY: a prefetch has no effect but on the cache, whatever the address (`wrapping_add` forms it
+                // without claiming it is in bounds; it is, as `a..b` lies inside the plane).
+                unsafe { _mm_prefetch::<_MM_HINT_T1>(base.wrapping_add(off)) };
+                off += 64;
             }
         }
-        let gb = frame.reader.gbuffer();
-        if w == 0 || h == 0 || gb.samples == 0 {
+        let (r, gb) = (&frame.reader, frame.reader.gbuffer());
+        if w == 0 || h == 0 {
             return;
         }
-        // The edge mask: one byte per pixel.
-        let width = gb.width as usize;
-        for y in y0..y0 + h {
-            let at = y as usize * width + x0 as usize;
-            let row = &frame.mask.shade_count[at..at + w as usize];
-            // SAFETY: both addresses lie inside `row` (w ≥ 1); prefetch has no other effect.
-            unsafe {
-                _mm_prefetch::<_MM_HINT_T1>(row.as_ptr().cast::<i8>());
-                _mm_prefetch::<_MM_HINT_T1>(row.as_ptr().add(row.len() - 1).cast::<i8>());
+        let sample_major = r.strides().1 != 1;
+        let last = if sample_major { 0 } else { gb.samples - 1 };
+        for &(base, size, _) in planes.iter().flatten() {
+            for y in y0..y0 + h {
+                span(base, r.index(x0, y, 0) * size, (r.index(x0 + w - 1, y, last) + 1) * size);
             }
         }
-        // Every sample of each pixel when they sit side by side; in sample-major order sample 0 only (the edge
-        // pixels' other samples are few and scattered).
-        let r = &frame.reader;
-        let last = if r.strides().1 == 1 { gb.samples - 1 } else { 0 };
-        let tile = (x0, y0, w, h);
-        rows(Some(&gb.coverage[..]), r, tile, last);
-        match &gb.position {
-            Some(p) => rows(Some(&p[..]), r, tile, last),
-            None => rows(gb.depth.as_deref(), r, tile, last),
-        }
-        rows(gb.normal.as_deref(), r, tile, last);
-        rows(gb.albedo.as_deref(), r, tile, last);
-        let reads = Reads::of(frame.cfg.brdf);
-        for (plane, read) in [
-            (&gb.specular, reads.specular),
-            (&gb.specular_power, reads.power),
-            (&gb.roughness, reads.metal_rough),
-            (&gb.metallic, reads.metal_rough),
-        ] {
-            if read {
-                rows(plane.as_deref(), r, tile, last);
+        if sample_major {
+            let width = gb.width as usize;
+            for y in y0..y0 + h {
+                let at = y as usize * width + x0 as usize;
+                for (k, _) in frame.mask.shade_count[at..at + w as usize].iter().enumerate().filter(|(_, &c)| c > 1) {
+                    for s in 1..gb.samples {
+                        let i = r.index(x0 + k as u32, y, s);
+                        for &(base, size, _) in planes.iter().flatten() {
+                            span(base, i * size, (i + 1) * size);
+                        }
+                    }
+                }
             }
         }
     }
     #[cfg(not(target_arch = "x86_64"))]
-    let _ = (frame, x0, y0, w, h);
+    let _ = (frame, planes, x0, y0, w, h);
 }
 
 /// Gathers, culls and shades one tile, box-filtering into the band's buffers (every pixel of the tile is
@@ -308,7 +318,7 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats)
         d
     };
     st.tiles += 1;
-    let (n_single, n_real) = gather(frame, tile, sc, st);
+    let (n_first, n_real) = gather(frame, tile, sc, st);
     st.t_gather += lap();
     // Pixels with no sample are black; edge pixels add their samples from 0.
     let width = frame.reader.gbuffer().width as usize;
@@ -316,7 +326,7 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats)
         sc.band_rgb[px as usize] = Vec3::ZERO;
         sc.band_heat[px as usize] = 0.0;
     }
-    for &(x, y) in &sc.edge_px {
+    for &(x, y, _) in &sc.edge_px {
         let px = (y - tile.y0) as usize * width + x as usize;
         sc.band_rgb[px] = Vec3::ZERO;
         sc.band_heat[px] = 0.0;
@@ -373,19 +383,20 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats)
     if variant.prepass {
         finish_prepass(items, frame.cfg.brdf);
     }
-    // The box filter into the band's buffers (`pixel` indexes them). Items `0..n_single` are the only sample of
-    // their pixel (weight 1): stored. The rest are edge samples, added.
+    // The box filter into the band's buffers (`pixel` indexes them). Items `0..n_first` are the first sample of
+    // their pixel: stored (times the weight, 1 for a pixel shaded once: exact). The rest are edge pixels' other
+    // samples, added (edge pixels were zeroed above, for those whose sample 0 is unusable).
     let (acc, acc_heat) = (&mut sc.band_rgb, &mut sc.band_heat);
     let out = |r: std::ops::Range<usize>| {
         let it = &*items;
         let cols = it.or[r.clone()].iter().zip(&it.og[r.clone()]).zip(&it.ob[r.clone()]);
         it.pixel[r.clone()].iter().zip(cols).zip(&it.tested[r.clone()]).zip(&it.weight[r])
     };
-    for (((&px, ((&r, &g), &b)), &t), _) in out(0..n_single) {
-        acc[px as usize] = Vec3::new(r, g, b);
+    for (((&px, ((&r, &g), &b)), &t), &w) in out(0..n_first) {
+        acc[px as usize] = Vec3::new(r, g, b) * w;
         acc_heat[px as usize] = t;
     }
-    for (((&px, ((&r, &g), &b)), &t), &w) in out(n_single..n_real) {
+    for (((&px, ((&r, &g), &b)), &t), &w) in out(n_first..n_real) {
         acc[px as usize] += Vec3::new(r, g, b) * w;
         acc_heat[px as usize] += t;
     }
@@ -398,12 +409,13 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats)
     st.t_shade += t_shade;
 }
 
-/// Builds the tile's work list: first the single samples of non-edge pixels (in one pass over the tile, which
-/// also lists the edge pixels), then the packed samples of edge pixels. Positions are read pixel by pixel (they
-/// decide which samples are shaded); the other attributes are then read plane by plane for the whole list.
-/// `pixel` is the index within the band's rows (`(y − band top) · width + x`); pixels with no usable sample are
-/// listed in `blank_px`. Returns how many items are the only sample of their pixel (they come first) and how many
-/// are real (the rest pad the list to whole vectors).
+/// Builds the tile's work list: first one sample per pixel, in one pass over the tile that also lists the edge
+/// pixels (a pixel shaded once: its first usable sample, weight 1; an edge pixel: its sample 0 when usable, weight
+/// 1/samples), then the edge pixels' other samples, packed. Positions are read pixel by pixel (they decide which
+/// samples are shaded); the other attributes are then read plane by plane for the whole list. `pixel` is the index
+/// within the band's rows (`(y − band top) · width + x`); pixels with no usable sample are listed in `blank_px`.
+/// Returns how many items are the first sample of their pixel (they come first) and how many are real (the rest
+/// pad the list to whole vectors).
 #[inline(always)]
 fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -> (usize, usize) {
     let gb = frame.reader.gbuffer();
@@ -444,12 +456,11 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
         let local_row = (y - tile.y0) as usize * width + x0;
         let counts_row = &frame.mask.shade_count[row + x0..row + x0 + tw];
         if let Some(plane) = plane {
-            // The common case first, a whole row at once: no edge pixel, and every pixel's sample 0 covered with a
-            // usable stored position (checked without branches). Otherwise pixel by pixel below.
+            // The common case first, a whole row at once: every pixel's sample 0 covered with a usable stored
+            // position (checked without branches). Otherwise pixel by pixel below.
             let first = (row + x0) * stride;
             let end = first + (tw - 1) * stride + 1;
             let (pos, cov) = (&plane[first..end], &gb.coverage[first..end]);
-            let single = counts_row.iter().fold(true, |a, &c| a & (c <= 1));
             // `abs() < ∞` is `is_finite` without a branch per component (the loops vectorise).
             let usable = |a: bool, (p, &c): (&Vec3, &bool)| {
                 a & c
@@ -459,9 +470,9 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
                     & (-p.z > MIN_VIEW_DEPTH)
             };
             let ok = if stride == 1 {
-                pos.iter().zip(cov).fold(single, usable)
+                pos.iter().zip(cov).fold(true, usable)
             } else {
-                pos.iter().step_by(stride).zip(cov.iter().step_by(stride)).fold(single, usable)
+                pos.iter().step_by(stride).zip(cov.iter().step_by(stride)).fold(true, usable)
             };
             if ok {
                 let n = it.px.len();
@@ -479,25 +490,34 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
                     }
                 }
                 it.pixel.extend(local_row as u32..(local_row + tw) as u32);
-                it.weight.resize(n + tw, 1.0);
+                it.weight.extend(counts_row.iter().map(|&c| if c > 1 { weight } else { 1.0 }));
                 sc.src.extend((first..end).step_by(stride));
+                for (k, _) in counts_row.iter().enumerate().filter(|&(_, &c)| c > 1) {
+                    sc.edge_px.push(((x0 + k) as u32, y, true));
+                }
                 continue;
             }
         }
         for (k, &count) in counts_row.iter().enumerate() {
             let x = (x0 + k) as u32;
+            let first = (row + x0 + k) * stride;
+            let local = (local_row + k) as u32;
             if count > 1 {
-                sc.edge_px.push((x, y));
+                // An edge pixel: sample 0 now, when usable; the others after the tile's single samples.
+                let pos = frame.reader.position(x, y, 0, first, counts);
+                if let Some(pos) = pos {
+                    push(it, &mut sc.src, pos, first, local, weight);
+                }
+                sc.edge_px.push((x, y, pos.is_some()));
                 continue;
             }
             // A non-edge pixel: its first usable sample stands for the whole pixel.
-            let first = (row + x0 + k) * stride;
             if let Some(plane) = plane {
                 // The common case first: sample 0 covered, with a usable stored position (else the loop below
                 // looks at every sample again, counting what it must).
                 let p = plane[first];
                 if gb.coverage[first] && p.is_finite() && -p.z > MIN_VIEW_DEPTH {
-                    push(it, &mut sc.src, p, first, (local_row + k) as u32, 1.0);
+                    push(it, &mut sc.src, p, first, local, 1.0);
                     continue;
                 }
             }
@@ -505,27 +525,27 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
                 let i = first + s as usize * sample_stride;
                 let pos = frame.reader.position(x, y, s, i, counts);
                 if let Some(pos) = pos {
-                    push(it, &mut sc.src, pos, i, (local_row + k) as u32, 1.0);
+                    push(it, &mut sc.src, pos, i, local, 1.0);
                 }
                 pos.is_some()
             });
             if !found {
-                sc.blank_px.push((local_row + k) as u32);
+                sc.blank_px.push(local);
             }
         }
     }
-    let n_single = sc.src.len();
-    for &(x, y) in &sc.edge_px {
+    let n_first = sc.src.len();
+    for &(x, y, taken) in &sc.edge_px {
         let first = (y as usize * width + x as usize) * stride;
         let local = ((y - tile.y0) as usize * width + x as usize) as u32;
         let before = sc.src.len();
-        for s in 0..samples {
+        for s in 1..samples {
             let i = first + s as usize * sample_stride;
             if let Some(pos) = frame.reader.position(x, y, s, i, counts) {
                 push(it, &mut sc.src, pos, i, local, weight);
             }
         }
-        st.edge_pixels += u64::from(sc.src.len() > before);
+        st.edge_pixels += u64::from(taken || sc.src.len() > before);
     }
     let n_real = sc.src.len();
     if n_real > 0 {
@@ -536,7 +556,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
         }
         frame.reader.fill_attributes(&sc.src, it, frame.cfg.brdf, counts);
     }
-    (n_single, n_real)
+    (n_first, n_real)
 }
 
 /// Tests every light's sphere against `bounds` (branch-free over lights, vectorised for the CPU at hand), writing
