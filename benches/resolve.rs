@@ -3,7 +3,7 @@
 //!
 //! - `resolve/tiled/1x/1280x720`: 1 sample per pixel, the < 15 ms target on 2 cores;
 //! - `resolve/tiled/4x-adaptive/1280x720`: 4× MSAA, lauritzen-style adaptive (edge pixels per sample), ≤ 1.5× the
-//!   1-sample cost; `…/sample-major` the same frame in sample-major order ([`gbuf::resolve::SampleMajor`]: every
+//!   1-sample cost; `…/split` the same frame in split order ([`gbuf::resolve::SplitSamples`]: every
 //!   pixel's sample 0 in planes of their own); `resolve/tiled/4x-ssaa` for scale;
 //! - `resolve/none/1x/1280x720`: no culling, same lights;
 //! - `resolve/tiled/1x/1280x720/threads-1` and `threads-2`: thread scaling (local rayon pools).
@@ -13,7 +13,7 @@
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use gbuf::detect::{detect, Detector, DetectorConfig};
-use gbuf::resolve::{fixture, resolve, uniform_mask, Culling, ResolveConfig, SampleMajor};
+use gbuf::resolve::{fixture, resolve, uniform_mask, Culling, ResolveConfig, SplitSamples};
 
 const W: u32 = 1280;
 const H: u32 = 720;
@@ -28,7 +28,7 @@ fn benches(c: &mut Criterion) {
     let mask1 = uniform_mask(&gb1, false);
     let mask4 = detect(&gb4, Detector::Lauritzen, &DetectorConfig::default()).expect("detect");
     let ssaa4 = uniform_mask(&gb4, true);
-    let sm4 = SampleMajor::new(&gb4).expect("reorder");
+    let split4 = SplitSamples::new(&gb4).expect("reorder");
     let tiled = ResolveConfig::default();
     let none = ResolveConfig { culling: Culling::None, ..tiled };
 
@@ -53,8 +53,8 @@ fn benches(c: &mut Criterion) {
     g.bench_function("tiled/4x-adaptive/1280x720", |b| {
         b.iter(|| resolve(black_box(&gb4), black_box(&lights), &mask4, &tiled).unwrap())
     });
-    g.bench_function("tiled/4x-adaptive/1280x720/sample-major", |b| {
-        b.iter(|| resolve(black_box(&sm4), black_box(&lights), &mask4, &tiled).unwrap())
+    g.bench_function("tiled/4x-adaptive/1280x720/split", |b| {
+        b.iter(|| resolve(black_box(&split4), black_box(&lights), &mask4, &tiled).unwrap())
     });
     g.bench_function("tiled/4x-ssaa/1280x720", |b| {
         b.iter(|| resolve(black_box(&gb4), black_box(&lights), &ssaa4, &tiled).unwrap())

@@ -12,7 +12,7 @@
 use gbuf::detect::{detect, Detector, DetectorConfig};
 use gbuf::resolve::{
     fixture, resolve, resolve_into, uniform_mask, Culling, ResolveConfig, ResolveInput, ResolveStats, Resolved,
-    SampleMajor,
+    SplitSamples,
 };
 use std::time::Instant;
 
@@ -62,14 +62,14 @@ fn time_per_frame() {
     let mask4 = detect(&gb4, Detector::Lauritzen, &DetectorConfig::default()).unwrap();
     let t_detect = t0.elapsed();
     let t0 = Instant::now();
-    let sm4 = SampleMajor::new(&gb4).unwrap();
+    let split4 = SplitSamples::new(&gb4).unwrap();
     let t_reorder = t0.elapsed();
     let t0 = Instant::now();
     let copy = gb4.clone();
     let t_copy = t0.elapsed();
     drop(copy);
     println!(
-        "4x: lauritzen edge detection {:.1} ms; reordering to sample-major {:.1} ms (once per G-buffer, current pool; \
+        "4x: lauritzen edge detection {:.1} ms; reordering to split {:.1} ms (once per G-buffer, current pool; \
          a plain copy of the G-buffer: {:.1} ms)",
         t_detect.as_secs_f64() * 1e3,
         t_reorder.as_secs_f64() * 1e3,
@@ -94,19 +94,19 @@ fn time_per_frame() {
         m
     };
     let (mask4_5, mask4_10) = (widened(5), widened(10));
-    let (in1, in4, sm4): (ResolveInput, ResolveInput, ResolveInput) = ((&gb1).into(), (&gb4).into(), (&sm4).into());
+    let (in1, in4, split4): (ResolveInput, ResolveInput, ResolveInput) = ((&gb1).into(), (&gb4).into(), (&split4).into());
     let tiled = ResolveConfig::default();
     for (name, gb, mask, cfg, reuse) in [
         ("tiled 1x", in1, &mask1, tiled, false),
         ("tiled 1x reusing the output", in1, &mask1, tiled, true),
         ("tiled 4x adaptive", in4, &mask4, tiled, false),
         ("tiled 4x adaptive reusing the output", in4, &mask4, tiled, true),
-        ("tiled 4x adaptive sample-major", sm4, &mask4, tiled, false),
-        ("tiled 4x adaptive sample-major reusing the output", sm4, &mask4, tiled, true),
+        ("tiled 4x adaptive split", split4, &mask4, tiled, false),
+        ("tiled 4x adaptive split reusing the output", split4, &mask4, tiled, true),
         ("tiled 4x, +5% of pixels per sample", in4, &mask4_5, tiled, false),
-        ("tiled 4x, +5% of pixels per sample, sample-major", sm4, &mask4_5, tiled, false),
+        ("tiled 4x, +5% of pixels per sample, split", split4, &mask4_5, tiled, false),
         ("tiled 4x, +10% of pixels per sample", in4, &mask4_10, tiled, false),
-        ("tiled 4x, +10% of pixels per sample, sample-major", sm4, &mask4_10, tiled, false),
+        ("tiled 4x, +10% of pixels per sample, split", split4, &mask4_10, tiled, false),
         ("none 1x", in1, &mask1, ResolveConfig { culling: Culling::None, ..Default::default() }, false),
     ] {
         // `resolve` allocates the image and heatmap per frame; `resolve_into` reuses one `Resolved`, as a

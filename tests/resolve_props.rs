@@ -252,9 +252,9 @@ fn damaged(mut gb: GBuffer, seed: u64) -> GBuffer {
 }
 
 #[test]
-fn sample_major_order_gives_the_same_result_as_interleaved() {
+fn split_order_gives_the_same_result_as_interleaved() {
     use gbuf::detect::{detect, Detector, DetectorConfig};
-    use gbuf::resolve::SampleMajor;
+    use gbuf::resolve::SplitSamples;
     for (samples, seed) in [(1, 3), (2, 5), (4, 7), (8, 9)] {
         let mut gb = damaged(fixture::spheres(41, 27, samples).unwrap(), seed);
         let lights = mixed_lights(&gb, seed);
@@ -265,8 +265,8 @@ fn sample_major_order_gives_the_same_result_as_interleaved() {
                 for &brdf in Brdf::ALL {
                     let c = ResolveConfig { culling, tile_size: 7, ..cfg(culling, brdf, Falloff::Gltf) };
                     let want = without_times(resolve(&gb, &lights, &mask, &c).unwrap());
-                    let sm = SampleMajor::new(&gb).unwrap();
-                    let got = without_times(resolve(&sm, &lights, &mask, &c).unwrap());
+                    let split = SplitSamples::new(&gb).unwrap();
+                    let got = without_times(resolve(&split, &lights, &mask, &c).unwrap());
                     let label = format!("{samples}x {what} {culling} {brdf}");
                     assert_bit_identical(&want.image, &got.image, &label);
                     assert_eq!(want.lights_per_pixel, got.lights_per_pixel, "{label}");
@@ -280,7 +280,7 @@ fn sample_major_order_gives_the_same_result_as_interleaved() {
         let mask = uniform_mask(&gb, true);
         let c = ResolveConfig::default();
         let want = without_times(resolve(&gb, &lights, &mask, &c).unwrap());
-        let got = without_times(resolve(&SampleMajor::new(&gb).unwrap(), &lights, &mask, &c).unwrap());
+        let got = without_times(resolve(&SplitSamples::new(&gb).unwrap(), &lights, &mask, &c).unwrap());
         assert_bit_identical(&want.image, &got.image, &format!("{samples}x from depth"));
         assert_eq!(want.stats, got.stats);
     }

@@ -19,14 +19,14 @@ pub mod fastmath;
 pub mod fixture;
 pub mod kernel;
 pub mod lights;
-pub mod order;
 pub mod reference;
 pub mod schedule;
 pub mod simd;
+pub mod split;
 pub mod surface;
 
 pub use config::{Brdf, Culling, Falloff, ResolveConfig, Schedule, DEFAULT_DEPTH_SLICES, DEFAULT_TILE_SIZE};
-pub use order::{ResolveInput, SampleMajor};
+pub use split::{ResolveInput, SplitSamples};
 pub use reference::{reference, reference_per_sample};
 pub use surface::SanitizedCounts;
 
@@ -87,7 +87,7 @@ pub fn uniform_mask(gb: &GBuffer, per_sample: bool) -> EdgeMask {
     EdgeMask { width: gb.width, height: gb.height, samples: gb.samples, shade_count }
 }
 
-/// Lights `gb` (a [`GBuffer`], or a [`SampleMajor`] copy of one: the same image, faster for MSAA) with `lights`,
+/// Lights `gb` (a [`GBuffer`], or a [`SplitSamples`] copy of one: the same image, faster for MSAA) with `lights`,
 /// shading per sample where `mask` says so, as configured by `cfg`. Runs on rayon's current thread pool (install
 /// a local pool to choose the thread count). Never returns NaN or Inf pixels.
 pub fn resolve<'a>(

@@ -255,9 +255,9 @@ fn planes_read(frame: &Frame<'_>) -> [Option<(*const i8, usize, usize)>; 8] {
 
 /// Asks the CPU to start loading a tile's G-buffer samples into cache (a hint: prefetches never fault). A
 /// tile's 16 row segments of 7 or so planes are too many short streams for the hardware prefetcher; without this
-/// the work-list build waits on memory. Interleaved order: every sample of the tile's rows. Sample-major order:
-/// sample 0 of the rows, and the other samples of the edge pixels only (scattered lines, each its own miss: issued
-/// a tile ahead, they overlap).
+/// the work-list build waits on memory. Interleaved order: every sample of the tile's rows. Split order: sample 0
+/// of the rows, and the other samples of the edge pixels only (their own lines: issued a tile ahead, the misses
+/// overlap).
 fn prefetch_tile(frame: &Frame<'_>, planes: &[Option<(*const i8, usize, usize)>], x0: u32, y0: u32, w: u32, h: u32) {
     #[cfg(target_arch = "x86_64")]
     {
@@ -272,27 +272,28 @@ fn prefetch_tile(frame: &Frame<'_>, planes: &[Option<(*const i8, usize, usize)>]
                 off += 64;
             }
         }
-        let (r, gb) = (&frame.reader, frame.reader.gbuffer());
+        let gb = frame.reader.gbuffer();
         if w == 0 || h == 0 {
             return;
         }
-        let sample_major = r.strides().1 != 1;
-        let last = if sample_major { 0 } else { gb.samples - 1 };
+        let at = frame.reader.sample_index();
+        let width = gb.width as usize;
+        // Interleaved: through the last sample of the row's last pixel.
+        let tail = if at.split() { 1 } else { gb.samples as usize };
         for &(base, size, _) in planes.iter().flatten() {
             for y in y0..y0 + h {
-                span(base, r.index(x0, y, 0) * size, (r.index(x0 + w - 1, y, last) + 1) * size);
+                let p = y as usize * width + x0 as usize;
+                span(base, at.first(p) * size, (at.first(p + w as usize - 1) + tail) * size);
             }
         }
-        if sample_major {
-            let width = gb.width as usize;
+        if at.split() {
+            let others = gb.samples as usize - 1;
             for y in y0..y0 + h {
-                let at = y as usize * width + x0 as usize;
-                for (k, _) in frame.mask.shade_count[at..at + w as usize].iter().enumerate().filter(|(_, &c)| c > 1) {
-                    for s in 1..gb.samples {
-                        let i = r.index(x0 + k as u32, y, s);
-                        for &(base, size, _) in planes.iter().flatten() {
-                            span(base, i * size, (i + 1) * size);
-                        }
+                let row = y as usize * width + x0 as usize;
+                for (k, _) in frame.mask.shade_count[row..row + w as usize].iter().enumerate().filter(|(_, &c)| c > 1) {
+                    let i = at.rest(row + k);
+                    for &(base, size, _) in planes.iter().flatten() {
+                        span(base, i * size, (i + others) * size);
                     }
                 }
             }
@@ -449,8 +450,9 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
     it.pixel.reserve(cap);
     sc.src.reserve(cap);
     let plane = gb.position.as_deref();
-    // Plane index = pixel number · `stride` + sample · `sample_stride` (either sample order).
-    let (stride, sample_stride) = frame.reader.strides();
+    // Where samples sit (either order): a row's samples 0 are `stride` apart.
+    let at = frame.reader.sample_index();
+    let stride = at.first_stride();
     for y in tile.y0..tile.y0 + tile.h {
         let row = y as usize * width;
         let local_row = (y - tile.y0) as usize * width + x0;
@@ -458,7 +460,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
         if let Some(plane) = plane {
             // The common case first, a whole row at once: every pixel's sample 0 covered with a usable stored
             // position (checked without branches). Otherwise pixel by pixel below.
-            let first = (row + x0) * stride;
+            let first = at.first(row + x0);
             let end = first + (tw - 1) * stride + 1;
             let (pos, cov) = (&plane[first..end], &gb.coverage[first..end]);
             // `abs() < ∞` is `is_finite` without a branch per component (the loops vectorise).
@@ -500,7 +502,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
         }
         for (k, &count) in counts_row.iter().enumerate() {
             let x = (x0 + k) as u32;
-            let first = (row + x0 + k) * stride;
+            let first = at.first(row + x0 + k);
             let local = (local_row + k) as u32;
             if count > 1 {
                 // An edge pixel: sample 0 now, when usable; the others after the tile's single samples.
@@ -522,7 +524,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
                 }
             }
             let found = (0..samples).any(|s| {
-                let i = first + s as usize * sample_stride;
+                let i = at.of(row + x0 + k, s);
                 let pos = frame.reader.position(x, y, s, i, counts);
                 if let Some(pos) = pos {
                     push(it, &mut sc.src, pos, i, local, 1.0);
@@ -536,11 +538,11 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
     }
     let n_first = sc.src.len();
     for &(x, y, taken) in &sc.edge_px {
-        let first = (y as usize * width + x as usize) * stride;
+        let rest = at.rest(y as usize * width + x as usize);
         let local = ((y - tile.y0) as usize * width + x as usize) as u32;
         let before = sc.src.len();
         for s in 1..samples {
-            let i = first + s as usize * sample_stride;
+            let i = rest + s as usize - 1;
             if let Some(pos) = frame.reader.position(x, y, s, i, counts) {
                 push(it, &mut sc.src, pos, i, local, weight);
             }

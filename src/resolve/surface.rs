@@ -121,10 +121,8 @@ pub struct SurfaceReader<'a> {
     camera: Option<Camera>,
     /// `(tan(fov/2) · aspect, tan(fov/2))`: the camera's ray slopes, computed once.
     slopes: Vec2,
-    /// Plane index step from one pixel to the next (row-major).
-    pixel_stride: usize,
-    /// Plane index step from one sample of a pixel to the next.
-    sample_stride: usize,
+    /// Where each sample sits in the planes.
+    at: SampleIndex,
 }
 
 /// The order of a G-buffer's planes.
@@ -132,9 +130,75 @@ pub struct SurfaceReader<'a> {
 pub enum SampleOrder {
     /// `(y·width + x)·samples + s`, a pixel's samples side by side: [`GBuffer`]'s own order.
     Interleaved,
-    /// `s·width·height + y·width + x`: every pixel's sample 0 (a one-sample G-buffer), then every pixel's sample
-    /// 1, and so on. See [`super::SampleMajor`].
-    SampleMajor,
+    /// Sample 0 of every pixel first (`y·width + x`: a one-sample G-buffer), then samples `1..samples` of every
+    /// pixel, side by side (`pixels + (y·width + x)·(samples − 1) + s − 1`). See [`super::SplitSamples`].
+    Split,
+}
+
+/// Plane indices of samples in a [`SampleOrder`]: in both orders a pixel's samples `1..samples` are consecutive;
+/// where sample 0 sits differs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SampleIndex {
+    /// Step between the samples 0 of consecutive pixels.
+    first: usize,
+    /// Index of pixel 0's sample 1.
+    rest_base: usize,
+    /// Step between the samples 1 of consecutive pixels.
+    rest: usize,
+    /// Split order with more than one sample.
+    split: bool,
+}
+
+impl SampleIndex {
+    /// The indices of `order` for a G-buffer of `pixels` pixels and `samples` samples.
+    #[must_use]
+    pub fn new(order: SampleOrder, pixels: usize, samples: usize) -> Self {
+        match order {
+            SampleOrder::Interleaved => SampleIndex { first: samples, rest_base: 1, rest: samples, split: false },
+            SampleOrder::Split => {
+                SampleIndex { first: 1, rest_base: pixels, rest: samples.saturating_sub(1), split: samples > 1 }
+            }
+        }
+    }
+
+    /// Plane index of sample 0 of pixel number `p` (row-major).
+    #[inline(always)]
+    #[must_use]
+    pub fn first(&self, p: usize) -> usize {
+        p * self.first
+    }
+
+    /// Plane index of sample 1 of pixel number `p`; samples `2..` follow it.
+    #[inline(always)]
+    #[must_use]
+    pub fn rest(&self, p: usize) -> usize {
+        self.rest_base + p * self.rest
+    }
+
+    /// Plane index of sample `s` of pixel number `p`.
+    #[inline(always)]
+    #[must_use]
+    pub fn of(&self, p: usize, s: u32) -> usize {
+        if s == 0 {
+            self.first(p)
+        } else {
+            self.rest(p) + s as usize - 1
+        }
+    }
+
+    /// Step between the samples 0 of consecutive pixels (1: a row's samples 0 are consecutive).
+    #[inline(always)]
+    #[must_use]
+    pub fn first_stride(&self) -> usize {
+        self.first
+    }
+
+    /// Whether a pixel's samples 1.. lie apart from its sample 0 (the split order, with more than one sample).
+    #[inline(always)]
+    #[must_use]
+    pub fn split(&self) -> bool {
+        self.split
+    }
 }
 
 impl<'a> SurfaceReader<'a> {
@@ -159,11 +223,8 @@ impl<'a> SurfaceReader<'a> {
             let ray = c.view_ray(Vec2::ZERO, 2, 2);
             Vec2::new(-ray.x, ray.y)
         });
-        let (pixel_stride, sample_stride) = match order {
-            SampleOrder::Interleaved => (gb.samples as usize, 1),
-            SampleOrder::SampleMajor => (1, gb.pixel_count()),
-        };
-        Ok(SurfaceReader { gb, camera: gb.camera, slopes, pixel_stride, sample_stride })
+        let at = SampleIndex::new(order, gb.pixel_count(), gb.samples as usize);
+        Ok(SurfaceReader { gb, camera: gb.camera, slopes, at })
     }
 
     /// Plane index of sample `s` of pixel (`x`, `y`), in the reader's sample order.
@@ -171,21 +232,14 @@ impl<'a> SurfaceReader<'a> {
     #[must_use]
     pub fn index(&self, x: u32, y: u32, s: u32) -> usize {
         debug_assert!(x < self.gb.width && y < self.gb.height && s < self.gb.samples);
-        self.pixel(x, y) * self.pixel_stride + s as usize * self.sample_stride
+        self.at.of(y as usize * self.gb.width as usize + x as usize, s)
     }
 
-    /// Row-major pixel number of (`x`, `y`).
-    #[inline(always)]
-    fn pixel(&self, x: u32, y: u32) -> usize {
-        y as usize * self.gb.width as usize + x as usize
-    }
-
-    /// `(pixel stride, sample stride)`: the plane index of sample `s` of pixel number `p` is
-    /// `p · pixel stride + s · sample stride`.
+    /// Where each sample sits in the planes.
     #[inline(always)]
     #[must_use]
-    pub fn strides(&self) -> (usize, usize) {
-        (self.pixel_stride, self.sample_stride)
+    pub fn sample_index(&self) -> SampleIndex {
+        self.at
     }
 
     /// The G-buffer being read.
