@@ -94,7 +94,8 @@ fn time_per_frame() {
         m
     };
     let (mask4_5, mask4_10) = (widened(5), widened(10));
-    let (in1, in4, split4): (ResolveInput, ResolveInput, ResolveInput) = ((&gb1).into(), (&gb4).into(), (&split4).into());
+    let (in1, in4, split4): (ResolveInput, ResolveInput, ResolveInput) =
+        ((&gb1).into(), (&gb4).into(), (&split4).into());
     let tiled = ResolveConfig::default();
     for (name, gb, mask, cfg, reuse) in [
         ("tiled 1x", in1, &mask1, tiled, false),

@@ -26,8 +26,8 @@ pub mod split;
 pub mod surface;
 
 pub use config::{Brdf, Culling, Falloff, ResolveConfig, Schedule, DEFAULT_DEPTH_SLICES, DEFAULT_TILE_SIZE};
-pub use split::{ResolveInput, SplitSamples};
 pub use reference::{reference, reference_per_sample};
+pub use split::{ResolveInput, SplitSamples};
 pub use surface::SanitizedCounts;
 
 use crate::detect::EdgeMask;
