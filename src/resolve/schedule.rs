@@ -262,14 +262,15 @@ fn prefetch_tile(frame: &Frame<'_>, planes: &[Option<(*const i8, usize, usize)>]
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T1};
-        /// Prefetches bytes `a..b` (b > a) from `base`.
+        /// Prefetches the cache lines holding bytes `a..b` (b > a) from `base`.
         fn span(base: *const i8, a: usize, b: usize) {
-            let mut off = a & !63;
-            while off < b {
+            let (first, end) = (base.wrapping_add(a), base.wrapping_add(b));
+            let mut line = first.wrapping_sub(first as usize & 63);
+            while line < end {
                 // SAFETY: a prefetch has no effect but on the cache, whatever the address (`wrapping_add` forms it
-                // without claiming it is in bounds; it is, as `a..b` lies inside the plane).
-                unsafe { _mm_prefetch::<_MM_HINT_T1>(base.wrapping_add(off)) };
-                off += 64;
+                // without claiming it is in bounds).
+                unsafe { _mm_prefetch::<_MM_HINT_T1>(line) };
+                line = line.wrapping_add(64);
             }
         }
         let gb = frame.reader.gbuffer();
