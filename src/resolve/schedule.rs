@@ -493,10 +493,14 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
                     }
                 }
                 it.pixel.extend(local_row as u32..(local_row + tw) as u32);
-                it.weight.extend(counts_row.iter().map(|&c| if c > 1 { weight } else { 1.0 }));
                 sc.src.extend((first..end).step_by(stride));
-                for (k, _) in counts_row.iter().enumerate().filter(|&(_, &c)| c > 1) {
-                    sc.edge_px.push(((x0 + k) as u32, y, true));
+                if counts_row.iter().fold(true, |a, &c| a & (c <= 1)) {
+                    it.weight.resize(n + tw, 1.0);
+                } else {
+                    it.weight.extend(counts_row.iter().map(|&c| if c > 1 { weight } else { 1.0 }));
+                    for (k, _) in counts_row.iter().enumerate().filter(|&(_, &c)| c > 1) {
+                        sc.edge_px.push(((x0 + k) as u32, y, true));
+                    }
                 }
                 continue;
             }
