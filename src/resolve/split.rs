@@ -19,6 +19,20 @@ use rayon::prelude::*;
 /// A G-buffer's resolve attributes (coverage, depth, position, normal, albedo, specular, specular power,
 /// roughness, metallic) in split order, ready to be resolved any number of times (see the module docs).
 /// ID and motion planes are not kept: the resolve does not read them (detect edges on the original G-buffer).
+///
+/// ```
+/// use gbuf::detect::{detect, Detector, DetectorConfig};
+/// use gbuf::resolve::{fixture, resolve, ResolveConfig, SplitSamples};
+/// let gb = fixture::spheres(48, 32, 4)?;
+/// let lights = fixture::lights_on_surfaces(&gb, 20, 3.0, 1);
+/// let mask = detect(&gb, Detector::Lauritzen, &DetectorConfig::default())?;
+/// let split = SplitSamples::new(&gb)?; // once per G-buffer
+/// let cfg = ResolveConfig::default();
+/// let (a, b) = (resolve(&gb, &lights, &mask, &cfg)?, resolve(&split, &lights, &mask, &cfg)?);
+/// assert_eq!(a.image, b.image);
+/// assert!(b.stats.edge_fraction > 0.0 && b.stats.shading_fraction < 1.0);
+/// # Ok::<(), gbuf::Error>(())
+/// ```
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SplitSamples {
     /// The planes, reordered ([`GBuffer::index`] does not apply to them: only the resolve reads this).
