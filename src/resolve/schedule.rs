@@ -232,11 +232,10 @@ fn run_band_avx2(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3],
     run_band(frame, y0, sc, rgb, heat)
 }
 
-/// The planes the resolve reads for `frame`'s BRDF, as (start, bytes per sample, samples): what
-/// [`prefetch_tile`] fetches.
-fn planes_read(frame: &Frame<'_>) -> [Option<(*const i8, usize, usize)>; 8] {
-    fn raw<T>(p: Option<&[T]>) -> Option<(*const i8, usize, usize)> {
-        p.map(|p| (p.as_ptr().cast::<i8>(), std::mem::size_of::<T>(), p.len()))
+/// The planes the resolve reads for `frame`'s BRDF, as (start, bytes per sample): what [`prefetch_tile`] fetches.
+fn planes_read(frame: &Frame<'_>) -> [Option<(*const i8, usize)>; 8] {
+    fn raw<T>(p: Option<&[T]>) -> Option<(*const i8, usize)> {
+        p.map(|p| (p.as_ptr().cast::<i8>(), std::mem::size_of::<T>()))
     }
     let gb = frame.reader.gbuffer();
     let reads = Reads::of(frame.cfg.brdf);
@@ -258,7 +257,7 @@ fn planes_read(frame: &Frame<'_>) -> [Option<(*const i8, usize, usize)>; 8] {
 /// the work-list build waits on memory. Interleaved order: every sample of the tile's rows. Split order: sample 0
 /// of the rows, and the other samples of the edge pixels only (their own lines: issued a tile ahead, the misses
 /// overlap).
-fn prefetch_tile(frame: &Frame<'_>, planes: &[Option<(*const i8, usize, usize)>], x0: u32, y0: u32, w: u32, h: u32) {
+fn prefetch_tile(frame: &Frame<'_>, planes: &[Option<(*const i8, usize)>], x0: u32, y0: u32, w: u32, h: u32) {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T1};
@@ -281,7 +280,7 @@ fn prefetch_tile(frame: &Frame<'_>, planes: &[Option<(*const i8, usize, usize)>]
         let width = gb.width as usize;
         // Interleaved: through the last sample of the row's last pixel.
         let tail = if at.split() { 1 } else { gb.samples as usize };
-        for &(base, size, _) in planes.iter().flatten() {
+        for &(base, size) in planes.iter().flatten() {
             for y in y0..y0 + h {
                 let p = y as usize * width + x0 as usize;
                 span(base, at.first(p) * size, (at.first(p + w as usize - 1) + tail) * size);
@@ -293,7 +292,7 @@ fn prefetch_tile(frame: &Frame<'_>, planes: &[Option<(*const i8, usize, usize)>]
                 let row = y as usize * width + x0 as usize;
                 for (k, _) in frame.mask.shade_count[row..row + w as usize].iter().enumerate().filter(|(_, &c)| c > 1) {
                     let i = at.rest(row + k);
-                    for &(base, size, _) in planes.iter().flatten() {
+                    for &(base, size) in planes.iter().flatten() {
                         span(base, i * size, (i + others) * size);
                     }
                 }
