@@ -12,8 +12,9 @@
 //! default sweep size (8 bits per component, or its f16 size); speed barely depends on the bit count.
 
 use criterion::{black_box, BenchmarkId, Criterion, Throughput};
+use gbuf::base::isa::Isa;
 use gbuf::codec::eval::{best_time, random_unit_vectors};
-use gbuf::codec::simd::{par_decode_normals, par_encode_normals, Isa, PAR_CHUNK};
+use gbuf::codec::simd::{par_decode_normals, par_encode_normals, PAR_CHUNK};
 use gbuf::codec::{color_codec, depth_codec, scalar_codec, NormalCodec, NormalScheme};
 use gbuf::util::SplitMix64;
 use glam::Vec3;

@@ -1,7 +1,7 @@
 //! The report stage (issue 5): what one layout × detector row of `gbuf report` costs, against the plain resolve of
 //! the same frame.
 //!
-//! - `report/row/<layout>/<detector>/WxHxS`: `report::sweep::sweep` with one layout and one detector and one timing
+//! - `report/row/<layout>/<detector>/WxHxS`: `analysis::sweep::sweep` with one layout and one detector and one timing
 //!   run — the f64 reference, the exact-G-buffer resolve the row's `layout_rmse` compares with, the layout's pack /
 //!   unpack, attribute error maps, the detector, its ground-truth scores, the resolve and the image errors;
 //! - `report/plain-resolve/<detector>/WxHxS`: the baseline, what `gbuf resolve --no-reference` does for the same
@@ -19,9 +19,9 @@
 //! (45×): the 2-thread plain resolve is the figure most sensitive to the load.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use gbuf::analysis::sweep::{sweep, SweepConfig};
 use gbuf::detect::{detect, Detector, DetectorConfig};
 use gbuf::layout::Layout;
-use gbuf::report::sweep::{sweep, SweepConfig};
 use gbuf::resolve::{reference, resolve, ResolveConfig};
 use gbuf::scene::{default_lights, render, SceneName};
 

@@ -13,7 +13,7 @@
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use gbuf::detect::{detect, Detector, DetectorConfig};
-use gbuf::resolve::{fixture, resolve, uniform_mask, Culling, ResolveConfig, SplitSamples};
+use gbuf::resolve::{fixture, resolve, Culling, ResolveConfig, SplitSamples};
 
 const W: u32 = 1280;
 const H: u32 = 720;
@@ -25,9 +25,9 @@ fn benches(c: &mut Criterion) {
     let gb1 = fixture::room(W, H, 1).expect("fixture");
     let gb4 = fixture::room(W, H, 4).expect("fixture");
     let lights = fixture::lights_for_density(W, H, LIGHTS, TARGET_LIGHTS_PER_SAMPLE, 7).expect("lights");
-    let mask1 = uniform_mask(&gb1, false);
+    let mask1 = gbuf::detect::baselines::none(&gb1);
     let mask4 = detect(&gb4, Detector::Lauritzen, &DetectorConfig::default()).expect("detect");
-    let ssaa4 = uniform_mask(&gb4, true);
+    let ssaa4 = gbuf::detect::baselines::ssaa(&gb4);
     let split4 = SplitSamples::new(&gb4).expect("reorder");
     let tiled = ResolveConfig::default();
     let none = ResolveConfig { culling: Culling::None, ..tiled };

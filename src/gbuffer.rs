@@ -46,49 +46,22 @@ pub enum Attribute {
     Motion,
 }
 
+crate::named!(Attribute: "attribute" {
+    Depth => "depth",
+    Position => "position",
+    Normal => "normal",
+    Albedo => "albedo",
+    Specular => "specular",
+    SpecularPower => "specular_power",
+    Roughness => "roughness",
+    Metallic => "metallic",
+    MaterialId => "material_id",
+    ObjectId => "object_id",
+    PrimitiveId => "primitive_id",
+    Motion => "motion",
+});
+
 impl Attribute {
-    /// Every attribute, in canonical order.
-    pub const ALL: [Attribute; 12] = [
-        Attribute::Depth,
-        Attribute::Position,
-        Attribute::Normal,
-        Attribute::Albedo,
-        Attribute::Specular,
-        Attribute::SpecularPower,
-        Attribute::Roughness,
-        Attribute::Metallic,
-        Attribute::MaterialId,
-        Attribute::ObjectId,
-        Attribute::PrimitiveId,
-        Attribute::Motion,
-    ];
-
-    /// The snake_case name used in flags, JSON and canonical channel names.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            Attribute::Depth => "depth",
-            Attribute::Position => "position",
-            Attribute::Normal => "normal",
-            Attribute::Albedo => "albedo",
-            Attribute::Specular => "specular",
-            Attribute::SpecularPower => "specular_power",
-            Attribute::Roughness => "roughness",
-            Attribute::Metallic => "metallic",
-            Attribute::MaterialId => "material_id",
-            Attribute::ObjectId => "object_id",
-            Attribute::PrimitiveId => "primitive_id",
-            Attribute::Motion => "motion",
-        }
-    }
-
-    /// Parses a name as written by [`Attribute::name`] (also accepts `-` for `_`).
-    #[must_use]
-    pub fn from_name(s: &str) -> Option<Attribute> {
-        let s = s.replace('-', "_");
-        Attribute::ALL.into_iter().find(|a| a.name() == s)
-    }
-
     /// Number of components (1, 2 or 3).
     #[must_use]
     pub fn components(self) -> usize {

@@ -4,10 +4,12 @@
 //! - [`HdrImage::write_png`]: 8-bit sRGB PNG with a stated tone map ([`ToneMap`]).
 //! - [`HdrImage::to_ldr_gamma22`]: the ISPC `deferred` sample's own output — clamp to [0, 1], `^(1/2.2)`, × 255,
 //!   truncate — so results compare byte for byte with that sample.
-//! - [`write_heatmap_png`]: counts per pixel (lights evaluated) as a colour ramp with a legend strip.
+//!
+//! Pixels become PNG files through [`crate::base::picture`] (one sRGB, one PNG writer for the whole crate).
 //!
 //! Every writer is atomic (temporary file + rename).
 
+use crate::base::picture::{srgb_encode, write_rgb8_png};
 use crate::error::{Error, Result};
 use crate::io::exr::{write_raw, RawChannel, RawData, RawImage};
 use glam::Vec3;
@@ -39,6 +41,39 @@ pub enum ToneMap {
     },
 }
 
+crate::named_enum! {
+    /// The curve of a [`ToneMap`], without its exposure (what `--tonemap` names).
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub enum ToneCurve: "tone map" {
+        /// Reinhard per channel (the default).
+        Reinhard => "reinhard",
+        /// Clamp per channel.
+        Clamp => "clamp",
+    }
+}
+
+crate::named_enum! {
+    /// An 8-bit encoding other than tone map + sRGB (what `--ldr` names).
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub enum LdrEncoding: "LDR encoding" {
+        /// The ISPC `deferred` sample's own: clamp, `^(1/2.2)`, × 255, truncate ([`HdrImage::to_ldr_gamma22`]).
+        Gamma22 => "gamma2.2",
+    }
+}
+
+impl ToneMap {
+    /// The tone map of `curve` with `exposure`.
+    #[must_use]
+    pub fn new(curve: ToneCurve, exposure: f32) -> Self {
+        match curve {
+            ToneCurve::Reinhard => ToneMap::Reinhard { exposure },
+            ToneCurve::Clamp => ToneMap::Clamp { exposure },
+        }
+    }
+}
+
 impl Default for ToneMap {
     /// Reinhard with exposure 1.
     fn default() -> Self {
@@ -66,16 +101,6 @@ impl ToneMap {
         } else {
             y.clamp(0.0, 1.0)
         }
-    }
-}
-
-/// The sRGB transfer function (IEC 61966-2-1) of a value in [0, 1].
-#[must_use]
-pub fn srgb_encode(x: f32) -> f32 {
-    if x <= 0.003_130_8 {
-        12.92 * x
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
     }
 }
 
@@ -133,63 +158,6 @@ impl HdrImage {
     }
 }
 
-/// Colour ramp for heatmaps: black → blue → cyan → green → yellow → red → white as `t` goes 0 → 1.
-#[must_use]
-pub fn heat_color(t: f32) -> [u8; 3] {
-    const STOPS: [[f32; 3]; 7] = [
-        [0.0, 0.0, 0.0],
-        [0.0, 0.0, 1.0],
-        [0.0, 1.0, 1.0],
-        [0.0, 1.0, 0.0],
-        [1.0, 1.0, 0.0],
-        [1.0, 0.0, 0.0],
-        [1.0, 1.0, 1.0],
-    ];
-    let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) } * (STOPS.len() - 1) as f32;
-    let i = (t as usize).min(STOPS.len() - 2);
-    let f = t - i as f32;
-    let (a, b) = (STOPS[i], STOPS[i + 1]);
-    [0, 1, 2].map(|k| ((a[k] + (b[k] - a[k]) * f) * 255.0 + 0.5) as u8)
-}
-
-/// Height in pixels of the legend strip under a heatmap.
-pub const HEATMAP_LEGEND_ROWS: u32 = 8;
-
-/// Writes `counts` (row-major, `width × height`) as a heatmap PNG scaled so that `max(counts)` is white, with a
-/// legend strip of [`HEATMAP_LEGEND_ROWS`] rows underneath running from 0 (left) to the maximum (right). Returns
-/// the maximum, which the caller should print (the PNG carries no text).
-pub fn write_heatmap_png(path: &Path, width: u32, height: u32, counts: &[u32]) -> Result<u32> {
-    if counts.len() != width as usize * height as usize {
-        return Err(Error::Argument(format!(
-            "{}: {} counts for a {width}×{height} heatmap",
-            path.display(),
-            counts.len()
-        )));
-    }
-    let max = counts.iter().copied().max().unwrap_or(0);
-    let scale = if max > 0 { 1.0 / max as f32 } else { 0.0 };
-    let mut bytes: Vec<u8> = counts.iter().flat_map(|&c| heat_color(c as f32 * scale)).collect();
-    for _ in 0..HEATMAP_LEGEND_ROWS {
-        for x in 0..width {
-            bytes.extend(heat_color(x as f32 / (width.max(2) - 1) as f32));
-        }
-    }
-    write_rgb8_png(path, width, height + HEATMAP_LEGEND_ROWS, bytes)?;
-    Ok(max)
-}
-
-/// Encodes 8-bit RGB bytes as PNG and writes them atomically.
-pub fn write_rgb8_png(path: &Path, width: u32, height: u32, bytes: Vec<u8>) -> Result<()> {
-    if width == 0 || height == 0 {
-        return Err(Error::Argument(format!("{}: cannot write an empty image", path.display())));
-    }
-    let img = image::RgbImage::from_raw(width, height, bytes)
-        .ok_or_else(|| Error::Argument(format!("{}: pixel buffer does not match {width}×{height}", path.display())))?;
-    let mut out = std::io::Cursor::new(Vec::new());
-    img.write_to(&mut out, image::ImageFormat::Png).map_err(|e| Error::invalid(path, format!("PNG encoding: {e}")))?;
-    crate::util::write_bytes_atomic(path, &out.into_inner())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -234,14 +202,6 @@ mod tests {
         let back = image::open(&png).unwrap().to_rgb8();
         assert_eq!(back.dimensions(), (3, 2));
         assert_eq!(back.get_pixel(1, 1).0[0], (srgb_encode(0.6) * 255.0 + 0.5) as u8);
-        let heat = dir.path().join("h.png");
-        let max = write_heatmap_png(&heat, 3, 2, &[0, 1, 2, 3, 4, 8]).unwrap();
-        assert_eq!(max, 8);
-        let h = image::open(&heat).unwrap().to_rgb8();
-        assert_eq!(h.dimensions(), (3, 2 + HEATMAP_LEGEND_ROWS));
-        assert_eq!(h.get_pixel(2, 1).0, [255, 255, 255]);
-        assert_eq!(h.get_pixel(0, 0).0, [0, 0, 0]);
-        assert!(write_heatmap_png(&heat, 3, 3, &[0; 6]).is_err());
         assert!(HdrImage::new(0, 0).write_png(&png, ToneMap::default()).is_err());
     }
 }

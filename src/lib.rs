@@ -6,6 +6,8 @@
 //! ([`report`]).
 #![warn(missing_docs)]
 
+pub mod analysis;
+pub mod base;
 pub mod camera;
 pub mod codec;
 pub mod detect;

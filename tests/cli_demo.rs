@@ -107,8 +107,9 @@ fn report_on_a_canonical_dump_and_bad_input() {
     // Unknown layout / detector names: exit 1 with the known names.
     let o = gbuf().arg("report").arg(&exr).args(["--layouts", "nope"]).output().unwrap();
     assert_eq!(o.status.code(), Some(1));
+    // An unknown name in an enum flag is a usage error (exit 2) like every other flag value clap refuses.
     let o = gbuf().arg("report").arg(&exr).args(["--detectors", "nope"]).output().unwrap();
-    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("lauritzen"));
     let o = gbuf().arg("budget").arg(&bad).args(["--max-bytes", "12"]).output().unwrap();
     assert_eq!(o.status.code(), Some(1));

@@ -7,7 +7,8 @@
 #[path = "../src/codec/strategies.rs"]
 mod strategies;
 
-use gbuf::codec::simd::{self, Isa, BLOCK, PAR_CHUNK};
+use gbuf::base::isa::Isa;
+use gbuf::codec::simd::{self, BLOCK, PAR_CHUNK};
 use gbuf::codec::ScalarCodec;
 use gbuf::codec::{color_codec, depth_codec, scalar_codec, ColorCodec, DepthCodec, NormalCodec, NormalScheme};
 use gbuf::util::SplitMix64;

@@ -1,9 +1,9 @@
 //! The budget search: never over the budget, never worse than the best built-in that fits, and its layout file
 //! loads back with the same size.
 
+use gbuf::analysis::budget::{search, BudgetConfig};
 use gbuf::detect::{Detector, DetectorConfig};
 use gbuf::layout::Layout;
-use gbuf::report::budget::{search, BudgetConfig};
 use gbuf::resolve::ResolveConfig;
 use gbuf::scene::{self, SceneName};
 

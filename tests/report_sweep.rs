@@ -1,10 +1,10 @@
 //! The sweep on a small rendered room: rows consistent with their layouts, the lossless layout exact, Pareto flags
 //! consistent with the numbers, and the needs analysis of a real scene.
 
+use gbuf::analysis::pareto::dominates;
+use gbuf::analysis::sweep::{sweep, SweepConfig};
 use gbuf::detect::{Detector, DetectorConfig};
 use gbuf::layout::Layout;
-use gbuf::report::pareto::dominates;
-use gbuf::report::sweep::{sweep, SweepConfig};
 use gbuf::resolve::ResolveConfig;
 use gbuf::scene::{self, SceneName};
 
@@ -55,7 +55,7 @@ fn sweep_rows_match_layouts_and_lossless_is_exact() {
     }
     // The lossless layout with every sample shaded has exactly the error of resolving the unpacked input itself.
     let exact = out.rows.iter().find(|r| r.layout == "reference-f32" && r.detector == "ssaa").unwrap();
-    let direct = gbuf::resolve::resolve(&gb, &lights, &gbuf::resolve::uniform_mask(&gb, true), &cfg.resolve).unwrap();
+    let direct = gbuf::resolve::resolve(&gb, &lights, &gbuf::detect::baselines::ssaa(&gb), &cfg.resolve).unwrap();
     let e0 = gbuf::measure::image::compare(&out.reference, &direct.image);
     assert_eq!(exact.rmse, Some(e0.rmse), "the f32 roundtrip is bit-exact");
     assert!(exact.rel_mse.unwrap() <= RESOLVE_VS_REFERENCE_REL_MSE, "{:?}", exact.rel_mse);
@@ -101,10 +101,10 @@ fn failing_rows_say_why() {
 #[test]
 fn needs_of_the_room() {
     let (gb, _) = small_room();
-    let n = gbuf::report::needs::analyze(&gb);
+    let n = gbuf::analysis::needs::analyze(&gb);
     assert!(n.absent.contains(&"motion".to_string()));
     assert!(n.material_count >= 2, "the room has a dozen materials: {}", n.material_count);
-    assert_eq!(n.material_id_bits, Some(gbuf::report::needs::bits_for_count(n.material_count)));
+    assert_eq!(n.material_id_bits, Some(gbuf::analysis::needs::bits_for_count(n.material_count)));
     let [lo, hi] = n.depth_range.unwrap();
     assert!(lo > 0.0 && hi > lo);
     assert_eq!(n.normals_face_camera, Some(n.back_facing_normals == 0));

@@ -11,8 +11,7 @@
 
 use gbuf::detect::{detect, Detector, DetectorConfig};
 use gbuf::resolve::{
-    fixture, resolve, resolve_into, uniform_mask, Culling, ResolveConfig, ResolveInput, ResolveStats, Resolved,
-    SplitSamples,
+    fixture, resolve, resolve_into, Culling, ResolveConfig, ResolveInput, ResolveStats, Resolved, SplitSamples,
 };
 use std::time::Instant;
 
@@ -57,7 +56,7 @@ fn time_per_frame() {
     let gb1 = fixture::room(w, h, 1).unwrap();
     let gb4 = fixture::room(w, h, 4).unwrap();
     let lights = fixture::lights_for_density(w, h, 1024, density, 7).unwrap();
-    let mask1 = uniform_mask(&gb1, false);
+    let mask1 = gbuf::detect::baselines::none(&gb1);
     let t0 = Instant::now();
     let mask4 = detect(&gb4, Detector::Lauritzen, &DetectorConfig::default()).unwrap();
     let t_detect = t0.elapsed();
@@ -80,7 +79,7 @@ fn time_per_frame() {
             rayon::ThreadPoolBuilder::new().num_threads(n).thread_name(move |i| format!("p{n}-{i}")).build().unwrap()
         })
         .into();
-    println!("kernel instruction set: {}", gbuf::resolve::kernel::instruction_set());
+    println!("kernel instruction set: {}", gbuf::resolve::instruction_set());
     // The bench frame has few edges (0.3% of pixels: sphere silhouettes); real frames have more. The same frame
     // with pixels scattered at random (the worst case for locality) also shaded per sample, up to 10%.
     let widened = |percent: u64| {

@@ -4,7 +4,7 @@
 use gbuf::image::HdrImage;
 use gbuf::light::{Light, LightKind};
 use gbuf::measure::image::compare;
-use gbuf::resolve::{fixture, reference, resolve, uniform_mask, Brdf, Culling, Falloff, ResolveConfig, Schedule};
+use gbuf::resolve::{fixture, reference, resolve, Brdf, Culling, Falloff, ResolveConfig, Schedule};
 use gbuf::GBuffer;
 use glam::Vec3;
 use proptest::prelude::*;
@@ -47,9 +47,9 @@ fn assert_bit_identical(a: &HdrImage, b: &HdrImage, what: &str) {
 fn kernel_matches_the_f64_reference_for_every_brdf_and_falloff() {
     let gb = fixture::spheres(40, 24, 4).unwrap();
     let lights = mixed_lights(&gb, 5);
-    let mask = uniform_mask(&gb, true);
-    for &brdf in Brdf::ALL {
-        for &falloff in Falloff::ALL {
+    let mask = gbuf::detect::baselines::ssaa(&gb);
+    for brdf in Brdf::ALL {
+        for falloff in Falloff::ALL {
             let c = cfg(Culling::None, brdf, falloff);
             let r = resolve(&gb, &lights, &mask, &c).unwrap();
             let reference = reference(&gb, &lights, &c).unwrap();
@@ -69,10 +69,10 @@ fn covered_fraction(gb: &GBuffer) -> f64 {
 fn every_culling_gives_the_same_image_bit_for_bit() {
     let gb = fixture::spheres(53, 29, 4).unwrap();
     let lights = mixed_lights(&gb, 11);
-    let mask = uniform_mask(&gb, true);
-    for &brdf in Brdf::ALL {
-        for &falloff in Falloff::ALL {
-            for &schedule in Schedule::ALL {
+    let mask = gbuf::detect::baselines::ssaa(&gb);
+    for brdf in Brdf::ALL {
+        for falloff in Falloff::ALL {
+            for schedule in Schedule::ALL {
                 let base = ResolveConfig { schedule, ..cfg(Culling::None, brdf, falloff) };
                 let none = resolve(&gb, &lights, &mask, &base).unwrap();
                 for &culling in &Culling::ALL[1..] {
@@ -90,11 +90,11 @@ fn every_culling_gives_the_same_image_bit_for_bit() {
 fn tile_size_and_thread_count_do_not_change_the_image() {
     let gb = fixture::spheres(45, 31, 2).unwrap();
     let lights = mixed_lights(&gb, 2);
-    let mask = uniform_mask(&gb, true);
+    let mask = gbuf::detect::baselines::ssaa(&gb);
     let base = ResolveConfig::default();
     let want = resolve(&gb, &lights, &mask, &base).unwrap();
     for tile_size in [1, 5, 8, 32, 64] {
-        for &culling in Culling::ALL {
+        for culling in Culling::ALL {
             let c = ResolveConfig { tile_size, culling, ..base };
             let r = resolve(&gb, &lights, &mask, &c).unwrap();
             assert_bit_identical(&want.image, &r.image, &format!("tile {tile_size} {culling}"));
@@ -113,14 +113,14 @@ fn non_edge_pixels_are_shaded_once_and_edge_pixels_per_sample() {
     let gb = fixture::spheres(32, 20, 4).unwrap();
     let lights = fixture::lights_on_surfaces(&gb, 30, 3.0, 4);
     let c = ResolveConfig::default();
-    let once = resolve(&gb, &lights, &uniform_mask(&gb, false), &c).unwrap();
-    let all = resolve(&gb, &lights, &uniform_mask(&gb, true), &c).unwrap();
+    let once = resolve(&gb, &lights, &gbuf::detect::baselines::none(&gb), &c).unwrap();
+    let all = resolve(&gb, &lights, &gbuf::detect::baselines::ssaa(&gb), &c).unwrap();
     let pixels_covered = gb.coverage.chunks(4).filter(|p| p.iter().any(|&c| c)).count() as u64;
     assert_eq!(once.stats.shading_evaluations, pixels_covered);
     assert_eq!(once.stats.edge_fraction, 0.0);
     assert_eq!(all.stats.shading_evaluations, gb.coverage.iter().filter(|&&c| c).count() as u64);
     // A mask flagging a single pixel: exactly that pixel differs from `once`, and it equals `all` there.
-    let mut mask = uniform_mask(&gb, false);
+    let mut mask = gbuf::detect::baselines::none(&gb);
     let p = (0..gb.pixel_count())
         .find(|&p| {
             let s = &gb.coverage[p * 4..p * 4 + 4];
@@ -141,7 +141,7 @@ fn non_edge_pixels_are_shaded_once_and_edge_pixels_per_sample() {
 fn last_rows_and_columns_are_shaded_when_the_size_is_not_a_tile_multiple() {
     let gb = fixture::spheres(37, 19, 1).unwrap();
     let lights = vec![Light::point(Vec3::new(0.0, 0.0, -1.0), Vec3::ONE, 50.0, f32::INFINITY)];
-    let r = resolve(&gb, &lights, &uniform_mask(&gb, false), &ResolveConfig::default()).unwrap();
+    let r = resolve(&gb, &lights, &gbuf::detect::baselines::none(&gb), &ResolveConfig::default()).unwrap();
     let (w, h) = (gb.width as usize, gb.height as usize);
     for x in 0..w {
         let p = (h - 1) * w + x;
@@ -197,7 +197,7 @@ proptest! {
         falloff in 0usize..2,
     ) {
         let gb = fixture::spheres(30, 18, 2).unwrap();
-        let mask = uniform_mask(&gb, true);
+        let mask = gbuf::detect::baselines::ssaa(&gb);
         let base = ResolveConfig {
             brdf: Brdf::ALL[brdf],
             falloff: Falloff::ALL[falloff],
@@ -260,9 +260,9 @@ fn split_order_gives_the_same_result_as_interleaved() {
         let lights = mixed_lights(&gb, seed);
         let adaptive = detect(&gb, Detector::Lauritzen, &DetectorConfig::default()).unwrap();
         assert!(samples == 1 || adaptive.shade_count.iter().any(|&c| c > 1), "{samples}x: no edge pixel");
-        for (mask, what) in [(adaptive, "adaptive"), (uniform_mask(&gb, true), "ssaa")] {
-            for &culling in Culling::ALL {
-                for &brdf in Brdf::ALL {
+        for (mask, what) in [(adaptive, "adaptive"), (gbuf::detect::baselines::ssaa(&gb), "ssaa")] {
+            for culling in Culling::ALL {
+                for brdf in Brdf::ALL {
                     let c = ResolveConfig { culling, tile_size: 7, ..cfg(culling, brdf, Falloff::Gltf) };
                     let want = without_times(resolve(&gb, &lights, &mask, &c).unwrap());
                     let split = SplitSamples::new(&gb).unwrap();
@@ -277,7 +277,7 @@ fn split_order_gives_the_same_result_as_interleaved() {
         }
         // Positions from depth and the camera instead of a position plane.
         gb.position = None;
-        let mask = uniform_mask(&gb, true);
+        let mask = gbuf::detect::baselines::ssaa(&gb);
         let c = ResolveConfig::default();
         let want = without_times(resolve(&gb, &lights, &mask, &c).unwrap());
         let got = without_times(resolve(&SplitSamples::new(&gb).unwrap(), &lights, &mask, &c).unwrap());

@@ -3,17 +3,17 @@
 use gbuf::image::HdrImage;
 use gbuf::light::{Light, LightKind};
 use gbuf::resolve::{
-    fixture, reference, reference_per_sample, resolve, uniform_mask, Brdf, Culling, Falloff, ResolveConfig, Schedule,
+    fixture, reference, reference_per_sample, resolve, Brdf, Culling, Falloff, ResolveConfig, Schedule,
 };
 use gbuf::GBuffer;
 use glam::Vec3;
 
 fn all_configs() -> Vec<ResolveConfig> {
     let mut v = Vec::new();
-    for &culling in Culling::ALL {
-        for &brdf in Brdf::ALL {
-            for &falloff in Falloff::ALL {
-                for &schedule in Schedule::ALL {
+    for culling in Culling::ALL {
+        for brdf in Brdf::ALL {
+            for falloff in Falloff::ALL {
+                for schedule in Schedule::ALL {
                     v.push(ResolveConfig { culling, brdf, falloff, schedule, ..Default::default() });
                 }
             }
@@ -30,7 +30,7 @@ fn assert_finite(img: &HdrImage, what: &str) {
 
 /// Runs every configuration plus the reference; checks finiteness; returns the default config's result.
 fn run_everything(gb: &GBuffer, lights: &[Light], what: &str) -> gbuf::resolve::Resolved {
-    let mask = uniform_mask(gb, true);
+    let mask = gbuf::detect::baselines::ssaa(gb);
     for c in all_configs() {
         let r = resolve(gb, lights, &mask, &c).unwrap_or_else(|e| panic!("{what} {c:?}: {e}"));
         assert_finite(&r.image, &format!("{what} {c:?}"));
@@ -93,7 +93,7 @@ fn hundred_thousand_lights() {
     let lights = fixture::lights_on_surfaces(&gb, 100_000, 0.5, 3);
     for culling in [Culling::Tiled, Culling::Clustered, Culling::Quad] {
         let c = ResolveConfig { culling, ..Default::default() };
-        let r = resolve(&gb, &lights, &uniform_mask(&gb, false), &c).unwrap();
+        let r = resolve(&gb, &lights, &gbuf::detect::baselines::none(&gb), &c).unwrap();
         assert_finite(&r.image, "100k lights");
         assert_eq!(r.stats.lights, 100_000);
         assert!(r.stats.light_pairs_lit > 0);
@@ -122,13 +122,13 @@ fn nan_and_inf_in_the_gbuffer_are_sanitised_and_counted() {
 #[test]
 fn bad_arguments_are_errors_not_panics() {
     let gb = fixture::spheres(8, 8, 1).unwrap();
-    let wrong = uniform_mask(&fixture::spheres(4, 8, 1).unwrap(), true);
+    let wrong = gbuf::detect::baselines::ssaa(&fixture::spheres(4, 8, 1).unwrap());
     assert!(resolve(&gb, &[], &wrong, &ResolveConfig::default()).is_err());
     let bad = ResolveConfig { tile_size: 0, ..Default::default() };
-    assert!(resolve(&gb, &[], &uniform_mask(&gb, true), &bad).is_err());
+    assert!(resolve(&gb, &[], &gbuf::detect::baselines::ssaa(&gb), &bad).is_err());
     let mut no_pos = gb.clone();
     no_pos.position = None;
     no_pos.camera = None;
-    let e = resolve(&no_pos, &[], &uniform_mask(&gb, true), &ResolveConfig::default()).unwrap_err();
+    let e = resolve(&no_pos, &[], &gbuf::detect::baselines::ssaa(&gb), &ResolveConfig::default()).unwrap_err();
     assert!(e.to_string().contains("position"), "{e}");
 }

@@ -2,11 +2,11 @@
 //! layout of at most N bytes per sample with the least image error on this dump (or the smallest under an error
 //! cap), why it won, and a layout file `--layout` accepts.
 
-use crate::cli::common::{print_json, InputArgs};
+use crate::cli::common::{print_json, InputArgs, Resolution};
 use anyhow::Context;
+use gbuf::analysis::budget::{search, BudgetConfig, BudgetResult};
 use gbuf::detect::{Detector, DetectorConfig};
 use gbuf::layout::Layout;
-use gbuf::report::budget::{search, BudgetConfig, BudgetResult};
 use gbuf::report::markdown::fmt_opt;
 use gbuf::resolve::ResolveConfig;
 use serde::Serialize;
@@ -26,13 +26,13 @@ pub struct Args {
     pub max_error: Option<f64>,
     /// Resolution the footprint is quoted at (default: the dump's).
     #[arg(long, value_name = "WxH")]
-    pub resolution: Option<String>,
+    pub resolution: Option<Resolution>,
     /// MSAA sample count the footprint is quoted at (default: the dump's).
     #[arg(long, value_name = "S")]
     pub msaa: Option<u32>,
     /// Edge detector the candidates are measured with.
     #[arg(long, default_value = "lauritzen")]
-    pub detector: String,
+    pub detector: Detector,
     /// Point lights to scatter when the dump brings none.
     #[arg(long, default_value_t = 64)]
     pub lights: u32,
@@ -47,15 +47,6 @@ pub struct Args {
     pub json: bool,
 }
 
-fn parse_resolution(s: &str) -> anyhow::Result<(u32, u32)> {
-    let (w, h) =
-        s.split_once(['x', 'X', '×']).with_context(|| format!("--resolution {s:?}: expected WxH, e.g. 1920x1080"))?;
-    let w: u32 = w.trim().parse().with_context(|| format!("--resolution {s:?}: bad width"))?;
-    let h: u32 = h.trim().parse().with_context(|| format!("--resolution {s:?}: bad height"))?;
-    anyhow::ensure!(w > 0 && h > 0 && w <= 65536 && h <= 65536, "--resolution {s:?}: out of range");
-    Ok((w, h))
-}
-
 #[derive(Serialize)]
 struct Output<'a> {
     #[serde(flatten)]
@@ -68,21 +59,11 @@ struct Output<'a> {
 
 /// Runs `gbuf budget`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let detector = Detector::from_name(&args.detector).with_context(|| {
-        format!(
-            "--detector: unknown detector {:?}; known: {}",
-            args.detector,
-            Detector::ALL.map(|d| d.name()).join(", ")
-        )
-    })?;
+    let detector = args.detector;
     if let Some(e) = args.max_error {
         anyhow::ensure!(e.is_finite() && e >= 0.0, "--max-error must be a finite number ≥ 0, got {e}");
     }
-    let (rw, rh) = match &args.resolution {
-        Some(s) => Some(parse_resolution(s)?),
-        None => None,
-    }
-    .unwrap_or((0, 0));
+    let (rw, rh) = args.resolution.map_or((0, 0), |r| (r.width, r.height));
     let loaded = args.input.load()?;
     let gb = &loaded.gbuffer;
     let (rw, rh) = if rw == 0 { (gb.width, gb.height) } else { (rw, rh) };

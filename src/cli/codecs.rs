@@ -120,7 +120,7 @@ fn print_table(rows: &[CodecRow], samples: usize) -> anyhow::Result<()> {
     writeln!(
         out,
         "enc/dec ns: per normal through the slice path (encode_slice/decode_slice), one thread, {}",
-        gbuf::codec::Isa::detect().name()
+        gbuf::base::isa::Isa::detect().name()
     )?;
     writeln!(
         out,

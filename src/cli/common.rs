@@ -2,6 +2,7 @@
 #![allow(dead_code)] // helpers used by the subcommands as they land
 
 use anyhow::Context;
+use gbuf::detect::{DetectorConfig, IdSource};
 use gbuf::gbuffer::Attribute;
 use gbuf::io::{LoadOptions, Loaded, ReadLimits};
 use std::io::Write;
@@ -68,4 +69,65 @@ pub fn print_json<T: serde::Serialize>(value: &T) -> anyhow::Result<()> {
     serde_json::to_writer_pretty(&mut out, value)?;
     writeln!(out)?;
     Ok(())
+}
+
+/// Detector threshold flags, shared by every command that runs a detector (flatten it into their `Args`).
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct ThresholdArgs {
+    /// lauritzen: multiplier on |∂z/∂x| + |∂z/∂y| (default 1).
+    #[arg(long, value_name = "X")]
+    pub gradient_scale: Option<f32>,
+    /// lauritzen: relative depth slack added to the derivative bound (default 1e-4).
+    #[arg(long, value_name = "X")]
+    pub depth_slack: Option<f32>,
+    /// depth: relative threshold, a fraction of the view depth (default 0.02).
+    #[arg(long, value_name = "X")]
+    pub depth_relative: Option<f32>,
+    /// depth: absolute threshold in view-space units (default 0).
+    #[arg(long, value_name = "X")]
+    pub depth_absolute: Option<f32>,
+    /// normal and lauritzen: angle threshold in degrees (default 8.11, i.e. n_i·n_0 < 0.99).
+    #[arg(long, value_name = "DEG")]
+    pub normal_angle: Option<f32>,
+    /// id and combined: which IDs to compare: material, object or either (default either).
+    #[arg(long, value_name = "IDS")]
+    pub ids: Option<IdSource>,
+}
+
+impl ThresholdArgs {
+    /// The library configuration: defaults overridden by the flags given, validated.
+    pub fn config(&self) -> anyhow::Result<DetectorConfig> {
+        let d = DetectorConfig::default();
+        let cfg = DetectorConfig {
+            gradient_scale: self.gradient_scale.unwrap_or(d.gradient_scale),
+            depth_slack: self.depth_slack.unwrap_or(d.depth_slack),
+            depth_relative: self.depth_relative.unwrap_or(d.depth_relative),
+            depth_absolute: self.depth_absolute.unwrap_or(d.depth_absolute),
+            normal_angle_deg: self.normal_angle.unwrap_or(d.normal_angle_deg),
+            ids: self.ids.unwrap_or(d.ids),
+        };
+        cfg.validate()?;
+        Ok(cfg)
+    }
+}
+
+/// `WxH` (also `W×H`): a resolution a footprint is quoted at. One parser for every command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Resolution {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+}
+
+impl std::str::FromStr for Resolution {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (w, h) = s.split_once(['x', 'X', '×']).ok_or_else(|| format!("{s:?} is not WxH, e.g. 1920x1080"))?;
+        let parse = |v: &str| v.trim().parse::<u32>().ok().filter(|v| (1..=65536).contains(v));
+        match (parse(w), parse(h)) {
+            (Some(width), Some(height)) => Ok(Resolution { width, height }),
+            _ => Err(format!("{s:?}: width and height must be integers in 1..=65536")),
+        }
+    }
 }

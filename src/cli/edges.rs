@@ -1,9 +1,10 @@
 //! `gbuf edges FILE [--detector D|all] [threshold flags] [--shading-tolerance T] [--mask OUT.png [--mask-truth
 //! id|shading]] [--json]`: run edge detectors and score them against the ID ground truth and the shading truth.
 
-use crate::cli::common::{print_json, InputArgs};
+use crate::cli::common::{print_json, InputArgs, ThresholdArgs};
 use anyhow::Context;
-use gbuf::detect::{self, truth, Detector, DetectorConfig, EdgeMask, IdSource};
+use gbuf::base::names::{NameParser, Named};
+use gbuf::detect::{self, truth, Detector, DetectorConfig, EdgeMask};
 use gbuf::measure::edges::{
     evaluate_against, shading_truth, truth_agreement, EdgeStats, ShadingTolerance, TruthAgreement,
 };
@@ -32,87 +33,45 @@ impl DetectorChoice {
     }
 }
 
-/// Parses `--detector` (a detector name or `all`).
-pub fn parse_detector_choice(s: &str) -> Result<DetectorChoice, String> {
-    if s == "all" {
-        return Ok(DetectorChoice::All);
+/// Every choice: each detector, then `all`.
+const CHOICES: [DetectorChoice; Detector::ALL.len() + 1] = {
+    let mut c = [DetectorChoice::All; Detector::ALL.len() + 1];
+    let mut i = 0;
+    while i < Detector::ALL.len() {
+        c[i] = DetectorChoice::One(Detector::ALL[i]);
+        i += 1;
     }
-    Detector::from_name(s).map(DetectorChoice::One).ok_or_else(|| {
-        let names: Vec<&str> = Detector::ALL.iter().map(|d| d.name()).collect();
-        format!("unknown detector {s:?}; known: {}, all", names.join(", "))
-    })
-}
+    c
+};
 
-/// Parses `--ids`.
-fn parse_ids(s: &str) -> Result<IdSource, String> {
-    IdSource::from_name(s)
-        .ok_or_else(|| format!("unknown ID choice {s:?}; known: {}", IdSource::ALL.map(IdSource::name).join(", ")))
-}
-
-/// Detector threshold flags, shared by every command that runs a detector (flatten it into their `Args`).
-#[derive(clap::Args, Debug, Clone, Default)]
-pub struct ThresholdArgs {
-    /// lauritzen: multiplier on |∂z/∂x| + |∂z/∂y| (default 1).
-    #[arg(long, value_name = "X")]
-    pub gradient_scale: Option<f32>,
-    /// lauritzen: relative depth slack added to the derivative bound (default 1e-4).
-    #[arg(long, value_name = "X")]
-    pub depth_slack: Option<f32>,
-    /// depth: relative threshold, a fraction of the view depth (default 0.02).
-    #[arg(long, value_name = "X")]
-    pub depth_relative: Option<f32>,
-    /// depth: absolute threshold in view-space units (default 0).
-    #[arg(long, value_name = "X")]
-    pub depth_absolute: Option<f32>,
-    /// normal and lauritzen: angle threshold in degrees (default 8.11, i.e. n_i·n_0 < 0.99).
-    #[arg(long, value_name = "DEG")]
-    pub normal_angle: Option<f32>,
-    /// id and combined: which IDs to compare: material, object or either (default either).
-    #[arg(long, value_name = "IDS", value_parser = parse_ids)]
-    pub ids: Option<IdSource>,
-}
-
-impl ThresholdArgs {
-    /// The library configuration: defaults overridden by the flags given, validated.
-    pub fn config(&self) -> anyhow::Result<DetectorConfig> {
-        let d = DetectorConfig::default();
-        let cfg = DetectorConfig {
-            gradient_scale: self.gradient_scale.unwrap_or(d.gradient_scale),
-            depth_slack: self.depth_slack.unwrap_or(d.depth_slack),
-            depth_relative: self.depth_relative.unwrap_or(d.depth_relative),
-            depth_absolute: self.depth_absolute.unwrap_or(d.depth_absolute),
-            normal_angle_deg: self.normal_angle.unwrap_or(d.normal_angle_deg),
-            ids: self.ids.unwrap_or(d.ids),
-        };
-        cfg.validate()?;
-        Ok(cfg)
+impl Named for DetectorChoice {
+    const KIND: &'static str = "detector";
+    fn all() -> &'static [Self] {
+        &CHOICES
     }
-}
-
-/// `--mask-truth`: the truth the mask picture's misses and false alarms are drawn against.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MaskTruth {
-    /// Object IDs.
-    Id,
-    /// The shading truth (needs lights).
-    Shading,
-}
-
-impl MaskTruth {
-    /// The CLI / JSON spelling.
-    pub fn name(self) -> &'static str {
+    fn name(self) -> &'static str {
         match self {
-            MaskTruth::Id => "id",
-            MaskTruth::Shading => "shading",
+            DetectorChoice::One(d) => d.name(),
+            DetectorChoice::All => "all",
         }
     }
 }
 
-fn parse_mask_truth(s: &str) -> Result<MaskTruth, String> {
-    match s {
-        "id" => Ok(MaskTruth::Id),
-        "shading" => Ok(MaskTruth::Shading),
-        _ => Err(format!("unknown truth {s:?}; known: id, shading")),
+impl clap::builder::ValueParserFactory for DetectorChoice {
+    type Parser = NameParser<DetectorChoice>;
+    fn value_parser() -> Self::Parser {
+        NameParser::default()
+    }
+}
+
+gbuf::named_enum! {
+    /// `--mask-truth`: the truth the mask picture's misses and false alarms are drawn against.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum MaskTruth: "mask truth" {
+        /// Object IDs.
+        Id => "id",
+        /// The shading truth (needs lights).
+        Shading => "shading",
     }
 }
 
@@ -123,7 +82,7 @@ pub struct Args {
     #[command(flatten)]
     pub input: InputArgs,
     /// Edge detector: lauritzen, depth, normal, id, combined, forward-msaa, ssaa, none; or `all` for one row each.
-    #[arg(long, value_name = "D", default_value = "lauritzen", value_parser = parse_detector_choice)]
+    #[arg(long, value_name = "D", default_value = "lauritzen")]
     pub detector: DetectorChoice,
     /// Detector thresholds.
     #[command(flatten)]
@@ -142,13 +101,13 @@ pub struct Args {
     pub mask: Option<PathBuf>,
     /// Which truth colours the misses and false alarms of --mask: id (object IDs) or shading (needs lights).
     /// Default: id when the dump has object IDs, else shading when it has lights.
-    #[arg(long, value_name = "TRUTH", value_parser = parse_mask_truth)]
+    #[arg(long, value_name = "TRUTH")]
     pub mask_truth: Option<MaskTruth>,
     /// BRDF of the shading truth's reference: lambert, blinn-phong, ggx.
-    #[arg(long, value_name = "B", default_value = "blinn-phong", value_parser = crate::cli::resolve::parse_brdf)]
+    #[arg(long, value_name = "B", default_value = "blinn-phong")]
     pub brdf: Brdf,
     /// Distance falloff of the shading truth's reference: gltf, linear.
-    #[arg(long, value_name = "F", default_value = "linear", value_parser = crate::cli::resolve::parse_falloff)]
+    #[arg(long, value_name = "F", default_value = "linear")]
     pub falloff: Falloff,
     /// Machine-readable output on stdout.
     #[arg(long)]

@@ -14,19 +14,19 @@ pub struct Args {
     pub json: bool,
 }
 
-/// `info` plus the scene's needs (see `gbuf::report::needs`).
+/// `info` plus the scene's needs (see `gbuf::analysis::needs`).
 #[derive(serde::Serialize)]
 struct WithNeeds<'a> {
     #[serde(flatten)]
     info: &'a gbuf::io::stats::Info,
-    needs: gbuf::report::needs::Needs,
+    needs: gbuf::analysis::needs::Needs,
 }
 
 /// Runs `gbuf info`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let loaded = args.input.load().with_context(|| format!("cannot load {}", args.input.file.display()))?;
     let info = gbuf::io::stats::info(&loaded, &args.input.file);
-    let needs = gbuf::report::needs_with_pruned_layout(&loaded.gbuffer);
+    let needs = gbuf::analysis::needs_with_pruned_layout(&loaded.gbuffer);
     if args.json {
         print_json(&WithNeeds { info: &info, needs })
     } else {

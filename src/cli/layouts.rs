@@ -1,5 +1,6 @@
 //! `gbuf layouts`: every layout with its bytes per sample and footprint at a resolution.
 
+use crate::cli::common::Resolution;
 use anyhow::Context;
 use gbuf::layout::{Layout, LayoutSummary};
 
@@ -9,24 +10,14 @@ pub struct Args {
     /// Layouts to show in detail (built-in names or layout files); all built-ins when none is given.
     pub layouts: Vec<String>,
     /// Resolution the footprint is computed for, `WxH`.
-    #[arg(long, value_name = "WxH", default_value = "1920x1080", value_parser = parse_resolution)]
-    pub resolution: (u32, u32),
+    #[arg(long, value_name = "WxH", default_value = "1920x1080")]
+    pub resolution: Resolution,
     /// Samples per pixel.
     #[arg(long, value_name = "S", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub msaa: u32,
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
-}
-
-/// Parses `WxH` (also `W×H`).
-pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X', '×']).ok_or_else(|| format!("{s:?} is not WxH"))?;
-    let parse = |v: &str| v.trim().parse::<u32>().ok().filter(|v| (1..=65536).contains(v));
-    match (parse(w), parse(h)) {
-        (Some(w), Some(h)) => Ok((w, h)),
-        _ => Err(format!("{s:?}: width and height must be integers in 1..=65536")),
-    }
 }
 
 /// Runs `gbuf layouts`.
@@ -40,7 +31,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         Layout::builtins()
     };
-    let (w, h) = args.resolution;
+    let (w, h) = (args.resolution.width, args.resolution.height);
     let rows: Vec<LayoutSummary> = layouts.iter().map(|l| LayoutSummary::new(l, w, h, args.msaa)).collect();
     if args.json {
         return super::common::print_json(&rows);

@@ -4,11 +4,11 @@
 
 use crate::cli::common::{print_json, InputArgs};
 use anyhow::Context;
+use gbuf::analysis::row::Report;
+use gbuf::analysis::sweep::SweepConfig;
 use gbuf::detect::{Detector, DetectorConfig};
 use gbuf::layout::Layout;
 use gbuf::report::markdown::fmt_opt;
-use gbuf::report::row::Report;
-use gbuf::report::sweep::SweepConfig;
 use gbuf::resolve::{Culling, ResolveConfig};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
@@ -24,11 +24,11 @@ pub struct SweepArgs {
     #[arg(long, value_name = "LIST")]
     pub layouts: Option<String>,
     /// Edge detectors, comma-separated.
-    #[arg(long, value_name = "LIST", default_value = DEFAULT_DETECTORS)]
-    pub detectors: String,
+    #[arg(long, value_name = "LIST", value_delimiter = ',', default_value = DEFAULT_DETECTORS)]
+    pub detectors: Vec<Detector>,
     /// Light culling modes to compare, comma-separated (default: the resolve's default only).
-    #[arg(long, value_name = "LIST")]
-    pub culling: Option<String>,
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    pub culling: Vec<Culling>,
     /// Timing runs per stage (medians and min–max are reported).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=50))]
     pub runs: u32,
@@ -54,23 +54,9 @@ impl SweepArgs {
                 .collect::<anyhow::Result<Vec<_>>>()?,
         };
         anyhow::ensure!(!layouts.is_empty(), "--layouts: no layout given");
-        let known = || Detector::ALL.map(|d| d.name()).join(", ");
-        let detectors = split(&self.detectors)
-            .map(|n| {
-                Detector::from_name(n)
-                    .with_context(|| format!("--detectors: unknown detector {n:?}; known: {}", known()))
-            })
-            .collect::<anyhow::Result<Vec<_>>>()?;
+        let detectors = self.detectors.clone();
         anyhow::ensure!(!detectors.is_empty(), "--detectors: no detector given");
-        let culling = match &self.culling {
-            None => vec![],
-            Some(list) => split(list)
-                .map(|n| {
-                    Culling::from_name(n)
-                        .with_context(|| format!("--culling: unknown mode {n:?}; known: {}", Culling::names()))
-                })
-                .collect::<anyhow::Result<Vec<_>>>()?,
-        };
+        let culling = self.culling.clone();
         Ok(SweepConfig {
             layouts,
             detectors,
@@ -169,7 +155,7 @@ pub fn run_and_write(
         pb.set_position(done as u64);
         pb.set_message(what.to_string());
     };
-    let input = gbuf::report::ReportInput {
+    let input = gbuf::analysis::ReportInput {
         name: name.to_string(),
         gbuffer: gb,
         lights,

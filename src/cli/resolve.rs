@@ -2,52 +2,19 @@
 //! [--falloff …] [--schedule …] [-o OUT.exr] [--png OUT.png] [--ldr gamma2.2] [--heatmap OUT.png] [--json]`:
 //! light the G-buffer on the CPU, measure it against the f64 reference, write the images.
 
-use crate::cli::common::{print_json, InputArgs};
-use crate::cli::edges::ThresholdArgs;
+use crate::cli::common::{print_json, InputArgs, ThresholdArgs};
 use anyhow::Context;
+use gbuf::base::picture::write_heatmap_png;
+use gbuf::base::timing::{timed, StageMs};
 use gbuf::detect::{self, Detector};
-use gbuf::image::{write_heatmap_png, ToneMap};
+use gbuf::image::{LdrEncoding, ToneCurve, ToneMap};
 use gbuf::light::Light;
 use gbuf::measure::image::{against_full_deferred, compare, ImageError};
-use gbuf::measure::timing::{timed, StageMs};
 use gbuf::resolve::{self, Brdf, Culling, Falloff, ResolveConfig, ResolveStats, Schedule};
 use gbuf::GBuffer;
 use serde::Serialize;
 use std::io::Write;
 use std::path::PathBuf;
-
-fn parse_with<T>(s: &str, what: &str, from: fn(&str) -> Option<T>, names: String) -> Result<T, String> {
-    from(s).ok_or_else(|| format!("unknown {what} {s:?}; known: {names}"))
-}
-fn parse_culling(s: &str) -> Result<Culling, String> {
-    parse_with(s, "culling", Culling::from_name, Culling::names())
-}
-pub(crate) fn parse_brdf(s: &str) -> Result<Brdf, String> {
-    parse_with(s, "BRDF", Brdf::from_name, Brdf::names())
-}
-pub(crate) fn parse_falloff(s: &str) -> Result<Falloff, String> {
-    parse_with(s, "falloff", Falloff::from_name, Falloff::names())
-}
-fn parse_schedule(s: &str) -> Result<Schedule, String> {
-    parse_with(s, "schedule", Schedule::from_name, Schedule::names())
-}
-fn parse_detector(s: &str) -> Result<Detector, String> {
-    let names = Detector::ALL.map(Detector::name).join(", ");
-    parse_with(s, "detector", Detector::from_name, names)
-}
-fn parse_ldr(s: &str) -> Result<String, String> {
-    if s == "gamma2.2" {
-        Ok(s.into())
-    } else {
-        Err(format!("unknown LDR encoding {s:?}; known: gamma2.2"))
-    }
-}
-fn parse_tonemap(s: &str) -> Result<String, String> {
-    match s {
-        "reinhard" | "clamp" => Ok(s.into()),
-        _ => Err(format!("unknown tone map {s:?}; known: reinhard, clamp")),
-    }
-}
 
 /// Flags of `gbuf resolve`.
 #[derive(clap::Args, Debug)]
@@ -66,22 +33,22 @@ pub struct Args {
     #[arg(long, value_name = "S", default_value_t = 1)]
     pub seed: u64,
     /// Edge detector choosing the pixels shaded per sample.
-    #[arg(long, value_name = "D", default_value = "lauritzen", value_parser = parse_detector)]
+    #[arg(long, value_name = "D", default_value = "lauritzen")]
     pub detector: Detector,
     /// Detector thresholds.
     #[command(flatten)]
     pub thresholds: ThresholdArgs,
     /// Light culling: none, quad, tiled, clustered.
-    #[arg(long, value_name = "C", default_value = "tiled", value_parser = parse_culling)]
+    #[arg(long, value_name = "C", default_value = "tiled")]
     pub culling: Culling,
     /// BRDF: lambert, blinn-phong, ggx.
-    #[arg(long, value_name = "B", default_value = "blinn-phong", value_parser = parse_brdf)]
+    #[arg(long, value_name = "B", default_value = "blinn-phong")]
     pub brdf: Brdf,
     /// Distance falloff: gltf, linear.
-    #[arg(long, value_name = "F", default_value = "linear", value_parser = parse_falloff)]
+    #[arg(long, value_name = "F", default_value = "linear")]
     pub falloff: Falloff,
     /// Schedule: deferred, light-prepass.
-    #[arg(long, value_name = "S", default_value = "deferred", value_parser = parse_schedule)]
+    #[arg(long, value_name = "S", default_value = "deferred")]
     pub schedule: Schedule,
     /// Tile edge in pixels.
     #[arg(long, value_name = "PX", default_value_t = resolve::DEFAULT_TILE_SIZE)]
@@ -96,11 +63,11 @@ pub struct Args {
     #[arg(long, value_name = "OUT.png")]
     pub png: Option<PathBuf>,
     /// Encode the PNG as the ISPC demo does instead: clamp to [0,1], ^(1/2.2), ×255, truncate.
-    #[arg(long, value_name = "ENC", value_parser = parse_ldr)]
-    pub ldr: Option<String>,
+    #[arg(long, value_name = "ENC")]
+    pub ldr: Option<LdrEncoding>,
     /// Tone map of the PNG: reinhard (x/(1+x), default) or clamp; then sRGB encoding.
-    #[arg(long, value_name = "TM", default_value = "reinhard", value_parser = parse_tonemap)]
-    pub tonemap: String,
+    #[arg(long, value_name = "TM", default_value = "reinhard")]
+    pub tonemap: ToneCurve,
     /// Exposure multiplied in before the tone map.
     #[arg(long, value_name = "E", default_value_t = 1.0)]
     pub exposure: f32,
@@ -227,12 +194,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let r = if args.ldr.is_some() {
             resolved.image.write_ldr_gamma22_png(out)
         } else {
-            let tone = if args.tonemap == "clamp" {
-                ToneMap::Clamp { exposure: args.exposure }
-            } else {
-                ToneMap::Reinhard { exposure: args.exposure }
-            };
-            resolved.image.write_png(out, tone)
+            resolved.image.write_png(out, ToneMap::new(args.tonemap, args.exposure))
         };
         r.with_context(|| format!("writing {}", out.display()))?;
     }

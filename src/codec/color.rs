@@ -14,8 +14,9 @@
 //! patterns of the float formats decode to the largest finite value / 0).
 
 use super::normal::{f16_to_finite, round_in_range, F16_MAX};
-use super::simd::{f32_to_f16_bits, run, Element, Isa, MapKernel};
+use super::simd::{f32_to_f16_bits, run, Element, MapKernel};
 use super::{mask, split_bits, ColorCodec};
+use crate::base::isa::Isa;
 use glam::Vec3;
 use std::sync::OnceLock;
 

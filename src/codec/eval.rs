@@ -6,7 +6,8 @@
 //! Errors are angles computed in f64 ([`angle_deg`]).
 
 use super::normal::{angle_deg, sanitize};
-use super::{Isa, NormalCodec};
+use super::NormalCodec;
+use crate::base::isa::Isa;
 use crate::util::SplitMix64;
 use glam::Vec3;
 use rayon::prelude::*;

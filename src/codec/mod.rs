@@ -29,11 +29,11 @@ pub mod simd;
 #[cfg(test)]
 pub mod strategies;
 
+use crate::base::isa::Isa;
 pub use color::color_codec;
 pub use depth::depth_codec;
 pub use normal::{angle_deg, normal_codec, NormalScheme};
 pub use scalar::scalar_codec;
-pub use simd::Isa;
 
 /// A unit-normal encoding.
 pub trait NormalCodec: Send + Sync {

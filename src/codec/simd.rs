@@ -13,69 +13,9 @@
 //! chunk runs the codec's single-threaded slice path.
 
 use super::{ColorCodec, DepthCodec, NormalCodec, ScalarCodec};
+use crate::base::isa::Isa;
 use glam::Vec3;
 use rayon::prelude::*;
-use std::sync::OnceLock;
-
-/// An instruction-set level the slice paths are compiled for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub enum Isa {
-    /// The x86-64 baseline (SSE2), or any other architecture.
-    Baseline,
-    /// AVX2 + FMA (FMA is enabled but never used for contraction, see the module doc).
-    Avx2,
-    /// AVX-512 F/VL/BW/DQ.
-    Avx512,
-}
-
-impl Isa {
-    /// Every level, narrowest first.
-    pub const ALL: [Isa; 3] = [Isa::Baseline, Isa::Avx2, Isa::Avx512];
-
-    /// The widest level this CPU supports (detected once).
-    #[must_use]
-    pub fn detect() -> Isa {
-        static DETECTED: OnceLock<Isa> = OnceLock::new();
-        *DETECTED.get_or_init(detect_uncached)
-    }
-
-    /// Every level this CPU can run, narrowest first (what the bit-identity tests iterate over).
-    #[must_use]
-    pub fn available() -> Vec<Isa> {
-        let top = Isa::detect();
-        Isa::ALL.into_iter().filter(|i| *i <= top).collect()
-    }
-
-    /// Lower-case name (`baseline`, `avx2`, `avx512`).
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            Isa::Baseline => "baseline",
-            Isa::Avx2 => "avx2",
-            Isa::Avx512 => "avx512",
-        }
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-fn detect_uncached() -> Isa {
-    if is_x86_feature_detected!("avx512f")
-        && is_x86_feature_detected!("avx512vl")
-        && is_x86_feature_detected!("avx512bw")
-        && is_x86_feature_detected!("avx512dq")
-    {
-        Isa::Avx512
-    } else if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
-        Isa::Avx2
-    } else {
-        Isa::Baseline
-    }
-}
-
-#[cfg(not(target_arch = "x86_64"))]
-fn detect_uncached() -> Isa {
-    Isa::Baseline
-}
 
 /// A slice loop to run under [`run`]. Implementations mark `run` `#[inline(always)]` so that its body is compiled
 /// inside each `#[target_feature]` wrapper.

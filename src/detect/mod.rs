@@ -18,7 +18,7 @@
 //! Conventions shared by every detector: a pixel with no covered sample has `shade_count` 0; a pixel mixing
 //! background and surface samples is an edge for the geometric detectors (its background samples must not take
 //! the surface's shading); any NaN or infinity among a covered pixel's samples makes it an edge (conservative).
-//! Ground truth from IDs lives in [`truth`]; precision and recall in [`crate::measure::edges`].
+//! Ground truth from IDs lives in [`truth`]; precision and recall in `measure::edges`.
 //!
 //! Work is parallel over rows with rayon.
 //!
@@ -27,7 +27,7 @@
 //! fraction of 0.172 (`none` 0.165, `ssaa` 0.658 — a third of the frame is sky); `id` 1.00/1.00 at 0.176;
 //! `forward-msaa` 0.32/0.81 at 0.175. Most of the geometric detectors' misses are the floor's checker tiles: separate,
 //! coplanar objects that only a material or ID test can tell apart. Against the shading truth
-//! ([`crate::measure::edges::shading_truth`], one display code step beyond the smooth gradient: 2.20% of the
+//! (`measure::edges::shading_truth`, one display code step beyond the smooth gradient: 2.20% of the
 //! pixels), precision / recall are `lauritzen` 0.98 / 0.45, `id` 1.00 / 0.69, `combined` 0.99 / 0.75,
 //! `forward-msaa` 0.43 / 0.76; the rest of the shading truth is creases, specular highlights and sphere rims, shading
 //! variation inside one surface that no G-buffer edge test sees.
@@ -40,81 +40,13 @@ pub mod picture;
 pub mod thresholds;
 pub mod truth;
 
+pub use crate::base::mask::EdgeMask;
 pub use thresholds::{DetectorConfig, IdSource};
 
 use crate::error::{Error, Result};
 use crate::gbuffer::{Attribute, GBuffer};
 use rayon::prelude::*;
 use std::borrow::Cow;
-
-/// The result of an edge detector: per pixel, how many shading evaluations it asks for.
-///
-/// `shade_count[p]` is 0 for a pixel with no covered sample, 1 for a pixel shaded once (sample 0 stands for the
-/// pixel), and `samples` for a pixel shaded per sample. Baselines such as `forward-msaa` may ask for counts in
-/// between (one evaluation per distinct primitive); the resolve shades such pixels per sample.
-#[derive(Clone, Debug, PartialEq)]
-pub struct EdgeMask {
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// Samples per pixel.
-    pub samples: u32,
-    /// Shading evaluations per pixel, row-major.
-    pub shade_count: Vec<u8>,
-}
-
-impl EdgeMask {
-    /// A mask of the given size with every pixel at `count` evaluations.
-    #[must_use]
-    pub fn filled(width: u32, height: u32, samples: u32, count: u8) -> Self {
-        EdgeMask { width, height, samples, shade_count: vec![count; width as usize * height as usize] }
-    }
-
-    /// Does pixel `p` (row-major index) need per-sample shading?
-    #[inline]
-    #[must_use]
-    pub fn is_edge(&self, p: usize) -> bool {
-        self.shade_count[p] > 1
-    }
-
-    /// Number of pixels flagged as edges.
-    #[must_use]
-    pub fn edge_pixels(&self) -> usize {
-        self.shade_count.iter().filter(|&&c| c > 1).count()
-    }
-
-    /// Total shading evaluations asked for (the numerator of [`EdgeMask::shading_fraction`]).
-    #[must_use]
-    pub fn shaded_samples(&self) -> u64 {
-        self.shade_count.iter().map(|&c| u64::from(c)).sum()
-    }
-
-    /// Per-pixel edge flags, row-major.
-    #[must_use]
-    pub fn edges(&self) -> Vec<bool> {
-        self.shade_count.iter().map(|&c| c > 1).collect()
-    }
-
-    /// Fraction of pixels flagged as edges.
-    #[must_use]
-    pub fn edge_fraction(&self) -> f64 {
-        if self.shade_count.is_empty() {
-            return 0.0;
-        }
-        self.edge_pixels() as f64 / self.shade_count.len() as f64
-    }
-
-    /// Shaded samples / (pixels × samples).
-    #[must_use]
-    pub fn shading_fraction(&self) -> f64 {
-        let total = self.shade_count.len() as f64 * f64::from(self.samples);
-        if total == 0.0 {
-            return 0.0;
-        }
-        self.shaded_samples() as f64 / total
-    }
-}
 
 /// Every edge detector and baseline. `ALL` lists them in report order; `name` is the one CLI/JSON spelling.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -138,50 +70,22 @@ pub enum Detector {
     None,
 }
 
+crate::named!(Detector: "detector" {
+    Lauritzen => "lauritzen",
+    Depth => "depth",
+    Normal => "normal",
+    Id => "id",
+    Combined => "combined",
+    ForwardMsaa => "forward-msaa",
+    Ssaa => "ssaa",
+    None => "none",
+});
+
 impl Detector {
-    /// Every detector, in report order.
-    pub const ALL: [Detector; 8] = [
-        Detector::Lauritzen,
-        Detector::Depth,
-        Detector::Normal,
-        Detector::Id,
-        Detector::Combined,
-        Detector::ForwardMsaa,
-        Detector::Ssaa,
-        Detector::None,
-    ];
-
-    /// The kebab-case name used by the CLI and JSON.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            Detector::Lauritzen => "lauritzen",
-            Detector::Depth => "depth",
-            Detector::Normal => "normal",
-            Detector::Id => "id",
-            Detector::Combined => "combined",
-            Detector::ForwardMsaa => "forward-msaa",
-            Detector::Ssaa => "ssaa",
-            Detector::None => "none",
-        }
-    }
-
-    /// Parses a name written by [`Detector::name`].
-    #[must_use]
-    pub fn from_name(s: &str) -> Option<Detector> {
-        Detector::ALL.into_iter().find(|d| d.name() == s)
-    }
-
     /// Is this one of the baselines (`forward-msaa`, `ssaa`, `none`) rather than a G-buffer edge detector?
     #[must_use]
     pub fn is_baseline(self) -> bool {
         matches!(self, Detector::ForwardMsaa | Detector::Ssaa | Detector::None)
-    }
-}
-
-impl std::fmt::Display for Detector {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
     }
 }
 
@@ -283,7 +187,9 @@ mod tests {
             assert_eq!(Detector::from_name(d.name()), Some(d));
             assert_eq!(serde_json::to_string(&d).unwrap(), format!("\"{}\"", d.name()));
         }
-        assert_eq!(Detector::from_name("forward_msaa"), None);
+        // One spelling rule for every name (`base::names`): case, `-` and `_` do not matter.
+        assert_eq!(Detector::from_name("Forward_MSAA"), Some(Detector::ForwardMsaa));
+        assert_eq!(Detector::from_name("forward-msaa2"), None);
         assert!(Detector::ForwardMsaa.is_baseline() && !Detector::Lauritzen.is_baseline());
     }
 

@@ -7,6 +7,7 @@
 //! are not true edges.
 
 use super::EdgeMask;
+use crate::base::picture::{srgb8, write_png as write_png_image};
 use crate::error::{Error, Result};
 use crate::gbuffer::GBuffer;
 use glam::Vec3;
@@ -18,13 +19,6 @@ pub const FLAGGED: [u8; 3] = [255, 0, 0];
 pub const MISSED: [u8; 3] = [255, 230, 0];
 /// Flagged pixels that are not true edges: cyan.
 pub const FALSE_ALARM: [u8; 3] = [0, 220, 255];
-
-/// Linear [0, 1] → 8-bit sRGB.
-fn srgb8(v: f32) -> u8 {
-    let v = if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.0 };
-    let s = if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
-    (s * 255.0 + 0.5) as u8
-}
 
 /// The scene as linear RGB per pixel, drawn from albedo and normals, else depth, else coverage.
 fn scene_rgb(gb: &GBuffer) -> Vec<Vec3> {
@@ -98,11 +92,7 @@ pub fn render(gb: &GBuffer, mask: &EdgeMask, truth: Option<&[bool]>) -> Result<i
 
 /// Renders (see [`render`]) and writes a PNG atomically to `path`.
 pub fn write_png(path: &Path, gb: &GBuffer, mask: &EdgeMask, truth: Option<&[bool]>) -> Result<()> {
-    let img = render(gb, mask, truth)?;
-    let mut bytes = Vec::new();
-    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
-        .map_err(|e| Error::io(path, std::io::Error::other(e)))?;
-    crate::util::write_bytes_atomic(path, &bytes)
+    write_png_image(path, &render(gb, mask, truth)?)
 }
 
 #[cfg(test)]

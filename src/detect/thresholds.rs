@@ -31,26 +31,7 @@ pub enum IdSource {
     Either,
 }
 
-impl IdSource {
-    /// Every choice, in CLI order.
-    pub const ALL: [IdSource; 3] = [IdSource::Material, IdSource::Object, IdSource::Either];
-
-    /// The kebab-case CLI spelling.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            IdSource::Material => "material",
-            IdSource::Object => "object",
-            IdSource::Either => "either",
-        }
-    }
-
-    /// Parses a name written by [`IdSource::name`].
-    #[must_use]
-    pub fn from_name(s: &str) -> Option<IdSource> {
-        IdSource::ALL.into_iter().find(|i| i.name() == s)
-    }
-}
+crate::named!(IdSource: "ID choice" { Material => "material", Object => "object", Either => "either" });
 
 /// The thresholds of every detector. Raising any of the numeric thresholds never adds edges.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -4,7 +4,7 @@
 //! not, or their object IDs differ ([`TruthSource::Object`], the ground truth of `gbuf edges`), or their
 //! (object, primitive) IDs differ ([`TruthSource::Primitive`], the finer truth a forward renderer's MSAA rate
 //! follows). The shading truth (does the reference shading actually vary inside the pixel?) is computed from the
-//! resolve's reference in [`crate::measure::edges::shading_truth`].
+//! resolve's reference in `measure::edges::shading_truth`.
 
 use super::{pixel_coverage, PixelCoverage};
 use crate::gbuffer::GBuffer;
@@ -20,16 +20,7 @@ pub enum TruthSource {
     Primitive,
 }
 
-impl TruthSource {
-    /// The kebab-case name.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            TruthSource::Object => "object",
-            TruthSource::Primitive => "primitive",
-        }
-    }
-}
+crate::named!(TruthSource: "truth" { Object => "object", Primitive => "primitive" });
 
 /// Per-pixel true-edge flags (row-major) from `source`'s IDs; `None` when the G-buffer lacks them.
 /// Empty pixels are never edges; a pixel mixing background and surface always is.

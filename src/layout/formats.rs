@@ -105,77 +105,35 @@ pub enum Format {
     D32F,
 }
 
+crate::named!(Format: "format" {
+    R8 => "r8",
+    Rg8 => "rg8",
+    Rgb8 => "rgb8",
+    Rgba8 => "rgba8",
+    Rgba8Srgb => "rgba8-srgb",
+    Rgba8Snorm => "rgba8-snorm",
+    Rgb10A2 => "rgb10a2",
+    R11G11B10F => "r11g11b10f",
+    R16F => "r16f",
+    Rg16F => "rg16f",
+    Rgba16F => "rgba16f",
+    R16Unorm => "r16-unorm",
+    Rg16Unorm => "rg16-unorm",
+    Rg16Snorm => "rg16-snorm",
+    Rgba16Unorm => "rgba16-unorm",
+    R16Ui => "r16ui",
+    R32F => "r32f",
+    Rg32F => "rg32f",
+    Rgba32F => "rgba32f",
+    R32Ui => "r32ui",
+    Rg32Ui => "rg32ui",
+    Rgba32Ui => "rgba32ui",
+    D16 => "d16",
+    D24S8 => "d24s8",
+    D32F => "d32f",
+});
+
 impl Format {
-    /// Every format.
-    pub const ALL: [Format; 25] = [
-        Format::R8,
-        Format::Rg8,
-        Format::Rgb8,
-        Format::Rgba8,
-        Format::Rgba8Srgb,
-        Format::Rgba8Snorm,
-        Format::Rgb10A2,
-        Format::R11G11B10F,
-        Format::R16F,
-        Format::Rg16F,
-        Format::Rgba16F,
-        Format::R16Unorm,
-        Format::Rg16Unorm,
-        Format::Rg16Snorm,
-        Format::Rgba16Unorm,
-        Format::R16Ui,
-        Format::R32F,
-        Format::Rg32F,
-        Format::Rgba32F,
-        Format::R32Ui,
-        Format::Rg32Ui,
-        Format::Rgba32Ui,
-        Format::D16,
-        Format::D24S8,
-        Format::D32F,
-    ];
-
-    /// The spelling used in layout files and output.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            Format::R8 => "r8",
-            Format::Rg8 => "rg8",
-            Format::Rgb8 => "rgb8",
-            Format::Rgba8 => "rgba8",
-            Format::Rgba8Srgb => "rgba8-srgb",
-            Format::Rgba8Snorm => "rgba8-snorm",
-            Format::Rgb10A2 => "rgb10a2",
-            Format::R11G11B10F => "r11g11b10f",
-            Format::R16F => "r16f",
-            Format::Rg16F => "rg16f",
-            Format::Rgba16F => "rgba16f",
-            Format::R16Unorm => "r16-unorm",
-            Format::Rg16Unorm => "rg16-unorm",
-            Format::Rg16Snorm => "rg16-snorm",
-            Format::Rgba16Unorm => "rgba16-unorm",
-            Format::R16Ui => "r16ui",
-            Format::R32F => "r32f",
-            Format::Rg32F => "rg32f",
-            Format::Rgba32F => "rgba32f",
-            Format::R32Ui => "r32ui",
-            Format::Rg32Ui => "rg32ui",
-            Format::Rgba32Ui => "rgba32ui",
-            Format::D16 => "d16",
-            Format::D24S8 => "d24s8",
-            Format::D32F => "d32f",
-        }
-    }
-
-    /// Parses a format name: [`Format::name`] spellings, case-insensitive, `_` and `-` ignored
-    /// (`RGBA8_SRGB`, `rgba8-srgb` and `Rgba8Srgb` are the same format).
-    #[must_use]
-    pub fn from_name(s: &str) -> Option<Format> {
-        let norm = |t: &str| t.chars().filter(|c| *c != '-' && *c != '_').collect::<String>().to_ascii_lowercase();
-        let want = norm(s);
-        Format::ALL.into_iter().find(|f| norm(f.name()) == want)
-    }
-
     /// All known names, comma-separated (for error messages).
     #[must_use]
     pub fn known_names() -> String {
@@ -256,12 +214,6 @@ impl Format {
     }
 }
 
-impl std::fmt::Display for Format {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -307,6 +259,7 @@ mod tests {
             assert_eq!(Format::from_name(&f.name().to_uppercase().replace('-', "_")), Some(f));
         }
         assert_eq!(Format::from_name("R11G11B10_FLOAT"), None);
+        assert_eq!(Format::from_name("Rgba8Srgb"), Some(Format::Rgba8Srgb));
         assert_eq!(Format::from_name("RGBA8_SRGB"), Some(Format::Rgba8Srgb));
         assert_eq!(Format::from_name("nope"), None);
     }

@@ -7,10 +7,11 @@
 //! gradient), which is what per-sample shading is for. Both are compared with [`evaluate_against`];
 //! [`truth_agreement`] compares two truths.
 
+use crate::base::mask::EdgeMask;
+use crate::base::picture::srgb_encode;
 use crate::detect::truth::object_truth;
-use crate::detect::EdgeMask;
 use crate::gbuffer::GBuffer;
-use crate::image::{srgb_encode, ToneMap};
+use crate::image::ToneMap;
 use glam::Vec3;
 use rayon::prelude::*;
 

@@ -7,7 +7,7 @@
 //! [`against_full_deferred`] measures a second schedule (the light pre-pass) against full deferred shading of the
 //! same input, the way the issue asks its error to be reported, separately from the error against the reference.
 
-use crate::detect::EdgeMask;
+use crate::base::mask::EdgeMask;
 use crate::image::HdrImage;
 use crate::light::Light;
 use crate::resolve::{resolve, ResolveConfig, Schedule};

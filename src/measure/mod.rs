@@ -1,6 +1,5 @@
-//! Error metrics between G-buffers and between images, and timing.
+//! Error metrics between G-buffers and between images.
 
 pub mod edges;
 pub mod gbuffer;
 pub mod image;
-pub mod timing;

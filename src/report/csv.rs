@@ -1,7 +1,7 @@
 //! `report.csv`: one line per row, every numeric metric in its own column, empty cells where a metric could not
 //! be computed (the `note`/`error` columns say why).
 
-use crate::report::row::Row;
+use crate::analysis::row::Row;
 use std::fmt::Write as _;
 
 /// The header columns, in order.
@@ -68,7 +68,7 @@ pub fn to_csv(rows: &[Row]) -> String {
     let mut s = COLUMNS.join(",");
     s.push('\n');
     for r in rows {
-        let t = |stage: &str, which: fn(&crate::report::row::Timing) -> f64| num(r.timings.get(stage).map(which));
+        let t = |stage: &str, which: fn(&crate::analysis::row::Timing) -> f64| num(r.timings.get(stage).map(which));
         let note = match (&r.note, &r.error) {
             (Some(n), Some(e)) => format!("error: {e}; {n}"),
             (None, Some(e)) => format!("error: {e}"),
@@ -120,7 +120,7 @@ pub fn to_csv(rows: &[Row]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::report::row::Timing;
+    use crate::analysis::row::Timing;
 
     #[test]
     fn header_and_rows_have_the_same_width_and_quote_commas() {

@@ -1,13 +1,13 @@
 //! The figures of a report: error against bytes and against run time (PNG + SVG), per-attribute error heatmaps
 //! of the worst layouts, the edge masks of each detector and the light-count heatmap.
 
-use crate::detect::EdgeMask;
+use crate::analysis::pareto;
+use crate::analysis::row::{Figure, Row};
+use crate::analysis::sweep::SweepOutput;
+use crate::base::mask::EdgeMask;
 use crate::error::Result;
 use crate::gbuffer::GBuffer;
-use crate::report::pareto;
 use crate::report::plot::{self, PlotPoint, ScatterPlot};
-use crate::report::row::{Figure, Row};
-use crate::report::sweep::SweepOutput;
 use crate::report::write::Attachment;
 use image::{Rgb, RgbImage};
 
@@ -81,15 +81,8 @@ pub fn mask_picture(mask: &EdgeMask) -> RgbImage {
 /// The picture of the reference image, tone-mapped (Reinhard) and sRGB-encoded.
 #[must_use]
 pub fn image_picture(img: &crate::image::HdrImage) -> RgbImage {
-    let enc = |v: f32| {
-        let t = if v.is_finite() { (v / (1.0 + v)).clamp(0.0, 1.0) } else { 0.0 };
-        let s = if t <= 0.003_130_8 { 12.92 * t } else { 1.055 * t.powf(1.0 / 2.4) - 0.055 };
-        (s * 255.0).round() as u8
-    };
-    RgbImage::from_fn(img.width, img.height, |x, y| {
-        let c = img.rgb[(y * img.width + x) as usize];
-        Rgb([enc(c.x), enc(c.y), enc(c.z)])
-    })
+    RgbImage::from_raw(img.width, img.height, img.to_srgb8(crate::image::ToneMap::default()))
+        .expect("an HdrImage holds width × height pixels")
 }
 
 /// Builds every figure of a sweep. Returns the files and their captions.

@@ -1,7 +1,7 @@
 //! `report.md`: the tables a person reads, with the figures inline.
 
-use crate::report::needs::Needs;
-use crate::report::row::{Report, Row};
+use crate::analysis::needs::Needs;
+use crate::analysis::row::{Report, Row};
 use std::fmt::Write as _;
 
 /// Formats an optional number with `prec` decimals; `—` when missing, `∞` when infinite.
@@ -231,7 +231,7 @@ pub fn to_markdown(rep: &Report) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::report::needs::analyze;
+    use crate::analysis::needs::analyze;
     use crate::GBuffer;
 
     #[test]
@@ -264,7 +264,7 @@ mod tests {
             sweep_seconds: 0.5,
             needs: analyze(&GBuffer::new(4, 2, 1).unwrap()),
             rows,
-            figures: vec![crate::report::row::Figure { file: "a.png".into(), caption: "A plot".into() }],
+            figures: vec![crate::analysis::row::Figure { file: "a.png".into(), caption: "A plot".into() }],
         };
         let md = to_markdown(&rep);
         assert!(md.contains("| fat-20 | 20 |"));

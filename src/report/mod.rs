@@ -1,167 +1,19 @@
-//! Reports: sweeps of layouts × detectors, the byte-budget search, the scene-needs analysis, and the
-//! table/CSV/JSON/plot writers.
-//!
-//! Input: a G-buffer (loaded or rendered) with its lights. Output: rows of measured numbers (errors against the
-//! unquantized reference, measured times), the Pareto front, and a folder a person reads (`report.md`) or a
-//! script reads (`report.json`, `report.csv`).
+//! Reports: the folder a person reads (`report.md`, plots, heatmaps) or a script reads (`report.json`,
+//! `report.csv`), written from the analysis ([`crate::analysis`]): tables, CSV, JSON and plot writers.
 
-pub mod budget;
 pub mod csv;
 pub mod figures;
 pub mod font;
 pub mod markdown;
-pub mod needs;
-pub mod pareto;
 pub mod plot;
-pub mod prune;
-pub mod row;
-pub mod sweep;
 pub mod write;
 
+use crate::analysis::needs;
+use crate::analysis::row::Report;
+use crate::analysis::sweep::{self, SweepConfig};
+use crate::analysis::{pruned_layout, ReportInput};
 use crate::error::Result;
-use crate::gbuffer::GBuffer;
-use crate::image::HdrImage;
-use crate::layout::Layout;
-use crate::light::Light;
-use crate::report::needs::{Needs, PrunedLayout};
-use crate::report::row::Report;
-use crate::report::sweep::{SweepConfig, SweepOutput};
 use crate::report::write::Attachment;
-
-/// What a report is about.
-#[derive(Clone, Debug)]
-pub struct ReportInput<'a> {
-    /// A name for the input (file path or scene name).
-    pub name: String,
-    /// The reference G-buffer.
-    pub gbuffer: &'a GBuffer,
-    /// View-space lights.
-    pub lights: &'a [Light],
-    /// Where the lights came from.
-    pub lights_source: String,
-}
-
-/// Image RMSE of `layout` on `gb` lit by `lights` (roundtrip, detector, resolve) against `reference`.
-pub fn layout_image_error(
-    gb: &GBuffer,
-    lights: &[Light],
-    layout: &Layout,
-    reference: &HdrImage,
-    cfg: &SweepConfig,
-) -> Result<crate::measure::image::ImageError> {
-    let decoded = layout.roundtrip(gb)?;
-    let det = cfg.detectors.first().copied().unwrap_or(crate::detect::Detector::Lauritzen);
-    let mask = crate::detect::detect(&decoded, det, &cfg.detector_config)?;
-    let res = crate::resolve::resolve(&decoded, lights, &mask, &cfg.resolve)?;
-    Ok(crate::measure::image::compare(reference, &res.image))
-}
-
-/// The lossless measuring baseline among the built-ins: never picked as the layout to prune when another one can
-/// be pruned, since nobody ships it.
-pub const LOSSLESS_BASELINE: &str = "reference-f32";
-
-/// Picks the layout to prune — among the swept layouts whose pruning saves bytes, the one with the least image
-/// error in the sweep (ties → the larger saving; the lossless baseline only when nothing else can be pruned) —
-/// prunes it and measures the pruned layout's error.
-pub fn pruned_layout(
-    input: &ReportInput<'_>,
-    needs: &Needs,
-    cfg: &SweepConfig,
-    out: &SweepOutput,
-) -> Option<(PrunedLayout, Layout)> {
-    let first_det = cfg.detectors.first()?.name();
-    let base_rmse = |name: &str| {
-        out.rows.iter().find(|r| r.layout == name && r.detector == first_det && r.error.is_none()).and_then(|r| r.rmse)
-    };
-    let mut best: Option<(u32, f64, &Layout, crate::layout::LayoutSpec, Vec<String>)> = None;
-    for l in &cfg.layouts {
-        let (spec, changes) = prune::prune_spec(l.spec(), needs);
-        let Ok(p) = Layout::from_spec(spec.clone()) else { continue };
-        let saved = (l.bytes_per_sample() - p.bytes_per_sample().min(l.bytes_per_sample())) as u32;
-        let err = base_rmse(l.name()).unwrap_or(f64::INFINITY);
-        // Rank: saves something, is not the lossless baseline, least error, largest saving.
-        let rank =
-            |saved: u32, err: f64, name: &str| (saved == 0, name == LOSSLESS_BASELINE, err, std::cmp::Reverse(saved));
-        let better = match &best {
-            None => true,
-            Some((s, e, bl, ..)) => {
-                rank(saved, err, l.name()).partial_cmp(&rank(*s, *e, bl.name())).is_some_and(|o| o.is_lt())
-            }
-        };
-        if better {
-            best = Some((saved, err, l, spec, changes));
-        }
-    }
-    let (saved, _, base, spec, changes) = best?;
-    let layout = Layout::from_spec(spec).ok()?;
-    let mut p = PrunedLayout {
-        name: layout.name().to_string(),
-        base: base.name().to_string(),
-        bytes_per_sample: layout.bytes_per_sample() as u32,
-        base_bytes_per_sample: base.bytes_per_sample() as u32,
-        bytes_saved: saved,
-        changes,
-        base_rmse: base_rmse(base.name()),
-        rmse: None,
-        psnr_db: None,
-        note: None,
-    };
-    match layout_image_error(input.gbuffer, input.lights, &layout, &out.reference, cfg) {
-        Ok(e) => {
-            p.rmse = Some(e.rmse);
-            p.psnr_db = Some(e.psnr_db);
-        }
-        Err(e) => p.note = Some(format!("could not measure the pruned layout: {e}")),
-    }
-    if p.changes.is_empty() {
-        p.note = Some("the scene uses everything every layout stores: nothing to leave out".into());
-    }
-    Some((p, layout))
-}
-
-/// The needs analysis with a pruned layout chosen without lighting (for `gbuf info`): among the built-ins, the one
-/// whose pruning saves the most bytes (the lossless baseline only when nothing else can be pruned). Its error is
-/// left unmeasured (`gbuf report` measures it).
-#[must_use]
-pub fn needs_with_pruned_layout(gb: &GBuffer) -> Needs {
-    let mut needs = needs::analyze(gb);
-    let mut best: Option<(Layout, Layout, Vec<String>)> = None;
-    for l in Layout::builtins() {
-        let (spec, changes) = prune::prune_spec(l.spec(), &needs);
-        let Ok(p) = Layout::from_spec(spec) else { continue };
-        let saved = l.bytes_per_sample().saturating_sub(p.bytes_per_sample());
-        let rank = |saved: usize, name: &str| (saved == 0, name == LOSSLESS_BASELINE, std::cmp::Reverse(saved));
-        let better = match &best {
-            None => true,
-            Some((b, bp, _)) => {
-                rank(saved, l.name()) < rank(b.bytes_per_sample().saturating_sub(bp.bytes_per_sample()), b.name())
-            }
-        };
-        if better {
-            best = Some((l, p, changes));
-        }
-    }
-    if let Some((base, p, changes)) = best {
-        let saved = base.bytes_per_sample().saturating_sub(p.bytes_per_sample()) as u32;
-        needs.pruned_layout = Some(PrunedLayout {
-            name: p.name().to_string(),
-            base: base.name().to_string(),
-            bytes_per_sample: p.bytes_per_sample() as u32,
-            base_bytes_per_sample: base.bytes_per_sample() as u32,
-            bytes_saved: saved,
-            note: Some(if changes.is_empty() {
-                "the scene uses everything every layout stores: nothing to leave out".into()
-            } else {
-                "error not measured here: `gbuf report` lights the scene and measures it".into()
-            }),
-            changes,
-            base_rmse: None,
-            rmse: None,
-            psnr_db: None,
-        });
-    }
-    needs
-}
 
 /// Runs the needs analysis and the sweep, prunes, and builds the figures: everything a report folder holds.
 pub fn run(

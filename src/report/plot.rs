@@ -4,12 +4,11 @@
 //! The plots are meant to be read next to the tables of `report.md`, so they stay simple: linear or log axes with
 //! "nice" ticks, one labelled point per row, the front as a polyline.
 
-use crate::error::Result;
+use crate::base::picture::colormap;
+pub use crate::base::picture::{png_bytes, write_png};
 use crate::report::font;
-use crate::util::write_bytes_atomic;
-use image::{ImageEncoder, Rgb, RgbImage};
+use image::{Rgb, RgbImage};
 use std::fmt::Write as _;
-use std::path::Path;
 
 /// One point of a scatter plot.
 #[derive(Clone, Debug)]
@@ -306,18 +305,6 @@ fn esc(s: &str) -> String {
     s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
 }
 
-/// Maps t ∈ [0, 1] to a perceptually ordered colour (dark blue → teal → yellow, after viridis).
-#[must_use]
-pub fn colormap(t: f32) -> Rgb<u8> {
-    const STOPS: [[f32; 3]; 5] =
-        [[68.0, 1.0, 84.0], [59.0, 82.0, 139.0], [33.0, 145.0, 140.0], [94.0, 201.0, 98.0], [253.0, 231.0, 37.0]];
-    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 } * (STOPS.len() - 1) as f32;
-    let i = (t.floor() as usize).min(STOPS.len() - 2);
-    let u = t - i as f32;
-    let c = |k: usize| (STOPS[i][k] + (STOPS[i + 1][k] - STOPS[i][k]) * u).round() as u8;
-    Rgb([c(0), c(1), c(2)])
-}
-
 /// A heatmap of `values` (row-major `width × height`), scaled so that `max` maps to the top of the colour map.
 /// `None` entries (e.g. background pixels) are drawn grey.
 #[must_use]
@@ -325,23 +312,9 @@ pub fn heatmap(values: &[Option<f32>], width: u32, height: u32, max: f32) -> Rgb
     debug_assert_eq!(values.len(), width as usize * height as usize);
     let inv = if max > 0.0 && max.is_finite() { 1.0 / max } else { 0.0 };
     RgbImage::from_fn(width, height, |x, y| match values[(y * width + x) as usize] {
-        Some(v) => colormap(v * inv),
+        Some(v) => Rgb(colormap(v * inv)),
         None => Rgb([128, 128, 128]),
     })
-}
-
-/// Encodes an RGB image as PNG bytes.
-pub fn png_bytes(img: &RgbImage) -> Result<Vec<u8>> {
-    let mut out = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut out)
-        .write_image(img.as_raw(), img.width(), img.height(), image::ExtendedColorType::Rgb8)
-        .map_err(|e| crate::Error::Argument(format!("PNG encoding failed: {e}")))?;
-    Ok(out)
-}
-
-/// Writes an RGB image as a PNG file, atomically.
-pub fn write_png(path: &Path, img: &RgbImage) -> Result<()> {
-    write_bytes_atomic(path, &png_bytes(img)?)
 }
 
 #[cfg(test)]
@@ -394,9 +367,6 @@ mod tests {
 
     #[test]
     fn colormap_ends_and_heatmap_background() {
-        assert_eq!(colormap(0.0), Rgb([68, 1, 84]));
-        assert_eq!(colormap(1.0), Rgb([253, 231, 37]));
-        assert_eq!(colormap(f32::NAN), colormap(0.0));
         let img = heatmap(&[Some(0.0), Some(2.0), None, Some(1.0)], 2, 2, 2.0);
         assert_eq!(*img.get_pixel(1, 0), Rgb([253, 231, 37]));
         assert_eq!(*img.get_pixel(0, 1), Rgb([128, 128, 128]));

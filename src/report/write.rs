@@ -1,8 +1,8 @@
 //! Writes a report folder: `report.md`, `report.csv`, `report.json` and the figures. Every file is written
 //! atomically; the folder is created if missing; files that are not ours are left untouched.
 
+use crate::analysis::row::Report;
 use crate::error::{Error, Result};
-use crate::report::row::Report;
 use crate::report::{csv, markdown};
 use crate::util::write_bytes_atomic;
 use std::path::{Path, PathBuf};
@@ -51,8 +51,8 @@ pub fn write_folder(dir: &Path, rep: &Report, attachments: &[Attachment]) -> Res
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::report::needs::analyze;
-    use crate::report::row::Row;
+    use crate::analysis::needs::analyze;
+    use crate::analysis::row::Row;
 
     fn rep() -> Report {
         Report {

@@ -1,5 +1,5 @@
 //! The BRDFs, written once in f64 as the reference definition of what one light adds to one sample. The batched
-//! f32 kernel (`kernel.rs`) evaluates the same formulas; [`crate::resolve::reference()`] calls these directly.
+//! f32 kernel (`kernel.rs`) evaluates the same formulas; the f64 reference (`reference.rs`) calls these directly.
 //!
 //! Conventions (view space, the crate's +X right, +Y up, looking −Z): `V = −p/|p|` points from the surface to the
 //! eye; `L` points from the surface to the light (`−direction` for a directional light); `H = normalize(L + V)`.
@@ -18,7 +18,7 @@
 
 use super::config::{Brdf, Falloff};
 use super::falloff::{attenuation, cone_constants, spot, MIN_DISTANCE};
-use super::surface::Surface;
+use super::worklist::Surface;
 use crate::light::{Light, LightKind};
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -155,8 +155,8 @@ mod tests {
         let s = surface(Vec3::Z);
         let behind = Light::point(Vec3::new(0.0, 0.0, -9.0), Vec3::ONE, 1.0, 100.0);
         let far = Light::point(Vec3::new(0.0, 0.0, -1.0), Vec3::ONE, 1.0, 3.0);
-        for brdf in Brdf::ALL {
-            for falloff in Falloff::ALL {
+        for brdf in &Brdf::ALL {
+            for falloff in &Falloff::ALL {
                 assert_eq!(shade(&s, &behind, *brdf, *falloff), DVec3::ZERO);
                 assert_eq!(shade(&s, &far, *brdf, *falloff), DVec3::ZERO);
             }

@@ -1,56 +1,16 @@
 //! The closed choices of the resolve (culling, BRDF, falloff, schedule) and the configuration that bundles them.
 //!
-//! Every enum has `ALL`, a kebab-case `name()` (the one CLI / JSON spelling) and `from_name()`.
+//! Every enum has `ALL`, a kebab-case `name()` (the one CLI / JSON spelling) and `from_name()`, from
+//! [`crate::base::names`].
 
 use serde::{Deserialize, Serialize};
 
-macro_rules! named_enum {
-    ($(#[$doc:meta])* $name:ident { $($(#[$vdoc:meta])* $variant:ident => $text:literal),+ $(,)? }) => {
-        $(#[$doc])*
-        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-        #[serde(rename_all = "kebab-case")]
-        pub enum $name {
-            $($(#[$vdoc])* $variant),+
-        }
-
-        impl $name {
-            /// Every variant, in the order the CLI lists them.
-            pub const ALL: &'static [$name] = &[$($name::$variant),+];
-
-            /// The kebab-case spelling used by flags and JSON.
-            #[must_use]
-            pub fn name(self) -> &'static str {
-                match self {
-                    $($name::$variant => $text),+
-                }
-            }
-
-            /// Parses a spelling written by [`Self::name`] (case-insensitive, `_` accepted for `-`).
-            #[must_use]
-            pub fn from_name(s: &str) -> Option<Self> {
-                let s = s.trim().to_ascii_lowercase().replace('_', "-");
-                Self::ALL.iter().copied().find(|v| v.name() == s)
-            }
-
-            /// All spellings, comma-separated, for error messages.
-            #[must_use]
-            pub fn names() -> String {
-                Self::ALL.iter().map(|v| v.name()).collect::<Vec<_>>().join(", ")
-            }
-        }
-
-        impl std::fmt::Display for $name {
-            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-                f.write_str(self.name())
-            }
-        }
-    };
-}
-
-named_enum! {
+crate::named_enum! {
     /// How lights are matched to samples before shading. Every method is conservative: it only drops lights whose
     /// contribution is exactly zero, so the image does not depend on the choice (see `tests/resolve_props.rs`).
-    Culling {
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub enum Culling: "culling" {
         /// Every light against every shaded sample.
         None => "none",
         /// Each light's screen-space bounding rectangle plus a per-sample depth-bounds test (the 2010 demo's
@@ -63,9 +23,11 @@ named_enum! {
     }
 }
 
-named_enum! {
+crate::named_enum! {
     /// The surface response.
-    Brdf {
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub enum Brdf: "BRDF" {
         /// `albedo / π · N·L`.
         Lambert => "lambert",
         /// The 2010 tiled-deferred demo / ISPC `deferred` model:
@@ -76,9 +38,11 @@ named_enum! {
     }
 }
 
-named_enum! {
+crate::named_enum! {
     /// Distance attenuation of point and spot lights (directional lights are not attenuated).
-    Falloff {
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub enum Falloff: "falloff" {
         /// KHR_lights_punctual: `clamp(1 − (d/range)⁴, 0, 1)² / d²`.
         Gltf => "gltf",
         /// The 2010 demo: `clamp((end − d)/(end − begin), 0, 1)`, zero beyond `end` (= the light's range).
@@ -86,9 +50,11 @@ named_enum! {
     }
 }
 
-named_enum! {
+crate::named_enum! {
     /// How the shading work is organised.
-    Schedule {
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub enum Schedule: "schedule" {
         /// Full deferred shading: every shaded sample evaluates the whole BRDF per light.
         Deferred => "deferred",
         /// Deferred lighting (light pre-pass): lights accumulate RGB diffuse light and a monochromatic specular
@@ -161,16 +127,16 @@ mod tests {
 
     #[test]
     fn names_round_trip_for_every_variant() {
-        for c in Culling::ALL {
+        for c in &Culling::ALL {
             assert_eq!(Culling::from_name(c.name()), Some(*c));
         }
-        for b in Brdf::ALL {
+        for b in &Brdf::ALL {
             assert_eq!(Brdf::from_name(b.name()), Some(*b));
         }
-        for f in Falloff::ALL {
+        for f in &Falloff::ALL {
             assert_eq!(Falloff::from_name(f.name()), Some(*f));
         }
-        for s in Schedule::ALL {
+        for s in &Schedule::ALL {
             assert_eq!(Schedule::from_name(s.name()), Some(*s));
         }
         assert_eq!(Brdf::from_name("Blinn_Phong"), Some(Brdf::BlinnPhong));

@@ -11,8 +11,8 @@
 //! Both falloffs are exactly 0 at and beyond `range`; the sphere is grown by [`CULL_MARGIN`] so f32 rounding in
 //! the tests cannot drop a light whose rounded contribution is not exactly 0.
 
-use super::kernel::{Items, QuadSoa};
 use super::simd::Lanes;
+use super::worklist::{Items, QuadSoa};
 use crate::light::Light;
 use glam::Vec3;
 

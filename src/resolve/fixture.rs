@@ -154,9 +154,9 @@ pub fn lights_on_surfaces(gb: &GBuffer, n: usize, range: f32, seed: u64) -> Vec<
 /// # Errors
 /// When the quarter-size frame cannot be built or resolved.
 pub fn lights_for_density(width: u32, height: u32, n: usize, per_sample: f64, seed: u64) -> Result<Vec<Light>> {
-    use super::{resolve, uniform_mask, ResolveConfig};
+    use super::{resolve, ResolveConfig};
     let small = room((width / 4).max(1), (height / 4).max(1), 1)?;
-    let mask = uniform_mask(&small, false);
+    let mask = crate::detect::baselines::none(&small);
     let cfg = ResolveConfig { tile_size: 4, ..Default::default() };
     let (mut lo, mut hi) = (0.05f32, 8.0f32);
     for _ in 0..18 {

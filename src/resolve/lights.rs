@@ -142,6 +142,7 @@ impl LightTable {
     }
 
     /// True when there are no lights.
+    #[allow(dead_code)] // the pair of `len` (clippy: len_without_is_empty)
     #[must_use]
     pub fn is_empty(&self) -> bool {
         self.rec.is_empty()

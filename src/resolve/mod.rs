@@ -11,31 +11,32 @@
 //! the box filter writes pixels. [`reference()`] is the f64, every-sample, no-culling image the errors are measured
 //! against, with the formulas of `brdf.rs` and `falloff.rs`.
 
-pub mod brdf;
-pub mod config;
-pub mod culling;
-pub mod falloff;
-pub mod fastmath;
+mod brdf;
+mod config;
+mod culling;
+mod falloff;
+mod fastmath;
 pub mod fixture;
-pub mod kernel;
-pub mod lights;
-pub mod reference;
-pub mod schedule;
-pub mod simd;
-pub mod split;
-pub mod surface;
+mod kernel;
+mod lights;
+mod reference;
+mod schedule;
+mod simd;
+mod split;
+mod surface;
+mod worklist;
 
 pub use config::{Brdf, Culling, Falloff, ResolveConfig, Schedule, DEFAULT_DEPTH_SLICES, DEFAULT_TILE_SIZE};
+pub use kernel::instruction_set;
 pub use reference::{reference, reference_per_sample};
 pub use split::{ResolveInput, SplitSamples};
 pub use surface::SanitizedCounts;
 
-use crate::detect::EdgeMask;
+use crate::base::mask::EdgeMask;
+use crate::base::timing::{ms, StageMs};
 use crate::error::{Error, Result};
-use crate::gbuffer::GBuffer;
 use crate::image::HdrImage;
 use crate::light::Light;
-use crate::measure::timing::{ms, StageMs};
 use serde::Serialize;
 use std::time::{Duration, Instant};
 
@@ -75,16 +76,6 @@ pub struct Resolved {
     pub stats: ResolveStats,
     /// Light evaluations spent on each pixel (sum over its shaded samples), row-major: the heatmap.
     pub lights_per_pixel: Vec<u32>,
-}
-
-/// A mask shading every pixel with a covered sample `per_pixel` times: 1 (shade once, the `none` baseline) or
-/// `gb.samples` (supersampling, the `ssaa` baseline). Pixels with no covered sample get 0.
-#[must_use]
-pub fn uniform_mask(gb: &GBuffer, per_sample: bool) -> EdgeMask {
-    let s = gb.samples.max(1) as usize;
-    let count = if per_sample { gb.samples.min(255) as u8 } else { 1 };
-    let shade_count = gb.coverage.chunks(s).map(|c| if c.iter().any(|&v| v) { count } else { 0 }).collect();
-    EdgeMask { width: gb.width, height: gb.height, samples: gb.samples, shade_count }
 }
 
 /// Lights `gb` (a [`GBuffer`], or a [`SplitSamples`] copy of one: the same image, faster for MSAA) with `lights`,

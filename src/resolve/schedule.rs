@@ -9,15 +9,16 @@
 
 use super::config::{Culling, ResolveConfig, Schedule};
 use super::culling::{light_sphere, quad_rects, Bounds};
-use super::kernel::{finish_prepass, shade, Items, QuadSoa, Variant, BLOCK, PAD_PIXEL};
+use super::kernel::{finish_prepass, shade, Variant, BLOCK};
 use super::lights::LightTable;
 #[cfg(target_arch = "x86_64")]
 use super::simd::Avx512;
 use super::simd::Portable;
 use super::surface::{Reads, SanitizedCounts, SurfaceReader, MIN_VIEW_DEPTH};
+use super::worklist::{Items, QuadSoa, PAD_PIXEL};
 #[cfg(target_arch = "x86_64")]
-use crate::codec::simd::Isa;
-use crate::detect::EdgeMask;
+use crate::base::isa::Isa;
+use crate::base::mask::EdgeMask;
 use crate::light::Light;
 use glam::Vec3;
 use rayon::prelude::*;

@@ -22,8 +22,10 @@ pub const BLOCK: usize = LANES;
 
 /// Relative error bound of [`Lanes::rsqrt`] on normal positive inputs (the refined `vrsqrt14ps` path; the portable
 /// path is `1/√x`, within 2 ulp).
+#[cfg_attr(not(test), allow(dead_code))] // the bound / scalar path the tests check against
 pub const RSQRT_MAX_REL_ERROR: f32 = 4e-7;
 /// Relative error bound of [`Lanes::rsqrt_approx`] (`vrsqrt14ps`: 2⁻¹⁴).
+#[cfg_attr(not(test), allow(dead_code))] // the bound / scalar path the tests check against
 pub const RSQRT_APPROX_REL_ERROR: f32 = 1.0 / 16384.0;
 
 /// A vector of [`LANES`] f32 lanes with the operations the shading kernel needs.
@@ -76,6 +78,7 @@ pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = S
     /// `self + 1` where `m`, else `self` (counters kept in f32: exact below 2²⁴).
     fn count(self, m: Self::Mask) -> Self;
     /// True when some lane of `m` is set.
+    #[cfg_attr(not(test), allow(dead_code))] // used by the tests
     fn any(m: Self::Mask) -> bool;
     /// The mask as bits (lane `j` → bit `j`).
     fn bits(m: Self::Mask) -> u64;

@@ -12,10 +12,11 @@
 //! absent, is mapped from the specular power (see [`roughness_from_power`]).
 
 use super::config::Brdf;
-use super::kernel::{Items, LANES};
-use crate::camera::Camera;
+use super::simd::LANES;
+use super::worklist::{Items, Surface};
 #[cfg(target_arch = "x86_64")]
-use crate::codec::simd::Isa;
+use crate::base::isa::Isa;
+use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::gbuffer::GBuffer;
 use glam::{Vec2, Vec3};
@@ -93,25 +94,6 @@ impl SanitizedCounts {
             + self.lights
             + self.output
     }
-}
-
-/// One sample, ready to shade: every field finite, normal unit length, depth > [`MIN_VIEW_DEPTH`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Surface {
-    /// View-space position.
-    pub p: Vec3,
-    /// Unit view-space normal.
-    pub n: Vec3,
-    /// Linear albedo, components ≥ 0.
-    pub albedo: Vec3,
-    /// Specular amount ≥ 0.
-    pub specular: f32,
-    /// Specular power in [0, [`MAX_SPECULAR_POWER`]].
-    pub power: f32,
-    /// Perceptual roughness in [0, 1].
-    pub roughness: f32,
-    /// Metallic in [0, 1].
-    pub metallic: f32,
 }
 
 /// Reads samples of one G-buffer (attribute planes resolved once), whose planes are in either sample order (see

@@ -40,31 +40,7 @@ pub enum SceneName {
     Stress,
 }
 
-impl SceneName {
-    /// Every scene.
-    pub const ALL: [SceneName; 2] = [SceneName::Room, SceneName::Stress];
-
-    /// The one CLI spelling.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            SceneName::Room => "room",
-            SceneName::Stress => "stress",
-        }
-    }
-
-    /// Parses a name as written by [`SceneName::name`] (case-insensitive).
-    #[must_use]
-    pub fn from_name(s: &str) -> Option<SceneName> {
-        SceneName::ALL.into_iter().find(|n| n.name().eq_ignore_ascii_case(s.trim()))
-    }
-}
-
-impl std::fmt::Display for SceneName {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
+crate::named!(SceneName: "scene" { Room => "room", Stress => "stress" });
 
 /// One object of a scene, as the G-buffer's ID planes name it.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]

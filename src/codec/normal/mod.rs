@@ -12,8 +12,9 @@
 //!
 //! Codes: component 0 sits in the low `k` bits, component 1 in the next `k`, and so on.
 
-use super::simd::{f16_bits_to_f32, f32_to_f16_bits, run, Isa, Kernel, BLOCK};
+use super::simd::{f16_bits_to_f32, f32_to_f16_bits, run, Kernel, BLOCK};
 use super::{mask, split_bits, NormalCodec};
+use crate::base::isa::Isa;
 use glam::{DVec3, Vec2, Vec3};
 
 mod hemi;
@@ -73,56 +74,26 @@ pub enum NormalScheme {
     OctF16,
 }
 
+crate::named!(NormalScheme: "normal scheme" {
+    XyzSnorm => "xyz-snorm",
+    XyzUnorm => "xyz-unorm",
+    XyzF16 => "xyz-f16",
+    XyHemi => "xy-hemi",
+    XyHemiF16 => "xy-hemi-f16",
+    Spherical => "spherical",
+    SpheremapCry => "spheremap-cry",
+    SpheremapCryF16 => "spheremap-cry-f16",
+    SpheremapIspc => "spheremap-ispc",
+    Lambert => "lambert",
+    LambertF16 => "lambert-f16",
+    Stereo => "stereo",
+    StereoF16 => "stereo-f16",
+    Oct => "oct",
+    OctPrecise => "oct-precise",
+    OctF16 => "oct-f16",
+});
+
 impl NormalScheme {
-    /// Every scheme.
-    pub const ALL: [NormalScheme; 16] = [
-        NormalScheme::XyzSnorm,
-        NormalScheme::XyzUnorm,
-        NormalScheme::XyzF16,
-        NormalScheme::XyHemi,
-        NormalScheme::XyHemiF16,
-        NormalScheme::Spherical,
-        NormalScheme::SpheremapCry,
-        NormalScheme::SpheremapCryF16,
-        NormalScheme::SpheremapIspc,
-        NormalScheme::Lambert,
-        NormalScheme::LambertF16,
-        NormalScheme::Stereo,
-        NormalScheme::StereoF16,
-        NormalScheme::Oct,
-        NormalScheme::OctPrecise,
-        NormalScheme::OctF16,
-    ];
-
-    /// The registry name without the bit count, e.g. `oct-precise`.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            NormalScheme::XyzSnorm => "xyz-snorm",
-            NormalScheme::XyzUnorm => "xyz-unorm",
-            NormalScheme::XyzF16 => "xyz-f16",
-            NormalScheme::XyHemi => "xy-hemi",
-            NormalScheme::XyHemiF16 => "xy-hemi-f16",
-            NormalScheme::Spherical => "spherical",
-            NormalScheme::SpheremapCry => "spheremap-cry",
-            NormalScheme::SpheremapCryF16 => "spheremap-cry-f16",
-            NormalScheme::SpheremapIspc => "spheremap-ispc",
-            NormalScheme::Lambert => "lambert",
-            NormalScheme::LambertF16 => "lambert-f16",
-            NormalScheme::Stereo => "stereo",
-            NormalScheme::StereoF16 => "stereo-f16",
-            NormalScheme::Oct => "oct",
-            NormalScheme::OctPrecise => "oct-precise",
-            NormalScheme::OctF16 => "oct-f16",
-        }
-    }
-
-    /// The scheme with this registry prefix.
-    #[must_use]
-    pub fn from_name(name: &str) -> Option<NormalScheme> {
-        NormalScheme::ALL.into_iter().find(|s| s.name() == name)
-    }
-
     /// Stored components (2 or 3).
     #[must_use]
     pub fn components(self) -> u32 {

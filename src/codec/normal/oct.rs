@@ -12,7 +12,8 @@
 //! Fold lines (x = 0 or y = 0 with z < 0) and −0.0 use `signNotZero`, so −0.0 folds like +0.0.
 
 use super::{finish, sanitize, sign_not_zero, NormalCodec, Planar, Projection, Quant};
-use crate::codec::{mask, Isa};
+use crate::base::isa::Isa;
+use crate::codec::mask;
 use glam::{Vec2, Vec3};
 
 /// The octahedral projection (plane coordinates in [−1, 1]², snorm or f16).

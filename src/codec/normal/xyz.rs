@@ -13,7 +13,8 @@
 use super::{
     finish, join_block, sanitize, split_block, NormalCodec, Quant, Quantizer, SnormQ, UnormQ, F16Q, FLOAT_SLACK_RAD,
 };
-use crate::codec::simd::{run, Isa, Kernel, BLOCK};
+use crate::base::isa::Isa;
+use crate::codec::simd::{run, Kernel, BLOCK};
 use glam::Vec3;
 
 /// How each xyz component is stored.

@@ -15,6 +15,8 @@
 //! combinations and every fitting built-in are packed into real words, unpacked, run through the detector and the
 //! full resolve, and compared with the reference; the measured error decides.
 
+use crate::analysis::needs::{self, Needs, MATERIAL_PARAMETERS};
+use crate::analysis::prune::prune_spec;
 use crate::codec::{self, NormalScheme};
 use crate::detect::{self, Detector, DetectorConfig};
 use crate::error::{Error, Result};
@@ -23,8 +25,6 @@ use crate::image::HdrImage;
 use crate::layout::{ConstantValue, FieldSpec, IndirectionSpec, Layout, LayoutSpec, TargetSpec, DEFAULT_DEPTH_RANGE};
 use crate::light::Light;
 use crate::measure;
-use crate::report::needs::{self, Needs, MATERIAL_PARAMETERS};
-use crate::report::prune::prune_spec;
 use crate::resolve::{self, ResolveConfig};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -374,7 +374,7 @@ fn price(pricer: &Pricer<'_>, attr: Attribute, names: &[String]) -> Result<Vec<O
 /// Keeps the options no other option beats on both cost and error (a dominated option never helps a combination).
 fn keep_front<T>(v: Vec<T>, key: impl Fn(&T) -> (f64, f64)) -> Vec<T> {
     let pts: Vec<(f64, f64)> = v.iter().map(&key).collect();
-    let on = crate::report::pareto::front(&pts);
+    let on = crate::analysis::pareto::front(&pts);
     let mut seen = Vec::new();
     v.into_iter()
         .zip(on)

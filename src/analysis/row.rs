@@ -1,8 +1,8 @@
 //! What a report holds: one [`Row`] per layout × detector (× culling) run, measured [`Timing`]s, and the
 //! [`Report`] that the writers turn into `report.md`, `report.csv` and `report.json`.
 
-use crate::report::needs::Needs;
-use crate::report::pareto;
+use crate::analysis::needs::Needs;
+use crate::analysis::pareto;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::time::Instant;

@@ -4,7 +4,7 @@
 //!
 //! Input: a G-buffer. Output: [`Needs`], a plain serializable summary. Only covered (non-background) samples are
 //! looked at, since background samples hold zeros by convention. The pruned layout built from this analysis lives
-//! in `report::prune`; it is attached to [`Needs::pruned_layout`] by the callers that can measure its error.
+//! in `analysis::prune`; it is attached to [`Needs::pruned_layout`] by the callers that can measure its error.
 
 use crate::gbuffer::{Attribute, GBuffer, PlaneRef};
 use serde::Serialize;
@@ -37,7 +37,7 @@ pub struct DepthBits {
     pub log_bits: u32,
 }
 
-/// The layout that leaves out what the scene does not need (filled in by `report::prune`).
+/// The layout that leaves out what the scene does not need (filled in by `analysis::prune`).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PrunedLayout {
     /// Name of the pruned layout.
@@ -290,7 +290,7 @@ pub fn bits_for_count(n: usize) -> u32 {
     }
 }
 
-/// Analyses what `gb` needs. The pruned layout is left `None` (see `report::prune`).
+/// Analyses what `gb` needs. The pruned layout is left `None` (see `analysis::prune`).
 #[must_use]
 pub fn analyze(gb: &GBuffer) -> Needs {
     let covered: Vec<usize> = gb.coverage.iter().enumerate().filter(|(_, c)| **c).map(|(i, _)| i).collect();

@@ -1,4 +1,5 @@
-//! Wall-clock timing of pipeline stages, in milliseconds (what `--json` reports under `ms`).
+//! Wall-clock timing of pipeline stages, in milliseconds (what `--json` reports under `ms`). The one timing
+//! helper of the crate: every stage and command times itself with [`timed`] or [`ms`].
 
 use serde::Serialize;
 use std::time::{Duration, Instant};

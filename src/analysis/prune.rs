@@ -6,9 +6,9 @@
 //! and targets whose remaining fields fit a smaller format of the same family shrink to it. Bits the layout marks
 //! `reserved` (lighting accumulation, AO, emissive, …) belong to the engine, not the G-buffer model, and are kept.
 
+use crate::analysis::needs::Needs;
 use crate::gbuffer::Attribute;
 use crate::layout::{ConstantValue, Format, LayoutSpec};
-use crate::report::needs::Needs;
 
 /// Format families whose members differ only in channel count, smallest first, with their channel width in bits
 /// (1 for integer formats, whose texels hold arbitrary bit fields).
@@ -153,8 +153,8 @@ pub fn prune_spec(spec: &LayoutSpec, needs: &Needs) -> (LayoutSpec, Vec<String>)
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::analysis::needs::analyze;
     use crate::layout::Layout;
-    use crate::report::needs::analyze;
     use crate::GBuffer;
     use glam::{Vec2, Vec3};
 

@@ -9,6 +9,7 @@
 //! Besides the rows it keeps what the figures need: per-pixel error maps of every layout, the edge masks of the
 //! first layout, and a light-count map.
 
+use crate::analysis::row::{mark_pareto, time_runs, Row, Timing};
 use crate::detect::{self, Detector, DetectorConfig, EdgeMask};
 use crate::error::Result;
 use crate::gbuffer::GBuffer;
@@ -16,7 +17,6 @@ use crate::image::HdrImage;
 use crate::layout::Layout;
 use crate::light::Light;
 use crate::measure;
-use crate::report::row::{mark_pareto, time_runs, Row, Timing};
 use crate::resolve::{self, Culling, ResolveConfig};
 
 /// What to sweep.

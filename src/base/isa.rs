@@ -1,0 +1,102 @@
+//! CPU instruction-set levels: the one list every SIMD path (codec slices, the resolve's gather, culling and
+//! light loop) dispatches on at run time.
+//!
+//! Each level has one feature list, and every `#[target_feature(enable = …)]` in the crate names exactly one of
+//! them (a test in `tests/architecture.rs` checks it):
+//!
+//! | level      | features                                         |
+//! |------------|--------------------------------------------------|
+//! | `baseline` | none beyond the target's default (SSE2 on x86-64; any other architecture) |
+//! | `avx2`     | [`AVX2_FEATURES`]                                  |
+//! | `avx512`   | [`AVX512_FEATURES`]                                |
+//!
+//! [`Isa::detect`] checks every feature of a level before choosing it, so a function compiled for a level's list
+//! is safe to call once `Isa::detect() >= level`.
+
+use std::sync::OnceLock;
+
+/// The features of [`Isa::Avx2`], as written in `#[target_feature(enable = …)]`.
+pub const AVX2_FEATURES: &str = "avx2,fma";
+/// The features of [`Isa::Avx512`], as written in `#[target_feature(enable = …)]`.
+pub const AVX512_FEATURES: &str = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma";
+
+/// An instruction-set level the SIMD paths are compiled for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Isa {
+    /// The x86-64 baseline (SSE2), or any other architecture.
+    Baseline,
+    /// AVX2 + FMA.
+    Avx2,
+    /// AVX-512 F/VL/BW/DQ (with AVX2 + FMA).
+    Avx512,
+}
+
+crate::named!(Isa: "instruction set" { Baseline => "baseline", Avx2 => "avx2", Avx512 => "avx512" });
+
+impl Isa {
+    /// The widest level this CPU supports (detected once).
+    #[must_use]
+    pub fn detect() -> Isa {
+        static DETECTED: OnceLock<Isa> = OnceLock::new();
+        *DETECTED.get_or_init(detect_uncached)
+    }
+
+    /// Every level this CPU can run, narrowest first (what the bit-identity tests iterate over).
+    #[must_use]
+    pub fn available() -> Vec<Isa> {
+        let top = Isa::detect();
+        Isa::ALL.iter().copied().filter(|i| *i <= top).collect()
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+fn detect_uncached() -> Isa {
+    let has = |list: &str| list.split(',').all(|f| x86_feature(f));
+    if has(AVX512_FEATURES) {
+        Isa::Avx512
+    } else if has(AVX2_FEATURES) {
+        Isa::Avx2
+    } else {
+        Isa::Baseline
+    }
+}
+
+/// `is_x86_feature_detected!` takes a literal, so the names of the feature lists are matched here.
+#[cfg(target_arch = "x86_64")]
+fn x86_feature(name: &str) -> bool {
+    match name {
+        "avx2" => is_x86_feature_detected!("avx2"),
+        "fma" => is_x86_feature_detected!("fma"),
+        "avx512f" => is_x86_feature_detected!("avx512f"),
+        "avx512vl" => is_x86_feature_detected!("avx512vl"),
+        "avx512bw" => is_x86_feature_detected!("avx512bw"),
+        "avx512dq" => is_x86_feature_detected!("avx512dq"),
+        _ => false,
+    }
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+fn detect_uncached() -> Isa {
+    Isa::Baseline
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_listed_feature_is_known_and_levels_are_ordered() {
+        #[cfg(target_arch = "x86_64")]
+        for f in AVX2_FEATURES.split(',').chain(AVX512_FEATURES.split(',')) {
+            // An unknown name would make `x86_feature` say false: the level could never be chosen.
+            assert!(
+                matches!(f, "avx2" | "fma" | "avx512f" | "avx512vl" | "avx512bw" | "avx512dq"),
+                "feature {f} is not matched by x86_feature"
+            );
+        }
+        assert!(AVX2_FEATURES.split(',').all(|f| AVX512_FEATURES.split(',').any(|g| g == f)));
+        let avail = Isa::available();
+        assert_eq!(avail[0], Isa::Baseline);
+        assert_eq!(*avail.last().unwrap(), Isa::detect());
+    }
+}

@@ -1,0 +1,16 @@
+//! The shared layer: the pieces more than one stage needs, so that every stage can import them without importing
+//! another stage. Nothing here imports anything of the crate but [`crate::error`] and [`crate::util`].
+//!
+//! | module      | what                                                                              |
+//! |-------------|-----------------------------------------------------------------------------------|
+//! | [`isa`]     | the CPU instruction-set levels the SIMD paths are compiled for, detected once      |
+//! | [`names`]   | the one spelling rule for every closed choice (flags, JSON, layout files)          |
+//! | [`timing`]  | wall-clock stage timing in milliseconds                                            |
+//! | [`mask`]    | [`mask::EdgeMask`]: shading evaluations per pixel, what detectors produce and the resolve reads |
+//! | [`picture`] | 8-bit pictures: sRGB, the colour map, PNG encoding                                 |
+
+pub mod isa;
+pub mod mask;
+pub mod names;
+pub mod picture;
+pub mod timing;

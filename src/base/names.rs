@@ -1,0 +1,213 @@
+//! The one spelling rule for closed choices (detectors, BRDFs, cullings, formats, scenes, …): every enum lists
+//! its variants once, with one kebab-case name each, and everything else — the CLI parser and its `--help`
+//! values, error messages, `Display`, `FromStr` — is derived from that list.
+//!
+//! The rule: a name is matched ignoring ASCII case, white space and the separators `-` and `_` ([`normalize`]):
+//! `blinn-phong`, `Blinn_Phong` and `BlinnPhong` are one BRDF, `RGBA8_SRGB` and `rgba8-srgb` one format. Enums declare themselves with [`named_enum!`](crate::named_enum) (or implement [`Named`] by
+//! hand where a variant carries data); clap picks the parser up through `ValueParserFactory`, so a flag of an
+//! enum type needs no `value_parser` attribute.
+
+use clap::builder::{PossibleValue, TypedValueParser};
+use std::ffi::OsStr;
+use std::marker::PhantomData;
+
+/// A closed choice with one name per value.
+pub trait Named: Copy + PartialEq + Send + Sync + 'static {
+    /// What the choice is, for messages ("detector", "BRDF").
+    const KIND: &'static str;
+
+    /// Every value, in the order lists show them.
+    fn all() -> &'static [Self];
+
+    /// The one spelling.
+    fn name(self) -> &'static str;
+
+    /// The value whose name matches `s` under the crate's one rule ([`normalize`]).
+    #[must_use]
+    fn from_name(s: &str) -> Option<Self> {
+        let s = normalize(s);
+        Self::all().iter().copied().find(|v| normalize(v.name()) == s)
+    }
+
+    /// Every name, comma-separated (for messages).
+    #[must_use]
+    fn names() -> String {
+        Self::all().iter().map(|v| v.name()).collect::<Vec<_>>().join(", ")
+    }
+
+    /// Parses `s`, or says what was expected: `unknown BRDF "x"; known: lambert, blinn-phong, ggx`.
+    fn parse(s: &str) -> Result<Self, String> {
+        Self::from_name(s).ok_or_else(|| format!("unknown {} {s:?}; known: {}", Self::KIND, Self::names()))
+    }
+}
+
+/// The spelling rule: ASCII lower case without white space, `-` or `_`.
+#[must_use]
+pub fn normalize(s: &str) -> String {
+    s.chars().filter(|c| !matches!(c, '-' | '_') && !c.is_whitespace()).collect::<String>().to_ascii_lowercase()
+}
+
+/// The clap parser of every [`Named`] type: parses by [`Named::from_name`] and lists [`Named::all`] as the
+/// possible values (shown by `--help` and shell completion).
+#[derive(Clone, Copy, Debug)]
+pub struct NameParser<T>(PhantomData<fn() -> T>);
+
+impl<T> Default for NameParser<T> {
+    fn default() -> Self {
+        NameParser(PhantomData)
+    }
+}
+
+impl<T: Named> TypedValueParser for NameParser<T> {
+    type Value = T;
+
+    fn parse_ref(&self, cmd: &clap::Command, arg: Option<&clap::Arg>, value: &OsStr) -> Result<T, clap::Error> {
+        let s = value.to_string_lossy();
+        T::parse(&s).map_err(|why| {
+            let flag = arg.map_or_else(|| "value".to_string(), |a| format!("'{a}'"));
+            clap::Error::raw(clap::error::ErrorKind::InvalidValue, format!("invalid value '{s}' for {flag}: {why}\n"))
+                .with_cmd(cmd)
+        })
+    }
+
+    fn possible_values(&self) -> Option<Box<dyn Iterator<Item = PossibleValue> + '_>> {
+        Some(Box::new(T::all().iter().map(|v| PossibleValue::new(v.name()))))
+    }
+}
+
+/// Implements the name machinery for an enum declared by hand (one whose variants carry no data):
+/// `ALL`, `name()`, `from_name()`, [`Named`] (with `names()` and `parse()`), `Display`, `FromStr` and clap's
+/// `ValueParserFactory`.
+///
+/// ```ignore
+/// named!(Brdf: "BRDF" { Lambert => "lambert", BlinnPhong => "blinn-phong" });
+/// ```
+#[macro_export]
+#[doc(hidden)]
+macro_rules! named {
+    ($name:ident : $kind:literal { $($variant:ident => $text:literal),+ $(,)? }) => {
+        impl $name {
+            /// Every variant, in the order lists show them.
+            pub const ALL: [$name; [$($name::$variant),+].len()] = [$($name::$variant),+];
+
+            /// The one kebab-case spelling (flags, JSON, file names).
+            #[must_use]
+            pub fn name(self) -> &'static str {
+                match self {
+                    $($name::$variant => $text),+
+                }
+            }
+
+            /// Parses a spelling of [`Self::name`] under the crate's one rule (`base::names::normalize`).
+            #[must_use]
+            pub fn from_name(s: &str) -> Option<Self> {
+                <Self as $crate::base::names::Named>::from_name(s)
+            }
+        }
+
+        impl $crate::base::names::Named for $name {
+            const KIND: &'static str = $kind;
+            fn all() -> &'static [Self] {
+                &Self::ALL
+            }
+            fn name(self) -> &'static str {
+                $name::name(self)
+            }
+        }
+
+        impl std::fmt::Display for $name {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(self.name())
+            }
+        }
+
+        impl std::str::FromStr for $name {
+            type Err = String;
+            fn from_str(s: &str) -> Result<Self, String> {
+                <Self as $crate::base::names::Named>::parse(s)
+            }
+        }
+
+        impl clap::builder::ValueParserFactory for $name {
+            type Parser = $crate::base::names::NameParser<$name>;
+            fn value_parser() -> Self::Parser {
+                $crate::base::names::NameParser::default()
+            }
+        }
+    };
+}
+
+/// Declares an enum whose variants carry no data, with its names ([`named!`](crate::named)): the attributes
+/// (derives, serde renames, docs) pass through, and each variant is followed by `=> "its-name"`.
+///
+/// ```ignore
+/// named_enum! {
+///     /// How lights are matched to samples.
+///     #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+///     pub enum Culling: "culling" {
+///         /// Every light against every sample.
+///         None => "none",
+///         Tiled => "tiled",
+///     }
+/// }
+/// ```
+#[macro_export]
+#[doc(hidden)]
+macro_rules! named_enum {
+    ($(#[$meta:meta])* pub enum $name:ident : $kind:literal {
+        $($(#[$vmeta:meta])* $variant:ident => $text:literal),+ $(,)?
+    }) => {
+        $(#[$meta])*
+        pub enum $name {
+            $($(#[$vmeta])* $variant),+
+        }
+        $crate::named!($name: $kind { $($variant => $text),+ });
+    };
+}
+
+pub use crate::{named, named_enum};
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    crate::named_enum! {
+        /// A test choice.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+        pub enum Fruit: "fruit" {
+            /// Red.
+            Apple => "apple",
+            /// Long.
+            BlueBanana => "blue-banana",
+        }
+    }
+
+    #[derive(Parser, Debug)]
+    struct Cli {
+        #[arg(long, default_value = "apple")]
+        fruit: Fruit,
+    }
+
+    #[test]
+    fn one_rule_for_every_spelling() {
+        assert_eq!(Fruit::ALL, [Fruit::Apple, Fruit::BlueBanana]);
+        for s in ["blue-banana", "Blue_Banana", " BLUE-banana ", "BlueBanana"] {
+            assert_eq!(Fruit::from_name(s), Some(Fruit::BlueBanana), "{s}");
+        }
+        assert_eq!(Fruit::from_name("blue-bananas"), None);
+        assert_eq!("apple".parse::<Fruit>(), Ok(Fruit::Apple));
+        assert_eq!(Fruit::parse("kiwi").unwrap_err(), "unknown fruit \"kiwi\"; known: apple, blue-banana");
+        assert_eq!(Fruit::BlueBanana.to_string(), "blue-banana");
+    }
+
+    #[test]
+    fn clap_parses_and_lists_the_names() {
+        assert_eq!(Cli::try_parse_from(["x"]).unwrap().fruit, Fruit::Apple);
+        assert_eq!(Cli::try_parse_from(["x", "--fruit", "BLUE_BANANA"]).unwrap().fruit, Fruit::BlueBanana);
+        let err = Cli::try_parse_from(["x", "--fruit", "kiwi"]).unwrap_err().to_string();
+        assert!(err.contains("unknown fruit \"kiwi\"; known: apple, blue-banana"), "{err}");
+        let help = <Cli as clap::CommandFactory>::command().render_long_help().to_string();
+        assert!(help.contains("blue-banana"), "{help}");
+    }
+}

@@ -1,0 +1,145 @@
+//! 8-bit pictures: the sRGB transfer function, the colour map every heatmap uses, and PNG encoding. The one place
+//! the crate turns numbers into pixels and pixels into a PNG file; plots (`report::plot`) draw on top of it.
+
+use crate::error::{Error, Result};
+use crate::util::write_bytes_atomic;
+use image::{ImageEncoder, RgbImage};
+use std::path::Path;
+
+/// The sRGB transfer function (IEC 61966-2-1) of a linear value in [0, 1].
+#[must_use]
+pub fn srgb_encode(x: f32) -> f32 {
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// The inverse of [`srgb_encode`]: an sRGB-encoded value in [0, 1] back to linear.
+#[must_use]
+pub fn srgb_decode(e: f32) -> f32 {
+    if e <= 0.040_45 {
+        e / 12.92
+    } else {
+        ((e + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// A linear value as an 8-bit sRGB code: clamped to [0, 1] (non-finite → 0), encoded, rounded to nearest.
+#[must_use]
+pub fn srgb8(x: f32) -> u8 {
+    let x = if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 };
+    (srgb_encode(x) * 255.0 + 0.5) as u8
+}
+
+/// The colour map of every heatmap: `t` ∈ [0, 1] to a perceptually ordered colour (dark violet → blue → teal →
+/// green → yellow, after viridis). Non-finite `t` is 0.
+#[must_use]
+pub fn colormap(t: f32) -> [u8; 3] {
+    const STOPS: [[f32; 3]; 5] =
+        [[68.0, 1.0, 84.0], [59.0, 82.0, 139.0], [33.0, 145.0, 140.0], [94.0, 201.0, 98.0], [253.0, 231.0, 37.0]];
+    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 } * (STOPS.len() - 1) as f32;
+    let i = (t.floor() as usize).min(STOPS.len() - 2);
+    let u = t - i as f32;
+    [0, 1, 2].map(|k| (STOPS[i][k] + (STOPS[i + 1][k] - STOPS[i][k]) * u).round() as u8)
+}
+
+/// Encodes an RGB image as PNG bytes.
+pub fn png_bytes(img: &RgbImage) -> Result<Vec<u8>> {
+    let mut out = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut out)
+        .write_image(img.as_raw(), img.width(), img.height(), image::ExtendedColorType::Rgb8)
+        .map_err(|e| Error::Argument(format!("PNG encoding failed: {e}")))?;
+    Ok(out)
+}
+
+/// Writes an RGB image as a PNG file, atomically (temporary file, then rename). Errors name `path`.
+pub fn write_png(path: &Path, img: &RgbImage) -> Result<()> {
+    if img.width() == 0 || img.height() == 0 {
+        return Err(Error::Argument(format!("{}: cannot write an empty image", path.display())));
+    }
+    let bytes = png_bytes(img).map_err(|e| Error::invalid(path, e.to_string()))?;
+    write_bytes_atomic(path, &bytes)
+}
+
+/// Writes 8-bit RGB bytes (row-major, `width × height × 3`) as a PNG file, atomically.
+pub fn write_rgb8_png(path: &Path, width: u32, height: u32, bytes: Vec<u8>) -> Result<()> {
+    if width == 0 || height == 0 {
+        return Err(Error::Argument(format!("{}: cannot write an empty image", path.display())));
+    }
+    let img = RgbImage::from_raw(width, height, bytes)
+        .ok_or_else(|| Error::Argument(format!("{}: pixel buffer does not match {width}×{height}", path.display())))?;
+    write_png(path, &img)
+}
+
+/// Height in pixels of the legend strip under a heatmap.
+pub const HEATMAP_LEGEND_ROWS: u32 = 8;
+
+/// Writes `counts` (row-major, `width × height`) as a heatmap PNG through [`colormap`], scaled so that
+/// `max(counts)` is the top of the map, with a legend strip of [`HEATMAP_LEGEND_ROWS`] rows underneath running
+/// from 0 (left) to the maximum (right). Returns the maximum, which the caller should print (the PNG carries no
+/// text).
+pub fn write_heatmap_png(path: &Path, width: u32, height: u32, counts: &[u32]) -> Result<u32> {
+    if counts.len() != width as usize * height as usize {
+        return Err(Error::Argument(format!(
+            "{}: {} counts for a {width}×{height} heatmap",
+            path.display(),
+            counts.len()
+        )));
+    }
+    let max = counts.iter().copied().max().unwrap_or(0);
+    let scale = if max > 0 { 1.0 / max as f32 } else { 0.0 };
+    let mut bytes: Vec<u8> = counts.iter().flat_map(|&c| colormap(c as f32 * scale)).collect();
+    for _ in 0..HEATMAP_LEGEND_ROWS {
+        for x in 0..width {
+            bytes.extend(colormap(x as f32 / (width.max(2) - 1) as f32));
+        }
+    }
+    write_rgb8_png(path, width, height + HEATMAP_LEGEND_ROWS, bytes)?;
+    Ok(max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_round_trips_and_has_the_standard_ends() {
+        assert_eq!(srgb_encode(0.0), 0.0);
+        assert!((srgb_encode(1.0) - 1.0).abs() < 1e-6);
+        for i in 0..=100 {
+            let x = i as f32 / 100.0;
+            assert!((srgb_decode(srgb_encode(x)) - x).abs() < 1e-6, "{x}");
+        }
+        assert_eq!(srgb8(0.5), 188);
+        assert_eq!((srgb8(f32::NAN), srgb8(f32::INFINITY), srgb8(-1.0), srgb8(7.0)), (0, 0, 0, 255));
+    }
+
+    #[test]
+    fn colormap_ends_and_png_round_trip() {
+        assert_eq!(colormap(0.0), [68, 1, 84]);
+        assert_eq!(colormap(1.0), [253, 231, 37]);
+        assert_eq!(colormap(f32::NAN), colormap(0.0));
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.png");
+        write_rgb8_png(&p, 2, 1, vec![1, 2, 3, 4, 5, 6]).unwrap();
+        assert_eq!(image::open(&p).unwrap().to_rgb8().as_raw(), &vec![1, 2, 3, 4, 5, 6]);
+        assert!(write_rgb8_png(&p, 3, 1, vec![0; 6]).is_err());
+        assert!(write_rgb8_png(&p, 0, 1, vec![]).is_err());
+    }
+
+    #[test]
+    fn heatmap_scales_to_the_maximum_with_a_legend() {
+        let dir = tempfile::tempdir().unwrap();
+        let heat = dir.path().join("h.png");
+        let max = write_heatmap_png(&heat, 3, 2, &[0, 1, 2, 3, 4, 8]).unwrap();
+        assert_eq!(max, 8);
+        let h = image::open(&heat).unwrap().to_rgb8();
+        assert_eq!(h.dimensions(), (3, 2 + HEATMAP_LEGEND_ROWS));
+        assert_eq!(h.get_pixel(2, 1).0, colormap(1.0));
+        assert_eq!(h.get_pixel(0, 0).0, colormap(0.0));
+        assert_eq!(h.get_pixel(2, 2 + HEATMAP_LEGEND_ROWS - 1).0, colormap(1.0), "legend ends at the maximum");
+        assert!(write_heatmap_png(&heat, 3, 3, &[0; 6]).is_err());
+    }
+}
