@@ -11,7 +11,7 @@
 //! `cargo bench --bench codecs -- --warm-up-time 1 --measurement-time 2`. Each scheme is benched at its first
 //! default sweep size (8 bits per component, or its f16 size); speed barely depends on the bit count.
 
-use criterion::{black_box, BenchmarkId, Criterion, Throughput};
+use criterion::{BenchmarkId, Criterion, Throughput};
 use gbuf::base::isa::Isa;
 use gbuf::codec::eval::{best_time, random_unit_vectors};
 use gbuf::codec::simd::{par_decode_normals, par_encode_normals, PAR_CHUNK};
@@ -19,6 +19,7 @@ use gbuf::codec::{color_codec, depth_codec, scalar_codec, NormalCodec, NormalSch
 use gbuf::util::SplitMix64;
 use glam::Vec3;
 use rayon::prelude::*;
+use std::hint::black_box;
 
 const COUNT: usize = 1_000_000;
 const SEED: u64 = 0x5eed;

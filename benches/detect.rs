@@ -4,13 +4,14 @@
 //! The G-buffer is ray-cast once, outside the timed loop, from a few analytic surfaces (floor, back wall, a tilted
 //! panel in front, a tessellated sphere) so every detector has silhouettes, creases and triangle edges to find.
 
-#[path = "../tests/detect_support.rs"]
+#[path = "../tests/support/detect.rs"]
 mod support;
 
-use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, criterion_main, Criterion};
 use gbuf::detect::{detect, Detector, DetectorConfig};
 use gbuf::measure::edges::{shading_truth, DEFAULT_SHADING_TOLERANCE};
 use glam::Vec3;
+use std::hint::black_box;
 use support::{render, Shape, Surface};
 
 fn scene(w: u32, h: u32, samples: u32) -> gbuf::GBuffer {

@@ -7,7 +7,7 @@
 //! the material table; for unpack, re-deriving position from depth). Then criterion measures the all-thread
 //! operations. Run: `cargo bench --bench pack -- --warm-up-time 1 --measurement-time 2`.
 
-use criterion::{black_box, Criterion, Throughput};
+use criterion::{Criterion, Throughput};
 use gbuf::codec::eval::best_time;
 use gbuf::gbuffer::GBuffer;
 use gbuf::layout::Layout;
@@ -15,6 +15,7 @@ use gbuf::util::SplitMix64;
 use gbuf::Camera;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
+use std::hint::black_box;
 
 const W: u32 = 1280;
 const H: u32 = 720;

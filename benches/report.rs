@@ -18,12 +18,13 @@
 //! `gbuf report` computes once per sweep, not once per row. An earlier run in the same session gave 2.4 / 107 ms
 //! (45×): the 2-thread plain resolve is the figure most sensitive to the load.
 
-use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, criterion_main, Criterion};
 use gbuf::analysis::sweep::{sweep, SweepConfig};
 use gbuf::detect::{detect, Detector, DetectorConfig};
 use gbuf::layout::Layout;
 use gbuf::resolve::{reference, resolve, ResolveConfig};
 use gbuf::scene::{default_lights, render, SceneName};
+use std::hint::black_box;
 
 const W: u32 = 320;
 const H: u32 = 180;

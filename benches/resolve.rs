@@ -11,9 +11,10 @@
 //! The G-buffer is built in code once, outside the timed loop. Run briefly:
 //! `cargo bench --bench resolve -- --warm-up-time 1 --measurement-time 3`.
 
-use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, criterion_main, Criterion};
 use gbuf::detect::{detect, Detector, DetectorConfig};
 use gbuf::resolve::{fixture, resolve, Culling, ResolveConfig, SplitSamples};
+use std::hint::black_box;
 
 const W: u32 = 1280;
 const H: u32 = 720;

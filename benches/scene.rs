@@ -1,8 +1,9 @@
 //! `scene/<name>/<W>x<H>`: rendering the analytic scenes at 4× MSAA (ray casting plus plane filling).
 //! Run briefly: `cargo bench --bench scene -- --warm-up-time 1 --measurement-time 2`.
 
-use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, criterion_main, Criterion};
 use gbuf::scene::{render, SceneName};
+use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("scene");

@@ -32,7 +32,7 @@ impl Camera {
     /// A camera at `eye` looking at `target` with `up` (right-handed, −Z forward).
     #[must_use]
     pub fn look_at(eye: Vec3, target: Vec3, up: Vec3, yfov: f32, aspect: f32, znear: f32, zfar: f32) -> Self {
-        Camera { world_to_view: Mat4::look_at_rh(eye, target, up), yfov, aspect, znear, zfar }
+        Camera { world_to_view: glam::camera::rh::view::look_at_mat4(eye, target, up), yfov, aspect, znear, zfar }
     }
 
     /// tan(yfov / 2).

@@ -1,18 +1,11 @@
 //! `gbuf info` through the built binary, in a fresh temporary directory.
 
-mod io_support;
+mod support;
 
-use io_support::*;
-use std::path::Path;
-use std::process::{Command, Output};
+use support::{gbuf, stderr};
 
-fn gbuf(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_gbuf")).current_dir(dir).args(args).output().expect("run gbuf")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use std::process::Output;
+use support::*;
 
 fn json(o: &Output) -> serde_json::Value {
     assert!(o.status.success(), "gbuf failed: {}", stderr(o));

@@ -1,10 +1,8 @@
 //! `gbuf codecs` run as a user would: the built binary in a fresh temp dir.
-
-use std::process::Command;
+mod support;
 
 fn gbuf(args: &[&str]) -> std::process::Output {
-    let dir = tempfile::tempdir().unwrap();
-    Command::new(env!("CARGO_BIN_EXE_gbuf")).args(args).current_dir(dir.path()).output().unwrap()
+    support::gbuf(tempfile::tempdir().unwrap().path(), args)
 }
 
 #[test]

@@ -1,7 +1,8 @@
 //! `gbuf edges` end to end: the built binary on canonical dumps written in a fresh temp dir.
 
-#[path = "detect_support.rs"]
 mod support;
+
+use support::gbuf as gbuf_cmd;
 
 use gbuf::detect::truth::{id_truth, TruthSource};
 use gbuf::detect::{detect, Detector, DetectorConfig};
@@ -9,12 +10,8 @@ use gbuf::measure::edges::{evaluate, evaluate_against};
 use gbuf::GBuffer;
 use glam::Vec3;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use support::{render, Shape, Surface};
-
-fn gbuf_cmd(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_gbuf")).current_dir(dir).args(args).output().unwrap()
-}
 
 /// A sphere in front of a tilted wall, with object and primitive IDs.
 fn scene() -> GBuffer {

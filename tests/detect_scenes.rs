@@ -1,6 +1,5 @@
 //! The edge detectors on analytic scenes built in code: silhouettes, creases, tessellation, grazing planes.
 
-#[path = "detect_support.rs"]
 mod support;
 
 use gbuf::detect::truth::{id_truth, object_truth, TruthSource};

@@ -2,7 +2,6 @@
 //! what it must flag (silhouettes with different lighting on each side) and what it must not (one flat-lit
 //! surface split into two objects at nearly equal depths, a smooth pool of light).
 
-#[path = "detect_support.rs"]
 mod support;
 
 use gbuf::detect::truth::object_truth;

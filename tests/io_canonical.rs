@@ -1,11 +1,11 @@
 //! Canonical EXR: bit-exact read-back of every attribute at every sample count, and its header.
 
-mod io_support;
+mod support;
 
 use gbuf::gbuffer::Attribute;
 use gbuf::io::canonical;
 use gbuf::io::LoadOptions;
-use io_support::{assert_bit_exact, every_attribute};
+use support::{assert_bit_exact, every_attribute};
 
 #[test]
 fn every_attribute_round_trips_bit_exactly_at_every_sample_count() {

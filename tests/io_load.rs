@@ -1,12 +1,12 @@
 //! `gbuf::io::load` end to end: format detection, sidecars, folding, sanitizing, and every kind of bad input.
 
-mod io_support;
+mod support;
 
 use gbuf::gbuffer::Attribute;
 use gbuf::io::{load, load_bytes, LoadOptions, ReadLimits, SourceFormat};
 use gbuf::Error;
-use io_support::*;
 use std::path::{Path, PathBuf};
+use support::*;
 
 fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
     let p = dir.join(name);

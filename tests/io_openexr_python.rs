@@ -1,8 +1,8 @@
 //! Cross-check with the reference implementation: the Python `OpenEXR` package (OpenEXR's own bindings) reads our
-//! canonical file and must see the same bits. Skipped, with a note, when `python3 -c "import OpenEXR"` fails
-//! (`.ci/run` installs it with pip).
+//! canonical file and must see the same bits. Required in CI (`.ci/run`
+//! installs it with pip; `support::python_has` fails the test there when it cannot run), skipped with a note elsewhere.
 
-mod io_support;
+mod support;
 
 use gbuf::gbuffer::{Attribute, PlaneRef};
 use std::process::Command;
@@ -19,18 +19,13 @@ for name in sys.argv[2:]:
 print(json.dumps(out))
 "#;
 
-fn python_openexr() -> bool {
-    Command::new("python3").args(["-c", "import OpenEXR, numpy"]).output().is_ok_and(|o| o.status.success())
-}
-
 #[test]
 fn python_openexr_reads_our_bits() {
-    if !python_openexr() {
-        eprintln!("note: python3 with OpenEXR and numpy not available; skipping the cross-check");
+    if !support::python_has("OpenEXR, numpy") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let gb = io_support::every_attribute(5, 3, 4, 77);
+    let gb = support::every_attribute(5, 3, 4, 77);
     let p = dir.path().join("x.exr");
     gbuf::io::canonical::write(&p, &gb).unwrap();
     let names =

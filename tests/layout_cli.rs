@@ -1,4 +1,7 @@
 //! `gbuf layouts` and `gbuf roundtrip` through the built binary, plus every layout on the analytic scenes.
+mod support;
+
+use support::gbuf;
 
 use gbuf::gbuffer::Attribute;
 use gbuf::layout::Layout;
@@ -6,11 +9,7 @@ use gbuf::measure::gbuffer::compare;
 use gbuf::scene::{render, SceneName};
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn gbuf(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_gbuf")).current_dir(dir).args(args).output().expect("run gbuf")
-}
+use std::process::Output;
 
 fn json(out: &Output) -> Value {
     assert!(out.status.success(), "stderr: {}", String::from_utf8_lossy(&out.stderr));

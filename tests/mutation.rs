@@ -4,7 +4,7 @@
 //! A counting global allocator measures the peak bytes allocated during each load. The short version runs in
 //! `cargo test`; the long one: `cargo test --release --test mutation -- --ignored`.
 
-mod io_support;
+mod support;
 
 use gbuf::gbuffer::PlaneRef;
 use gbuf::io::{load_bytes, LoadOptions, ReadLimits};
@@ -95,9 +95,9 @@ fn fixtures() -> Vec<Fixture> {
     }
     // Canonical files built in code: every attribute at 4 samples, and a plain 1-sample one.
     for (name, gb) in
-        [("every4.exr", io_support::every_attribute(6, 5, 4, 9)), ("plain1.exr", io_support::plausible(16, 12, 1, 9))]
+        [("every4.exr", support::every_attribute(6, 5, 4, 9)), ("plain1.exr", support::plausible(16, 12, 1, 9))]
     {
-        let bytes = io_support::canonical_bytes(&gb);
+        let bytes = support::canonical_bytes(&gb);
         out.push(Fixture { name: name.into(), header_len: header_len(&bytes), bytes, sidecar: None });
     }
     out
@@ -237,14 +237,14 @@ fn mutations_long() {
 #[test]
 fn oversized_declarations_are_refused_without_allocating() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let bytes = io_support::generic_exr(4, 4, &["Z"], |_, i| i as f32);
-    let (mut attrs, _) = io_support::parse_header(&bytes);
+    let bytes = support::generic_exr(4, 4, &["Z"], |_, i| i as f32);
+    let (mut attrs, _) = support::parse_header(&bytes);
     for (w, h) in [(100_000, 100_000), (4000, 4000), (20_000, 16)] {
         let bx: Vec<u8> = [0i32, 0, w - 1, h - 1].iter().flat_map(|v| v.to_le_bytes()).collect();
         for a in attrs.iter_mut().filter(|a| a.name == "dataWindow" || a.name == "displayWindow") {
             a.value = bx.clone();
         }
-        let evil = io_support::rebuild(&bytes, &attrs, 0);
+        let evil = support::rebuild(&bytes, &attrs, 0);
         let opts = LoadOptions { limits: ReadLimits { max_bytes: MAX_BYTES, allow_dwa: false }, ..Default::default() };
         let base = CURRENT.load(Relaxed);
         PEAK.store(base, Relaxed);

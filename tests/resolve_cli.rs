@@ -1,15 +1,10 @@
 //! `gbuf resolve` run as a binary in a fresh temporary directory.
+mod support;
+
+use support::{gbuf, stderr};
 
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn gbuf(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_gbuf")).current_dir(dir).args(args).output().expect("run gbuf")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use std::process::Output;
 
 #[test]
 fn missing_file_is_exit_1_naming_the_file() {

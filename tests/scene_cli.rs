@@ -1,19 +1,13 @@
 //! `gbuf scene` through the built binary, in a fresh temporary directory.
+mod support;
+
+use support::{gbuf, stderr};
 
 use gbuf::io::canonical;
 use gbuf::io::sidecar::Sidecar;
 use gbuf::io::LoadOptions;
 use gbuf::scene::{default_lights, render, scatter_lights, SceneName};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn gbuf(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_gbuf")).current_dir(dir).args(args).output().unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 #[test]
 fn writes_a_canonical_exr_and_sidecar_that_read_back_exactly() {

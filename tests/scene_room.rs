@@ -1,6 +1,5 @@
 //! The `room` scene: geometric invariants of every sample, MSAA positions, IDs, smooth tessellation, determinism.
 
-#[path = "scene_support.rs"]
 mod support;
 
 use gbuf::scene::{objects, render, SceneName};

@@ -1,6 +1,5 @@
 //! The `stress` scene holds every extreme its module doc promises.
 
-#[path = "scene_support.rs"]
 mod support;
 
 use gbuf::scene::{objects, render, stress, SceneName};

@@ -51,7 +51,7 @@ impl Isa {
 
 #[cfg(target_arch = "x86_64")]
 fn detect_uncached() -> Isa {
-    let has = |list: &str| list.split(',').all(|f| x86_feature(f));
+    let has = |list: &str| list.split(',').all(x86_feature);
     if has(AVX512_FEATURES) {
         Isa::Avx512
     } else if has(AVX2_FEATURES) {

@@ -62,11 +62,16 @@ impl<T: Named> TypedValueParser for NameParser<T> {
     type Value = T;
 
     fn parse_ref(&self, cmd: &clap::Command, arg: Option<&clap::Arg>, value: &OsStr) -> Result<T, clap::Error> {
+        use clap::error::{ContextKind, ContextValue, ErrorKind};
         let s = value.to_string_lossy();
-        T::parse(&s).map_err(|why| {
-            let flag = arg.map_or_else(|| "value".to_string(), |a| format!("'{a}'"));
-            clap::Error::raw(clap::error::ErrorKind::InvalidValue, format!("invalid value '{s}' for {flag}: {why}\n"))
-                .with_cmd(cmd)
+        T::from_name(&s).ok_or_else(|| {
+            let mut err = clap::Error::new(ErrorKind::InvalidValue).with_cmd(cmd);
+            let flag = arg.map_or_else(|| "value".to_string(), ToString::to_string);
+            err.insert(ContextKind::InvalidArg, ContextValue::String(flag));
+            err.insert(ContextKind::InvalidValue, ContextValue::String(s.into_owned()));
+            let names = T::all().iter().map(|v| v.name().to_string()).collect();
+            err.insert(ContextKind::ValidValue, ContextValue::Strings(names));
+            err
         })
     }
 
@@ -205,8 +210,10 @@ mod tests {
     fn clap_parses_and_lists_the_names() {
         assert_eq!(Cli::try_parse_from(["x"]).unwrap().fruit, Fruit::Apple);
         assert_eq!(Cli::try_parse_from(["x", "--fruit", "BLUE_BANANA"]).unwrap().fruit, Fruit::BlueBanana);
-        let err = Cli::try_parse_from(["x", "--fruit", "kiwi"]).unwrap_err().to_string();
-        assert!(err.contains("unknown fruit \"kiwi\"; known: apple, blue-banana"), "{err}");
+        let err = Cli::try_parse_from(["x", "--fruit", "kiwi"]).unwrap_err();
+        assert_eq!(err.kind(), clap::error::ErrorKind::InvalidValue);
+        let err = err.to_string();
+        assert!(err.contains("'kiwi'") && err.contains("apple, blue-banana"), "{err}");
         let help = <Cli as clap::CommandFactory>::command().render_long_help().to_string();
         assert!(help.contains("blue-banana"), "{help}");
     }

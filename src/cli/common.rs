@@ -89,7 +89,7 @@ pub struct ThresholdArgs {
     /// normal and lauritzen: angle threshold in degrees (default 8.11, i.e. n_i·n_0 < 0.99).
     #[arg(long, value_name = "DEG")]
     pub normal_angle: Option<f32>,
-    /// id and combined: which IDs to compare: material, object or either (default either).
+    /// id and combined: which IDs to compare (default either).
     #[arg(long, value_name = "IDS")]
     pub ids: Option<IdSource>,
 }

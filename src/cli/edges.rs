@@ -81,7 +81,7 @@ pub struct Args {
     /// The dump to read.
     #[command(flatten)]
     pub input: InputArgs,
-    /// Edge detector: lauritzen, depth, normal, id, combined, forward-msaa, ssaa, none; or `all` for one row each.
+    /// Edge detector, or `all` for one row each.
     #[arg(long, value_name = "D", default_value = "lauritzen")]
     pub detector: DetectorChoice,
     /// Detector thresholds.
@@ -103,10 +103,10 @@ pub struct Args {
     /// Default: id when the dump has object IDs, else shading when it has lights.
     #[arg(long, value_name = "TRUTH")]
     pub mask_truth: Option<MaskTruth>,
-    /// BRDF of the shading truth's reference: lambert, blinn-phong, ggx.
+    /// BRDF of the shading truth's reference.
     #[arg(long, value_name = "B", default_value = "blinn-phong")]
     pub brdf: Brdf,
-    /// Distance falloff of the shading truth's reference: gltf, linear.
+    /// Distance falloff of the shading truth's reference.
     #[arg(long, value_name = "F", default_value = "linear")]
     pub falloff: Falloff,
     /// Machine-readable output on stdout.

@@ -38,16 +38,16 @@ pub struct Args {
     /// Detector thresholds.
     #[command(flatten)]
     pub thresholds: ThresholdArgs,
-    /// Light culling: none, quad, tiled, clustered.
+    /// Light culling.
     #[arg(long, value_name = "C", default_value = "tiled")]
     pub culling: Culling,
-    /// BRDF: lambert, blinn-phong, ggx.
+    /// BRDF.
     #[arg(long, value_name = "B", default_value = "blinn-phong")]
     pub brdf: Brdf,
-    /// Distance falloff: gltf, linear.
+    /// Distance falloff.
     #[arg(long, value_name = "F", default_value = "linear")]
     pub falloff: Falloff,
-    /// Schedule: deferred, light-prepass.
+    /// Schedule.
     #[arg(long, value_name = "S", default_value = "deferred")]
     pub schedule: Schedule,
     /// Tile edge in pixels.
@@ -65,7 +65,7 @@ pub struct Args {
     /// Encode the PNG as the ISPC demo does instead: clamp to [0,1], ^(1/2.2), ×255, truncate.
     #[arg(long, value_name = "ENC")]
     pub ldr: Option<LdrEncoding>,
-    /// Tone map of the PNG: reinhard (x/(1+x), default) or clamp; then sRGB encoding.
+    /// Tone map of the PNG (reinhard: x/(1+x); clamp), then sRGB encoding.
     #[arg(long, value_name = "TM", default_value = "reinhard")]
     pub tonemap: ToneCurve,
     /// Exposure multiplied in before the tone map.

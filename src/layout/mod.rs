@@ -352,6 +352,22 @@ mod tests {
     fn builtins_validate_and_have_the_documented_sizes() {
         let sizes: Vec<(String, usize)> =
             Layout::builtins().iter().map(|l| (l.name().to_string(), l.bytes_per_sample())).collect();
-        eprintln!("{sizes:?}");
+        // The sizes README.md, docs/LAYOUTS.md and docs/GUIDE.md quote.
+        let want = [
+            ("fat-20", 20),
+            ("rgba16f-2x", 20),
+            ("lauritzen-15", 15),
+            ("destiny-96", 12),
+            ("bevy-deferred", 20),
+            ("unreal-like", 20),
+            ("minimal-8", 8),
+            ("reference-f32", 84),
+        ];
+        for (name, bytes) in want {
+            let got =
+                sizes.iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("built-in {name} missing: {sizes:?}"));
+            assert_eq!(got.1, bytes, "{name}");
+        }
+        assert_eq!(sizes.len(), want.len(), "every built-in has a documented size: {sizes:?}");
     }
 }

@@ -1,120 +1,132 @@
 //! `report.csv`: one line per row, every numeric metric in its own column, empty cells where a metric could not
-//! be computed (the `note`/`error` columns say why).
+//! be computed (the `note`/`error` columns say why). Written by the `csv` crate from [`CsvRow`], whose field names
+//! are the header: the columns are listed once.
 
 use crate::analysis::row::Row;
-use std::fmt::Write as _;
+use serde::{Serialize, Serializer};
 
-/// The header columns, in order.
-pub const COLUMNS: [&str; 34] = [
-    "layout",
-    "bytes_per_sample",
-    "footprint_bytes",
-    "detector",
-    "culling",
-    "normal_mean_deg",
-    "normal_p95_deg",
-    "normal_max_deg",
-    "depth_rel_mean",
-    "depth_rel_max",
-    "albedo_max_abs",
-    "scalar_max_abs",
-    "rmse",
-    "psnr_db",
-    "layout_rmse",
-    "max_abs",
-    "rel_mse",
-    "shading_fraction",
-    "edge_fraction",
-    "precision",
-    "recall",
-    "encode_ms",
-    "encode_ms_min",
-    "encode_ms_max",
-    "decode_ms",
-    "decode_ms_min",
-    "decode_ms_max",
-    "detect_ms",
-    "resolve_ms",
-    "resolve_ms_min",
-    "resolve_ms_max",
-    "pareto_bytes",
-    "pareto_time",
-    "note",
-];
+/// A metric cell: the shortest decimal that reads back to the value, `inf`/`-inf`, or empty (absent or NaN).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Num(pub Option<f64>);
 
-/// Quotes a field when it holds a comma, quote or newline (RFC 4180).
-#[must_use]
-pub fn field(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
+impl Serialize for Num {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self.0 {
+            Some(x) if x.is_finite() => s.collect_str(&x),
+            Some(x) if x.is_nan() => s.serialize_str(""),
+            Some(x) if x > 0.0 => s.serialize_str("inf"),
+            Some(_) => s.serialize_str("-inf"),
+            None => s.serialize_str(""),
+        }
     }
 }
 
-fn num(v: Option<f64>) -> String {
-    match v {
-        Some(x) if x.is_finite() => format!("{x}"),
-        Some(x) if x.is_nan() => String::new(),
-        Some(x) if x > 0.0 => "inf".into(),
-        Some(_) => "-inf".into(),
-        None => String::new(),
-    }
+/// One line of `report.csv`.
+#[derive(Debug, Serialize)]
+#[allow(missing_docs)] // the field names are the CSV header, documented in docs/GUIDE.md
+pub struct CsvRow<'a> {
+    pub layout: &'a str,
+    pub bytes_per_sample: u32,
+    pub footprint_bytes: u64,
+    pub detector: &'a str,
+    pub culling: &'a str,
+    pub normal_mean_deg: Num,
+    pub normal_p95_deg: Num,
+    pub normal_max_deg: Num,
+    pub depth_rel_mean: Num,
+    pub depth_rel_max: Num,
+    pub albedo_max_abs: Num,
+    pub scalar_max_abs: Num,
+    pub rmse: Num,
+    pub psnr_db: Num,
+    pub layout_rmse: Num,
+    pub max_abs: Num,
+    pub rel_mse: Num,
+    pub shading_fraction: Num,
+    pub edge_fraction: Num,
+    pub precision: Num,
+    pub recall: Num,
+    pub encode_ms: Num,
+    pub encode_ms_min: Num,
+    pub encode_ms_max: Num,
+    pub decode_ms: Num,
+    pub decode_ms_min: Num,
+    pub decode_ms_max: Num,
+    pub detect_ms: Num,
+    pub resolve_ms: Num,
+    pub resolve_ms_min: Num,
+    pub resolve_ms_max: Num,
+    pub pareto_bytes: bool,
+    pub pareto_time: bool,
+    pub note: String,
 }
 
-/// The CSV text for `rows`.
-#[must_use]
-pub fn to_csv(rows: &[Row]) -> String {
-    let mut s = COLUMNS.join(",");
-    s.push('\n');
-    for r in rows {
-        let t = |stage: &str, which: fn(&crate::analysis::row::Timing) -> f64| num(r.timings.get(stage).map(which));
+impl<'a> CsvRow<'a> {
+    /// The CSV line of `r`.
+    #[must_use]
+    pub fn of(r: &'a Row) -> Self {
         let note = match (&r.note, &r.error) {
             (Some(n), Some(e)) => format!("error: {e}; {n}"),
             (None, Some(e)) => format!("error: {e}"),
             (Some(n), None) => n.clone(),
             (None, None) => String::new(),
         };
-        let cells = [
-            field(&r.layout),
-            r.bytes_per_sample.to_string(),
-            r.footprint_bytes.to_string(),
-            field(&r.detector),
-            field(r.culling.as_deref().unwrap_or("")),
-            num(r.normal_mean_deg),
-            num(r.normal_p95_deg),
-            num(r.normal_max_deg),
-            num(r.depth_rel_mean),
-            num(r.depth_rel_max),
-            num(r.albedo_max_abs),
-            num(r.scalar_max_abs),
-            num(r.rmse),
-            num(r.psnr_db),
-            num(r.layout_rmse),
-            num(r.max_abs),
-            num(r.rel_mse),
-            num(r.shading_fraction),
-            num(r.edge_fraction),
-            num(r.precision),
-            num(r.recall),
-            num(r.encode_ms),
-            t("encode", |t| t.min_ms),
-            t("encode", |t| t.max_ms),
-            num(r.decode_ms),
-            t("decode", |t| t.min_ms),
-            t("decode", |t| t.max_ms),
-            num(r.detect_ms),
-            num(r.resolve_ms),
-            t("resolve", |t| t.min_ms),
-            t("resolve", |t| t.max_ms),
-            r.pareto.bytes.to_string(),
-            r.pareto.time.to_string(),
-            field(&note),
-        ];
-        debug_assert_eq!(cells.len(), COLUMNS.len());
-        let _ = writeln!(s, "{}", cells.join(","));
+        CsvRow {
+            layout: &r.layout,
+            bytes_per_sample: r.bytes_per_sample,
+            footprint_bytes: r.footprint_bytes,
+            detector: &r.detector,
+            culling: r.culling.as_deref().unwrap_or(""),
+            normal_mean_deg: Num(r.normal_mean_deg),
+            normal_p95_deg: Num(r.normal_p95_deg),
+            normal_max_deg: Num(r.normal_max_deg),
+            depth_rel_mean: Num(r.depth_rel_mean),
+            depth_rel_max: Num(r.depth_rel_max),
+            albedo_max_abs: Num(r.albedo_max_abs),
+            scalar_max_abs: Num(r.scalar_max_abs),
+            rmse: Num(r.rmse),
+            psnr_db: Num(r.psnr_db),
+            layout_rmse: Num(r.layout_rmse),
+            max_abs: Num(r.max_abs),
+            rel_mse: Num(r.rel_mse),
+            shading_fraction: Num(r.shading_fraction),
+            edge_fraction: Num(r.edge_fraction),
+            precision: Num(r.precision),
+            recall: Num(r.recall),
+            encode_ms: Num(r.encode_ms),
+            encode_ms_min: Num(r.timings.get("encode").map(|t| t.min_ms)),
+            encode_ms_max: Num(r.timings.get("encode").map(|t| t.max_ms)),
+            decode_ms: Num(r.decode_ms),
+            decode_ms_min: Num(r.timings.get("decode").map(|t| t.min_ms)),
+            decode_ms_max: Num(r.timings.get("decode").map(|t| t.max_ms)),
+            detect_ms: Num(r.detect_ms),
+            resolve_ms: Num(r.resolve_ms),
+            resolve_ms_min: Num(r.timings.get("resolve").map(|t| t.min_ms)),
+            resolve_ms_max: Num(r.timings.get("resolve").map(|t| t.max_ms)),
+            pareto_bytes: r.pareto.bytes,
+            pareto_time: r.pareto.time,
+            note,
+        }
     }
-    s
+}
+
+/// The CSV text for `rows` (header line first, RFC 4180 quoting). An empty report still has its header.
+#[must_use]
+pub fn to_csv(rows: &[Row]) -> String {
+    let blank = Row::default();
+    let lines: Vec<CsvRow<'_>> =
+        if rows.is_empty() { vec![CsvRow::of(&blank)] } else { rows.iter().map(CsvRow::of).collect() };
+    let mut w = csv::WriterBuilder::new().terminator(csv::Terminator::Any(b'\n')).from_writer(Vec::new());
+    for l in &lines {
+        // Writing into a Vec cannot fail, and every field serializes to a string, number or bool.
+        let _ = w.serialize(l);
+    }
+    let text = String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default();
+    if rows.is_empty() {
+        text.lines().next().map(|h| format!("{h}\n")).unwrap_or_default()
+    } else {
+        text
+    }
 }
 
 #[cfg(test)]
@@ -137,6 +149,9 @@ mod tests {
         let csv = to_csv(&[r.clone(), Row { error: Some("failed".into()), ..r }]);
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines.len(), 3);
+        assert_eq!(lines[0].split(',').count(), 34);
+        assert!(lines[0].starts_with("layout,bytes_per_sample,footprint_bytes,detector,culling,"));
+        assert_eq!(to_csv(&[]), format!("{}\n", lines[0]), "an empty report keeps its header");
         assert!(lines[1].starts_with("\"a,b\",12,0,depth-normal,,"));
         assert!(lines[1].contains(",0.25,inf,"));
         assert!(lines[1].contains(",2,1,3,"), "encode median, min, max: {}", lines[1]);
@@ -153,7 +168,7 @@ mod tests {
                     _ => {}
                 }
             }
-            assert_eq!(n, COLUMNS.len(), "{l}");
+            assert_eq!(n, lines[0].split(',').count(), "{l}");
         }
     }
 }

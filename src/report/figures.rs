@@ -44,7 +44,23 @@ fn scatter(rows: &[Row], title: &str, x_label: &str, x: impl Fn(&Row) -> Option<
         .map(|(b, f)| PlotPoint { x: b.1, y: b.2, label: b.0.to_string(), on_front: f })
         .collect();
     let y_label = if log_y { "image RMSE (log)" } else { "image RMSE" };
-    ScatterPlot { title: title.into(), x_label: x_label.into(), y_label: y_label.into(), log_y, points }
+    ScatterPlot {
+        title: title.into(),
+        x_label: x_label.into(),
+        y_label: y_label.into(),
+        log_x: None,
+        log_y: Some(log_y),
+        points,
+    }
+}
+
+/// A heatmap plot of per-pixel `values` with axes and a colour bar, at most [`MAX_PICTURE_WIDTH`] pixels of grid.
+fn heat_plot(title: String, values: &[Option<f32>], gb: &GBuffer, max: f32, label: String) -> Result<RgbImage> {
+    let grid_w = gb.width.clamp(1, MAX_PICTURE_WIDTH);
+    let grid_h = (u64::from(gb.height) * u64::from(grid_w) / u64::from(gb.width.max(1))).max(1) as u32;
+    let (w, h) = (grid_w + 190, grid_h + 90);
+    let (w, h) = (w.max(plot::MIN_SIZE.0), h.max(plot::MIN_SIZE.1));
+    plot::Heatmap { title, values, width: gb.width, height: gb.height, max, label }.to_png_image(w, h)
 }
 
 /// Downscales (nearest) so the width is at most [`MAX_PICTURE_WIDTH`].
@@ -102,8 +118,8 @@ pub fn figures(gb: &GBuffer, out: &SweepOutput) -> Result<(Vec<Attachment>, Vec<
         scatter(&out.rows, "Image error vs run time", "encode + decode + detect + resolve (ms)", |r| r.total_ms);
     for (stem, p, what) in [("error_vs_bytes", &by_bytes, "bytes per sample"), ("error_vs_time", &by_time, "run time")]
     {
-        png(&format!("{stem}.png"), p.to_png_image(w, h), format!("Image RMSE against {what}, one point per layout (its best detector); the Pareto front in red (SVG: {stem}.svg)"), &mut files)?;
-        files.push(Attachment { name: format!("{stem}.svg"), bytes: p.to_svg(w, h).into_bytes() });
+        png(&format!("{stem}.png"), p.to_png_image(w, h)?, format!("Image RMSE against {what}, one point per layout (its best detector); the Pareto front in red (SVG: {stem}.svg)"), &mut files)?;
+        files.push(Attachment { name: format!("{stem}.svg"), bytes: p.to_svg(w, h)?.into_bytes() });
     }
     png(
         "reference.png",
@@ -134,8 +150,8 @@ pub fn figures(gb: &GBuffer, out: &SweepOutput) -> Result<(Vec<Attachment>, Vec<
             let max = percentile_max(v);
             png(
                 &format!("heatmap_{slug}_{what}.png"),
-                plot::heatmap(v, gb.width, gb.height, max),
-                format!("{name}: per-pixel {what} error ({unit}; yellow = {max:.3e} or more, grey = background)"),
+                heat_plot(format!("{name}: {what} error"), v, gb, max, format!("{what} error ({unit})"))?,
+                format!("{name}: per-pixel {what} error ({unit}; the colour bar's top = {max:.3e} or more, grey = background)"),
                 &mut files,
             )?;
         }
@@ -153,8 +169,8 @@ pub fn figures(gb: &GBuffer, out: &SweepOutput) -> Result<(Vec<Attachment>, Vec<
         let max = lpp.iter().copied().max().unwrap_or(0) as f32;
         png(
             "lights_per_pixel.png",
-            plot::heatmap(&v, gb.width, gb.height, max),
-            format!("Lights reaching each pixel after culling (yellow = {max})"),
+            heat_plot("Lights per pixel after culling".into(), &v, gb, max, "lights evaluated".into())?,
+            format!("Lights reaching each pixel after culling (colour bar: 0 to {max})"),
             &mut files,
         )?;
     }

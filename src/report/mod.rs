@@ -3,7 +3,6 @@
 
 pub mod csv;
 pub mod figures;
-pub mod font;
 pub mod markdown;
 pub mod plot;
 pub mod write;

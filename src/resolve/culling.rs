@@ -281,9 +281,9 @@ mod tests {
         assert_eq!(list[0], 7, "appends");
         assert_eq!(&list[1..], &scalar[..]);
         #[cfg(target_arch = "x86_64")]
-        if std::is_x86_feature_detected!("avx512f") {
+        if crate::base::isa::Isa::detect() == crate::base::isa::Isa::Avx512 {
             use crate::resolve::simd::Avx512;
-            #[target_feature(enable = "avx512f")]
+            #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
             fn run(it: &Items, b: &Bounds, s: [&[f32]; 4], out: &mut Vec<u32>) -> Option<Bounds> {
                 b.touching::<Avx512>(s[0], s[1], s[2], s[3], out);
                 Bounds::of_items_in::<Avx512>(it, 0..48)

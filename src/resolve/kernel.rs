@@ -102,7 +102,7 @@ fn dispatch<const B: u8, const F: u8, const Q: bool, const P: bool>(
 }
 
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx2,fma")]
+#[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
 fn run_avx512<const B: u8, const F: u8, const Q: bool, const P: bool>(
     it: &mut Items,
     range: std::ops::Range<usize>,

@@ -222,7 +222,7 @@ fn run_band(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat
 }
 
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx2,fma")]
+#[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
 fn run_band_avx512(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat: &mut [u32]) -> TileStats {
     run_band(frame, y0, sc, rgb, heat)
 }
@@ -587,7 +587,7 @@ fn cull_tile_list(frame: &Frame<'_>, b: &Bounds, sc: &mut Scratch) {
 fn tile_bounds(it: &Items, range: std::ops::Range<usize>) -> Option<Bounds> {
     #[cfg(target_arch = "x86_64")]
     if Isa::detect() == Isa::Avx512 {
-        #[target_feature(enable = "avx512f,avx2,fma")]
+        #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
         fn avx512(it: &Items, range: std::ops::Range<usize>) -> Option<Bounds> {
             Bounds::of_items_in::<Avx512>(it, range)
         }
@@ -598,7 +598,7 @@ fn tile_bounds(it: &Items, range: std::ops::Range<usize>) -> Option<Bounds> {
 }
 
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx2,fma")]
+#[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
 fn touching_avx512(b: &Bounds, s: &Spheres, out: &mut Vec<u32>) {
     b.touching::<Avx512>(&s.x, &s.y, &s.z, &s.r, out);
 }

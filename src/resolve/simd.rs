@@ -458,7 +458,7 @@ mod avx512 {
     pub struct Avx512(__m512);
 
     // SAFETY (all `unsafe` blocks in this module): the intrinsics need AVX-512F, and `Avx512` values are only
-    // created inside functions the kernel dispatch enters after `is_x86_feature_detected!("avx512f")`. Loads and
+    // created inside functions the kernel dispatch enters after `Isa::detect()` found AVX-512. Loads and
     // stores check the slice length first.
 
     impl Add for Avx512 {
@@ -748,8 +748,8 @@ mod tests {
     #[test]
     fn avx512_lanes_are_accurate_where_supported() {
         #[cfg(target_arch = "x86_64")]
-        if std::is_x86_feature_detected!("avx512f") {
-            #[target_feature(enable = "avx512f")]
+        if crate::base::isa::Isa::detect() == crate::base::isa::Isa::Avx512 {
+            #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
             fn run() {
                 check::<Avx512>();
                 check::<Two<Avx512>>();

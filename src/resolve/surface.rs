@@ -580,7 +580,7 @@ mod avx512 {
     const IDX: [([i32; 16], [i32; 16]); 3] = [indices(0), indices(1), indices(2)];
 
     /// The x, y, z components of 16 `Vec3`.
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
     #[inline]
     unsafe fn load3(v: &[Vec3]) -> [__m512; 3] {
         let v = &v[..LANES];
@@ -594,14 +594,14 @@ mod avx512 {
         })
     }
 
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
     #[inline]
     unsafe fn store(v: __m512, out: &mut [f32]) {
         _mm512_storeu_ps(out[..LANES].as_mut_ptr(), v);
     }
 
     /// `v` finite and ≥ 0 (false for NaN).
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
     #[inline]
     unsafe fn finite_nonneg(v: __m512) -> __mmask16 {
         _mm512_cmp_ps_mask::<_CMP_GE_OQ>(v, _mm512_setzero_ps())
@@ -609,7 +609,7 @@ mod avx512 {
     }
 
     /// Normals made unit length; NaN/Inf or zero length → +Z, counted. Absent plane: +Z.
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
     #[inline]
     pub unsafe fn normals(plane: Option<&[Vec3]>, out: [&mut [f32]; 3], count: &mut u64) {
         let [ox, oy, oz] = out;
@@ -632,7 +632,7 @@ mod avx512 {
     }
 
     /// Albedo with NaN/Inf and negative components → 0, counted once per sample. Absent plane: the default grey.
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
     #[inline]
     pub unsafe fn albedo(plane: Option<&[Vec3]>, out: [&mut [f32]; 3], count: &mut u64) {
         let Some(plane) = plane else {
@@ -651,7 +651,7 @@ mod avx512 {
     }
 
     /// A scalar: NaN/Inf → default, out of `[lo, hi]` → clamped, both counted. Absent plane: the default.
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
     #[inline]
     pub unsafe fn clamped(plane: Option<&[f32]>, out: &mut [f32], (default, lo, hi): (f32, f32, f32), count: &mut u64) {
         let Some(plane) = plane else {
@@ -753,7 +753,7 @@ mod tests {
         let mut src: Vec<usize> = (0..32).collect();
         src.extend([47, 33, 34, 35, 36, 37, 38, 39, 40, 41, 42, 43, 44, 45, 46, 32]);
         #[cfg(target_arch = "x86_64")]
-        let vector = std::is_x86_feature_detected!("avx512f");
+        let vector = crate::base::isa::Isa::detect() == crate::base::isa::Isa::Avx512;
         #[cfg(not(target_arch = "x86_64"))]
         let vector = false;
         let paths = if vector { &[false, true][..] } else { &[false][..] };

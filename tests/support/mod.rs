@@ -1,0 +1,47 @@
+//! What the integration tests share, in one module (`mod support;` at the top of a test file): builders of
+//! G-buffers with every attribute and adversarial values ([`io`]), a tiny analytic ray caster for the detector
+//! tests ([`detect`]), tolerances of the scene tests ([`scene`]), the command helper that runs the built `gbuf`
+//! binary, and the check that a Python cross-check can run.
+#![allow(dead_code, unused_imports)] // each test binary uses a subset
+
+pub mod detect;
+pub mod io;
+pub mod scene;
+
+pub use detect::*;
+pub use io::*;
+pub use scene::*;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+/// The built `gbuf` binary as a command.
+pub fn gbuf_command() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_gbuf"))
+}
+
+/// Runs `gbuf args…` in `dir` and returns what it printed and its exit status.
+pub fn gbuf(dir: &Path, args: &[&str]) -> Output {
+    gbuf_command().current_dir(dir).args(args).output().expect("run gbuf")
+}
+
+/// Standard error of a finished command, as text.
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Can `python3` import every module of `modules` (e.g. `"OpenEXR, numpy"`)? A cross-check that cannot run is a
+/// failure in CI (`CI` set, as `.ci/run` runs): there the answer must be yes, so this panics instead of
+/// letting the test skip. Elsewhere it says so on stderr and returns false.
+pub fn python_has(modules: &str) -> bool {
+    let ok =
+        Command::new("python3").args(["-c", &format!("import {modules}")]).output().is_ok_and(|o| o.status.success());
+    if !ok {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI is set but python3 cannot import {modules}: the cross-check must run in CI (.ci/run installs it)"
+        );
+        eprintln!("note: python3 cannot import {modules}; skipping the cross-check (it is required in CI)");
+    }
+    ok
+}
