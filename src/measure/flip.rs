@@ -1,0 +1,1303 @@
+//! FLIP and HDR-FLIP image difference evaluators.
+//!
+//! An independent Rust implementation of
+//!
+//! * **LDR-FLIP**: P. Andersson, J. Nilsson, T. Akenine-Möller, M. Oskarsson, K. Åström,
+//!   M. D. Fairchild, "FLIP: A Difference Evaluator for Alternating Images", HPG 2020.
+//! * **HDR-FLIP**: P. Andersson, J. Nilsson, P. Shirley, T. Akenine-Möller,
+//!   "Visualizing Errors in Rendered High Dynamic Range Images", Eurographics 2021.
+//!
+//! Constants, filter construction, colour transforms, exposure selection and the
+//! magma colour map follow NVIDIA's reference implementation (NVlabs/flip v1.6,
+//! PyPI `flip-evaluator` 1.7), so that results agree with it to float precision
+//! (checked against `flip-evaluator` 1.7 on 17 image pairs when it was written: means within 2.6e-5, per-pixel
+//! maps within 1e-5 outside float-noise pixels; the oracle test is not in this repository yet, see issue 17).
+//!
+//! Images are `f32`, interleaved RGB (`len == width * height * 3`), row 0 at the top.
+//! The error map has one value per pixel in `[0, 1]`.
+//!
+//! Implementation notes:
+//! * All filters are separable: the achromatic and red-green CSF filters are single
+//!   Gaussians, the blue-yellow CSF filter is a sum of two Gaussians and is split
+//!   into two separable filters (as in the reference's `separatedConvolutions.pdf`);
+//!   the edge/point detectors are products of a 1D Gaussian and its 1st/2nd
+//!   derivative. Borders are clamp-to-edge, as in the reference.
+//! * The image is cut into horizontal bands processed in parallel with rayon, and
+//!   each band into 256-column tiles. Horizontally filtered rows of a tile live in a
+//!   small ring buffer (~300 KB, L2-resident) from which the vertical pass produces
+//!   two output rows at a time; there are no full-size intermediate images.
+//! * Inner loops are plain `f32` code on 8-lane blocks (including branch-free
+//!   `log2`/`exp2`-based `pow` and cube root), compiled twice, generic and with
+//!   AVX2 enabled, and picked at run time. No FMA contraction is used, so both paths
+//!   give identical results.
+//! * Filter taps are accumulated in the same order as the reference, so filtered
+//!   values match it bit for bit. The cube root is correctly rounded; `pow` has a
+//!   relative error of ~1e-6. Per-pixel differences to the reference are ~1e-5 or
+//!   less (larger only where reference and test differ by float noise, because
+//!   HyAB^0.7 amplifies tiny differences). The mean is summed in `f64` (the
+//!   reference sums in `f32`; see [`FlipMap::mean_f32_sequential`]).
+
+// Constants are kept with the reference's decimals (they round to the same f32).
+#![allow(clippy::excessive_precision, clippy::needless_range_loop, clippy::too_many_arguments)]
+#![allow(clippy::manual_is_multiple_of)] // `%` keeps the MSRV below 1.87
+
+use rayon::prelude::*;
+
+// ---------------------------------------------------------------------------
+// Public API
+// ---------------------------------------------------------------------------
+
+/// Viewing conditions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlipOptions {
+    /// Pixels per degree of visual angle. Default: [`default_ppd`]
+    /// (0.7 m from a 0.7 m wide, 3840 pixel wide monitor, ≈ 67.02).
+    pub pixels_per_degree: f32,
+}
+
+impl Default for FlipOptions {
+    fn default() -> Self {
+        FlipOptions { pixels_per_degree: default_ppd() }
+    }
+}
+
+impl FlipOptions {
+    /// Options for a viewer at `distance_m` metres from a monitor `monitor_width_m`
+    /// metres wide showing `resolution_x` pixels horizontally.
+    pub fn from_viewing_conditions(distance_m: f32, resolution_x: f32, monitor_width_m: f32) -> Self {
+        FlipOptions { pixels_per_degree: pixels_per_degree(distance_m, resolution_x, monitor_width_m) }
+    }
+}
+
+/// Pixels per degree for the given viewing conditions, as the reference computes it
+/// (`distance * (resolution / width) * pi / 180`, small-angle form, in `f32`).
+pub fn pixels_per_degree(distance_m: f32, resolution_x: f32, monitor_width_m: f32) -> f32 {
+    distance_m * (resolution_x / monitor_width_m) * (PI / 180.0)
+}
+
+/// The reference default pixels per degree: `pixels_per_degree(0.7, 3840.0, 0.7)` ≈ 67.0206.
+pub fn default_ppd() -> f32 {
+    pixels_per_degree(0.7, 3840.0, 0.7)
+}
+
+/// A FLIP error map.
+#[derive(Clone, Debug)]
+pub struct FlipMap {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// `width * height` errors in `[0, 1]`, row 0 at the top.
+    pub values: Vec<f32>,
+    /// Mean of `values` (summed in `f64`; 0 for an empty image).
+    pub mean: f64,
+}
+
+impl FlipMap {
+    /// The mean as the reference tool reports it: a sequential `f32` sum in row-major
+    /// order divided by the pixel count. For large images this drifts from the exact
+    /// mean (by ~8e-4 at 1920x1080 for a mean of 0.1); use it only to reproduce numbers
+    /// printed by NVIDIA's tools.
+    pub fn mean_f32_sequential(&self) -> f32 {
+        if self.values.is_empty() {
+            return 0.0;
+        }
+        let mut sum = 0.0f32;
+        for &v in &self.values {
+            sum += v;
+        }
+        sum / (self.width * self.height) as f32
+    }
+}
+
+/// Tone mappers available to HDR-FLIP (ACES is the reference default).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ToneMapper {
+    /// Reinhard on luminance: `c / (1 + L)`.
+    Reinhard,
+    /// Narkowicz' ACES fit, with the 0.6 pre-exposure cancelled (reference default).
+    #[default]
+    Aces,
+    /// Hable's filmic curve (rational fit used by the reference).
+    Hable,
+}
+
+/// Exposure settings for HDR-FLIP. `None` means "computed as the reference does".
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct HdrParams {
+    /// Start exposure `c_start` (stops). Default: `log2(x_max / Y_max)` of the reference.
+    pub start_exposure: Option<f32>,
+    /// Stop exposure `c_stop` (stops). Default: `log2(x_max / Y_median)` of the reference.
+    pub stop_exposure: Option<f32>,
+    /// Number of exposures. Default: `max(2, ceil(c_stop - c_start))`.
+    pub num_exposures: Option<usize>,
+    /// The tone mapper applied at each exposure (ACES by default, as the reference).
+    pub tone_mapper: ToneMapper,
+}
+
+/// Result of HDR-FLIP.
+#[derive(Clone, Debug)]
+pub struct HdrFlip {
+    /// Per-pixel maximum of the LDR-FLIP maps over all exposures, and its mean.
+    pub map: FlipMap,
+    /// The exposures (in stops) that were evaluated, in order.
+    pub exposures: Vec<f32>,
+    /// The start exposure used (stops).
+    pub start_exposure: f32,
+    /// The stop exposure used (stops).
+    pub stop_exposure: f32,
+    /// The tone mapper used.
+    pub tone_mapper: ToneMapper,
+    /// Per pixel, `i / (n - 1)` for the exposure index `i` that gave the maximum error
+    /// (0 where every exposure gave 0), as the reference's exposure map.
+    pub exposure_map: Vec<f32>,
+}
+
+impl HdrFlip {
+    /// Mean HDR-FLIP error (same as `map.mean`).
+    pub fn mean(&self) -> f64 {
+        self.map.mean
+    }
+}
+
+/// LDR-FLIP of two **sRGB-encoded** images (display values; values are decoded
+/// with the sRGB transfer function and clamped to `[0, 1]` in linear RGB).
+///
+/// This is what `flip_evaluator.evaluate(ref, test, "LDR")` computes.
+pub fn ldr_flip(reference_srgb: &[f32], test_srgb: &[f32], width: usize, height: usize, opts: &FlipOptions) -> FlipMap {
+    ldr_common(reference_srgb, test_srgb, width, height, opts, Encoding::Srgb)
+}
+
+/// LDR-FLIP of two images given in **linear** RGB, clamped to `[0, 1]`
+/// (`flip_evaluator.evaluate(ref, test, "LDR", inputsRGB=False)`).
+pub fn ldr_flip_linear(
+    reference_linear: &[f32],
+    test_linear: &[f32],
+    width: usize,
+    height: usize,
+    opts: &FlipOptions,
+) -> FlipMap {
+    ldr_common(reference_linear, test_linear, width, height, opts, Encoding::Linear)
+}
+
+/// HDR-FLIP of two linear-RGB HDR images (non-negative values) with the reference
+/// defaults: ACES tone mapping, start/stop exposures and their number computed from
+/// the reference image's luminance (`flip_evaluator.evaluate(ref, test, "HDR")`).
+pub fn hdr_flip(
+    reference_linear: &[f32],
+    test_linear: &[f32],
+    width: usize,
+    height: usize,
+    opts: &FlipOptions,
+) -> HdrFlip {
+    hdr_flip_with(reference_linear, test_linear, width, height, opts, &HdrParams::default())
+}
+
+/// HDR-FLIP with explicit exposure / tone mapper settings.
+///
+/// Panics if `start_exposure > stop_exposure` or if `num_exposures == Some(0)`.
+pub fn hdr_flip_with(
+    reference_linear: &[f32],
+    test_linear: &[f32],
+    width: usize,
+    height: usize,
+    opts: &FlipOptions,
+    params: &HdrParams,
+) -> HdrFlip {
+    check_sizes(reference_linear, test_linear, width, height);
+    let tm = params.tone_mapper;
+    let (start, stop) = match (params.start_exposure, params.stop_exposure) {
+        (Some(a), Some(b)) => (a, b),
+        (a, b) => {
+            let (s0, s1) = compute_exposures(reference_linear, tm);
+            (a.unwrap_or(s0), b.unwrap_or(s1))
+        }
+    };
+    assert!(start <= stop, "HDR-FLIP: start exposure ({start}) must not exceed stop exposure ({stop})");
+    let n = match params.num_exposures {
+        Some(n) => n,
+        None => (stop - start).ceil().max(2.0) as usize,
+    };
+    assert!(n >= 1, "HDR-FLIP: need at least one exposure");
+    // With n == 1 the reference divides by zero (step = inf/NaN); we evaluate `start` only.
+    let step = if n > 1 { (stop - start) / (n - 1) as f32 } else { 0.0 };
+    let exposures: Vec<f32> = (0..n).map(|i| start + i as f32 * step).collect();
+
+    let npix = width * height;
+    let mut max_map = vec![0.0f32; npix];
+    let mut exposure_map = vec![0.0f32; npix];
+    if npix > 0 {
+        let ctx = Ctx::new(width, height, opts.pixels_per_degree);
+        for (i, &e) in exposures.iter().enumerate() {
+            let enc = Encoding::Hdr { scale: 2.0f32.powf(e), tm };
+            let tag = if n > 1 { i as f32 / (n - 1) as f32 } else { 0.0 };
+            run_bands(&ctx, reference_linear, test_linear, enc, &mut max_map, Some((&mut exposure_map, tag)));
+        }
+    }
+    let mean = mean_f64(&max_map);
+    HdrFlip {
+        map: FlipMap { width, height, values: max_map, mean },
+        exposures,
+        start_exposure: start,
+        stop_exposure: stop,
+        tone_mapper: tm,
+        exposure_map,
+    }
+}
+
+/// Maps error values in `[0, 1]` to sRGB-encoded RGB8 with the magma colour map,
+/// exactly as the reference does (index `int(255 v + 0.5)`; values outside `[0, 1]`
+/// are clamped). Returns `values.len() * 3` bytes, ready to be written as a PNG.
+pub fn magma_rgb8(values: &[f32]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(values.len() * 3);
+    for &v in values {
+        out.extend_from_slice(&MAGMA_RGB8[magma_index(v)]);
+    }
+    out
+}
+
+/// Convenience: [`magma_rgb8`] of a [`FlipMap`].
+pub fn flip_map_to_magma_rgb8(map: &FlipMap) -> Vec<u8> {
+    magma_rgb8(&map.values)
+}
+
+/// The magma colour map as sRGB RGB8 (256 entries; matplotlib's magma as tabulated by the reference).
+pub fn magma_lut() -> &'static [[u8; 3]; 256] {
+    &MAGMA_RGB8
+}
+
+#[inline]
+fn magma_index(v: f32) -> usize {
+    let v = if v > 0.0 {
+        if v < 1.0 {
+            v
+        } else {
+            1.0
+        }
+    } else {
+        0.0
+    }; // NaN -> 0
+    ((v * 255.0 + 0.5) as usize) & 255
+}
+
+// ---------------------------------------------------------------------------
+// Constants (from the papers / reference implementation)
+// ---------------------------------------------------------------------------
+
+// The reference's 3.14159265358979f is this same f32 value.
+const PI: f32 = std::f32::consts::PI;
+
+// Colour pipeline parameters.
+const GQC: f32 = 0.7; // exponent on HyAB distance
+const GPC: f32 = 0.4; // breakpoint fraction of cmax
+const GPT: f32 = 0.95; // error value at breakpoint
+const GW: f32 = 0.082; // feature detector width (degrees)
+                       // gqf = 0.5: feature difference exponent, implemented as sqrt.
+
+// CSF as sums of Gaussians: a1, b1 (first) and a2, b2 (second) for Y, Cx, Cz.
+const GA1: [f32; 3] = [1.0, 1.0, 34.1];
+const GB1: [f32; 3] = [0.0047, 0.0053, 0.04];
+const GA2: [f32; 3] = [0.0, 0.0, 13.5];
+const GB2: [f32; 3] = [1.0e-5, 1.0e-5, 0.025];
+
+// D65 white in XYZ and its inverse.
+const ILL: [f32; 3] = [0.950428545, 1.000000000, 1.088900371];
+const INV_ILL: [f32; 3] = [1.052156925, 1.000000000, 0.918357670];
+
+// Linear sRGB -> XYZ (D65), exact rational form.
+const RGB2XYZ: [[f32; 3]; 3] = [
+    [10135552.0 / 24577794.0, 8788810.0 / 24577794.0, 4435075.0 / 24577794.0],
+    [2613072.0 / 12288897.0, 8788810.0 / 12288897.0, 887015.0 / 12288897.0],
+    [1425312.0 / 73733382.0, 8788810.0 / 73733382.0, 70074185.0 / 73733382.0],
+];
+// XYZ -> linear sRGB (D65).
+const XYZ2RGB: [[f32; 3]; 3] = [
+    [3.241003275, -1.537398934, -0.498615861],
+    [-0.969224334, 1.875930071, 0.041554224],
+    [0.055639423, -0.204011202, 1.057148933],
+];
+
+// CIELab constants.
+const LAB_DELTA: f32 = 6.0 / 29.0;
+const LAB_DELTA_SQ: f32 = LAB_DELTA * LAB_DELTA;
+const LAB_DELTA_CUBE: f32 = LAB_DELTA * LAB_DELTA_SQ;
+const LAB_FACTOR: f32 = 1.0 / (3.0 * LAB_DELTA_SQ);
+const LAB_TERM: f32 = 4.0 / 29.0;
+const ONE_THIRD: f32 = 1.0 / 3.0;
+
+// Tone mapper rational coefficients (c^2 t0 + c t1 + t2) / (c^2 t3 + c t4 + t5).
+const TM_REINHARD: [f32; 6] = [0.0, 1.0, 0.0, 0.0, 1.0, 1.0];
+const TM_ACES: [f32; 6] = [0.6 * 0.6 * 2.51, 0.6 * 0.03, 0.0, 0.6 * 0.6 * 2.43, 0.6 * 0.59, 0.14];
+const TM_HABLE: [f32; 6] = [0.231683, 0.013791, 0.0, 0.18, 0.3, 0.018];
+
+impl ToneMapper {
+    fn coefficients(self) -> [f32; 6] {
+        match self {
+            ToneMapper::Reinhard => TM_REINHARD,
+            ToneMapper::Aces => TM_ACES,
+            ToneMapper::Hable => TM_HABLE,
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Driver
+// ---------------------------------------------------------------------------
+
+#[derive(Clone, Copy, Debug)]
+enum Encoding {
+    /// sRGB-encoded input: decode, clamp.
+    Srgb,
+    /// Linear input: clamp.
+    Linear,
+    /// Linear HDR input: multiply by `scale = 2^exposure`, tone map, clamp.
+    Hdr { scale: f32, tm: ToneMapper },
+}
+
+fn check_sizes(r: &[f32], t: &[f32], w: usize, h: usize) {
+    let n = w.checked_mul(h).and_then(|n| n.checked_mul(3)).expect("FLIP: image size overflows usize");
+    assert_eq!(r.len(), n, "FLIP: reference image must have width * height * 3 values");
+    assert_eq!(t.len(), n, "FLIP: test image must have width * height * 3 values");
+}
+
+fn ldr_common(r: &[f32], t: &[f32], w: usize, h: usize, opts: &FlipOptions, enc: Encoding) -> FlipMap {
+    check_sizes(r, t, w, h);
+    let mut values = vec![0.0f32; w * h];
+    if w * h > 0 {
+        let ctx = Ctx::new(w, h, opts.pixels_per_degree);
+        run_bands(&ctx, r, t, enc, &mut values, None);
+    }
+    let mean = mean_f64(&values);
+    FlipMap { width: w, height: h, values, mean }
+}
+
+fn mean_f64(v: &[f32]) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let s: f64 = v.par_chunks(1 << 14).map(|c| c.iter().map(|&x| x as f64).sum::<f64>()).sum();
+    s / v.len() as f64
+}
+
+/// Start/stop exposures from the reference image, as in the HDR-FLIP paper (Sec. 4.2)
+/// and the reference code: `x_max` solves `tm(x) = 0.85`; `c_start = log2(x_max / Y_max)`,
+/// `c_stop = log2(x_max / Y_median)` (median = element `n/2` of the sorted luminances).
+fn compute_exposures(img: &[f32], tm: ToneMapper) -> (f32, f32) {
+    let tc = tm.coefficients();
+    let t = 0.85f32;
+    let a = tc[0] - t * tc[3];
+    let b = tc[1] - t * tc[4];
+    let c = tc[2] - t * tc[5];
+    let x_max = if a == 0.0 {
+        -c / b
+    } else {
+        let d1 = -0.5 * (b / a);
+        let d2 = (d1 * d1 - c / a).sqrt();
+        d1 + d2
+    };
+    let mut lum: Vec<f32> = img.par_chunks_exact(3).map(|p| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]).collect();
+    if lum.is_empty() {
+        return (0.0, 0.0);
+    }
+    let y_max = lum.par_iter().copied().reduce(|| -1e30f32, |a, b| if a > b { a } else { b });
+    let mid = lum.len() / 2;
+    let (_, &mut y_median, _) = lum.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
+    let start = ((x_max / y_max) as f64).log2() as f32;
+    let stop = ((x_max / y_median) as f64).log2() as f32;
+    (start, stop)
+}
+
+/// Number of f32 planes per horizontally filtered row: for each image
+/// (0 = reference, 1 = test) 7 planes: Y*gY, Cx*gCx, Cz*gCz1, Cz*gCz2 (CSF),
+/// Yn*dG, Yn*ddG, Yn*G (features).
+const NH: usize = 14;
+const HP_Y: usize = 0;
+const HP_CX: usize = 1;
+const HP_CZ1: usize = 2;
+const HP_CZ2: usize = 3;
+const HP_DX: usize = 4;
+const HP_DDX: usize = 5;
+const HP_G: usize = 6;
+
+struct Ctx {
+    w: usize,
+    h: usize,
+    /// CSF filter radius, feature filter radius, max of both.
+    rs: usize,
+    rf: usize,
+    rmax: usize,
+    /// Ring size (rows) = 2 * rmax + 2 (two output rows per vertical pass).
+    ring: usize,
+    sy: Vec<f32>,
+    scx: Vec<f32>,
+    scz1: Vec<f32>,
+    scz2: Vec<f32>,
+    fg: Vec<f32>,
+    fdg: Vec<f32>,
+    fddg: Vec<f32>,
+    /// Per tap: [sy, scx, scz1, scz2] and [fg, fdg, fddg].
+    ws: Vec<[f32; 4]>,
+    wf: Vec<[f32; 3]>,
+    cmax: f32,
+    pccmax: f32,
+}
+
+impl Ctx {
+    fn new(w: usize, h: usize, ppd: f32) -> Ctx {
+        assert!(ppd > 0.0 && ppd.is_finite(), "FLIP: pixels per degree must be positive");
+        let pi_sq = PI * PI;
+
+        // CSF (spatial) filters. Radius from the widest Gaussian.
+        let mut max_b = GB1[0];
+        for &b in GB1.iter().chain(GB2.iter()) {
+            max_b = max_b.max(b);
+        }
+        let rs = (3.0 * (max_b / (2.0 * pi_sq)).sqrt() * ppd).ceil() as usize;
+        let gauss = |x2: f32, a: f32, b: f32| a * (PI / b).sqrt() * (-pi_sq * x2 / b).exp();
+        let gauss_sqrt = |x2: f32, a: f32, b: f32| (a * (PI / b).sqrt()).sqrt() * (-pi_sq * x2 / b).exp();
+        let ns = 2 * rs + 1;
+        let dx = 1.0 / ppd;
+        let (mut sy, mut scx, mut scz1, mut scz2) = (vec![0.0; ns], vec![0.0; ns], vec![0.0; ns], vec![0.0; ns]);
+        let (mut sum_y, mut sum_cx, mut sum_cz1, mut sum_cz2) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
+        for i in 0..ns {
+            let ix = (i as i32 - rs as i32) as f32 * dx;
+            let ix2 = ix * ix;
+            sy[i] = gauss(ix2, GA1[0], GB1[0]);
+            scx[i] = gauss(ix2, GA1[1], GB1[1]);
+            scz1[i] = gauss_sqrt(ix2, GA1[2], GB1[2]);
+            scz2[i] = gauss_sqrt(ix2, GA2[2], GB2[2]);
+            sum_y += sy[i];
+            sum_cx += scx[i];
+            sum_cz1 += scz1[i];
+            sum_cz2 += scz2[i];
+        }
+        // Y and Cx: 1D weights sum to 1. Cz: the 2D filter g1(x)g1(y) + g2(x)g2(y) sums to 1.
+        let (ny, ncx) = (1.0 / sum_y, 1.0 / sum_cx);
+        let ncz = 1.0 / (sum_cz1 * sum_cz1 + sum_cz2 * sum_cz2).sqrt();
+        sy.iter_mut().for_each(|v| *v *= ny);
+        scx.iter_mut().for_each(|v| *v *= ncx);
+        scz1.iter_mut().for_each(|v| *v *= ncz);
+        scz2.iter_mut().for_each(|v| *v *= ncz);
+
+        // Feature filters: Gaussian and its 1st/2nd derivatives, sd = gw/2 degrees.
+        let sd = 0.5 * GW * ppd;
+        let rf = (3.0 * sd).ceil() as usize;
+        let nf = 2 * rf + 1;
+        let (mut fg, mut fdg, mut fddg) = (vec![0.0f32; nf], vec![0.0f32; nf], vec![0.0f32; nf]);
+        let (mut g_sum, mut dg_neg, mut dg_pos, mut ddg_neg, mut ddg_pos) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
+        for i in 0..nf {
+            let x = (i as i32 - rf as i32) as f32;
+            let g = (-(x * x) / (2.0 * sd * sd)).exp();
+            g_sum += g;
+            let dg = -x * g;
+            if dg > 0.0 {
+                dg_pos += dg;
+            } else {
+                dg_neg -= dg;
+            }
+            let ddg = (x * x / (sd * sd) - 1.0) * g;
+            if ddg > 0.0 {
+                ddg_pos += ddg;
+            } else {
+                ddg_neg -= ddg;
+            }
+            fg[i] = g;
+            fdg[i] = dg;
+            fddg[i] = ddg;
+        }
+        // Gaussian sums to 1; positive / negative lobes of the derivatives sum to +1 / -1.
+        for i in 0..nf {
+            fg[i] /= g_sum;
+            fdg[i] /= if fdg[i] > 0.0 { dg_pos } else { dg_neg };
+            fddg[i] /= if fddg[i] > 0.0 { ddg_pos } else { ddg_neg };
+        }
+
+        let cmax = max_color_distance();
+        let rmax = rs.max(rf);
+        let ws = (0..ns).map(|i| [sy[i], scx[i], scz1[i], scz2[i]]).collect();
+        let wf = (0..nf).map(|i| [fg[i], fdg[i], fddg[i]]).collect();
+        Ctx {
+            w,
+            h,
+            ws,
+            wf,
+            rs,
+            rf,
+            rmax,
+            ring: 2 * rmax + 2,
+            sy,
+            scx,
+            scz1,
+            scz2,
+            fg,
+            fdg,
+            fddg,
+            cmax,
+            pccmax: GPC * cmax,
+        }
+    }
+}
+
+/// `cmax`: HyAB distance (after Hunt adjustment, raised to gqc) between pure green and blue.
+fn max_color_distance() -> f32 {
+    let lab = |rgb: [f32; 3]| {
+        let xyz = [0, 1, 2].map(|r| RGB2XYZ[r][0] * rgb[0] + RGB2XYZ[r][1] * rgb[1] + RGB2XYZ[r][2] * rgb[2]);
+        let f = [0, 1, 2].map(|i| {
+            let v = xyz[i] * INV_ILL[i];
+            if v > LAB_DELTA_CUBE {
+                v.powf(ONE_THIRD)
+            } else {
+                LAB_FACTOR * v + LAB_TERM
+            }
+        });
+        let l = 116.0 * f[1] - 16.0;
+        let a = 500.0 * (f[0] - f[1]);
+        let b = 200.0 * (f[1] - f[2]);
+        [l, 0.01 * l * a, 0.01 * l * b]
+    };
+    let g = lab([0.0, 1.0, 0.0]);
+    let b = lab([0.0, 0.0, 1.0]);
+    let hyab = (g[0] - b[0]).abs() + ((g[1] - b[1]) * (g[1] - b[1]) + (g[2] - b[2]) * (g[2] - b[2])).sqrt();
+    hyab.powf(GQC)
+}
+
+/// Runs one LDR-FLIP evaluation over the whole image, band-parallel.
+/// Without `merge`, writes the error map into `out`. With `merge = (exposure_map, tag)`,
+/// keeps the per-pixel maximum in `out` and writes `tag` to `exposure_map` where it grew.
+fn run_bands(ctx: &Ctx, r: &[f32], t: &[f32], enc: Encoding, out: &mut [f32], merge: Option<(&mut [f32], f32)>) {
+    let (w, h) = (ctx.w, ctx.h);
+    // A few bands per thread for load balance; each band re-filters 2*rmax halo rows.
+    let threads = rayon::current_num_threads().max(1);
+    let min_band = (4 * ctx.rmax).max(16);
+    let nbands = (threads * 3).min(h.div_ceil(min_band)).max(1);
+    let band_h = h.div_ceil(nbands).next_multiple_of(2); // rows are produced in pairs
+    match merge {
+        None => out.par_chunks_mut(band_h * w).enumerate().for_each(|(b, o)| band(ctx, r, t, enc, b * band_h, o, None)),
+        Some((em, tag)) => out
+            .par_chunks_mut(band_h * w)
+            .zip(em.par_chunks_mut(band_h * w))
+            .enumerate()
+            .for_each(|(b, (o, e))| band(ctx, r, t, enc, b * band_h, o, Some((e, tag)))),
+    }
+}
+
+/// Runtime dispatch to an AVX2 build of the band kernel on x86-64.
+fn band(ctx: &Ctx, r: &[f32], t: &[f32], enc: Encoding, y0: usize, out: &mut [f32], merge: Option<(&mut [f32], f32)>) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        #[cfg(test)]
+        let generic = tests::FORCE_GENERIC.load(std::sync::atomic::Ordering::Relaxed);
+        #[cfg(not(test))]
+        let generic = false;
+        if !generic && crate::base::isa::Isa::detect() >= crate::base::isa::Isa::Avx2 {
+            // SAFETY: the CPU supports AVX2 and FMA (checked by `Isa::detect`).
+            unsafe { band_avx2(ctx, r, t, enc, y0, out, merge) };
+            return;
+        }
+    }
+    band_impl(ctx, r, t, enc, y0, out, merge)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn band_avx2(
+    ctx: &Ctx,
+    r: &[f32],
+    t: &[f32],
+    enc: Encoding,
+    y0: usize,
+    out: &mut [f32],
+    merge: Option<(&mut [f32], f32)>,
+) {
+    band_impl(ctx, r, t, enc, y0, out, merge)
+}
+
+/// Column tile width: a tile's ring of horizontally filtered rows
+/// (`(2 rmax + 1) * NH * TW` floats, ~300 KB at 67 ppd) stays in L2.
+const TW: usize = 256;
+/// SIMD-friendly lane block of the inner loops.
+const LANES: usize = 8;
+/// Tile columns are computed in multiples of this (see `conv_rows`).
+const COLS: usize = 4 * LANES;
+
+#[inline(always)]
+fn band_impl(
+    ctx: &Ctx,
+    r: &[f32],
+    t: &[f32],
+    enc: Encoding,
+    y0: usize,
+    out: &mut [f32],
+    mut merge: Option<(&mut [f32], f32)>,
+) {
+    let (w, h) = (ctx.w, ctx.h);
+    let rows = out.len() / w;
+    // Ring rows hold NH planes with the constant stride TW (cheap addressing).
+    let row_len = NH * TW;
+    let mut ring = vec![0.0f32; ctx.ring * row_len];
+    let mut pad = vec![0.0f32; 8 * (TW + 2 * ctx.rmax)];
+    let mut rgb = vec![0.0f32; 3 * (TW + 2 * ctx.rmax)];
+    let mut err = vec![0.0f32; 2 * TW];
+    let mut offs_s = vec![0usize; 2 * ctx.rs + 2];
+    let mut offs_f = vec![0usize; 2 * ctx.rf + 2];
+    let mut x0 = 0;
+    while x0 < w {
+        let tw = TW.min(w - x0); // output columns of this tile
+        let tws = tw.next_multiple_of(COLS); // computed columns (<= TW)
+        let mut next = y0.saturating_sub(ctx.rmax);
+        // Output rows are produced in pairs (y, y + 1); for an odd last row the
+        // second one is computed from clamped rows and discarded.
+        let mut y = y0;
+        while y < y0 + rows {
+            let hi = (y + 1 + ctx.rmax).min(h - 1);
+            while next <= hi {
+                let slot = next % ctx.ring;
+                let dst = &mut ring[slot * row_len..(slot + 1) * row_len];
+                hrow(ctx, r, t, enc, next, x0, tw, tws, &mut pad, &mut rgb, dst);
+                next += 1;
+            }
+            // offs[i]: ring offset of input row clamp(y - radius + i), i = 0..=2 radius + 1.
+            for (i, o) in offs_s.iter_mut().enumerate() {
+                *o = ((y + i).saturating_sub(ctx.rs).min(h - 1) % ctx.ring) * row_len;
+            }
+            for (i, o) in offs_f.iter_mut().enumerate() {
+                *o = ((y + i).saturating_sub(ctx.rf).min(h - 1) % ctx.ring) * row_len;
+            }
+            vrow2(ctx, &ring, tws, &offs_s, &offs_f, &mut err);
+            for dy in 0..2.min(y0 + rows - y) {
+                let ry = y + dy - y0;
+                let e = &err[dy * TW..dy * TW + tw];
+                let orow = &mut out[ry * w + x0..ry * w + x0 + tw];
+                match merge.as_mut() {
+                    None => orow.copy_from_slice(e),
+                    Some((em, tag)) => {
+                        let erow = &mut em[ry * w + x0..ry * w + x0 + tw];
+                        for ((o, x), &v) in orow.iter_mut().zip(erow.iter_mut()).zip(e.iter()) {
+                            let grow = v > *o;
+                            *o = if grow { v } else { *o };
+                            *x = if grow { *tag } else { *x };
+                        }
+                    }
+                }
+            }
+            y += 2;
+        }
+        x0 += tw;
+    }
+}
+
+/// Converts columns `[x0 - rmax, x0 + tws + rmax)` (clamped to the image) of row `y`
+/// of both images to YCxCz and filters them horizontally into `out`
+/// (NH planes of stride `TW`, `tws` columns each).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn hrow(
+    ctx: &Ctx,
+    r: &[f32],
+    t: &[f32],
+    enc: Encoding,
+    y: usize,
+    x0: usize,
+    tw: usize,
+    tws: usize,
+    pad: &mut [f32],
+    rgb: &mut [f32],
+    out: &mut [f32],
+) {
+    let w = ctx.w;
+    let rp = ctx.rmax;
+    let pw = tws + 2 * rp; // padded plane width
+                           // Source columns actually present, and where they land in the padded planes.
+    let lo = x0.saturating_sub(rp);
+    let hi = (x0 + tw + rp).min(w);
+    let n = hi - lo;
+    let lpad = rp - (x0 - lo);
+    for (img, src) in [r, t].into_iter().enumerate() {
+        let row = &src[(y * w + lo) * 3..(y * w + hi) * 3];
+        let (rr, rest) = rgb[..3 * n].split_at_mut(n);
+        let (gg, bb) = rest.split_at_mut(n);
+        for (((p, r0), g0), b0) in row.chunks_exact(3).zip(rr.iter_mut()).zip(gg.iter_mut()).zip(bb.iter_mut()) {
+            *r0 = p[0];
+            *g0 = p[1];
+            *b0 = p[2];
+        }
+        match enc {
+            Encoding::Srgb => {
+                for ch in [&mut *rr, &mut *gg, &mut *bb] {
+                    for v in ch.iter_mut() {
+                        *v = clamp01(srgb_to_linear(*v));
+                    }
+                }
+            }
+            Encoding::Linear => {
+                for ch in [&mut *rr, &mut *gg, &mut *bb] {
+                    for v in ch.iter_mut() {
+                        *v = clamp01(*v);
+                    }
+                }
+            }
+            Encoding::Hdr { scale, tm: ToneMapper::Reinhard } => {
+                for ((r0, g0), b0) in rr.iter_mut().zip(gg.iter_mut()).zip(bb.iter_mut()) {
+                    let (r1, g1, b1) = (*r0 * scale, *g0 * scale, *b0 * scale);
+                    let lum = 0.2126 * r1 + 0.7152 * g1 + 0.0722 * b1;
+                    let f = 1.0 / (1.0 + lum);
+                    *r0 = clamp01(r1 * f);
+                    *g0 = clamp01(g1 * f);
+                    *b0 = clamp01(b1 * f);
+                }
+            }
+            Encoding::Hdr { scale, tm } => {
+                let c = tm.coefficients();
+                for ch in [&mut *rr, &mut *gg, &mut *bb] {
+                    for v in ch.iter_mut() {
+                        let x = *v * scale;
+                        let x2 = x * x;
+                        *v = clamp01((x2 * c[0] + x * c[1] + c[2]) / (x2 * c[3] + x * c[4] + c[5]));
+                    }
+                }
+            }
+        }
+        // Linear RGB -> XYZ -> YCxCz (+ normalised Y for the feature filters), into padded planes.
+        {
+            let planes = &mut pad[img * 4 * pw..(img + 1) * 4 * pw];
+            let (py, rest) = planes.split_at_mut(pw);
+            let (pcx, rest) = rest.split_at_mut(pw);
+            let (pcz, pyn) = rest.split_at_mut(pw);
+            let it = py[lpad..lpad + n]
+                .iter_mut()
+                .zip(pcx[lpad..lpad + n].iter_mut())
+                .zip(pcz[lpad..lpad + n].iter_mut())
+                .zip(pyn[lpad..lpad + n].iter_mut())
+                .zip(rr.iter().zip(gg.iter()).zip(bb.iter()));
+            for ((((oy, ocx), ocz), oyn), ((&cr, &cg), &cb)) in it {
+                let x = (RGB2XYZ[0][0] * cr + RGB2XYZ[0][1] * cg + RGB2XYZ[0][2] * cb) * INV_ILL[0];
+                let yv = (RGB2XYZ[1][0] * cr + RGB2XYZ[1][1] * cg + RGB2XYZ[1][2] * cb) * INV_ILL[1];
+                let z = (RGB2XYZ[2][0] * cr + RGB2XYZ[2][1] * cg + RGB2XYZ[2][2] * cb) * INV_ILL[2];
+                let yy = 116.0 * yv - 16.0;
+                *oy = yy;
+                *ocx = 500.0 * (x - yv);
+                *ocz = 200.0 * (yv - z);
+                *oyn = yy * (1.0 / 116.0) + 16.0 / 116.0;
+            }
+        }
+        // Clamp-to-edge padding (image borders), also fills the lane-rounding columns.
+        for p in 0..4 {
+            let plane = &mut pad[(img * 4 + p) * pw..(img * 4 + p + 1) * pw];
+            let (first, last) = (plane[lpad], plane[lpad + n - 1]);
+            plane[..lpad].fill(first);
+            plane[lpad + n..].fill(last);
+        }
+    }
+    let (rs, rf) = (ctx.rs, ctx.rf);
+    for img in 0..2 {
+        let plane = |p: usize| &pad[(img * 4 + p) * pw..(img * 4 + p + 1) * pw];
+        let o = |q: usize| (img * 7 + q) * TW;
+        conv_rows::<1, 4>(plane(0), [&ctx.sy], rp - rs, tws, &mut out[o(HP_Y)..o(HP_Y) + tws]);
+        conv_rows::<1, 4>(plane(1), [&ctx.scx], rp - rs, tws, &mut out[o(HP_CX)..o(HP_CX) + tws]);
+        conv_rows::<2, 2>(plane(2), [&ctx.scz1, &ctx.scz2], rp - rs, tws, &mut out[o(HP_CZ1)..o(HP_CZ2) + tws]);
+        conv_rows::<3, 2>(plane(3), [&ctx.fdg, &ctx.fddg, &ctx.fg], rp - rf, tws, &mut out[o(HP_DX)..o(HP_G) + tws]);
+    }
+}
+
+/// Eight f32 lanes; element-wise code on it compiles to one SIMD register op.
+#[derive(Clone, Copy)]
+struct F8([f32; LANES]);
+
+impl F8 {
+    #[inline(always)]
+    fn zero() -> F8 {
+        F8([0.0; LANES])
+    }
+    /// Loads `s[i..i + LANES]`. The bounds check is a debug assertion: callers index
+    /// within buffers whose sizes are fixed by construction (see `band_impl`).
+    #[inline(always)]
+    fn load(s: &[f32], i: usize) -> F8 {
+        debug_assert!(i + LANES <= s.len());
+        // SAFETY: in bounds (asserted in debug builds, guaranteed by the buffer layout).
+        F8(unsafe { (s.as_ptr().add(i) as *const [f32; LANES]).read_unaligned() })
+    }
+    /// `self += w * v`, lane-wise (no FMA, like the reference).
+    #[inline(always)]
+    fn mac(&mut self, w: f32, v: F8) {
+        for l in 0..LANES {
+            self.0[l] += w * v.0[l];
+        }
+    }
+}
+
+/// `out[j * TW + x] = sum_k wts[j][k] * src[off + x + k]` (x < n) for the N filters `wts`
+/// (same length), accumulated in tap order; `n` must be a multiple of `4 * LANES`.
+/// Columns are processed `C` lane blocks at a time so that `C * N` independent sums
+/// hide the add latency.
+#[inline(always)]
+fn conv_rows<const N: usize, const C: usize>(src: &[f32], wts: [&[f32]; N], off: usize, n: usize, out: &mut [f32]) {
+    let taps = wts[0].len();
+    assert!(n % (C * LANES) == 0 && n <= TW && src.len() >= off + n + taps - 1 && out.len() >= (N - 1) * TW + n);
+    assert!(wts.iter().all(|w| w.len() == taps));
+    let src = &src[off..];
+    let mut c = 0;
+    while c < n {
+        let mut acc = [[F8::zero(); C]; N];
+        for k in 0..taps {
+            for b in 0..C {
+                let v = F8::load(src, c + b * LANES + k);
+                for j in 0..N {
+                    acc[j][b].mac(wts[j][k], v);
+                }
+            }
+        }
+        for j in 0..N {
+            for b in 0..C {
+                let o = j * TW + c + b * LANES;
+                out[o..o + LANES].copy_from_slice(&acc[j][b].0);
+            }
+        }
+        c += C * LANES;
+    }
+}
+
+/// Vertical pass over `taps + 1` consecutive input rows (`offs[i]`) for two output
+/// rows at once: input row i contributes `w[i]` to the first and `w[i - 1]` to the
+/// second, so every ring load serves both (taps still accumulate in order).
+/// Returns the two rows' sums for the ring planes `planes`, plane j weighted by
+/// `wts[tap][wsel[j]]`.
+#[inline(always)]
+fn vsum2<const P: usize, const Q: usize>(
+    ring: &[f32],
+    offs: &[usize],
+    c: usize,
+    planes: [usize; P],
+    wts: &[[f32; Q]],
+    wsel: [usize; P],
+) -> ([F8; P], [F8; P]) {
+    let taps = wts.len();
+    let mut a0 = [F8::zero(); P];
+    let mut a1 = [F8::zero(); P];
+    let load = |base: usize| planes.map(|q| F8::load(ring, base + q * TW + c));
+    let v = load(offs[0]);
+    for j in 0..P {
+        a0[j].mac(wts[0][wsel[j]], v[j]);
+    }
+    for i in 1..taps {
+        let v = load(offs[i]);
+        let (w0, w1) = (&wts[i], &wts[i - 1]);
+        for j in 0..P {
+            a0[j].mac(w0[wsel[j]], v[j]);
+            a1[j].mac(w1[wsel[j]], v[j]);
+        }
+    }
+    let v = load(offs[taps]);
+    for j in 0..P {
+        a1[j].mac(wts[taps - 1][wsel[j]], v[j]);
+    }
+    (a0, a1)
+}
+
+/// Vertical filtering of output rows y and y + 1 (tile columns) from the ring of
+/// horizontally filtered rows, then colour difference, feature difference and the
+/// final FLIP error, into `out[..TW]` and `out[TW..2 TW]`.
+#[inline(always)]
+fn vrow2(ctx: &Ctx, ring: &[f32], tws: usize, offs_s: &[usize], offs_f: &[usize], out: &mut [f32]) {
+    // Bounds for the unchecked loads.
+    assert!(tws % LANES == 0 && tws <= TW && out.len() >= 2 * TW);
+    assert!(offs_s.len() == ctx.ws.len() + 1 && offs_f.len() == ctx.wf.len() + 1);
+    assert!(offs_s.iter().chain(offs_f).all(|&o| o + NH * TW <= ring.len()));
+    // Sums for the whole tile row pair: acc[row][plane] with planes
+    // 0..8 = Y, Cx, Cz1, Cz2 (reference), same (test); 8..16 = dx, ddx, dy, ddy (reference), same (test).
+    let mut acc = [[[0.0f32; TW]; 16]; 2];
+    let mut c = 0;
+    while c < tws {
+        let mut put = |j: usize, r: ([F8; 4], [F8; 4])| {
+            for k in 0..4 {
+                acc[0][j + k][c..c + LANES].copy_from_slice(&r.0[k].0);
+                acc[1][j + k][c..c + LANES].copy_from_slice(&r.1[k].0);
+            }
+        };
+        // Y and Cx of both images; then Cz1 and Cz2 of both images.
+        let (ya, yb) = vsum2(ring, offs_s, c, [HP_Y, HP_CX, 7 + HP_Y, 7 + HP_CX], &ctx.ws, [0, 1, 0, 1]);
+        let (za, zb) = vsum2(ring, offs_s, c, [HP_CZ1, HP_CZ2, 7 + HP_CZ1, 7 + HP_CZ2], &ctx.ws, [2, 3, 2, 3]);
+        put(0, ([ya[0], ya[1], za[0], za[1]], [yb[0], yb[1], zb[0], zb[1]]));
+        put(4, ([ya[2], ya[3], za[2], za[3]], [yb[2], yb[3], zb[2], zb[3]]));
+        // Features: x-derivative planes times G, G plane times y-derivatives (per image).
+        for img in 0..2 {
+            let o = img * 7;
+            let (a, b) = vsum2(ring, offs_f, c, [o + HP_DX, o + HP_DDX, o + HP_G, o + HP_G], &ctx.wf, [0, 0, 1, 2]);
+            put(8 + img * 4, (a, b));
+        }
+        c += LANES;
+    }
+    // Per-pixel colour / feature differences (long independent loop, so the pow
+    // latency chains of neighbouring lanes overlap).
+    let (cmax, pccmax) = (ctx.cmax, ctx.pccmax);
+    for (row, o) in acc.iter().zip(out.chunks_exact_mut(TW)) {
+        let [sy_r, scx_r, sz1_r, sz2_r, sy_t, scx_t, sz1_t, sz2_t, dx_r, ddx_r, dy_r, ddy_r, dx_t, ddx_t, dy_t, ddy_t] =
+            row;
+        for i in 0..tws {
+            let cd = color_error(
+                sy_r[i],
+                scx_r[i],
+                sz1_r[i] + sz2_r[i],
+                sy_t[i],
+                scx_t[i],
+                sz1_t[i] + sz2_t[i],
+                cmax,
+                pccmax,
+            );
+            let er = (dx_r[i] * dx_r[i] + dy_r[i] * dy_r[i]).sqrt();
+            let pr = (ddx_r[i] * ddx_r[i] + ddy_r[i] * ddy_r[i]).sqrt();
+            let et = (dx_t[i] * dx_t[i] + dy_t[i] * dy_t[i]).sqrt();
+            let pt = (ddx_t[i] * ddx_t[i] + ddy_t[i] * ddy_t[i]).sqrt();
+            let ed = (er - et).abs();
+            let pd = (pr - pt).abs();
+            let m = if ed > pd { ed } else { pd };
+            let fd = (std::f32::consts::FRAC_1_SQRT_2 * m).sqrt(); // ^gqf, gqf = 0.5
+            o[i] = fast_pow(cd, 1.0 - fd);
+        }
+    }
+}
+
+/// Colour error in [0, 1] between two CSF-filtered YCxCz colours.
+#[inline(always)]
+fn color_error(yr: f32, cxr: f32, czr: f32, yt: f32, cxt: f32, czt: f32, cmax: f32, pccmax: f32) -> f32 {
+    let (lr, ar, br) = ycxcz_to_lab_hunt(yr, cxr, czr);
+    let (lt, at, bt) = ycxcz_to_lab_hunt(yt, cxt, czt);
+    let hyab = (lr - lt).abs() + ((ar - at) * (ar - at) + (br - bt) * (br - bt)).sqrt();
+    let c = fast_pow(hyab, GQC);
+    if c < pccmax {
+        c * (GPT / pccmax)
+    } else {
+        GPT + ((c - pccmax) / (cmax - pccmax)) * (1.0 - GPT)
+    }
+}
+
+/// Filtered YCxCz -> XYZ -> linear RGB (clamped to the gamut [0,1]) -> XYZ -> CIELab,
+/// with the Hunt adjustment applied to a and b.
+#[inline(always)]
+fn ycxcz_to_lab_hunt(yc: f32, cx: f32, cz: f32) -> (f32, f32, f32) {
+    let yy = (yc + 16.0) / 116.0;
+    let x = (yy + cx / 500.0) * ILL[0];
+    let y = yy * ILL[1];
+    let z = (yy - cz / 200.0) * ILL[2];
+    let r = clamp01(XYZ2RGB[0][0] * x + XYZ2RGB[0][1] * y + XYZ2RGB[0][2] * z);
+    let g = clamp01(XYZ2RGB[1][0] * x + XYZ2RGB[1][1] * y + XYZ2RGB[1][2] * z);
+    let b = clamp01(XYZ2RGB[2][0] * x + XYZ2RGB[2][1] * y + XYZ2RGB[2][2] * z);
+    let fx = lab_f((RGB2XYZ[0][0] * r + RGB2XYZ[0][1] * g + RGB2XYZ[0][2] * b) * INV_ILL[0]);
+    let fy = lab_f((RGB2XYZ[1][0] * r + RGB2XYZ[1][1] * g + RGB2XYZ[1][2] * b) * INV_ILL[1]);
+    let fz = lab_f((RGB2XYZ[2][0] * r + RGB2XYZ[2][1] * g + RGB2XYZ[2][2] * b) * INV_ILL[2]);
+    let l = 116.0 * fy - 16.0;
+    let a = 500.0 * (fx - fy);
+    let bb = 200.0 * (fy - fz);
+    (l, 0.01 * l * a, 0.01 * l * bb)
+}
+
+#[inline(always)]
+fn lab_f(v: f32) -> f32 {
+    let lin = LAB_FACTOR * v + LAB_TERM;
+    let cbrt = fast_cbrt(v);
+    if v > LAB_DELTA_CUBE {
+        cbrt
+    } else {
+        lin
+    }
+}
+
+#[inline(always)]
+fn clamp01(v: f32) -> f32 {
+    let v = if v > 0.0 { v } else { 0.0 };
+    if v > 1.0 {
+        1.0
+    } else {
+        v
+    }
+}
+
+#[inline(always)]
+fn srgb_to_linear(s: f32) -> f32 {
+    let lin = s / 12.92;
+    let p = fast_pow((s + 0.055) / 1.055, 2.4);
+    if s <= 0.04045 {
+        lin
+    } else {
+        p
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Branch-free f32 log2 / exp2 / pow (vectorisable; ~1e-6 relative error)
+// ---------------------------------------------------------------------------
+
+/// log2(x) for finite x > 0 (subnormals handled).
+#[inline(always)]
+fn fast_log2(x: f32) -> f32 {
+    let sub = x < f32::MIN_POSITIVE;
+    let xs = if sub { x * 16777216.0 } else { x }; // 2^24
+    let bits = xs.to_bits();
+    let e = (bits >> 23) as i32 - if sub { 127 + 24 } else { 127 };
+    let m = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000); // [1, 2)
+    let big = m > std::f32::consts::SQRT_2;
+    let m = if big { m * 0.5 } else { m }; // [sqrt(1/2), sqrt(2))
+    let e = if big { e + 1 } else { e };
+    // ln(m) = 2 atanh(t), t = (m - 1) / (m + 1), |t| <= 0.1716.
+    let t = (m - 1.0) / (m + 1.0);
+    let t2 = t * t;
+    const K: f32 = 2.0 * std::f32::consts::LOG2_E;
+    let p = K + t2 * (K / 3.0 + t2 * (K / 5.0 + t2 * (K / 7.0 + t2 * (K / 9.0))));
+    e as f32 + t * p
+}
+
+/// 2^v, for v clamped to [-126, 127].
+#[inline(always)]
+fn fast_exp2(v: f32) -> f32 {
+    let v = if v > -126.0 { v } else { -126.0 };
+    let v = if v < 127.0 { v } else { 127.0 };
+    const MAGIC: f32 = 12582912.0; // 1.5 * 2^23: rounds to an integer
+    let tmp = v + MAGIC;
+    let n = tmp - MAGIC;
+    let ni = tmp.to_bits() as i32 - 0x4B40_0000;
+    let f = v - n; // [-0.5, 0.5]
+    const L1: f32 = std::f32::consts::LN_2;
+    const L2: f32 = L1 * L1 / 2.0;
+    const L3: f32 = L2 * L1 / 3.0;
+    const L4: f32 = L3 * L1 / 4.0;
+    const L5: f32 = L4 * L1 / 5.0;
+    const L6: f32 = L5 * L1 / 6.0;
+    const L7: f32 = L6 * L1 / 7.0;
+    let p = 1.0 + f * (L1 + f * (L2 + f * (L3 + f * (L4 + f * (L5 + f * (L6 + f * L7))))));
+    p * f32::from_bits(((ni + 127) as u32) << 23)
+}
+
+/// Cube root for x >= 0 (the reference uses powf(x, 1/3)): bit-level initial guess
+/// (|rel. error| < 4%), one Halley step in f32 (~1e-4) and one in f64 (~1e-12), so the
+/// result is the correctly rounded cube root in all but rare midpoint cases. Being
+/// exact here matters: FLIP's HyAB^0.7 amplifies 1-ulp Lab differences between
+/// nearly equal pixels.
+#[inline(always)]
+fn fast_cbrt(x: f32) -> f32 {
+    let y = f32::from_bits(x.to_bits() / 3 + 709958130); // (127 - 127/3 - 0.033) * 2^23
+    let y3 = y * y * y;
+    let y = y * (y3 + 2.0 * x) / (2.0 * y3 + x);
+    let (xd, yd) = (x as f64, y as f64);
+    let y3 = yd * yd * yd;
+    let y = (yd * (y3 + 2.0 * xd) / (2.0 * y3 + xd)) as f32;
+    if x > 0.0 {
+        y
+    } else {
+        0.0
+    }
+}
+
+/// x^y for x >= 0 (x <= 0 gives 0, or 1 when y == 0, like powf(0, y)).
+#[inline(always)]
+fn fast_pow(x: f32, y: f32) -> f32 {
+    let pos = x > 0.0;
+    let xs = if pos { x } else { 1.0 };
+    let r = fast_exp2(y * fast_log2(xs));
+    let zero_case = if y == 0.0 { 1.0 } else { 0.0 };
+    if pos {
+        r
+    } else {
+        zero_case
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Magma colour map (matplotlib "magma", as tabulated in the reference; RGB8 = round(255 c))
+// ---------------------------------------------------------------------------
+
+#[rustfmt::skip]
+static MAGMA_RGB8: [[u8; 3]; 256] = [
+    [0, 0, 4], [1, 0, 5], [1, 1, 6], [1, 1, 8], [2, 1, 9], [2, 2, 11], [2, 2, 13], [3, 3, 15],
+    [3, 3, 18], [4, 4, 20], [5, 4, 22], [6, 5, 24], [6, 5, 26], [7, 6, 28], [8, 7, 30], [9, 7, 32],
+    [10, 8, 34], [11, 9, 36], [12, 9, 38], [13, 10, 41], [14, 11, 43], [16, 11, 45], [17, 12, 47], [18, 13, 49],
+    [19, 13, 52], [20, 14, 54], [21, 14, 56], [22, 15, 59], [24, 15, 61], [25, 16, 63], [26, 16, 66], [28, 16, 68],
+    [29, 17, 71], [30, 17, 73], [32, 17, 75], [33, 17, 78], [34, 17, 80], [36, 18, 83], [37, 18, 85], [39, 18, 88],
+    [41, 17, 90], [42, 17, 92], [44, 17, 95], [45, 17, 97], [47, 17, 99], [49, 17, 101], [51, 16, 103], [52, 16, 105],
+    [54, 16, 107], [56, 16, 108], [57, 15, 110], [59, 15, 112], [61, 15, 113], [63, 15, 114], [64, 15, 116], [66, 15, 117],
+    [68, 15, 118], [69, 16, 119], [71, 16, 120], [73, 16, 120], [74, 16, 121], [76, 17, 122], [78, 17, 123], [79, 18, 123],
+    [81, 18, 124], [82, 19, 124], [84, 19, 125], [86, 20, 125], [87, 21, 126], [89, 21, 126], [90, 22, 126], [92, 22, 127],
+    [93, 23, 127], [95, 24, 127], [96, 24, 128], [98, 25, 128], [100, 26, 128], [101, 26, 128], [103, 27, 128], [104, 28, 129],
+    [106, 28, 129], [107, 29, 129], [109, 29, 129], [110, 30, 129], [112, 31, 129], [114, 31, 129], [115, 32, 129], [117, 33, 129],
+    [118, 33, 129], [120, 34, 129], [121, 34, 130], [123, 35, 130], [124, 35, 130], [126, 36, 130], [128, 37, 130], [129, 37, 129],
+    [131, 38, 129], [132, 38, 129], [134, 39, 129], [136, 39, 129], [137, 40, 129], [139, 41, 129], [140, 41, 129], [142, 42, 129],
+    [144, 42, 129], [145, 43, 129], [147, 43, 128], [148, 44, 128], [150, 44, 128], [152, 45, 128], [153, 45, 128], [155, 46, 127],
+    [156, 46, 127], [158, 47, 127], [160, 47, 127], [161, 48, 126], [163, 48, 126], [165, 49, 126], [166, 49, 125], [168, 50, 125],
+    [170, 51, 125], [171, 51, 124], [173, 52, 124], [174, 52, 123], [176, 53, 123], [178, 53, 123], [179, 54, 122], [181, 54, 122],
+    [183, 55, 121], [184, 55, 121], [186, 56, 120], [188, 57, 120], [189, 57, 119], [191, 58, 119], [192, 58, 118], [194, 59, 117],
+    [196, 60, 117], [197, 60, 116], [199, 61, 115], [200, 62, 115], [202, 62, 114], [204, 63, 113], [205, 64, 113], [207, 64, 112],
+    [208, 65, 111], [210, 66, 111], [211, 67, 110], [213, 68, 109], [214, 69, 108], [216, 69, 108], [217, 70, 107], [219, 71, 106],
+    [220, 72, 105], [222, 73, 104], [223, 74, 104], [224, 76, 103], [226, 77, 102], [227, 78, 101], [228, 79, 100], [229, 80, 100],
+    [231, 82, 99], [232, 83, 98], [233, 84, 98], [234, 86, 97], [235, 87, 96], [236, 88, 96], [237, 90, 95], [238, 91, 94],
+    [239, 93, 94], [240, 95, 94], [241, 96, 93], [242, 98, 93], [242, 100, 92], [243, 101, 92], [244, 103, 92], [244, 105, 92],
+    [245, 107, 92], [246, 108, 92], [246, 110, 92], [247, 112, 92], [247, 114, 92], [248, 116, 92], [248, 118, 92], [249, 120, 93],
+    [249, 121, 93], [249, 123, 93], [250, 125, 94], [250, 127, 94], [250, 129, 95], [251, 131, 95], [251, 133, 96], [251, 135, 97],
+    [252, 137, 97], [252, 138, 98], [252, 140, 99], [252, 142, 100], [252, 144, 101], [253, 146, 102], [253, 148, 103], [253, 150, 104],
+    [253, 152, 105], [253, 154, 106], [253, 155, 107], [254, 157, 108], [254, 159, 109], [254, 161, 110], [254, 163, 111], [254, 165, 113],
+    [254, 167, 114], [254, 169, 115], [254, 170, 116], [254, 172, 118], [254, 174, 119], [254, 176, 120], [254, 178, 122], [254, 180, 123],
+    [254, 182, 124], [254, 183, 126], [254, 185, 127], [254, 187, 129], [254, 189, 130], [254, 191, 132], [254, 193, 133], [254, 194, 135],
+    [254, 196, 136], [254, 198, 138], [254, 200, 140], [254, 202, 141], [254, 204, 143], [254, 205, 144], [254, 207, 146], [254, 209, 148],
+    [254, 211, 149], [254, 213, 151], [254, 215, 153], [254, 216, 154], [253, 218, 156], [253, 220, 158], [253, 222, 160], [253, 224, 161],
+    [253, 226, 163], [253, 227, 165], [253, 229, 167], [253, 231, 169], [253, 233, 170], [253, 235, 172], [252, 236, 174], [252, 238, 176],
+    [252, 240, 178], [252, 242, 180], [252, 244, 182], [252, 246, 184], [252, 247, 185], [252, 249, 187], [252, 251, 189], [252, 253, 191],
+];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Makes `band` take the generic (non-AVX2) path.
+    pub(super) static FORCE_GENERIC: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+    #[test]
+    fn generic_and_avx2_paths_agree() {
+        let (w, h) = (300, 70);
+        let a = lcg_image(w, h, 5);
+        let b: Vec<f32> = a.iter().map(|v| (v * 0.9 + 0.03).min(1.0)).collect();
+        let opts = FlipOptions::default();
+        let fast = ldr_flip(&a, &b, w, h, &opts);
+        let hd: Vec<f32> = a.iter().map(|v| v * v * 30.0).collect();
+        let hfast = hdr_flip(&hd, &b, w, h, &opts);
+        FORCE_GENERIC.store(true, std::sync::atomic::Ordering::Relaxed);
+        let slow = ldr_flip(&a, &b, w, h, &opts);
+        let hslow = hdr_flip(&hd, &b, w, h, &opts);
+        FORCE_GENERIC.store(false, std::sync::atomic::Ordering::Relaxed);
+        assert_eq!(fast.values, slow.values);
+        assert_eq!(hfast.map.values, hslow.map.values);
+        assert_eq!(hfast.exposure_map, hslow.exposure_map);
+    }
+
+    #[test]
+    fn linear_entry_point_matches_srgb_decoding() {
+        let (w, h) = (40, 30);
+        let a = lcg_image(w, h, 8);
+        let b = lcg_image(w, h, 9);
+        let dec = |v: &[f32]| -> Vec<f32> { v.iter().map(|&s| srgb_to_linear(s)).collect() };
+        let m1 = ldr_flip(&a, &b, w, h, &FlipOptions::default());
+        let m2 = ldr_flip_linear(&dec(&a), &dec(&b), w, h, &FlipOptions::default());
+        assert_eq!(m1.values, m2.values);
+    }
+
+    fn lcg_image(w: usize, h: usize, seed: u64) -> Vec<f32> {
+        let mut s = seed;
+        (0..w * h * 3)
+            .map(|_| {
+                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                (s >> 40) as f32 / (1u64 << 24) as f32
+            })
+            .collect()
+    }
+
+    #[test]
+    fn default_ppd_matches_reference_formula() {
+        let p = FlipOptions::default().pixels_per_degree;
+        assert!((p - 67.0206).abs() < 1e-3, "{p}");
+        assert_eq!(p, 0.7f32 * (3840.0f32 / 0.7f32) * (PI / 180.0));
+    }
+
+    #[test]
+    fn filter_sizes_and_normalisation() {
+        let c = Ctx::new(8, 8, default_ppd());
+        assert_eq!((c.rs, c.rf), (10, 9));
+        let s: f32 = c.sy.iter().sum();
+        assert!((s - 1.0).abs() < 1e-5);
+        let s: f32 = c.scx.iter().sum();
+        assert!((s - 1.0).abs() < 1e-5);
+        let s1: f32 = c.scz1.iter().sum();
+        let s2: f32 = c.scz2.iter().sum();
+        assert!((s1 * s1 + s2 * s2 - 1.0).abs() < 1e-5);
+        let pos: f32 = c.fdg.iter().filter(|&&v| v > 0.0).sum();
+        let neg: f32 = c.fddg.iter().filter(|&&v| v < 0.0).sum();
+        assert!((pos - 1.0).abs() < 1e-5 && (neg + 1.0).abs() < 1e-5);
+        assert!((c.cmax - 41.2).abs() < 0.5, "cmax {}", c.cmax);
+    }
+
+    #[test]
+    fn fast_pow_accuracy() {
+        // Worst relative error of fast_pow against f64 powf on [lo, hi).
+        let worst = |lo: f32, hi: f32, y: f32| {
+            let mut worst = 0.0f64;
+            let mut x = lo;
+            while x < hi {
+                let a = fast_pow(x, y) as f64;
+                let b = (x as f64).powf(y as f64);
+                if (1e-36..1e36).contains(&b) {
+                    worst = worst.max(((a - b) / b).abs());
+                }
+                x *= 1.000731;
+            }
+            worst
+        };
+        for &y in &[ONE_THIRD, GQC, 2.4, 0.05, 0.5, 1.0] {
+            // The range FLIP uses (colours, distances, errors); the error is dominated by the
+            // f32 rounding of y * log2(x) (a few ulp of a number up to ~20).
+            let w = worst(1e-6, 300.0, y);
+            assert!(w < 4e-6, "y = {y}: worst relative error {w}");
+            let w = worst(1e-30, 1e6, y);
+            assert!(w < 1e-5, "y = {y}: worst relative error {w}");
+        }
+        let mut worst = 0.0f64;
+        let mut x = 1e-6f32;
+        while x < 2.0 {
+            let a = fast_cbrt(x) as f64;
+            let b = (x as f64).cbrt();
+            worst = worst.max(((a - b) / b).abs());
+            x *= 1.000137;
+        }
+        assert!(worst < 6.5e-8, "cbrt worst relative error {worst}");
+        assert_eq!(fast_cbrt(0.0), 0.0);
+        assert_eq!(fast_pow(0.0, 0.7), 0.0);
+        assert_eq!(fast_pow(0.0, 0.0), 1.0);
+        assert!((fast_pow(1e-40, 0.5) as f64 - 1e-20).abs() < 1e-25);
+    }
+
+    #[test]
+    fn identical_images_give_zero() {
+        let (w, h) = (37, 23);
+        let a = lcg_image(w, h, 1);
+        let m = ldr_flip(&a, &a, w, h, &FlipOptions::default());
+        assert!(m.values.iter().all(|&v| v == 0.0));
+        assert_eq!(m.mean, 0.0);
+        let hd: Vec<f32> = a.iter().map(|v| v * 20.0).collect();
+        let r = hdr_flip(&hd, &hd, w, h, &FlipOptions::default());
+        assert_eq!(r.map.mean, 0.0);
+        assert!(r.exposures.len() >= 2);
+    }
+
+    #[test]
+    fn errors_in_unit_range_and_tiny_images() {
+        for &(w, h) in &[(1, 1), (1, 7), (5, 1), (3, 40), (130, 3)] {
+            let a = lcg_image(w, h, 2);
+            let b = lcg_image(w, h, 3);
+            let m = ldr_flip(&a, &b, w, h, &FlipOptions::default());
+            assert!(m.values.iter().all(|v| (0.0..=1.0).contains(v)), "{w}x{h}");
+            assert!(m.mean > 0.0);
+        }
+        for &ppd in &[0.5f32, 5.0, 300.0] {
+            let (w, h) = (45, 33);
+            let a = lcg_image(w, h, 4);
+            let b = lcg_image(w, h, 5);
+            let m = ldr_flip(&a, &b, w, h, &FlipOptions { pixels_per_degree: ppd });
+            assert!(m.values.iter().all(|v| (0.0..=1.0).contains(v)), "ppd {ppd}");
+        }
+        let e = ldr_flip(&[], &[], 0, 5, &FlipOptions::default());
+        assert_eq!(e.mean, 0.0);
+    }
+
+    #[test]
+    fn black_vs_white_is_max() {
+        let (w, h) = (16, 16);
+        let a = vec![0.0f32; w * h * 3];
+        let b = vec![1.0f32; w * h * 3];
+        let m = ldr_flip(&a, &b, w, h, &FlipOptions::default());
+        assert!(m.mean > 0.9 && m.mean <= 1.0, "{}", m.mean);
+    }
+
+    #[test]
+    fn magma_endpoints() {
+        let rgb = magma_rgb8(&[0.0, 1.0, -1.0, f32::NAN, 2.0]);
+        assert_eq!(&rgb[0..3], &[0, 0, 4]);
+        assert_eq!(&rgb[3..6], &[252, 253, 191]);
+        assert_eq!(&rgb[6..9], &[0, 0, 4]);
+        assert_eq!(&rgb[9..12], &[0, 0, 4]);
+        assert_eq!(&rgb[12..15], &[252, 253, 191]);
+    }
+}
