@@ -1,7 +1,7 @@
 //! The CPU lighting resolve: light a (possibly packed) G-buffer the way a tiled deferred renderer would, and count
 //! the work.
 //!
-//! Input: a [`GBuffer`], view-space [`Light`]s, an [`EdgeMask`] (which pixels are shaded per sample) and a
+//! Input: a [`GBuffer`](crate::GBuffer), view-space [`Light`]s, an [`EdgeMask`] (which pixels are shaded per sample) and a
 //! [`ResolveConfig`]. Output: a linear HDR image plus [`ResolveStats`] (light-sample pairs tested and lit, shading
 //! evaluations, sanitised values, milliseconds per stage) and the per-pixel light-evaluation counts for a heatmap.
 //!
@@ -26,7 +26,10 @@ mod split;
 mod surface;
 mod worklist;
 
-pub use config::{Brdf, Culling, Falloff, ResolveConfig, Schedule, DEFAULT_DEPTH_SLICES, DEFAULT_TILE_SIZE};
+pub use config::{
+    Brdf, Culling, Falloff, ResolveConfig, Schedule, DEFAULT_DEPTH_SLICES, DEFAULT_TILE_SIZE, MAX_DEPTH_SLICES,
+    MAX_TILE_SIZE,
+};
 pub use kernel::instruction_set;
 pub use reference::{reference, reference_per_sample};
 pub use split::{ResolveInput, SplitSamples};
@@ -78,7 +81,7 @@ pub struct Resolved {
     pub lights_per_pixel: Vec<u32>,
 }
 
-/// Lights `gb` (a [`GBuffer`], or a [`SplitSamples`] copy of one: the same image, faster for MSAA) with `lights`,
+/// Lights `gb` (a [`GBuffer`](crate::GBuffer), or a [`SplitSamples`] copy of one: the same image, faster for MSAA) with `lights`,
 /// shading per sample where `mask` says so, as configured by `cfg`. Runs on rayon's current thread pool (install
 /// a local pool to choose the thread count). Never returns NaN or Inf pixels.
 pub fn resolve<'a>(

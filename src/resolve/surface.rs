@@ -44,7 +44,7 @@ pub fn roughness_from_power(p: f32) -> f32 {
 
 /// How many values were replaced because they were NaN, infinite or out of range (per attribute), plus lights
 /// dropped and output pixels that had to be zeroed. The resolve counts only the attributes its BRDF reads
-/// ([`Reads`]); [`SurfaceReader::read`] (the reference) reads and counts every attribute.
+/// (`Reads`); the reference reads and counts every attribute.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct SanitizedCounts {
     /// Covered samples treated as background: position NaN/Inf or not in front of the camera.
@@ -55,7 +55,7 @@ pub struct SanitizedCounts {
     pub albedo: u64,
     /// Specular amounts NaN/Inf or negative.
     pub specular: u64,
-    /// Specular powers NaN/Inf, negative or above [`MAX_SPECULAR_POWER`].
+    /// Specular powers NaN/Inf, negative or above 1e6 (`MAX_SPECULAR_POWER`).
     pub specular_power: u64,
     /// Roughness NaN/Inf or outside [0, 1].
     pub roughness: u64,
