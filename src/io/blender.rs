@@ -367,8 +367,8 @@ impl<'a> Channels<'a> {
 /// Where the camera of a world-space dump came from.
 pub(super) struct CameraChoice {
     pub(super) camera: Option<Camera>,
-    /// "sidecar", "fit" or "unknown" (for [`Loaded::camera_source`]).
-    pub(super) source: String,
+    /// Sidecar, fit or unknown (for [`Loaded::camera_source`]).
+    pub(super) source: super::CameraSource,
     /// The same with detail, for source notes (e.g. the fit's reprojection error).
     pub(super) detail: String,
 }
@@ -405,7 +405,7 @@ pub(super) fn resolve_camera(
             }
             detail.push_str(&format!(", median reprojection error of the position pass {err:.3} px"));
         }
-        return Ok(CameraChoice { camera: Some(camera), source: "sidecar".into(), detail });
+        return Ok(CameraChoice { camera: Some(camera), source: super::CameraSource::Sidecar, detail });
     }
     if let Some(p) = world_pos {
         let (mut ps, mut qs) = (Vec::new(), Vec::new());
@@ -418,19 +418,23 @@ pub(super) fn resolve_camera(
         match super::camera_fit::fit_camera(&ps, &qs, w, h) {
             Some((camera, rms)) if rms <= FIT_MAX_RMS_PX => {
                 let detail = format!("camera fitted to {} positions, RMS reprojection error {rms:.3} px", ps.len());
-                return Ok(CameraChoice { camera: Some(camera), source: "fit".into(), detail });
+                return Ok(CameraChoice { camera: Some(camera), source: super::CameraSource::Fit, detail });
             }
             Some((_, rms)) => {
                 let detail = format!("camera fit rejected: RMS reprojection error {rms:.2} px > {FIT_MAX_RMS_PX} px");
-                return Ok(CameraChoice { camera: None, source: "unknown".into(), detail });
+                return Ok(CameraChoice { camera: None, source: super::CameraSource::Unknown, detail });
             }
             None => {
                 let detail = "camera fit failed: positions too few or degenerate (coplanar or collinear)".into();
-                return Ok(CameraChoice { camera: None, source: "unknown".into(), detail });
+                return Ok(CameraChoice { camera: None, source: super::CameraSource::Unknown, detail });
             }
         }
     }
-    Ok(CameraChoice { camera: None, source: "unknown".into(), detail: "no sidecar camera and no position pass".into() })
+    Ok(CameraChoice {
+        camera: None,
+        source: super::CameraSource::Unknown,
+        detail: "no sidecar camera and no position pass".into(),
+    })
 }
 
 /// Median distance in pixels between the projection of covered world positions and their pixel centres (over a

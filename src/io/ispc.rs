@@ -349,7 +349,7 @@ fn decode(h: &Header, chunk: &[u8], path: &Path) -> Result<Loaded> {
         format: SourceFormat::IspcBin,
         sources,
         lights: Some(lights),
-        camera_source: "file".into(),
+        camera_source: super::CameraSource::File,
         compression: None,
         sanitized: Vec::new(),
     })

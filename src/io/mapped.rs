@@ -106,7 +106,7 @@ pub fn read(raw: &RawImage, path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         format: SourceFormat::Mapped,
         sources,
         lights: None,
-        camera_source: "unknown".into(),
+        camera_source: super::CameraSource::Unknown,
         compression: Some((raw.compression.clone(), raw.lossy)),
         sanitized: Vec::new(),
     })

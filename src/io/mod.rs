@@ -63,6 +63,28 @@ pub struct AttributeSource {
     pub note: Option<String>,
 }
 
+crate::named_enum! {
+    /// Where a loaded G-buffer's camera came from (`gbuf info` prints it; JSON `camera.source`).
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub enum CameraSource: "camera source" {
+        /// Stored in the dump itself (canonical header, ISPC projection).
+        File => "file",
+        /// The sidecar's camera.
+        Sidecar => "sidecar",
+        /// Fitted to the dump's position pass (least squares over pixel rays).
+        Fit => "fit",
+        /// No camera: the dump has none and none could be recovered.
+        Unknown => "unknown",
+    }
+}
+
+impl PartialEq<&str> for CameraSource {
+    fn eq(&self, other: &&str) -> bool {
+        self.name() == *other
+    }
+}
+
 /// A loaded dump: the G-buffer plus what came with it.
 #[derive(Clone, Debug)]
 pub struct Loaded {
@@ -74,8 +96,8 @@ pub struct Loaded {
     pub sources: Vec<AttributeSource>,
     /// Lights from the sidecar or the dump itself (ISPC), in view space; `None` when the dump has none.
     pub lights: Option<Vec<Light>>,
-    /// Where the camera came from: "file", "sidecar", "fit", or "unknown".
-    pub camera_source: String,
+    /// Where the camera came from.
+    pub camera_source: CameraSource,
     /// Compression of the file and whether it is lossy.
     pub compression: Option<(String, bool)>,
     /// NaN / Inf values found (and replaced by finite values) per attribute: (attribute, nan, inf).
@@ -160,13 +182,13 @@ fn read_exr(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
     if canonical::matches(raw) {
         let gbuffer = canonical::from_raw(raw, path)?;
         let sources = canonical::sources(raw, &gbuffer);
-        let camera_source = if gbuffer.camera.is_some() { "file" } else { "unknown" };
+        let camera_source = if gbuffer.camera.is_some() { CameraSource::File } else { CameraSource::Unknown };
         let mut loaded = Loaded {
             gbuffer,
             format: SourceFormat::Canonical,
             sources,
             lights: None,
-            camera_source: camera_source.into(),
+            camera_source,
             compression: Some((raw.compression.clone(), raw.lossy)),
             sanitized: Vec::new(),
         };
@@ -221,7 +243,7 @@ fn finish(mut loaded: Loaded, path: &Path, side: Option<(&Sidecar, &Path)>, opts
             }
             if loaded.gbuffer.camera.is_none() {
                 loaded.gbuffer.camera = Some(c.to_camera());
-                loaded.camera_source = "sidecar".into();
+                loaded.camera_source = CameraSource::Sidecar;
             }
         }
         if loaded.lights.is_none() && !s.lights.is_empty() {

@@ -57,8 +57,8 @@ impl Serialize for AttributeMap {
 /// The camera and where it came from.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct CameraInfo {
-    /// "file", "sidecar", "fit" or "unknown".
-    pub source: String,
+    /// Where it came from.
+    pub source: super::CameraSource,
     /// The parameters (sidecar form), when known.
     #[serde(flatten)]
     pub params: Option<SidecarCamera>,
@@ -171,10 +171,7 @@ pub fn info(loaded: &Loaded, file: &std::path::Path) -> Info {
         background_samples: gb.background_samples() as u64,
         total_samples: gb.len() as u64,
         compression: loaded.compression.as_ref().map(|(m, l)| CompressionInfo { method: m.clone(), lossy: *l }),
-        camera: CameraInfo {
-            source: loaded.camera_source.clone(),
-            params: gb.camera.as_ref().map(SidecarCamera::from_camera),
-        },
+        camera: CameraInfo { source: loaded.camera_source, params: gb.camera.as_ref().map(SidecarCamera::from_camera) },
         lights: loaded.lights.as_ref().map(Vec::len),
     }
 }
