@@ -316,7 +316,7 @@ fn print_human(r: &Report) -> anyhow::Result<()> {
         writeln!(out, "sanitised: {s:?}")?;
     }
     if let Some(max) = r.heatmap_max {
-        writeln!(out, "heatmap: black = 0, white = {max} light evaluations per pixel")?;
+        writeln!(out, "heatmap: dark violet = 0, yellow = {max} light evaluations per pixel (viridis-like map)")?;
     }
     Ok(())
 }
