@@ -106,7 +106,7 @@ pub fn figures(gb: &GBuffer, out: &SweepOutput) -> Result<(Vec<Attachment>, Vec<
     let mut files = Vec::new();
     let mut figs = Vec::new();
     let mut png = |name: &str, img: RgbImage, caption: String, files: &mut Vec<Attachment>| -> Result<()> {
-        files.push(Attachment { name: name.into(), bytes: plot::png_bytes(&fit(img))? });
+        files.push(Attachment { name: name.into(), bytes: crate::base::picture::png_bytes(&fit(img))? });
         figs.push(Figure { file: name.into(), caption });
         Ok(())
     };

@@ -3,7 +3,6 @@
 //! raw heatmap pictures. Text uses an embedded TrueType font (Go Regular, BSD-3-Clause, `assets/fonts/`) through
 //! plotters' `ab_glyph` feature, so no system font is needed.
 
-pub use crate::base::picture::{png_bytes, write_png};
 use crate::error::Result;
 use ab_glyph::{point, Font, FontRef, ScaleFont};
 use image::RgbImage;
@@ -497,7 +496,7 @@ mod tests {
         let dark =
             |ys: std::ops::Range<u32>| img.enumerate_pixels().filter(move |(_, y, p)| ys.contains(y) && p.0[0] < 100);
         assert!(dark(0..2).count() == 0 && dark(6..34).count() > 50, "title placed");
-        assert_eq!(image::load_from_memory(&png_bytes(&img).unwrap()).unwrap().height(), 320);
+        assert_eq!(image::load_from_memory(&crate::base::picture::png_bytes(&img).unwrap()).unwrap().height(), 320);
         assert!(plot().to_png_image(100, 50).is_err(), "too small");
     }
 
