@@ -19,7 +19,7 @@
 //! (45×): the 2-thread plain resolve is the figure most sensitive to the load.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use gbuf::analysis::sweep::{sweep, SweepConfig};
+use gbuf::analysis::sweep::{sweep, FlipRows, SweepConfig};
 use gbuf::detect::{detect, Detector, DetectorConfig};
 use gbuf::layout::Layout;
 use gbuf::resolve::{reference, resolve, ResolveConfig};
@@ -45,6 +45,9 @@ fn benches(c: &mut Criterion) {
         culling: Vec::new(),
         resolve: resolve_cfg,
         runs: 1,
+        // FLIP off: the bench measures the sweep's own work against a plain resolve.
+        flip: FlipRows::None,
+        viewing: Default::default(),
     };
     let size = format!("{W}x{H}x{SAMPLES}");
     let mut group = c.benchmark_group("report");

@@ -43,7 +43,7 @@ pub enum ToneMap {
 
 crate::named_enum! {
     /// The curve of a [`ToneMap`], without its exposure (what `--tonemap` names).
-    #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
     #[serde(rename_all = "kebab-case")]
     pub enum ToneCurve: "tone map" {
         /// Reinhard per channel (the default).

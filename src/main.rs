@@ -35,6 +35,8 @@ enum Command {
     Report(cli::report::Args),
     /// Find the best layout under a byte budget.
     Budget(cli::budget::Args),
+    /// Merge the report.json of several `gbuf report` runs (one per frame) into one report.
+    Merge(cli::merge::Args),
 }
 
 fn main() -> ExitCode {
@@ -50,6 +52,7 @@ fn main() -> ExitCode {
         Command::Resolve(a) => cli::resolve::run(a),
         Command::Report(a) => cli::report::run(a),
         Command::Budget(a) => cli::budget::run(a),
+        Command::Merge(a) => cli::merge::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,8 +1,17 @@
-//! Small shared helpers: atomic file output and a deterministic random number generator.
+//! Small shared helpers: atomic file output, a deterministic random number generator, and reading back the
+//! `null`s that JSON writes for non-finite numbers.
 
 use crate::error::{Error, Result};
 use std::io::Write;
 use std::path::Path;
+
+/// Deserializes an `f64` that JSON may hold as `null` (serde_json writes NaN and ±∞ as `null`): `null` reads back
+/// as NaN, so a report written with a non-finite number still reads back (`gbuf merge`). Use with
+/// `#[serde(deserialize_with = "crate::util::f64_or_nan")]`.
+pub fn f64_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+    use serde::Deserialize;
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
 
 /// Writes a file atomically: the bytes go to a temporary file in the same directory, which is then renamed over
 /// `path`. A failure leaves whatever was at `path` untouched.

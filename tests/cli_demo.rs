@@ -24,7 +24,7 @@ fn demo_writes_the_report_folder() {
         .unwrap();
     assert!(o.status.success(), "stderr: {}", String::from_utf8_lossy(&o.stderr));
     let json: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is JSON");
-    assert_eq!(json["width"], 64);
+    assert_eq!(json["frames"][0]["width"], 64);
     assert_eq!(json["rows"].as_array().unwrap().len(), 9);
     for key in [
         "layout",
@@ -32,8 +32,11 @@ fn demo_writes_the_report_folder() {
         "detector",
         "normal_mean_deg",
         "normal_max_deg",
-        "psnr_db",
-        "rmse",
+        "layout_error",
+        "aa_error",
+        "total_error",
+        "bandwidth_mb",
+        "resolve_pass_ms",
         "shading_fraction",
         "encode_ms",
         "decode_ms",
@@ -51,7 +54,7 @@ fn demo_writes_the_report_folder() {
         "depth_range",
         "pruned_layout",
     ] {
-        assert!(json["needs"].get(key).is_some(), "needs lacks {key}");
+        assert!(json["frames"][0]["needs"].get(key).is_some(), "needs lacks {key}");
     }
     for f in ["report.md", "report.csv", "report.json", "error_vs_bytes.svg"] {
         assert!(out.join(f).is_file(), "{f} missing");

@@ -2,7 +2,7 @@
 //! consistent with the numbers, and the needs analysis of a real scene.
 
 use gbuf::analysis::pareto::dominates;
-use gbuf::analysis::sweep::{sweep, SweepConfig};
+use gbuf::analysis::sweep::{sweep, FlipRows, SweepConfig};
 use gbuf::detect::{Detector, DetectorConfig};
 use gbuf::layout::Layout;
 use gbuf::resolve::ResolveConfig;
@@ -30,6 +30,8 @@ fn sweep_rows_match_layouts_and_lossless_is_exact() {
         culling: vec![],
         resolve: ResolveConfig::default(),
         runs: 2,
+        flip: FlipRows::Decisive,
+        viewing: Default::default(),
     };
     let mut calls = 0;
     let out = sweep(&gb, &lights, &cfg, &mut |done, total, _| {
@@ -44,7 +46,14 @@ fn sweep_rows_match_layouts_and_lossless_is_exact() {
         assert_eq!(r.bytes_per_sample as usize, l.bytes_per_sample(), "{}", r.layout);
         assert_eq!(r.footprint_bytes, l.footprint_bytes(gb.width, gb.height, gb.samples));
         assert!(r.error.is_none(), "{}: {:?}", r.layout, r.error);
-        assert!(r.rmse.is_some() && r.encode_ms.is_some() && r.decode_ms.is_some() && r.resolve_ms.is_some());
+        assert!(r.layout_error.is_some() && r.aa_error.is_some() && r.total_error.is_some());
+        assert!(r.encode_ms.is_some() && r.decode_ms.is_some() && r.resolve_ms.is_some());
+        assert_eq!(r.resolve_pass_ms, Some(r.decode_ms.unwrap() + r.resolve_ms.unwrap()));
+        // FLIP where it decides: the first detector's rows, and every detector's AA error.
+        let first = r.detector == "lauritzen";
+        assert_eq!(r.layout_error.unwrap().flip_ldr.is_some(), first, "{} × {}", r.layout, r.detector);
+        assert!(r.aa_error.unwrap().flip_ldr.is_some() && r.aa_error.unwrap().flip_hdr.is_some());
+        assert!(r.bandwidth_mb.tiled > 0.0 && r.bandwidth_mb.quad.unwrap() > r.bandwidth_mb.tiled / 2.0);
         assert_eq!(r.timings["encode"].runs, 2);
         let sf = r.shading_fraction.unwrap();
         assert!((0.0..=1.0).contains(&sf));
@@ -57,18 +66,48 @@ fn sweep_rows_match_layouts_and_lossless_is_exact() {
     let exact = out.rows.iter().find(|r| r.layout == "reference-f32" && r.detector == "ssaa").unwrap();
     let direct = gbuf::resolve::resolve(&gb, &lights, &gbuf::detect::baselines::ssaa(&gb), &cfg.resolve).unwrap();
     let e0 = gbuf::measure::image::compare(&out.reference, &direct.image);
-    assert_eq!(exact.rmse, Some(e0.rmse), "the f32 roundtrip is bit-exact");
-    assert!(exact.rel_mse.unwrap() <= RESOLVE_VS_REFERENCE_REL_MSE, "{:?}", exact.rel_mse);
+    let total = exact.total_error.unwrap();
+    assert_eq!(total.rmse, e0.rmse, "the f32 roundtrip is bit-exact");
+    assert!(total.rel_mse <= RESOLVE_VS_REFERENCE_REL_MSE, "{total:?}");
     assert_eq!(exact.normal_max_deg, Some(0.0));
+    // The lossless layout has layout error 0 with every detector, by construction; its total error is the AA
+    // error alone.
+    for r in out.rows.iter().filter(|r| r.layout == "reference-f32") {
+        let l = r.layout_error.unwrap();
+        assert_eq!((l.rmse, l.max_abs), (0.0, 0.0), "{}", r.detector);
+        assert_eq!(r.total_error.unwrap().rmse, r.aa_error.unwrap().rmse, "{}", r.detector);
+        if let Some(f) = l.flip_ldr {
+            assert_eq!((f, l.flip_hdr), (0.0, Some(0.0)));
+        }
+    }
+    // The AA error is the detector's, the same for every layout; shading more samples aliases less.
+    let aa = |d: &str| out.detectors.iter().find(|x| x.detector == d).unwrap().aa_error.unwrap();
+    for r in &out.rows {
+        assert_eq!(r.aa_error.unwrap(), aa(&r.detector));
+    }
+    assert!(aa("ssaa").rmse < aa("lauritzen").rmse);
     // A lossy layout really is lossy.
     let min8 = out.rows.iter().find(|r| r.layout == "minimal-8" && r.detector == "ssaa").unwrap();
-    assert!(min8.normal_max_deg.unwrap() > 0.0 && min8.rmse.unwrap() > exact.rmse.unwrap());
-    // Pareto flags agree with the numbers.
-    let pts: Vec<(f64, f64)> = out.rows.iter().map(|r| (f64::from(r.bytes_per_sample), r.rmse.unwrap())).collect();
-    for (i, r) in out.rows.iter().enumerate() {
-        let dominated = pts.iter().any(|&q| dominates(q, pts[i]));
-        assert_eq!(r.pareto.bytes, !dominated, "{} × {}", r.layout, r.detector);
+    assert!(min8.normal_max_deg.unwrap() > 0.0 && min8.layout_rmse().unwrap() > 0.0);
+    // Pareto flags agree with the numbers, recomputed from the rows: layout error against bytes and against the
+    // resolve pass time.
+    for (axis, x) in [("bytes", 0), ("time", 1)] {
+        let pts: Vec<(f64, f64)> = out
+            .rows
+            .iter()
+            .map(|r| {
+                let c = if x == 0 { f64::from(r.bytes_per_sample) } else { r.resolve_pass_ms.unwrap() };
+                (c, r.layout_rmse().unwrap())
+            })
+            .collect();
+        for (i, r) in out.rows.iter().enumerate() {
+            let dominated = pts.iter().any(|&q| dominates(q, pts[i]));
+            let flag = if x == 0 { r.pareto.bytes } else { r.pareto.time };
+            assert_eq!(flag, !dominated, "{axis}: {} × {}", r.layout, r.detector);
+        }
     }
+    // The lossless layout is on the bytes front (nothing has less error), whatever its size.
+    assert!(out.rows.iter().any(|r| r.layout == "reference-f32" && r.pareto.bytes));
     assert_eq!(out.maps.len(), 3);
     assert_eq!(out.masks.len(), 2);
     assert_eq!(out.lights_per_pixel.as_ref().map(Vec::len), Some(gb.pixel_count()));
@@ -87,13 +126,15 @@ fn failing_rows_say_why() {
         culling: vec![],
         resolve: ResolveConfig::default(),
         runs: 1,
+        flip: FlipRows::None,
+        viewing: Default::default(),
     };
     let out = sweep(&gb, &lights, &cfg, &mut |_, _, _| {}).unwrap();
     let id = out.rows.iter().find(|r| r.detector == "id").unwrap();
     assert!(id.error.as_deref().is_some_and(|e| e.contains("detector")), "{:?}", id.error);
-    assert!(id.rmse.is_none() && !id.pareto.bytes);
+    assert!(id.layout_error.is_none() && !id.pareto.bytes);
     let ok = out.rows.iter().find(|r| r.detector == "lauritzen").unwrap();
-    assert!(ok.rmse.is_some());
+    assert!(ok.layout_error.is_some() && ok.layout_error.unwrap().flip_ldr.is_none(), "--flip none");
     assert!(ok.precision.is_none(), "no object IDs, no ground truth");
     assert!(ok.note.as_deref().is_some_and(|n| n.contains("ground truth")));
 }

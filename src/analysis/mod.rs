@@ -5,6 +5,7 @@
 //! Input: a G-buffer (loaded or rendered) with its lights. Output: rows of measured numbers (errors against the
 //! unquantized reference, measured times) and the Pareto front; `report` writes them for a person or a script.
 
+pub mod aggregate;
 pub mod budget;
 pub mod needs;
 pub mod pareto;
@@ -33,26 +34,27 @@ pub struct ReportInput<'a> {
     pub lights_source: String,
 }
 
-/// Image RMSE of `layout` on `gb` lit by `lights` (roundtrip, detector, resolve) against `reference`.
+/// The layout error of `layout` on `gb` lit by `lights`: the image of its roundtrip (first detector of `cfg`,
+/// resolve) against `exact`, the exact G-buffer lit the same way.
 pub fn layout_image_error(
     gb: &GBuffer,
     lights: &[Light],
     layout: &Layout,
-    reference: &HdrImage,
+    exact: &HdrImage,
     cfg: &SweepConfig,
 ) -> Result<crate::measure::image::ImageError> {
     let decoded = layout.roundtrip(gb)?;
     let det = cfg.detectors.first().copied().unwrap_or(crate::detect::Detector::Lauritzen);
     let mask = crate::detect::detect(&decoded, det, &cfg.detector_config)?;
     let res = crate::resolve::resolve(&decoded, lights, &mask, &cfg.resolve)?;
-    Ok(crate::measure::image::compare(reference, &res.image))
+    Ok(crate::measure::image::compare(exact, &res.image))
 }
 
 /// The lossless measuring baseline among the built-ins: never picked as the layout to prune when another one can
 /// be pruned, since nobody ships it.
 pub const LOSSLESS_BASELINE: &str = "reference-f32";
 
-/// Picks the layout to prune — among the swept layouts whose pruning saves bytes, the one with the least image
+/// Picks the layout to prune — among the swept layouts whose pruning saves bytes, the one with the least layout
 /// error in the sweep (ties → the larger saving; the lossless baseline only when nothing else can be pruned) —
 /// prunes it and measures the pruned layout's error.
 pub fn pruned_layout(
@@ -63,7 +65,10 @@ pub fn pruned_layout(
 ) -> Option<(PrunedLayout, Layout)> {
     let first_det = cfg.detectors.first()?.name();
     let base_rmse = |name: &str| {
-        out.rows.iter().find(|r| r.layout == name && r.detector == first_det && r.error.is_none()).and_then(|r| r.rmse)
+        out.rows
+            .iter()
+            .find(|r| r.layout == name && r.detector == first_det && r.error.is_none())
+            .and_then(|r| r.layout_rmse())
     };
     let mut best: Option<(u32, f64, &Layout, crate::layout::LayoutSpec, Vec<String>)> = None;
     for l in &cfg.layouts {
@@ -98,12 +103,15 @@ pub fn pruned_layout(
         psnr_db: None,
         note: None,
     };
-    match layout_image_error(input.gbuffer, input.lights, &layout, &out.reference, cfg) {
-        Ok(e) => {
-            p.rmse = Some(e.rmse);
-            p.psnr_db = Some(e.psnr_db);
-        }
-        Err(e) => p.note = Some(format!("could not measure the pruned layout: {e}")),
+    match out.exact.first().and_then(Option::as_ref) {
+        Some(exact) => match layout_image_error(input.gbuffer, input.lights, &layout, exact, cfg) {
+            Ok(e) => {
+                p.rmse = Some(e.rmse);
+                p.psnr_db = Some(e.psnr_db);
+            }
+            Err(e) => p.note = Some(format!("could not measure the pruned layout: {e}")),
+        },
+        None => p.note = Some("the exact G-buffer could not be lit: the pruned layout's error is unknown".into()),
     }
     if p.changes.is_empty() {
         p.note = Some("the scene uses everything every layout stores: nothing to leave out".into());

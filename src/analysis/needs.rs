@@ -27,7 +27,7 @@ pub const MATERIAL_PARAMETERS: [Attribute; 4] =
     [Attribute::Specular, Attribute::SpecularPower, Attribute::Roughness, Attribute::Metallic];
 
 /// Bits a depth encoding needs over the depth range in use.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct DepthBits {
     /// The relative precision aimed for.
     pub relative_precision: f64,
@@ -38,7 +38,7 @@ pub struct DepthBits {
 }
 
 /// The layout that leaves out what the scene does not need (filled in by `analysis::prune`).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct PrunedLayout {
     /// Name of the pruned layout.
     pub name: String,
@@ -52,18 +52,19 @@ pub struct PrunedLayout {
     pub bytes_saved: u32,
     /// What was dropped or changed, one line each.
     pub changes: Vec<String>,
-    /// Image RMSE of the base layout against the reference (when measured).
+    /// Layout error (image RMSE against the exact G-buffer lit with the same detector) of the base layout, when
+    /// measured.
     pub base_rmse: Option<f64>,
-    /// Image RMSE of the pruned layout against the reference (when measured).
+    /// Layout error (RMSE) of the pruned layout, when measured.
     pub rmse: Option<f64>,
-    /// PSNR of the pruned layout in dB (when measured).
+    /// Layout error as PSNR in dB (peak: the exact image's largest channel value), when measured.
     pub psnr_db: Option<f64>,
     /// Why a measurement is missing, if one is.
     pub note: Option<String>,
 }
 
 /// The scene-needs analysis.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct Needs {
     /// Covered (surface) samples looked at.
     pub covered_samples: usize,

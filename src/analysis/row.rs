@@ -1,20 +1,26 @@
 //! What a report holds: one [`Row`] per layout × detector (× culling) run, measured [`Timing`]s, and the
 //! [`Report`] that the writers turn into `report.md`, `report.csv` and `report.json`.
 
+use crate::analysis::aggregate::{AggregateRow, BudgetChoice, DetectorAggregate, Over};
 use crate::analysis::needs::Needs;
 use crate::analysis::pareto;
-use serde::Serialize;
+use crate::analysis::sweep::{DetectorResult, FlipRows};
+use crate::measure::image::{ErrorSet, Viewing};
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
 /// A measured duration over several runs: median and spread.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Timing {
     /// Median over the runs, in milliseconds.
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
     pub median_ms: f64,
     /// Fastest run.
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
     pub min_ms: f64,
     /// Slowest run.
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
     pub max_ms: f64,
     /// Number of runs.
     pub runs: usize,
@@ -49,18 +55,43 @@ pub fn time_runs<T, E>(runs: usize, mut f: impl FnMut() -> Result<T, E>) -> Resu
     Ok((last.expect("at least one run"), timing))
 }
 
-/// Pareto membership of a row.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+/// Pareto membership of a row. Both fronts rank by the *layout error* (RMSE of the image lit from the unpacked
+/// G-buffer against the exact G-buffer lit with the same detector and schedule), never by the error against the
+/// every-sample reference, which also holds the detector's aliasing.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct ParetoFlags {
-    /// On the front of image RMSE against bytes per sample.
+    /// On the front of layout error against bytes per sample.
     pub bytes: bool,
-    /// On the front of image RMSE against total run time (encode + decode + detect + resolve).
+    /// On the front of layout error against the resolve pass time (decode + lighting).
     pub time: bool,
 }
 
+/// Modelled G-buffer traffic of one frame, in MB (10⁶ bytes), per lighting schedule; docs/GUIDE.md gives the
+/// formulas.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Bandwidth {
+    /// Tiled deferred: the G-buffer written once per covered sample, read once per covered sample by the tiled
+    /// resolve, and the RGBA16F output written once per pixel.
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    pub tiled: f64,
+    /// Quad (light-volume) deferred: the G-buffer written once, then per light-fragment pair one G-buffer read and
+    /// one RGBA16F accumulation read-modify-write; `None` when the pair count is unknown.
+    pub quad: Option<f64>,
+    /// The light-fragment pairs of the quad schedule (quad-culled resolve of the exact G-buffer with the row's
+    /// detector).
+    pub quad_light_fragments: Option<u64>,
+}
+
 /// One measured combination. Every metric is `None` when it could not be computed; `note` or `error` says why.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+///
+/// Three image errors are kept apart: [`Row::layout_error`] (what the layout's packing costs),
+/// [`Row::aa_error`] (what the detector's anti-aliasing costs, the same for every layout) and
+/// [`Row::total_error`] (both, against the every-sample reference).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Row {
+    /// The frame (dump) this row was measured on.
+    #[serde(default)]
+    pub frame: String,
     /// Layout name.
     pub layout: String,
     /// Bytes per sample of the layout.
@@ -85,17 +116,14 @@ pub struct Row {
     pub albedo_max_abs: Option<f64>,
     /// Maximum absolute error over the scalar attributes (relative for specular power).
     pub scalar_max_abs: Option<f64>,
-    /// Image RMSE against the reference.
-    pub rmse: Option<f64>,
-    /// Image PSNR in dB against the reference (peak = reference maximum); infinite when identical.
-    pub psnr_db: Option<f64>,
-    /// Image RMSE against the exact (unpacked-input) G-buffer lit with the same detector: the error the layout's
-    /// quantization alone causes, without the detector's aliasing that `rmse` also counts.
-    pub layout_rmse: Option<f64>,
-    /// Largest absolute pixel error.
-    pub max_abs: Option<f64>,
-    /// Relative MSE (MSE / mean squared reference).
-    pub rel_mse: Option<f64>,
+    /// The image lit from the unpacked G-buffer against the exact G-buffer lit with the same detector and
+    /// schedule: the error the layout alone causes (0 for a lossless layout).
+    pub layout_error: Option<ErrorSet>,
+    /// The exact G-buffer lit with the detector against the every-sample reference: the detector's aliasing,
+    /// whatever the layout.
+    pub aa_error: Option<ErrorSet>,
+    /// The image lit from the unpacked G-buffer against the every-sample reference: both errors together.
+    pub total_error: Option<ErrorSet>,
     /// Shaded samples / all samples.
     pub shading_fraction: Option<f64>,
     /// Fraction of pixels flagged as edges.
@@ -104,15 +132,22 @@ pub struct Row {
     pub precision: Option<f64>,
     /// Detector recall against ground truth.
     pub recall: Option<f64>,
-    /// Median encode (pack) time in ms.
+    /// Arithmetic operations the lighting pass spends decoding one sample (summed over the layout's fields, as the
+    /// codecs count them).
+    pub decode_ops_per_sample: Option<u32>,
+    /// Modelled G-buffer traffic per frame.
+    pub bandwidth_mb: Bandwidth,
+    /// Median encode (pack) time in ms: a tool cost (a renderer writes its G-buffer while rasterising).
     pub encode_ms: Option<f64>,
     /// Median decode (unpack) time in ms.
     pub decode_ms: Option<f64>,
     /// Median edge-detection time in ms.
     pub detect_ms: Option<f64>,
-    /// Median resolve time in ms.
+    /// Median resolve (lighting) time in ms.
     pub resolve_ms: Option<f64>,
-    /// Sum of the four medians.
+    /// The resolve pass: decode + resolve medians, the time axis of the fronts.
+    pub resolve_pass_ms: Option<f64>,
+    /// Sum of the four medians (the tool's own time for the row).
     pub total_ms: Option<f64>,
     /// The full timings (median and spread) per stage.
     pub timings: BTreeMap<String, Timing>,
@@ -125,7 +160,7 @@ pub struct Row {
 }
 
 impl Row {
-    /// Adds a stage timing, keeping the flat median field in step.
+    /// Adds a stage timing, keeping the flat median fields in step.
     pub fn set_timing(&mut self, stage: &str, t: Timing) {
         match stage {
             "encode" => self.encode_ms = Some(t.median_ms),
@@ -135,6 +170,10 @@ impl Row {
             _ => {}
         }
         self.timings.insert(stage.to_string(), t);
+        self.resolve_pass_ms = match (self.decode_ms, self.resolve_ms) {
+            (Some(b), Some(d)) => Some(b + d),
+            _ => None,
+        };
         self.total_ms = match (self.encode_ms, self.decode_ms, self.detect_ms, self.resolve_ms) {
             (Some(a), Some(b), Some(c), Some(d)) => Some(a + b + c + d),
             _ => None,
@@ -148,13 +187,19 @@ impl Row {
             None => s.as_ref().to_string(),
         });
     }
+
+    /// The layout error's RMSE, what the fronts rank by.
+    #[must_use]
+    pub fn layout_rmse(&self) -> Option<f64> {
+        self.layout_error.map(|e| e.rmse)
+    }
 }
 
-/// Marks the Pareto fronts (RMSE against bytes, RMSE against total time) on `rows`.
+/// Marks the Pareto fronts (layout error against bytes, and against the resolve pass time) on `rows`.
 pub fn mark_pareto(rows: &mut [Row]) {
-    let err = |r: &Row| r.rmse.unwrap_or(f64::NAN);
+    let err = |r: &Row| if r.error.is_some() { f64::NAN } else { r.layout_rmse().unwrap_or(f64::NAN) };
     let by_bytes: Vec<(f64, f64)> = rows.iter().map(|r| (f64::from(r.bytes_per_sample), err(r))).collect();
-    let by_time: Vec<(f64, f64)> = rows.iter().map(|r| (r.total_ms.unwrap_or(f64::NAN), err(r))).collect();
+    let by_time: Vec<(f64, f64)> = rows.iter().map(|r| (r.resolve_pass_ms.unwrap_or(f64::NAN), err(r))).collect();
     let (fb, ft) = (pareto::front(&by_bytes), pareto::front(&by_time));
     for (i, r) in rows.iter_mut().enumerate() {
         r.pareto = ParetoFlags { bytes: fb[i], time: ft[i] };
@@ -162,7 +207,7 @@ pub fn mark_pareto(rows: &mut [Row]) {
 }
 
 /// A figure written next to the report.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Figure {
     /// File name inside the report folder.
     pub file: String,
@@ -170,9 +215,9 @@ pub struct Figure {
     pub caption: String,
 }
 
-/// Everything a report folder holds.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Report {
+/// One analysed frame (dump) of a report: what it is and what was measured on it apart from the rows.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Frame {
     /// What was analysed (file path or scene name).
     pub input: String,
     /// Width in pixels.
@@ -182,21 +227,46 @@ pub struct Report {
     /// Samples per pixel.
     pub samples: u32,
     /// Fraction of samples covered by a surface.
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
     pub coverage: f64,
     /// Number of lights.
     pub lights: usize,
     /// Where the lights came from.
     pub lights_source: String,
-    /// Timing runs per stage.
-    pub runs: usize,
     /// Time of the reference resolve (every sample shaded, f64 accumulation).
     pub reference: Option<Timing>,
-    /// Wall time of the whole sweep in seconds.
+    /// Wall time of this frame's sweep in seconds.
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
     pub sweep_seconds: f64,
     /// The scene-needs analysis.
     pub needs: Needs,
-    /// One row per combination.
+    /// Each detector on the exact G-buffer: its anti-aliasing error and the shading it costs.
+    pub detectors: Vec<DetectorResult>,
+}
+
+/// Everything a report folder holds: the frames, one row per frame × layout × detector (× culling), and the rows
+/// aggregated over the frames.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// The frames, in the order given.
+    pub frames: Vec<Frame>,
+    /// Timing runs per stage.
+    pub runs: usize,
+    /// How the images were shown for FLIP.
+    pub viewing: Viewing,
+    /// Which rows got FLIP.
+    pub flip: FlipRows,
+    /// What the aggregate fronts rank by: each layout's mean or worst frame.
+    pub over: Over,
+    /// One row per frame × combination; the fronts are marked within each frame.
     pub rows: Vec<Row>,
+    /// One row per combination over every frame (mean and worst frame); the fronts rank by [`Report::over`].
+    pub aggregate: Vec<AggregateRow>,
+    /// Each detector over every frame.
+    pub detectors: Vec<DetectorAggregate>,
+    /// With a byte budget (`--max-bytes`): the layout of the report that wins over every frame.
+    #[serde(default)]
+    pub budget: Option<BudgetChoice>,
     /// Plots and pictures.
     pub figures: Vec<Figure>,
 }
@@ -230,7 +300,11 @@ mod tests {
     #[test]
     fn pareto_marks_rows_without_numbers_as_off_the_front() {
         let mk = |b, e: Option<f64>, t| {
-            let mut r = Row { bytes_per_sample: b, rmse: e, ..Default::default() };
+            let mut r = Row {
+                bytes_per_sample: b,
+                layout_error: e.map(|rmse| ErrorSet { rmse, ..Default::default() }),
+                ..Default::default()
+            };
             for s in ["encode", "decode", "detect", "resolve"] {
                 r.set_timing(s, Timing::from_ms(vec![t / 4.0]).unwrap());
             }
@@ -241,5 +315,6 @@ mod tests {
         let flags: Vec<(bool, bool)> = rows.iter().map(|r| (r.pareto.bytes, r.pareto.time)).collect();
         assert_eq!(flags, vec![(true, false), (true, true), (false, true), (false, false)]);
         assert_eq!(rows[0].total_ms, Some(10.0));
+        assert_eq!(rows[0].resolve_pass_ms, Some(5.0), "decode + resolve");
     }
 }

@@ -9,7 +9,7 @@
 //! Besides the rows it keeps what the figures need: per-pixel error maps of every layout, the edge masks of the
 //! first layout, and a light-count map.
 
-use crate::analysis::row::{mark_pareto, time_runs, Row, Timing};
+use crate::analysis::row::{mark_pareto, time_runs, Bandwidth, Row, Timing};
 use crate::detect::{self, Detector, DetectorConfig, EdgeMask};
 use crate::error::Result;
 use crate::gbuffer::GBuffer;
@@ -17,7 +17,10 @@ use crate::image::HdrImage;
 use crate::layout::Layout;
 use crate::light::Light;
 use crate::measure;
+use crate::measure::flip::FlipMap;
+use crate::measure::image::{error_set, ErrorSet, Viewing};
 use crate::resolve::{self, Culling, ResolveConfig};
+use serde::Serialize;
 
 /// What to sweep.
 #[derive(Clone, Debug)]
@@ -34,6 +37,26 @@ pub struct SweepConfig {
     pub resolve: ResolveConfig,
     /// Timing runs per stage (the median and spread are reported).
     pub runs: usize,
+    /// Which rows get FLIP.
+    pub flip: FlipRows,
+    /// How the images are shown for FLIP.
+    pub viewing: Viewing,
+}
+
+crate::named_enum! {
+    /// Which rows of a sweep get the perceptual error (FLIP costs about as much as a resolve at 1080p).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, serde::Deserialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub enum FlipRows: "FLIP selection" {
+        /// Where it decides: each layout's errors with the first detector (and first culling mode), and each
+        /// detector's anti-aliasing error.
+        #[default]
+        Decisive => "decisive",
+        /// Every row.
+        All => "all",
+        /// None (numerical errors only).
+        None => "none",
+    }
 }
 
 /// Per-pixel error maps of one layout (row-major; `None` = background pixel).
@@ -47,7 +70,8 @@ pub struct ErrorMaps {
     pub depth_rel: Option<Vec<Option<f32>>>,
     /// Largest absolute albedo error (any channel).
     pub albedo_abs: Option<Vec<Option<f32>>>,
-    /// Absolute image error (largest channel) of the layout's first detector row.
+    /// Absolute image error (largest channel) of the layout's first detector row against the exact G-buffer lit
+    /// with the same detector: where the layout's loss shows.
     pub image_abs: Option<Vec<Option<f32>>>,
 }
 
@@ -66,8 +90,49 @@ pub struct SweepOutput {
     pub masks: Vec<(String, EdgeMask)>,
     /// Lights per pixel from the first successful resolve.
     pub lights_per_pixel: Option<Vec<u32>>,
+    /// Per detector (in sweep order): the anti-aliasing error of the exact G-buffer lit with it, and its shading
+    /// fraction there.
+    pub detectors: Vec<DetectorResult>,
+    /// The exact G-buffer lit with each detector (sweep order): what layout errors are measured against.
+    pub exact: Vec<Option<HdrImage>>,
+    /// The LDR-FLIP map of the layout with the largest layout FLIP (first detector), with its name.
+    pub worst_flip: Option<(String, FlipMap)>,
     /// Wall time of the sweep in seconds.
     pub seconds: f64,
+}
+
+/// A detector on the exact G-buffer: what its anti-aliasing costs in error and in shading.
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct DetectorResult {
+    /// The frame.
+    #[serde(default)]
+    pub frame: String,
+    /// Detector name.
+    pub detector: String,
+    /// Shaded samples / all samples on the exact G-buffer.
+    pub shading_fraction: Option<f64>,
+    /// Fraction of pixels shaded per sample.
+    pub edge_fraction: Option<f64>,
+    /// The exact G-buffer lit with this detector against the every-sample reference.
+    pub aa_error: Option<ErrorSet>,
+    /// Light-fragment pairs of a quad-culled resolve with this detector's mask.
+    pub quad_light_fragments: Option<u64>,
+    /// On the front of anti-aliasing error against shading fraction (among this frame's detectors).
+    pub on_front: bool,
+    /// Why a number is missing.
+    pub error: Option<String>,
+}
+
+/// Modelled traffic of a layout of `bytes` per sample on `gb` (see [`Bandwidth`]).
+#[must_use]
+pub fn bandwidth(gb: &GBuffer, bytes: u32, quad_light_fragments: Option<u64>) -> Bandwidth {
+    const OUTPUT_BYTES: f64 = 8.0; // RGBA16F
+    let covered = (gb.len() - gb.background_samples()) as f64;
+    let b = f64::from(bytes);
+    let write = b * covered;
+    let tiled = write + b * covered + OUTPUT_BYTES * gb.pixel_count() as f64;
+    let quad = quad_light_fragments.map(|n| (write + n as f64 * (b + 2.0 * OUTPUT_BYTES)) / 1e6);
+    Bandwidth { tiled: tiled / 1e6, quad, quad_light_fragments }
 }
 
 /// Progress callback: (done, total, what is running).
@@ -107,37 +172,96 @@ fn image_abs(reference: &HdrImage, test: &HdrImage) -> Vec<Option<f32>> {
     reference.rgb.iter().zip(&test.rgb).map(|(a, b)| Some((*b - *a).abs().max_element())).collect()
 }
 
+/// Each detector on the exact G-buffer: the mask, the image (what layouts are compared with for their layout
+/// error), its anti-aliasing error against the reference and the quad schedule's light-fragment pairs.
+fn detector_results(
+    gb: &GBuffer,
+    lights: &[Light],
+    cfg: &SweepConfig,
+    reference: &HdrImage,
+) -> (Vec<Option<HdrImage>>, Vec<DetectorResult>) {
+    let viewing = (cfg.flip != FlipRows::None).then_some(&cfg.viewing);
+    let mut images = Vec::new();
+    let mut results = Vec::new();
+    for &d in &cfg.detectors {
+        let mut r = DetectorResult {
+            frame: String::new(),
+            detector: d.name().to_string(),
+            shading_fraction: None,
+            edge_fraction: None,
+            aa_error: None,
+            quad_light_fragments: None,
+            on_front: false,
+            error: None,
+        };
+        let lit = detect::detect(gb, d, &cfg.detector_config).and_then(|mask| {
+            let res = resolve::resolve(gb, lights, &mask, &cfg.resolve)?;
+            let quad = if cfg.resolve.culling == Culling::Quad {
+                res.stats.light_pairs_tested
+            } else {
+                let q = ResolveConfig { culling: Culling::Quad, ..cfg.resolve };
+                resolve::resolve(gb, lights, &mask, &q)?.stats.light_pairs_tested
+            };
+            Ok((mask, res, quad))
+        });
+        match lit {
+            Ok((mask, res, quad)) => {
+                r.shading_fraction = Some(mask.shading_fraction());
+                r.edge_fraction = Some(mask.edge_fraction());
+                r.aa_error = Some(error_set(reference, &res.image, viewing));
+                r.quad_light_fragments = Some(quad);
+                images.push(Some(res.image));
+            }
+            Err(e) => {
+                r.error = Some(format!("exact G-buffer with {}: {e}", d.name()));
+                images.push(None);
+            }
+        }
+        results.push(r);
+    }
+    mark_detector_front(&mut results);
+    (images, results)
+}
+
+/// Marks the detectors on the front of anti-aliasing error (RMSE) against the shading they cost.
+pub fn mark_detector_front(results: &mut [DetectorResult]) {
+    let pts: Vec<(f64, f64)> = results
+        .iter()
+        .map(|r| (r.shading_fraction.unwrap_or(f64::NAN), r.aa_error.map_or(f64::NAN, |e| e.rmse)))
+        .collect();
+    for (r, on) in results.iter_mut().zip(crate::analysis::pareto::front(&pts)) {
+        r.on_front = on;
+    }
+}
+
 /// Runs the sweep. `lights` are in view space. The reference is computed once.
 pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, progress: Progress<'_>) -> Result<SweepOutput> {
     let start = std::time::Instant::now();
     let cullings: Vec<Option<Culling>> =
         if cfg.culling.is_empty() { vec![None] } else { cfg.culling.iter().copied().map(Some).collect() };
     let per_layout = cfg.detectors.len() * cullings.len();
-    let total = 1 + cfg.layouts.len() * (1 + per_layout);
+    let total = 2 + cfg.layouts.len() * (1 + per_layout);
     let mut done = 0;
     progress(done, total, "reference");
     let (reference, reference_timing) = time_runs(1, || resolve::reference(gb, lights, &cfg.resolve))?;
-    // Each detector on the exact G-buffer: what the layouts' images are compared with for `layout_rmse`.
-    let exact: Vec<Option<HdrImage>> = cfg
-        .detectors
-        .iter()
-        .map(|&d| {
-            let mask = detect::detect(gb, d, &cfg.detector_config).ok()?;
-            resolve::resolve(gb, lights, &mask, &cfg.resolve).ok().map(|r| r.image)
-        })
-        .collect();
+    done += 1;
+    progress(done, total, "detectors on the exact G-buffer");
+    // The resolve is bit-identical across culling modes, so one exact image per detector serves every culling.
+    let (exact, detectors) = detector_results(gb, lights, cfg, &reference);
     done += 1;
 
     let mut rows = Vec::new();
     let mut maps = Vec::new();
     let mut masks = Vec::new();
     let mut lights_per_pixel = None;
+    let mut worst_flip: Option<(String, FlipMap)> = None;
     for (li, layout) in cfg.layouts.iter().enumerate() {
         let bytes = layout.bytes_per_sample() as u32;
         let base = Row {
             layout: layout.name().to_string(),
             bytes_per_sample: bytes,
             footprint_bytes: layout.footprint_bytes(gb.width, gb.height, gb.samples),
+            bandwidth_mb: bandwidth(gb, bytes, None),
             ..Default::default()
         };
         progress(done, total, &format!("{}: pack/unpack", layout.name()));
@@ -171,6 +295,8 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, progress: Progre
         for (di, &det) in cfg.detectors.iter().enumerate() {
             progress(done, total, &format!("{} × {}: detect", layout.name(), det.name()));
             let mut row = Row { detector: det.name().to_string(), ..attr_row.clone() };
+            row.aa_error = detectors[di].aa_error;
+            row.bandwidth_mb = bandwidth(gb, bytes, detectors[di].quad_light_fragments);
             let mask = match time_runs(cfg.runs, || detect::detect(&decoded, det, &cfg.detector_config)) {
                 Ok((m, t)) => {
                     row.set_timing("detect", t);
@@ -197,7 +323,7 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, progress: Progre
                 }
                 None => row.add_note("no object IDs: no ground truth for precision/recall"),
             }
-            for &c in &cullings {
+            for (ci, &c) in cullings.iter().enumerate() {
                 progress(done, total, &format!("{} × {}: resolve", layout.name(), det.name()));
                 let mut rcfg = cfg.resolve;
                 let mut r = row.clone();
@@ -205,20 +331,41 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, progress: Progre
                     rcfg.culling = c;
                     r.culling = Some(c.name().to_string());
                 }
+                let decisive = di == 0 && ci == 0;
+                let flip = match cfg.flip {
+                    FlipRows::All => true,
+                    FlipRows::Decisive => decisive,
+                    FlipRows::None => false,
+                };
+                let viewing = flip.then_some(&cfg.viewing);
                 match time_runs(cfg.runs, || resolve::resolve(&decoded, lights, &mask, &rcfg)) {
                     Ok((res, t)) => {
                         r.set_timing("resolve", t);
-                        let e = measure::image::compare(&reference, &res.image);
-                        r.rmse = Some(e.rmse);
-                        r.psnr_db = Some(e.psnr_db);
-                        r.max_abs = Some(e.max_abs);
-                        r.rel_mse = Some(e.rel_mse);
-                        r.layout_rmse = exact[di].as_ref().map(|x| measure::image::compare(x, &res.image).rmse);
-                        if e.rmse == 0.0 {
-                            r.add_note("image identical to the reference (PSNR infinite)");
+                        if c == Some(Culling::Quad) {
+                            r.bandwidth_mb = bandwidth(gb, bytes, Some(res.stats.light_pairs_tested));
+                        }
+                        r.total_error = Some(error_set(&reference, &res.image, viewing));
+                        if let Some(x) = exact[di].as_ref() {
+                            let mut e = ErrorSet::numeric(&measure::image::compare(x, &res.image));
+                            if let Some((map, hdr)) = viewing.and_then(|v| measure::image::flip_pair(x, &res.image, v))
+                            {
+                                e.flip_ldr = Some(map.mean);
+                                e.flip_hdr = Some(hdr);
+                                if decisive && worst_flip.as_ref().is_none_or(|(_, w)| map.mean > w.mean) {
+                                    worst_flip = Some((layout.name().to_string(), map));
+                                }
+                            }
+                            r.layout_error = Some(e);
+                            if e.rmse == 0.0 {
+                                r.add_note("image identical to the exact G-buffer's (layout error 0)");
+                            }
+                        } else {
+                            r.add_note("the exact G-buffer could not be lit with this detector: no layout error");
                         }
                         if lmaps.image_abs.is_none() {
-                            lmaps.image_abs = Some(image_abs(&reference, &res.image));
+                            if let Some(x) = exact[di].as_ref() {
+                                lmaps.image_abs = Some(image_abs(x, &res.image));
+                            }
                         }
                         if lights_per_pixel.is_none() {
                             lights_per_pixel = Some(res.lights_per_pixel.clone());
@@ -244,6 +391,9 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, progress: Progre
         maps,
         masks,
         lights_per_pixel,
+        detectors,
+        exact,
+        worst_flip,
         seconds: start.elapsed().as_secs_f64(),
     })
 }

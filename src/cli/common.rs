@@ -8,11 +8,9 @@ use gbuf::io::{LoadOptions, Loaded, ReadLimits};
 use std::io::Write;
 use std::path::PathBuf;
 
-/// How to read the input dump.
+/// How to read a dump (every flag but the file itself).
 #[derive(clap::Args, Debug, Clone)]
-pub struct InputArgs {
-    /// The dump: canonical/Blender/Mitsuba EXR or ISPC `deferred` .bin.
-    pub file: PathBuf,
+pub struct ReadArgs {
     /// Scene sidecar (camera + lights). Default: `<file stem>.json` beside the dump, if present.
     #[arg(long)]
     pub scene: Option<PathBuf>,
@@ -30,7 +28,7 @@ pub struct InputArgs {
     pub allow_dwa: bool,
 }
 
-impl InputArgs {
+impl ReadArgs {
     /// Library load options from the flags.
     pub fn options(&self) -> anyhow::Result<LoadOptions> {
         let mut map = Vec::new();
@@ -55,11 +53,91 @@ impl InputArgs {
             limits: ReadLimits { max_bytes: self.max_memory.saturating_mul(1 << 20), allow_dwa: self.allow_dwa },
         })
     }
+}
+
+/// How to read the input dump.
+#[derive(clap::Args, Debug, Clone)]
+pub struct InputArgs {
+    /// The dump: canonical/Blender/Mitsuba EXR or ISPC `deferred` .bin.
+    pub file: PathBuf,
+    /// How to read it.
+    #[command(flatten)]
+    pub read: ReadArgs,
+}
+
+impl InputArgs {
+    /// Library load options from the flags.
+    pub fn options(&self) -> anyhow::Result<LoadOptions> {
+        self.read.options()
+    }
 
     /// Loads the dump.
     pub fn load(&self) -> anyhow::Result<Loaded> {
         let opts = self.options()?;
         Ok(gbuf::io::load(&self.file, &opts)?)
+    }
+}
+
+/// Several dumps (the frames of a capture), read one after another.
+#[derive(clap::Args, Debug, Clone)]
+pub struct FramesArgs {
+    /// The dumps: files, directories (every .exr and .bin file in them, sorted) or glob patterns (`'cap/*.exr'`).
+    #[arg(required = true, num_args = 1.., value_name = "FILE")]
+    pub files: Vec<PathBuf>,
+    /// How to read them (`--scene` only with a single dump: each frame's sidecar is found beside it).
+    #[command(flatten)]
+    pub read: ReadArgs,
+}
+
+impl FramesArgs {
+    /// The dump paths, expanded and checked: every one exists, none twice.
+    pub fn paths(&self) -> anyhow::Result<Vec<PathBuf>> {
+        let mut out: Vec<PathBuf> = Vec::new();
+        for p in &self.files {
+            let text = p.to_string_lossy();
+            if p.is_dir() {
+                let mut found: Vec<PathBuf> = std::fs::read_dir(p)
+                    .with_context(|| format!("reading the directory {}", p.display()))?
+                    .filter_map(|e| e.ok().map(|e| e.path()))
+                    .filter(|f| {
+                        f.is_file()
+                            && f.extension()
+                                .is_some_and(|e| e.eq_ignore_ascii_case("exr") || e.eq_ignore_ascii_case("bin"))
+                    })
+                    .collect();
+                found.sort();
+                anyhow::ensure!(!found.is_empty(), "{}: the directory holds no .exr or .bin dump", p.display());
+                out.extend(found);
+            } else if !p.exists() && text.contains(['*', '?', '[']) {
+                let mut found: Vec<PathBuf> = glob::glob(&text)
+                    .with_context(|| format!("bad glob pattern {text:?}"))?
+                    .filter_map(std::result::Result::ok)
+                    .filter(|f| f.is_file())
+                    .collect();
+                found.sort();
+                anyhow::ensure!(!found.is_empty(), "{text}: the pattern matches no file");
+                out.extend(found);
+            } else {
+                anyhow::ensure!(p.exists(), "{}: no such file", p.display());
+                out.push(p.clone());
+            }
+        }
+        let mut seen = std::collections::HashSet::new();
+        for p in &out {
+            anyhow::ensure!(seen.insert(p.clone()), "{} is given twice: each frame once", p.display());
+        }
+        anyhow::ensure!(
+            out.len() == 1 || self.read.scene.is_none(),
+            "--scene names one sidecar but {} dumps are given: put each frame's sidecar beside it as <stem>.json",
+            out.len()
+        );
+        Ok(out)
+    }
+
+    /// Loads one of the dumps.
+    pub fn load(&self, path: &std::path::Path) -> anyhow::Result<Loaded> {
+        let opts = self.read.options()?;
+        gbuf::io::load(path, &opts).with_context(|| format!("loading {}", path.display()))
     }
 }
 

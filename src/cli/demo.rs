@@ -36,6 +36,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .with_context(|| format!("rendering the room scene at {}×{} × {}", args.width, args.height, args.msaa))?;
     let lights = scene::default_lights(SceneName::Room, &gb);
     let source = format!("the room's {} default lights", lights.len());
-    run_and_write("room (rendered in memory)", &gb, &lights, &source, &cfg, &args.out, args.json)?;
+    run_and_write("room (rendered in memory)", gb, lights, &source, &cfg, &args.out, args.json)?;
     Ok(())
 }

@@ -7,6 +7,7 @@ pub mod demo;
 pub mod edges;
 pub mod info;
 pub mod layouts;
+pub mod merge;
 pub mod report;
 pub mod resolve;
 pub mod roundtrip;

@@ -1,14 +1,19 @@
-//! `gbuf report FILE [--scene SIDECAR] [--layouts LIST] [--detectors LIST] [--culling LIST] [-o DIR] [--json]`:
-//! sweep layouts × detectors on a dump and write the report folder. Also the pieces `gbuf demo` reuses: the
-//! sweep flags, the progress bar, the human summary.
+//! `gbuf report FILE… [--scene SIDECAR] [--layouts LIST] [--detectors LIST] [--culling LIST] [--flip WHICH]
+//! [--over mean|worst] [-o DIR] [--json]`: sweep layouts × detectors on one or more dumps (frames), one after
+//! another, and write the report folder with per-frame and aggregated rows. Also the pieces `gbuf demo` and
+//! `gbuf merge` reuse: the sweep flags, the progress bar, the human summary.
 
-use crate::cli::common::{print_json, InputArgs};
+use crate::cli::common::{print_json, FramesArgs};
 use anyhow::Context;
+use gbuf::analysis::aggregate::Over;
 use gbuf::analysis::row::Report;
-use gbuf::analysis::sweep::SweepConfig;
+use gbuf::analysis::sweep::{FlipRows, SweepConfig};
 use gbuf::detect::{Detector, DetectorConfig};
+use gbuf::image::ToneCurve;
 use gbuf::layout::Layout;
+use gbuf::measure::image::Viewing;
 use gbuf::report::markdown::fmt_opt;
+use gbuf::report::Assembly;
 use gbuf::resolve::{Culling, ResolveConfig};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
@@ -38,6 +43,19 @@ pub struct SweepArgs {
     /// Seed for scattered lights.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Which rows get FLIP: `decisive` (each layout's errors with the first detector, each detector's AA
+    /// error), `all`, or `none`.
+    #[arg(long, value_name = "WHICH", default_value = "decisive")]
+    pub flip: FlipRows,
+    /// Pixels per degree of the viewer FLIP models (default: a 0.7 m wide 4K monitor seen from 0.7 m).
+    #[arg(long, value_name = "PPD", default_value_t = gbuf::measure::flip::default_ppd())]
+    pub ppd: f32,
+    /// Tone map of the displayed image LDR-FLIP sees (as `gbuf resolve --tonemap`).
+    #[arg(long, value_name = "TM", default_value = "reinhard")]
+    pub tonemap: ToneCurve,
+    /// Exposure of the displayed image (as `gbuf resolve --exposure`).
+    #[arg(long, value_name = "E", default_value_t = 1.0)]
+    pub exposure: f32,
 }
 
 fn split(list: &str) -> impl Iterator<Item = &str> {
@@ -57,7 +75,19 @@ impl SweepArgs {
         let detectors = self.detectors.clone();
         anyhow::ensure!(!detectors.is_empty(), "--detectors: no detector given");
         let culling = self.culling.clone();
+        anyhow::ensure!(
+            self.ppd.is_finite() && self.ppd > 0.0,
+            "--ppd must be a positive number of pixels per degree, got {}",
+            self.ppd
+        );
+        anyhow::ensure!(
+            self.exposure.is_finite() && self.exposure > 0.0,
+            "--exposure must be a positive number, got {}",
+            self.exposure
+        );
         Ok(SweepConfig {
+            flip: self.flip,
+            viewing: Viewing { tone_map: self.tonemap, exposure: self.exposure, pixels_per_degree: self.ppd },
             layouts,
             detectors,
             detector_config: DetectorConfig::default(),
@@ -80,108 +110,236 @@ pub fn progress_bar() -> ProgressBar {
     pb
 }
 
+fn pareto_word(p: gbuf::analysis::row::ParetoFlags) -> &'static str {
+    match (p.bytes, p.time) {
+        (true, true) => "bytes+time",
+        (true, false) => "bytes",
+        (false, true) => "time",
+        _ => "",
+    }
+}
+
 /// Prints the human summary of a report.
 pub fn print_summary(rep: &Report, dir: &Path) {
-    println!(
-        "{}: {}×{} × {} samples, {:.1}% covered, {} lights ({})",
-        rep.input,
-        rep.width,
-        rep.height,
-        rep.samples,
-        100.0 * rep.coverage,
-        rep.lights,
-        rep.lights_source
-    );
-    println!("{}", rep.needs.summary_line());
-    if let Some(p) = &rep.needs.pruned_layout {
+    let multi = rep.frames.len() > 1;
+    for f in &rep.frames {
         println!(
-            "pruned layout {}: {} B/sample ({} B less than {}), RMSE {} (base {})",
-            p.name,
-            p.bytes_per_sample,
-            p.bytes_saved,
-            p.base,
-            fmt_opt(p.rmse, 5),
-            fmt_opt(p.base_rmse, 5)
+            "{}: {}×{} × {} samples, {:.1}% covered, {} lights ({})",
+            f.input,
+            f.width,
+            f.height,
+            f.samples,
+            100.0 * f.coverage,
+            f.lights,
+            f.lights_source
         );
-    }
-    println!(
-        "{:<22} {:>7} {:<13} {:>9} {:>9} {:>8} {:>9} {:>10}  pareto",
-        "layout", "B/samp", "detector", "normal°", "PSNR dB", "shaded", "rmse", "total ms"
-    );
-    for r in &rep.rows {
-        if let Some(e) = &r.error {
-            println!("{:<22} {:>7} {:<13} error: {e}", r.layout, r.bytes_per_sample, r.detector);
-            continue;
+        println!("{}", f.needs.summary_line());
+        if let Some(p) = &f.needs.pruned_layout {
+            println!(
+                "pruned layout {}: {} B/sample ({} B less than {}), layout RMSE {} (base {})",
+                p.name,
+                p.bytes_per_sample,
+                p.bytes_saved,
+                p.base,
+                fmt_opt(p.rmse, 5),
+                fmt_opt(p.base_rmse, 5)
+            );
         }
-        let p = match (r.pareto.bytes, r.pareto.time) {
-            (true, true) => "bytes+time",
-            (true, false) => "bytes",
-            (false, true) => "time",
-            _ => "",
-        };
+    }
+    println!("detectors (exact G-buffer; AA error = against the every-sample reference):");
+    for d in &rep.detectors {
         println!(
-            "{:<22} {:>7} {:<13} {:>9} {:>9} {:>7.1}% {:>9} {:>10}  {p}",
-            r.layout,
-            r.bytes_per_sample,
-            r.detector,
-            fmt_opt(r.normal_max_deg, 3),
-            fmt_opt(r.psnr_db, 2),
-            100.0 * r.shading_fraction.unwrap_or(f64::NAN),
-            fmt_opt(r.rmse, 5),
-            fmt_opt(r.total_ms, 1)
+            "  {:<13} shaded {:>6.1}%  AA RMSE {:>9}  AA FLIP {:>7}{}",
+            d.detector,
+            100.0 * d.shading_fraction.as_ref().map_or(f64::NAN, |s| s.mean),
+            fmt_opt(d.aa_rmse.as_ref().map(|s| s.over(rep.over)), 5),
+            fmt_opt(d.aa_flip_ldr.as_ref().map(|s| s.over(rep.over)), 4),
+            if d.on_front { "  front" } else { "" }
         );
     }
+    if multi {
+        println!(
+            "{:<22} {:>7} {:<13} {:>12} {:>12} {:>11} {:>10}  pareto ({} frame)",
+            "layout",
+            "B/samp",
+            "detector",
+            "layout RMSE",
+            "layout FLIP",
+            "worst frame",
+            "pass ms",
+            rep.over.name()
+        );
+        for r in &rep.aggregate {
+            let l = r.layout_rmse.as_ref();
+            println!(
+                "{:<22} {:>7} {:<13} {:>12} {:>12} {:>11} {:>10}  {}",
+                r.layout,
+                r.bytes_per_sample,
+                r.detector,
+                fmt_opt(l.map(|s| s.over(rep.over)), 5),
+                fmt_opt(r.layout_flip_ldr.as_ref().map(|s| s.over(rep.over)), 4),
+                l.map_or("—".into(), |s| short(&s.worst_frame)),
+                fmt_opt(r.resolve_pass_ms.as_ref().map(|s| s.mean), 1),
+                pareto_word(r.pareto)
+            );
+        }
+    } else {
+        println!(
+            "{:<22} {:>7} {:<13} {:>9} {:>11} {:>9} {:>9} {:>8} {:>9}  pareto",
+            "layout", "B/samp", "detector", "normal°", "layout RMSE", "FLIP", "AA RMSE", "shaded", "pass ms"
+        );
+        for r in &rep.rows {
+            if let Some(e) = &r.error {
+                println!("{:<22} {:>7} {:<13} error: {e}", r.layout, r.bytes_per_sample, r.detector);
+                continue;
+            }
+            println!(
+                "{:<22} {:>7} {:<13} {:>9} {:>11} {:>9} {:>9} {:>7.1}% {:>9}  {}",
+                r.layout,
+                r.bytes_per_sample,
+                r.detector,
+                fmt_opt(r.normal_max_deg, 3),
+                fmt_opt(r.layout_rmse(), 5),
+                fmt_opt(r.layout_error.and_then(|e| e.flip_ldr), 4),
+                fmt_opt(r.aa_error.map(|e| e.rmse), 5),
+                100.0 * r.shading_fraction.unwrap_or(f64::NAN),
+                fmt_opt(r.resolve_pass_ms, 1),
+                pareto_word(r.pareto)
+            );
+        }
+    }
+    if let Some(b) = &rep.budget {
+        match (&b.layout, &b.layout_rmse) {
+            (Some(l), Some(st)) => println!(
+                "budget {} B/sample over {} frame(s), by the {} frame: {l} ({} B, layout RMSE mean {} / worst {} on {})",
+                b.max_bytes,
+                rep.frames.len(),
+                b.over.name(),
+                b.bytes_per_sample.unwrap_or(0),
+                fmt_opt(Some(st.mean), 5),
+                fmt_opt(Some(st.worst), 5),
+                short(&st.worst_frame)
+            ),
+            _ => println!("budget {} B/sample: no layout of the report fits and was measured on every frame", b.max_bytes),
+        }
+    }
+    let secs: f64 = rep.frames.iter().map(|f| f.sweep_seconds).sum();
     println!(
-        "sweep: {} rows in {:.1} s; report written to {}",
+        "sweep: {} rows over {} frame(s) in {:.1} s; report written to {}",
         rep.rows.len(),
-        rep.sweep_seconds,
+        rep.frames.len(),
+        secs,
         dir.join("report.md").display()
     );
 }
 
-/// Sweeps, writes the folder, prints the summary (or the JSON report).
+fn short(frame: &str) -> String {
+    Path::new(frame).file_name().map_or(frame.to_string(), |n| n.to_string_lossy().into_owned())
+}
+
+/// One frame to sweep: a name, its G-buffer and lights.
+pub struct FrameInput {
+    /// The frame's name (its path, or the scene's name).
+    pub name: String,
+    /// The G-buffer.
+    pub gbuffer: gbuf::GBuffer,
+    /// Its view-space lights.
+    pub lights: Vec<gbuf::Light>,
+    /// Where the lights came from.
+    pub lights_source: String,
+}
+
+/// Sweeps the frames one after another (`next` yields them, so only one is in memory at a time), writes the
+/// folder, prints the summary (or the JSON report).
+pub fn run_frames(
+    count: usize,
+    mut next: impl FnMut(usize) -> anyhow::Result<FrameInput>,
+    cfg: &SweepConfig,
+    how: &Assembly,
+    out: &Path,
+    json: bool,
+) -> anyhow::Result<Report> {
+    let pb = progress_bar();
+    let mut frames = Vec::new();
+    let mut rows = Vec::new();
+    let mut files = Vec::new();
+    let mut figures = Vec::new();
+    for i in 0..count {
+        let f = next(i)?;
+        let mut progress = |done: usize, total: usize, what: &str| {
+            pb.set_length(total as u64);
+            pb.set_position(done as u64);
+            pb.set_message(if count > 1 { format!("frame {}/{count}: {what}", i + 1) } else { what.to_string() });
+        };
+        let input = gbuf::analysis::ReportInput {
+            name: f.name.clone(),
+            gbuffer: &f.gbuffer,
+            lights: &f.lights,
+            lights_source: f.lights_source.clone(),
+        };
+        let prefix =
+            if count > 1 { format!("frame{:0w$}_", i + 1, w = count.to_string().len()) } else { String::new() };
+        let r = gbuf::report::run_frame(&input, cfg, count == 1, &prefix, &mut progress)
+            .with_context(|| format!("{}: report", f.name))?;
+        frames.push(r.frame);
+        rows.extend(r.rows);
+        files.extend(r.files);
+        figures.extend(r.figures);
+    }
+    pb.finish_and_clear();
+    let (rep, plots) = gbuf::report::assemble(frames, rows, figures, how)?;
+    files.extend(plots);
+    write_and_print(&rep, &files, out, json)?;
+    Ok(rep)
+}
+
+/// Writes the report folder and prints the summary (or the JSON report).
+pub fn write_and_print(
+    rep: &Report,
+    files: &[gbuf::report::write::Attachment],
+    out: &Path,
+    json: bool,
+) -> anyhow::Result<()> {
+    gbuf::report::write::write_folder(out, rep, files)
+        .with_context(|| format!("writing the report to {}", out.display()))?;
+    if json {
+        print_json(rep)
+    } else {
+        print_summary(rep, out);
+        Ok(())
+    }
+}
+
+/// Sweeps one in-memory frame (what `gbuf demo` runs).
 pub fn run_and_write(
     name: &str,
-    gb: &gbuf::GBuffer,
-    lights: &[gbuf::Light],
+    gb: gbuf::GBuffer,
+    lights: Vec<gbuf::Light>,
     lights_source: &str,
     cfg: &SweepConfig,
     out: &Path,
     json: bool,
 ) -> anyhow::Result<Report> {
-    let pb = progress_bar();
-    let mut progress = |done: usize, total: usize, what: &str| {
-        pb.set_length(total as u64);
-        pb.set_position(done as u64);
-        pb.set_message(what.to_string());
-    };
-    let input = gbuf::analysis::ReportInput {
-        name: name.to_string(),
-        gbuffer: gb,
-        lights,
-        lights_source: lights_source.to_string(),
-    };
-    let (rep, files) = gbuf::report::run(&input, cfg, &mut progress)?;
-    pb.finish_and_clear();
-    gbuf::report::write::write_folder(out, &rep, &files)
-        .with_context(|| format!("writing the report to {}", out.display()))?;
-    if json {
-        print_json(&rep)?;
-    } else {
-        print_summary(&rep, out);
-    }
-    Ok(rep)
+    let mut frame =
+        Some(FrameInput { name: name.to_string(), gbuffer: gb, lights, lights_source: lights_source.to_string() });
+    run_frames(1, |_| frame.take().context("one frame"), cfg, &Assembly::of(cfg, Over::default(), None), out, json)
 }
 
 /// Flags of `gbuf report`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The dump and how to read it.
+    /// The dumps and how to read them.
     #[command(flatten)]
-    pub input: InputArgs,
+    pub input: FramesArgs,
     /// What to sweep.
     #[command(flatten)]
     pub sweep: SweepArgs,
+    /// Over several frames, rank the aggregate by each layout's mean or worst frame.
+    #[arg(long, value_name = "HOW", default_value = "worst")]
+    pub over: Over,
+    /// Also pick the layout of at most N bytes per sample with the least layout error over the frames.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub max_bytes: Option<u32>,
     /// Output folder (created if missing; other files in it are left alone).
     #[arg(short = 'o', long = "out", default_value = "gbuf-report")]
     pub out: PathBuf,
@@ -190,18 +348,24 @@ pub struct Args {
     pub json: bool,
 }
 
+/// Lights of a loaded frame: the dump's or sidecar's, else `n` scattered with `seed`.
+pub fn frame_lights(loaded: &gbuf::io::Loaded, n: u32, seed: u64) -> (Vec<gbuf::Light>, String) {
+    match &loaded.lights {
+        Some(l) if !l.is_empty() => (l.clone(), "from the dump/sidecar".to_string()),
+        _ => (gbuf::scene::scatter_lights(&loaded.gbuffer, n as usize, seed), format!("{n} scattered, seed {seed}")),
+    }
+}
+
 /// Runs `gbuf report`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let cfg = args.sweep.config()?;
-    let loaded = args.input.load()?;
-    let gb = &loaded.gbuffer;
-    let (lights, source) = match &loaded.lights {
-        Some(l) if !l.is_empty() => (l.clone(), "from the dump/sidecar".to_string()),
-        _ => (
-            gbuf::scene::scatter_lights(gb, args.sweep.lights as usize, args.sweep.seed),
-            format!("{} scattered, seed {}", args.sweep.lights, args.sweep.seed),
-        ),
+    let paths = args.input.paths()?;
+    let next = |i: usize| -> anyhow::Result<FrameInput> {
+        let p = &paths[i];
+        let loaded = args.input.load(p)?;
+        let (lights, lights_source) = frame_lights(&loaded, args.sweep.lights, args.sweep.seed);
+        Ok(FrameInput { name: p.display().to_string(), gbuffer: loaded.gbuffer, lights, lights_source })
     };
-    run_and_write(&args.input.file.display().to_string(), gb, &lights, &source, &cfg, &args.out, args.json)?;
+    run_frames(paths.len(), next, &cfg, &Assembly::of(&cfg, args.over, args.max_bytes), &args.out, args.json)?;
     Ok(())
 }

@@ -8,8 +8,9 @@
 //! same input, the way the issue asks its error to be reported, separately from the error against the reference.
 
 use crate::base::mask::EdgeMask;
-use crate::image::HdrImage;
+use crate::image::{HdrImage, ToneCurve, ToneMap};
 use crate::light::Light;
+use crate::measure::flip;
 use crate::resolve::{resolve, ResolveConfig, Schedule};
 use crate::GBuffer;
 use serde::Serialize;
@@ -103,6 +104,106 @@ pub fn compare(reference: &HdrImage, test: &HdrImage) -> ImageError {
         peak: 1.0,
         pixels_over_1pct: reference.rgb.len().max(test.rgb.len()) as u64,
     })
+}
+
+/// How the images are shown to the person FLIP models: the tone map and exposure of `gbuf resolve --png` (8-bit
+/// sRGB) for LDR-FLIP, and the viewing distance in pixels per degree for both FLIP variants.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct Viewing {
+    /// The tone curve of the displayed (LDR) image.
+    pub tone_map: ToneCurve,
+    /// Exposure multiplied in before the tone curve.
+    pub exposure: f32,
+    /// Pixels per degree of visual angle (FLIP's default, 67.02, is a 0.7 m wide 4K monitor seen from 0.7 m).
+    pub pixels_per_degree: f32,
+}
+
+impl Default for Viewing {
+    fn default() -> Self {
+        Viewing { tone_map: ToneCurve::Reinhard, exposure: 1.0, pixels_per_degree: flip::default_ppd() }
+    }
+}
+
+impl Viewing {
+    /// The tone map of the displayed image.
+    #[must_use]
+    pub fn tone(&self) -> ToneMap {
+        ToneMap::new(self.tone_map, self.exposure)
+    }
+}
+
+/// One error between two images in every measure a report shows: the numerical ones of [`ImageError`] and, when
+/// computed, the perceptual ones (mean FLIP, in [0, 1]: 0 = indistinguishable).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
+pub struct ErrorSet {
+    /// Root mean square error (linear radiance).
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    pub rmse: f64,
+    /// PSNR in dB, peak = [`ErrorSet::psnr_peak`]; capped at [`PSNR_CAP_DB`].
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    pub psnr_db: f64,
+    /// The PSNR peak: the largest channel value of the image compared against.
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    pub psnr_peak: f64,
+    /// Relative MSE: `Σ (t − r)² / Σ r²`.
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    pub rel_mse: f64,
+    /// Largest absolute difference.
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    pub max_abs: f64,
+    /// Mean LDR-FLIP of the displayed images ([`Viewing`]); `None` when not computed.
+    pub flip_ldr: Option<f64>,
+    /// Mean HDR-FLIP of the linear images (exposure range from the image compared against, ACES tone mapper, as
+    /// NVIDIA's reference); `None` when not computed.
+    pub flip_hdr: Option<f64>,
+}
+
+impl ErrorSet {
+    /// The numerical measures of `e`, FLIP not computed.
+    #[must_use]
+    pub fn numeric(e: &ImageError) -> Self {
+        ErrorSet {
+            rmse: e.rmse,
+            psnr_db: e.psnr_db,
+            psnr_peak: e.peak,
+            rel_mse: e.rel_mse,
+            max_abs: e.max_abs,
+            flip_ldr: None,
+            flip_hdr: None,
+        }
+    }
+}
+
+/// FLIP of `test` against `reference` as `viewing` shows them: (LDR-FLIP map of the displayed images, mean
+/// HDR-FLIP of the linear ones). `None` when the sizes differ.
+#[must_use]
+pub fn flip_pair(reference: &HdrImage, test: &HdrImage, viewing: &Viewing) -> Option<(flip::FlipMap, f64)> {
+    if reference.width != test.width || reference.height != test.height || reference.rgb.len() != test.rgb.len() {
+        return None;
+    }
+    let (w, h) = (reference.width as usize, reference.height as usize);
+    let opts = flip::FlipOptions { pixels_per_degree: viewing.pixels_per_degree };
+    let shown =
+        |img: &HdrImage| -> Vec<f32> { img.to_srgb8(viewing.tone()).iter().map(|&b| f32::from(b) / 255.0).collect() };
+    let ldr = flip::ldr_flip(&shown(reference), &shown(test), w, h, &opts);
+    // HDR-FLIP needs finite, non-negative radiance: what the resolve writes, but a dump's reference may not be.
+    let linear = |img: &HdrImage| -> Vec<f32> {
+        img.rgb.iter().flat_map(|c| c.to_array()).map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 }).collect()
+    };
+    let hdr = flip::hdr_flip(&linear(reference), &linear(test), w, h, &opts).mean();
+    Some((ldr, hdr))
+}
+
+/// The [`ErrorSet`] of `test` against `reference`, with FLIP when `viewing` is given. Images of different sizes
+/// compare as completely wrong (see [`compare`]) and get no FLIP.
+#[must_use]
+pub fn error_set(reference: &HdrImage, test: &HdrImage, viewing: Option<&Viewing>) -> ErrorSet {
+    let mut e = ErrorSet::numeric(&compare(reference, test));
+    if let Some((ldr, hdr)) = viewing.and_then(|v| flip_pair(reference, test, v)) {
+        e.flip_ldr = Some(ldr.mean);
+        e.flip_hdr = Some(hdr);
+    }
+    e
 }
 
 /// The error of `image` (e.g. the light pre-pass's output) against full deferred shading of the same G-buffer,
@@ -208,5 +309,30 @@ mod tests {
         let mask = crate::detect::detect(&gb, crate::detect::Detector::None, &Default::default()).unwrap();
         let e = against_full_deferred(&gb, &[], &mask, &ResolveConfig::default(), &HdrImage::new(4, 8));
         assert!(e.unwrap_err().to_string().contains("4×8"));
+    }
+
+    #[test]
+    fn error_set_flip_is_zero_for_identical_images_and_grows_with_the_difference() {
+        let mut a = HdrImage::new(16, 16);
+        for (i, c) in a.rgb.iter_mut().enumerate() {
+            *c = Vec3::splat((i % 7) as f32 * 0.3);
+        }
+        let v = Viewing::default();
+        let same = error_set(&a, &a, Some(&v));
+        assert_eq!((same.rmse, same.flip_ldr, same.flip_hdr), (0.0, Some(0.0), Some(0.0)));
+        let mut b = a.clone();
+        b.rgb[40] += Vec3::splat(0.5);
+        let small = error_set(&a, &b, Some(&v));
+        for c in b.rgb.iter_mut().step_by(3) {
+            *c += Vec3::splat(0.5);
+        }
+        let large = error_set(&a, &b, Some(&v));
+        assert!(
+            small.flip_ldr.unwrap() > 0.0 && large.flip_ldr.unwrap() > small.flip_ldr.unwrap(),
+            "{small:?} {large:?}"
+        );
+        assert!(small.flip_hdr.unwrap() > 0.0 && large.flip_hdr.unwrap() > small.flip_hdr.unwrap());
+        assert_eq!(error_set(&a, &b, None).flip_ldr, None);
+        assert_eq!(error_set(&a, &HdrImage::new(2, 2), Some(&v)).flip_ldr, None, "sizes differ: no FLIP");
     }
 }

@@ -2,6 +2,7 @@
 //! be computed (the `note`/`error` columns say why). Written by the `csv` crate from [`CsvRow`], whose field names
 //! are the header: the columns are listed once.
 
+use crate::analysis::aggregate::{AggregateRow, Stat};
 use crate::analysis::row::Row;
 use serde::{Serialize, Serializer};
 
@@ -25,6 +26,7 @@ impl Serialize for Num {
 #[derive(Debug, Serialize)]
 #[allow(missing_docs)] // the field names are the CSV header, documented in docs/GUIDE.md
 pub struct CsvRow<'a> {
+    pub frame: &'a str,
     pub layout: &'a str,
     pub bytes_per_sample: u32,
     pub footprint_bytes: u64,
@@ -37,15 +39,26 @@ pub struct CsvRow<'a> {
     pub depth_rel_max: Num,
     pub albedo_max_abs: Num,
     pub scalar_max_abs: Num,
-    pub rmse: Num,
-    pub psnr_db: Num,
     pub layout_rmse: Num,
-    pub max_abs: Num,
-    pub rel_mse: Num,
+    pub layout_psnr_db: Num,
+    pub layout_flip_ldr: Num,
+    pub layout_flip_hdr: Num,
+    pub aa_rmse: Num,
+    pub aa_psnr_db: Num,
+    pub aa_flip_ldr: Num,
+    pub aa_flip_hdr: Num,
+    pub total_rmse: Num,
+    pub total_psnr_db: Num,
+    pub total_flip_ldr: Num,
+    pub total_flip_hdr: Num,
+    pub total_psnr_peak: Num,
     pub shading_fraction: Num,
     pub edge_fraction: Num,
     pub precision: Num,
     pub recall: Num,
+    pub decode_ops_per_sample: Num,
+    pub bandwidth_tiled_mb: Num,
+    pub bandwidth_quad_mb: Num,
     pub encode_ms: Num,
     pub encode_ms_min: Num,
     pub encode_ms_max: Num,
@@ -56,6 +69,7 @@ pub struct CsvRow<'a> {
     pub resolve_ms: Num,
     pub resolve_ms_min: Num,
     pub resolve_ms_max: Num,
+    pub resolve_pass_ms: Num,
     pub pareto_bytes: bool,
     pub pareto_time: bool,
     pub note: String,
@@ -71,7 +85,9 @@ impl<'a> CsvRow<'a> {
             (Some(n), None) => n.clone(),
             (None, None) => String::new(),
         };
+        let (l, a, t) = (r.layout_error.as_ref(), r.aa_error.as_ref(), r.total_error.as_ref());
         CsvRow {
+            frame: &r.frame,
             layout: &r.layout,
             bytes_per_sample: r.bytes_per_sample,
             footprint_bytes: r.footprint_bytes,
@@ -84,15 +100,26 @@ impl<'a> CsvRow<'a> {
             depth_rel_max: Num(r.depth_rel_max),
             albedo_max_abs: Num(r.albedo_max_abs),
             scalar_max_abs: Num(r.scalar_max_abs),
-            rmse: Num(r.rmse),
-            psnr_db: Num(r.psnr_db),
-            layout_rmse: Num(r.layout_rmse),
-            max_abs: Num(r.max_abs),
-            rel_mse: Num(r.rel_mse),
+            layout_rmse: Num(l.map(|e| e.rmse)),
+            layout_psnr_db: Num(l.map(|e| e.psnr_db)),
+            layout_flip_ldr: Num(l.and_then(|e| e.flip_ldr)),
+            layout_flip_hdr: Num(l.and_then(|e| e.flip_hdr)),
+            aa_rmse: Num(a.map(|e| e.rmse)),
+            aa_psnr_db: Num(a.map(|e| e.psnr_db)),
+            aa_flip_ldr: Num(a.and_then(|e| e.flip_ldr)),
+            aa_flip_hdr: Num(a.and_then(|e| e.flip_hdr)),
+            total_rmse: Num(t.map(|e| e.rmse)),
+            total_psnr_db: Num(t.map(|e| e.psnr_db)),
+            total_flip_ldr: Num(t.and_then(|e| e.flip_ldr)),
+            total_flip_hdr: Num(t.and_then(|e| e.flip_hdr)),
+            total_psnr_peak: Num(t.map(|e| e.psnr_peak)),
             shading_fraction: Num(r.shading_fraction),
             edge_fraction: Num(r.edge_fraction),
             precision: Num(r.precision),
             recall: Num(r.recall),
+            decode_ops_per_sample: Num(r.decode_ops_per_sample.map(f64::from)),
+            bandwidth_tiled_mb: Num(r.error.is_none().then_some(r.bandwidth_mb.tiled)),
+            bandwidth_quad_mb: Num(r.bandwidth_mb.quad),
             encode_ms: Num(r.encode_ms),
             encode_ms_min: Num(r.timings.get("encode").map(|t| t.min_ms)),
             encode_ms_max: Num(r.timings.get("encode").map(|t| t.max_ms)),
@@ -103,6 +130,7 @@ impl<'a> CsvRow<'a> {
             resolve_ms: Num(r.resolve_ms),
             resolve_ms_min: Num(r.timings.get("resolve").map(|t| t.min_ms)),
             resolve_ms_max: Num(r.timings.get("resolve").map(|t| t.max_ms)),
+            resolve_pass_ms: Num(r.resolve_pass_ms),
             pareto_bytes: r.pareto.bytes,
             pareto_time: r.pareto.time,
             note,
@@ -110,23 +138,96 @@ impl<'a> CsvRow<'a> {
     }
 }
 
-/// The CSV text for `rows` (header line first, RFC 4180 quoting). An empty report still has its header.
-#[must_use]
-pub fn to_csv(rows: &[Row]) -> String {
-    let blank = Row::default();
-    let lines: Vec<CsvRow<'_>> =
-        if rows.is_empty() { vec![CsvRow::of(&blank)] } else { rows.iter().map(CsvRow::of).collect() };
+/// One line of `aggregate.csv`: a layout × detector over every frame.
+#[derive(Debug, Serialize)]
+#[allow(missing_docs)] // the field names are the CSV header, documented in docs/GUIDE.md
+pub struct AggregateCsvRow<'a> {
+    pub layout: &'a str,
+    pub bytes_per_sample: u32,
+    pub detector: &'a str,
+    pub culling: &'a str,
+    pub frames: usize,
+    pub failed_frames: usize,
+    pub layout_rmse_mean: Num,
+    pub layout_rmse_worst: Num,
+    pub layout_rmse_worst_frame: &'a str,
+    pub layout_flip_ldr_mean: Num,
+    pub layout_flip_ldr_worst: Num,
+    pub layout_flip_hdr_mean: Num,
+    pub aa_rmse_mean: Num,
+    pub total_rmse_mean: Num,
+    pub total_rmse_worst: Num,
+    pub normal_max_deg_worst: Num,
+    pub resolve_pass_ms_mean: Num,
+    pub bandwidth_tiled_mb_mean: Num,
+    pub bandwidth_quad_mb_mean: Num,
+    pub decode_ops_per_sample: Num,
+    pub pareto_bytes: bool,
+    pub pareto_time: bool,
+}
+
+impl<'a> AggregateCsvRow<'a> {
+    /// The CSV line of `r`.
+    #[must_use]
+    pub fn of(r: &'a AggregateRow) -> Self {
+        let mean = |s: &Option<Stat>| Num(s.as_ref().map(|s| s.mean));
+        let worst = |s: &Option<Stat>| Num(s.as_ref().map(|s| s.worst));
+        AggregateCsvRow {
+            layout: &r.layout,
+            bytes_per_sample: r.bytes_per_sample,
+            detector: &r.detector,
+            culling: r.culling.as_deref().unwrap_or(""),
+            frames: r.frames,
+            failed_frames: r.failed_frames,
+            layout_rmse_mean: mean(&r.layout_rmse),
+            layout_rmse_worst: worst(&r.layout_rmse),
+            layout_rmse_worst_frame: r.layout_rmse.as_ref().map_or("", |s| s.worst_frame.as_str()),
+            layout_flip_ldr_mean: mean(&r.layout_flip_ldr),
+            layout_flip_ldr_worst: worst(&r.layout_flip_ldr),
+            layout_flip_hdr_mean: mean(&r.layout_flip_hdr),
+            aa_rmse_mean: mean(&r.aa_rmse),
+            total_rmse_mean: mean(&r.total_rmse),
+            total_rmse_worst: worst(&r.total_rmse),
+            normal_max_deg_worst: worst(&r.normal_max_deg),
+            resolve_pass_ms_mean: mean(&r.resolve_pass_ms),
+            bandwidth_tiled_mb_mean: mean(&r.bandwidth_tiled_mb),
+            bandwidth_quad_mb_mean: mean(&r.bandwidth_quad_mb),
+            decode_ops_per_sample: Num(r.decode_ops_per_sample.map(f64::from)),
+            pareto_bytes: r.pareto.bytes,
+            pareto_time: r.pareto.time,
+        }
+    }
+}
+
+fn write_csv<T: Serialize>(lines: &[T]) -> String {
     let mut w = csv::WriterBuilder::new().terminator(csv::Terminator::Any(b'\n')).from_writer(Vec::new());
-    for l in &lines {
+    for l in lines {
         // Writing into a Vec cannot fail, and every field serializes to a string, number or bool.
         let _ = w.serialize(l);
     }
-    let text = String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default();
+    String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
+}
+
+/// The text of `aggregate.csv` (header line first).
+#[must_use]
+pub fn aggregate_csv(rows: &[AggregateRow]) -> String {
     if rows.is_empty() {
-        text.lines().next().map(|h| format!("{h}\n")).unwrap_or_default()
-    } else {
-        text
+        let blank = AggregateRow::default();
+        let text = write_csv(&[AggregateCsvRow::of(&blank)]);
+        return text.lines().next().map(|h| format!("{h}\n")).unwrap_or_default();
     }
+    write_csv(&rows.iter().map(AggregateCsvRow::of).collect::<Vec<_>>())
+}
+
+/// The CSV text for `rows` (header line first, RFC 4180 quoting). An empty report still has its header.
+#[must_use]
+pub fn to_csv(rows: &[Row]) -> String {
+    if rows.is_empty() {
+        let blank = Row::default();
+        let text = write_csv(&[CsvRow::of(&blank)]);
+        return text.lines().next().map(|h| format!("{h}\n")).unwrap_or_default();
+    }
+    write_csv(&rows.iter().map(CsvRow::of).collect::<Vec<_>>())
 }
 
 #[cfg(test)]
@@ -140,8 +241,11 @@ mod tests {
             layout: "a,b".into(),
             bytes_per_sample: 12,
             detector: "depth-normal".into(),
-            rmse: Some(0.25),
-            psnr_db: Some(f64::INFINITY),
+            layout_error: Some(crate::measure::image::ErrorSet {
+                rmse: 0.25,
+                psnr_db: f64::INFINITY,
+                ..Default::default()
+            }),
             ..Default::default()
         };
         r.set_timing("encode", Timing::from_ms(vec![1.0, 2.0, 3.0]).unwrap());
@@ -149,10 +253,10 @@ mod tests {
         let csv = to_csv(&[r.clone(), Row { error: Some("failed".into()), ..r }]);
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines.len(), 3);
-        assert_eq!(lines[0].split(',').count(), 34);
-        assert!(lines[0].starts_with("layout,bytes_per_sample,footprint_bytes,detector,culling,"));
+        assert_eq!(lines[0].split(',').count(), 47);
+        assert!(lines[0].starts_with("frame,layout,bytes_per_sample,footprint_bytes,detector,culling,"));
         assert_eq!(to_csv(&[]), format!("{}\n", lines[0]), "an empty report keeps its header");
-        assert!(lines[1].starts_with("\"a,b\",12,0,depth-normal,,"));
+        assert!(lines[1].starts_with(",\"a,b\",12,0,depth-normal,,"));
         assert!(lines[1].contains(",0.25,inf,"));
         assert!(lines[1].contains(",2,1,3,"), "encode median, min, max: {}", lines[1]);
         assert!(lines[1].ends_with(",\"say \"\"why\"\"\""));

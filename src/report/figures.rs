@@ -1,6 +1,7 @@
 //! The figures of a report: error against bytes and against run time (PNG + SVG), per-attribute error heatmaps
 //! of the worst layouts, the edge masks of each detector and the light-count heatmap.
 
+use crate::analysis::aggregate::{AggregateRow, Over};
 use crate::analysis::pareto;
 use crate::analysis::row::{Figure, Row};
 use crate::analysis::sweep::SweepOutput;
@@ -20,38 +21,41 @@ pub const WORST_LAYOUTS: usize = 2;
 /// Heatmaps wider than this are downscaled (nearest pixel) to keep the report folder small.
 pub const MAX_PICTURE_WIDTH: u32 = 960;
 
-/// One point per layout: its row with the least image error (over detectors and culling modes), with the Pareto
-/// front of those points. The y axis is logarithmic when the errors span more than a factor of 20.
-fn scatter(rows: &[Row], title: &str, x_label: &str, x: impl Fn(&Row) -> Option<f64>) -> ScatterPlot {
+/// One point per layout: its row with the least layout error (over detectors and culling modes), with the Pareto
+/// front of those points. The y axis is logarithmic when the errors span more than a factor of 20; layouts with
+/// layout error 0 (lossless) sit on the axis of a linear plot and are left out of a logarithmic one.
+fn scatter<'a>(
+    rows: impl IntoIterator<Item = (&'a str, Option<f64>, Option<f64>)>,
+    title: &str,
+    x_label: &str,
+    y_what: &str,
+) -> ScatterPlot {
     let mut best: Vec<(&str, f64, f64)> = Vec::new();
-    for r in rows {
-        let (Some(xv), Some(y)) = (x(r), r.rmse) else { continue };
+    for (layout, xv, y) in rows {
+        let (Some(xv), Some(y)) = (xv, y) else { continue };
         if !(xv.is_finite() && y.is_finite()) {
             continue;
         }
-        match best.iter_mut().find(|b| b.0 == r.layout) {
-            Some(b) if y < b.2 => *b = (&r.layout, xv, y),
+        match best.iter_mut().find(|b| b.0 == layout) {
+            Some(b) if y < b.2 => *b = (layout, xv, y),
             Some(_) => {}
-            None => best.push((&r.layout, xv, y)),
+            None => best.push((layout, xv, y)),
         }
     }
     let front = pareto::front(&best.iter().map(|b| (b.1, b.2)).collect::<Vec<_>>());
-    let (lo, hi) = best.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.2), b.max(p.2)));
+    let (lo, hi) =
+        best.iter().filter(|p| p.2 > 0.0).fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.2), b.max(p.2)));
     let log_y = lo > 0.0 && hi / lo > 20.0;
+    if log_y {
+        best.retain(|p| p.2 > 0.0);
+    }
     let points = best
         .iter()
         .zip(front)
         .map(|(b, f)| PlotPoint { x: b.1, y: b.2, label: b.0.to_string(), on_front: f })
         .collect();
-    let y_label = if log_y { "image RMSE (log)" } else { "image RMSE" };
-    ScatterPlot {
-        title: title.into(),
-        x_label: x_label.into(),
-        y_label: y_label.into(),
-        log_x: None,
-        log_y: Some(log_y),
-        points,
-    }
+    let y_label = if log_y { format!("{y_what} (log)") } else { y_what.to_string() };
+    ScatterPlot { title: title.into(), x_label: x_label.into(), y_label, log_x: None, log_y: Some(log_y), points }
 }
 
 /// A heatmap plot of per-pixel `values` with axes and a colour bar, at most [`MAX_PICTURE_WIDTH`] pixels of grid.
@@ -101,37 +105,121 @@ pub fn image_picture(img: &crate::image::HdrImage) -> RgbImage {
         .expect("an HdrImage holds width × height pixels")
 }
 
-/// Builds every figure of a sweep. Returns the files and their captions.
-pub fn figures(gb: &GBuffer, out: &SweepOutput) -> Result<(Vec<Attachment>, Vec<Figure>)> {
+/// Writes the two scatter plots (PNG + SVG) of a report: layout error against bytes and against time.
+fn plot_pair(
+    files: &mut Vec<Attachment>,
+    figs: &mut Vec<Figure>,
+    by_bytes: &ScatterPlot,
+    by_time: &ScatterPlot,
+    over: &str,
+) -> Result<()> {
+    let (w, h) = PLOT_SIZE;
+    for (stem, p, what) in
+        [("error_vs_bytes", by_bytes, "bytes per sample"), ("error_vs_time", by_time, "resolve pass time")]
+    {
+        let name = format!("{stem}.png");
+        files.push(Attachment { name: name.clone(), bytes: crate::base::picture::png_bytes(&p.to_png_image(w, h)?)? });
+        figs.push(Figure {
+            file: name,
+            caption: format!(
+                "Layout error{over} against {what}, one point per layout (its best detector); the Pareto front in red \
+                 (SVG: {stem}.svg)"
+            ),
+        });
+        files.push(Attachment { name: format!("{stem}.svg"), bytes: p.to_svg(w, h)?.into_bytes() });
+    }
+    Ok(())
+}
+
+/// The plots of a report over several frames: each layout's aggregated layout error (mean or worst frame).
+pub fn aggregate_figures(rows: &[AggregateRow], over: Over) -> Result<(Vec<Attachment>, Vec<Figure>)> {
+    let (mut files, mut figs) = (Vec::new(), Vec::new());
+    let ok = || rows.iter().filter(|r| r.failed_frames == 0);
+    let err = |r: &AggregateRow| r.layout_rmse.as_ref().map(|s| s.over(over));
+    let y = format!("layout error, {} frame (RMSE)", over.name());
+    let by_bytes = scatter(
+        ok().map(|r| (r.layout.as_str(), Some(f64::from(r.bytes_per_sample)), err(r))),
+        "Layout error over all frames vs bytes per sample",
+        "bytes per sample",
+        &y,
+    );
+    let by_time = scatter(
+        ok().map(|r| (r.layout.as_str(), r.resolve_pass_ms.as_ref().map(|s| s.mean), err(r))),
+        "Layout error over all frames vs resolve pass time",
+        "mean decode + resolve (ms)",
+        &y,
+    );
+    plot_pair(&mut files, &mut figs, &by_bytes, &by_time, &format!(" ({} frame)", over.name()))?;
+    Ok((files, figs))
+}
+
+/// Builds every figure of one frame's sweep (with the two scatter plots when `with_plots`; a report over several
+/// frames draws them from the aggregate instead). `prefix` starts every file name. Returns the files and their
+/// captions.
+pub fn figures(
+    gb: &GBuffer,
+    out: &SweepOutput,
+    with_plots: bool,
+    prefix: &str,
+) -> Result<(Vec<Attachment>, Vec<Figure>)> {
     let mut files = Vec::new();
     let mut figs = Vec::new();
-    let mut png = |name: &str, img: RgbImage, caption: String, files: &mut Vec<Attachment>| -> Result<()> {
-        files.push(Attachment { name: name.into(), bytes: crate::base::picture::png_bytes(&fit(img))? });
-        figs.push(Figure { file: name.into(), caption });
+    let png = |name: &str,
+               img: RgbImage,
+               caption: String,
+               files: &mut Vec<Attachment>,
+               figs: &mut Vec<Figure>|
+     -> Result<()> {
+        let name = format!("{prefix}{name}");
+        files.push(Attachment { name: name.clone(), bytes: crate::base::picture::png_bytes(&fit(img))? });
+        figs.push(Figure { file: name, caption });
         Ok(())
     };
-    let (w, h) = PLOT_SIZE;
-    let by_bytes = scatter(&out.rows, "Image error vs bytes per sample", "bytes per sample", |r| {
-        Some(f64::from(r.bytes_per_sample))
-    });
-    let by_time =
-        scatter(&out.rows, "Image error vs run time", "encode + decode + detect + resolve (ms)", |r| r.total_ms);
-    for (stem, p, what) in [("error_vs_bytes", &by_bytes, "bytes per sample"), ("error_vs_time", &by_time, "run time")]
-    {
-        png(&format!("{stem}.png"), p.to_png_image(w, h)?, format!("Image RMSE against {what}, one point per layout (its best detector); the Pareto front in red (SVG: {stem}.svg)"), &mut files)?;
-        files.push(Attachment { name: format!("{stem}.svg"), bytes: p.to_svg(w, h)?.into_bytes() });
+    if with_plots {
+        let rows = || out.rows.iter().filter(|r| r.error.is_none());
+        let by_bytes = scatter(
+            rows().map(|r| (r.layout.as_str(), Some(f64::from(r.bytes_per_sample)), r.layout_rmse())),
+            "Layout error vs bytes per sample",
+            "bytes per sample",
+            "layout error (image RMSE)",
+        );
+        let by_time = scatter(
+            rows().map(|r| (r.layout.as_str(), r.resolve_pass_ms, r.layout_rmse())),
+            "Layout error vs resolve pass time",
+            "decode + resolve (ms)",
+            "layout error (image RMSE)",
+        );
+        plot_pair(&mut files, &mut figs, &by_bytes, &by_time, "")?;
     }
     png(
         "reference.png",
         image_picture(&out.reference),
         "The reference image (every sample shaded, unquantized G-buffer), tone-mapped".into(),
         &mut files,
+        &mut figs,
     )?;
+    if let Some((name, map)) = &out.worst_flip {
+        let img =
+            RgbImage::from_raw(map.width as u32, map.height as u32, crate::measure::flip::flip_map_to_magma_rgb8(map))
+                .expect("a FLIP map holds width × height values");
+        png(
+            "flip_worst_layout.png",
+            img,
+            format!(
+                "LDR-FLIP error map of {name}, the layout with the largest layout FLIP (mean {:.4}; magma: black = no \
+                 visible difference, yellow = the largest)",
+                map.mean
+            ),
+            &mut files,
+            &mut figs,
+        )?;
+    }
 
-    // The worst layouts by their best image error.
+    // The worst layouts by their best layout error.
     let mut worst: Vec<(&str, f64)> = Vec::new();
     for m in &out.maps {
-        let best = out.rows.iter().filter(|r| r.layout == m.layout).filter_map(|r| r.rmse).fold(f64::NAN, f64::min);
+        let best =
+            out.rows.iter().filter(|r| r.layout == m.layout).filter_map(Row::layout_rmse).fold(f64::NAN, f64::min);
         if best.is_finite() {
             worst.push((&m.layout, best));
         }
@@ -144,7 +232,7 @@ pub fn figures(gb: &GBuffer, out: &SweepOutput) -> Result<(Vec<Attachment>, Vec<
             ("normal", "degrees", &m.normal_deg),
             ("depth", "relative", &m.depth_rel),
             ("albedo", "absolute", &m.albedo_abs),
-            ("image", "absolute radiance", &m.image_abs),
+            ("image", "absolute radiance against the exact G-buffer's image", &m.image_abs),
         ] {
             let Some(v) = map else { continue };
             let max = percentile_max(v);
@@ -153,6 +241,7 @@ pub fn figures(gb: &GBuffer, out: &SweepOutput) -> Result<(Vec<Attachment>, Vec<
                 heat_plot(format!("{name}: {what} error"), v, gb, max, format!("{what} error ({unit})"))?,
                 format!("{name}: per-pixel {what} error ({unit}; the colour bar's top = {max:.3e} or more, grey = background)"),
                 &mut files,
+                &mut figs,
             )?;
         }
     }
@@ -162,6 +251,7 @@ pub fn figures(gb: &GBuffer, out: &SweepOutput) -> Result<(Vec<Attachment>, Vec<
             mask_picture(mask),
             format!("Edge mask of {det}: white = shaded per sample ({:.1}% of pixels)", 100.0 * mask.edge_fraction()),
             &mut files,
+            &mut figs,
         )?;
     }
     if let Some(lpp) = &out.lights_per_pixel {
@@ -172,6 +262,7 @@ pub fn figures(gb: &GBuffer, out: &SweepOutput) -> Result<(Vec<Attachment>, Vec<
             heat_plot("Lights per pixel after culling".into(), &v, gb, max, "lights evaluated".into())?,
             format!("Lights reaching each pixel after culling (colour bar: 0 to {max})"),
             &mut files,
+            &mut figs,
         )?;
     }
     Ok((files, figs))

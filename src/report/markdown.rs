@@ -1,7 +1,9 @@
 //! `report.md`: the tables a person reads, with the figures inline.
 
+use crate::analysis::aggregate::{AggregateRow, DetectorAggregate, Stat};
 use crate::analysis::needs::Needs;
-use crate::analysis::row::{Report, Row};
+use crate::analysis::row::{Frame, ParetoFlags, Report, Row};
+use crate::measure::image::ErrorSet;
 use std::fmt::Write as _;
 
 /// Formats an optional number with `prec` decimals; `—` when missing, `∞` when infinite.
@@ -95,7 +97,25 @@ pub fn needs_section(n: &Needs) -> String {
     s
 }
 
-/// The results table.
+fn flip_pair(e: Option<&ErrorSet>) -> String {
+    match e {
+        Some(e) if e.flip_ldr.is_some() || e.flip_hdr.is_some() => {
+            format!("{} / {}", fmt_opt(e.flip_ldr, 4), fmt_opt(e.flip_hdr, 4))
+        }
+        _ => "—".into(),
+    }
+}
+
+fn pareto_cell(p: ParetoFlags) -> &'static str {
+    match (p.bytes, p.time) {
+        (true, true) => "bytes, time",
+        (true, false) => "bytes",
+        (false, true) => "time",
+        (false, false) => "",
+    }
+}
+
+/// The results table of one frame.
 #[must_use]
 pub fn rows_table(rows: &[Row]) -> String {
     let culling = rows.iter().any(|r| r.culling.is_some());
@@ -103,21 +123,36 @@ pub fn rows_table(rows: &[Row]) -> String {
     if culling {
         s.push_str(" culling |");
     }
-    s.push_str(
-        " normal mean / p95 / max ° | depth rel max | PSNR dB | RMSE | layout RMSE | shaded | precision / recall | \
-         encode ms | decode ms | detect ms | resolve ms | Pareto |\n|---|--:|--:|---|",
-    );
+    let cols = [
+        "normal mean / max °",
+        "layout RMSE",
+        "layout PSNR dB",
+        "layout FLIP LDR / HDR",
+        "AA RMSE",
+        "total RMSE",
+        "total FLIP LDR / HDR",
+        "shaded",
+        "precision / recall",
+        "decode ops",
+        "traffic tiled / quad MB",
+        "decode ms",
+        "resolve ms",
+        "detect ms",
+        "encode ms (tool)",
+        "Pareto",
+    ];
+    for c in cols {
+        let _ = write!(s, " {c} |");
+    }
+    s.push_str("\n|---|--:|--:|---|");
     if culling {
         s.push_str("---|");
     }
-    s.push_str("--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|---|\n");
+    for _ in 1..cols.len() {
+        s.push_str("--:|");
+    }
+    s.push_str("---|\n");
     for r in rows {
-        let pareto = match (r.pareto.bytes, r.pareto.time) {
-            (true, true) => "bytes, time",
-            (true, false) => "bytes",
-            (false, true) => "time",
-            (false, false) => "",
-        };
         let _ = write!(
             s,
             "| {} | {} | {:.1} | {} |",
@@ -130,26 +165,32 @@ pub fn rows_table(rows: &[Row]) -> String {
             let _ = write!(s, " {} |", r.culling.as_deref().unwrap_or("—"));
         }
         if let Some(e) = &r.error {
-            let _ = writeln!(s, " error: {} | | | | | | | | | | | |", e.replace('|', "/"));
+            let _ = writeln!(s, " error: {} |{}", e.replace('|', "/"), " |".repeat(cols.len() - 1));
             continue;
         }
+        let (l, a, t) = (r.layout_error.as_ref(), r.aa_error.as_ref(), r.total_error.as_ref());
         let _ = writeln!(
             s,
-            " {} / {} / {} | {} | {} | {} | {} | {} | {} / {} | {} | {} | {} | {} | {pareto} |",
+            " {} / {} | {} | {} | {} | {} | {} | {} | {} | {} / {} | {} | {} / {} | {} | {} | {} | {} | {} |",
             fmt_opt(r.normal_mean_deg, 3),
-            fmt_opt(r.normal_p95_deg, 3),
             fmt_opt(r.normal_max_deg, 3),
-            fmt_opt(r.depth_rel_max, 6),
-            fmt_opt(r.psnr_db, 2),
-            fmt_opt(r.rmse, 5),
-            fmt_opt(r.layout_rmse, 5),
+            fmt_opt(l.map(|e| e.rmse), 5),
+            fmt_opt(l.map(|e| e.psnr_db), 2),
+            flip_pair(l),
+            fmt_opt(a.map(|e| e.rmse), 5),
+            fmt_opt(t.map(|e| e.rmse), 5),
+            flip_pair(t),
             pct(r.shading_fraction),
             fmt_opt(r.precision, 3),
             fmt_opt(r.recall, 3),
-            timing_cell(r, "encode"),
+            r.decode_ops_per_sample.map_or("—".into(), |n| n.to_string()),
+            fmt_opt(Some(r.bandwidth_mb.tiled), 1),
+            fmt_opt(r.bandwidth_mb.quad, 1),
             timing_cell(r, "decode"),
-            timing_cell(r, "detect"),
             timing_cell(r, "resolve"),
+            timing_cell(r, "detect"),
+            timing_cell(r, "encode"),
+            pareto_cell(r.pareto),
         );
     }
     let notes: Vec<String> =
@@ -162,46 +203,164 @@ pub fn rows_table(rows: &[Row]) -> String {
     s
 }
 
-/// The whole `report.md`.
+fn stat_cell(st: &Option<Stat>, prec: usize, frames: bool) -> String {
+    match st {
+        None => "—".into(),
+        Some(st) if frames => {
+            format!("{} / {} ({})", fmt_opt(Some(st.mean), prec), fmt_opt(Some(st.worst), prec), st.worst_frame)
+        }
+        Some(st) => format!("{} / {}", fmt_opt(Some(st.mean), prec), fmt_opt(Some(st.worst), prec)),
+    }
+}
+
+/// The table of the rows aggregated over frames: mean / worst (worst frame).
 #[must_use]
-pub fn to_markdown(rep: &Report) -> String {
-    let mut s = String::new();
-    let _ = writeln!(s, "# gbuf report: {}\n", rep.input);
+pub fn aggregate_table(rows: &[AggregateRow]) -> String {
+    let mut s = String::from(
+        "| layout | B/sample | detector | culling | frames | layout RMSE mean / worst (frame) | layout FLIP LDR mean / \
+         worst | AA RMSE mean / worst | total RMSE mean / worst | resolve pass ms mean / worst | traffic tiled MB \
+         mean | traffic quad MB mean | Pareto |\n|---|--:|---|---|--:|--:|--:|--:|--:|--:|--:|--:|---|\n",
+    );
+    for r in rows {
+        let failed = if r.failed_frames > 0 { format!(" ({} failed)", r.failed_frames) } else { String::new() };
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {}{failed} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            r.layout,
+            r.bytes_per_sample,
+            r.detector,
+            r.culling.as_deref().unwrap_or("—"),
+            r.frames,
+            stat_cell(&r.layout_rmse, 5, true),
+            stat_cell(&r.layout_flip_ldr, 4, false),
+            stat_cell(&r.aa_rmse, 5, false),
+            stat_cell(&r.total_rmse, 5, false),
+            stat_cell(&r.resolve_pass_ms, 1, false),
+            fmt_opt(r.bandwidth_tiled_mb.as_ref().map(|s| s.mean), 1),
+            fmt_opt(r.bandwidth_quad_mb.as_ref().map(|s| s.mean), 1),
+            pareto_cell(r.pareto),
+        );
+    }
+    s
+}
+
+/// The detector table: anti-aliasing error against the shading each detector costs.
+#[must_use]
+pub fn detector_table(rows: &[DetectorAggregate]) -> String {
+    let mut s = String::from(
+        "| detector | shaded (mean) | AA RMSE mean / worst | AA FLIP LDR mean / worst | AA FLIP HDR mean / worst | \
+         on the front |\n|---|--:|--:|--:|--:|---|\n",
+    );
+    for d in rows {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {} |",
+            d.detector,
+            pct(d.shading_fraction.as_ref().map(|s| s.mean)),
+            stat_cell(&d.aa_rmse, 5, false),
+            stat_cell(&d.aa_flip_ldr, 4, false),
+            stat_cell(&d.aa_flip_hdr, 4, false),
+            if d.on_front { "yes" } else { "" }
+        );
+    }
+    s
+}
+
+fn frame_header(s: &mut String, f: &Frame, rows: usize, runs: usize) {
     let _ = writeln!(
         s,
-        "{}×{} pixels, {} samples per pixel, {:.1}% of samples covered, {} lights ({}). Sweep of {} rows took \
-         {:.1} s; times are medians of {} runs with (min–max).\n",
-        rep.width,
-        rep.height,
-        rep.samples,
-        100.0 * rep.coverage,
-        rep.lights,
-        rep.lights_source,
-        rep.rows.len(),
-        rep.sweep_seconds,
-        rep.runs
+        "{}×{} pixels, {} samples per pixel, {:.1}% of samples covered, {} lights ({}). Sweep of {rows} rows took \
+         {:.1} s; times are medians of {runs} runs with (min–max).\n",
+        f.width,
+        f.height,
+        f.samples,
+        100.0 * f.coverage,
+        f.lights,
+        f.lights_source,
+        f.sweep_seconds,
     );
-    if let Some(t) = rep.reference {
+    if let Some(t) = f.reference {
         let _ = writeln!(
             s,
             "The reference (every sample shaded, unquantized G-buffer) took {:.1} ms ({:.1}–{:.1}).\n",
             t.median_ms, t.min_ms, t.max_ms
         );
     }
-    s.push_str("## What the scene needs\n\n");
-    s.push_str(&needs_section(&rep.needs));
-    s.push_str("\n## Layouts × detectors\n\n");
-    s.push_str(&rows_table(&rep.rows));
-    s.push_str("\n## Pareto fronts\n\n");
-    for (what, pick) in [("image RMSE against bytes per sample", true), ("image RMSE against run time", false)] {
-        let mut names: Vec<String> = rep
-            .rows
+}
+
+fn fronts(s: &mut String, rows: &[Row]) {
+    for (what, pick) in
+        [("layout error against bytes per sample", true), ("layout error against the resolve pass time", false)]
+    {
+        let mut names: Vec<String> = rows
             .iter()
             .filter(|r| if pick { r.pareto.bytes } else { r.pareto.time })
             .map(|r| format!("{} × {}", r.layout, r.detector))
             .collect();
         names.dedup();
         let _ = writeln!(s, "- {what}: {}", if names.is_empty() { "none".into() } else { names.join(", ") });
+    }
+}
+
+/// The whole `report.md`.
+#[must_use]
+pub fn to_markdown(rep: &Report) -> String {
+    let mut s = String::new();
+    let multi = rep.frames.len() > 1;
+    if multi {
+        let _ = writeln!(s, "# gbuf report: {} frames\n", rep.frames.len());
+    } else {
+        let _ = writeln!(s, "# gbuf report: {}\n", rep.frames.first().map_or("(no frame)", |f| f.input.as_str()));
+    }
+    let v = &rep.viewing;
+    let _ = writeln!(
+        s,
+        "Errors are kept apart: the **layout error** (image lit from the unpacked G-buffer against the exact \
+         G-buffer lit with the same detector and schedule), the **anti-aliasing (AA) error** (the exact G-buffer lit \
+         with the detector against the every-sample reference) and the **total** (unpacked G-buffer against the \
+         reference). Fronts rank layouts by layout error. FLIP ({} rows): LDR-FLIP of the displayed image \
+         ({} tone map, exposure {}, 8-bit sRGB, as `gbuf resolve --png`) and HDR-FLIP of the linear image, at {:.2} \
+         pixels per degree. PSNR's peak is the largest channel value of the image compared against.\n",
+        rep.flip.name(),
+        v.tone_map.name(),
+        v.exposure,
+        v.pixels_per_degree
+    );
+    if multi {
+        let over = rep.over.name();
+        s.push_str(&format!("\n## Over all frames (fronts by the {over} frame)\n\n"));
+        s.push_str(&aggregate_table(&rep.aggregate));
+        s.push('\n');
+        for (what, pick) in [("bytes per sample", true), ("mean resolve pass time", false)] {
+            let names: Vec<String> = rep
+                .aggregate
+                .iter()
+                .filter(|r| if pick { r.pareto.bytes } else { r.pareto.time })
+                .map(|r| format!("{} × {}", r.layout, r.detector))
+                .collect();
+            let _ = writeln!(
+                s,
+                "- layout error ({over}) against {what}: {}",
+                if names.is_empty() { "none".into() } else { names.join(", ") }
+            );
+        }
+    }
+    s.push_str("\n## Detectors: anti-aliasing error against the shading it costs\n\n");
+    s.push_str(&detector_table(&rep.detectors));
+    for f in &rep.frames {
+        let rows: Vec<Row> = rep.rows.iter().filter(|r| r.frame == f.input).cloned().collect();
+        if multi {
+            let _ = writeln!(s, "\n## Frame {}\n", f.input);
+        } else {
+            s.push('\n');
+        }
+        frame_header(&mut s, f, rows.len(), rep.runs);
+        s.push_str(if multi { "### What the scene needs\n\n" } else { "## What the scene needs\n\n" });
+        s.push_str(&needs_section(&f.needs));
+        s.push_str(if multi { "\n### Layouts × detectors\n\n" } else { "\n## Layouts × detectors\n\n" });
+        s.push_str(&rows_table(&rows));
+        s.push_str(if multi { "\n### Pareto fronts\n\n" } else { "\n## Pareto fronts\n\n" });
+        fronts(&mut s, &rows);
     }
     if !rep.figures.is_empty() {
         s.push_str("\n## Figures\n\n");
@@ -211,19 +370,19 @@ pub fn to_markdown(rep: &Report) -> String {
     }
     s.push_str(
         "\n## Reading the numbers\n\n\
+         docs/GUIDE.md gives every column with its formula. In short:\n\n\
          - **B/sample**: bytes one MSAA sample takes in the layout's render targets; footprint = B/sample × pixels × \
          samples.\n\
-         - **normal °**: angle between the stored and the decoded normal over covered samples.\n\
-         - **PSNR / RMSE**: the lit image from the decoded G-buffer (shaded per pixel or per sample as the detector \
-         decides) against the reference lit from the unquantized G-buffer with every sample shaded. PSNR is \
-         infinite when the images are identical. It counts both the layout's quantization and the detector's \
-         aliasing (edge samples shaded once).\n\
-         - **layout RMSE**: the same lit image against the exact G-buffer lit with the same detector: what the \
-         layout's quantization alone costs.\n\
+         - **layout error**: what the layout's quantization alone costs; 0 for a lossless layout.\n\
+         - **AA error**: what shading edge pixels once (per the detector) costs; the same for every layout.\n\
+         - **total**: both, against the reference lit from the unquantized G-buffer with every sample shaded.\n\
+         - **FLIP**: NVIDIA's perceptual difference (0 = indistinguishable, 1 = most different), mean over pixels.\n\
          - **shaded**: shading evaluations / (pixels × samples): 100% is supersampling, 1/samples is one per pixel.\n\
-         - **precision / recall**: of the detector's edge pixels against ground-truth edges (pixels whose samples \
-         shade differently).\n\
-         - **Pareto**: no other row has both less error and fewer bytes (or less run time).\n",
+         - **decode ops**: arithmetic operations per sample the lighting pass spends unpacking the layout.\n\
+         - **traffic**: modelled G-buffer bytes per frame; tiled = write + one read per covered sample + output; \
+         quad = write + per light-fragment pair one G-buffer read and an RGBA16F read-modify-write.\n\
+         - **resolve pass**: decode + resolve medians, the time axis of the fronts; encode is the tool's own cost.\n\
+         - **Pareto**: no other row has both less layout error and fewer bytes (or a shorter resolve pass).\n",
     );
     s
 }
@@ -240,29 +399,40 @@ mod tests {
             Row {
                 layout: "fat-20".into(),
                 bytes_per_sample: 20,
+                frame: "room".into(),
                 detector: "depth".into(),
-                rmse: Some(0.1),
+                layout_error: Some(ErrorSet { rmse: 0.1, ..Default::default() }),
                 ..Default::default()
             },
             Row {
                 layout: "bad".into(),
+                frame: "room".into(),
                 detector: "depth".into(),
                 error: Some("no | way".into()),
                 ..Default::default()
             },
         ];
         let rep = Report {
-            input: "room".into(),
-            width: 4,
-            height: 2,
-            samples: 1,
-            coverage: 0.0,
-            lights: 0,
-            lights_source: "none".into(),
+            frames: vec![Frame {
+                input: "room".into(),
+                width: 4,
+                height: 2,
+                samples: 1,
+                coverage: 0.0,
+                lights: 0,
+                lights_source: "none".into(),
+                reference: None,
+                sweep_seconds: 0.5,
+                needs: analyze(&GBuffer::new(4, 2, 1).unwrap()),
+                detectors: vec![],
+            }],
             runs: 3,
-            reference: None,
-            sweep_seconds: 0.5,
-            needs: analyze(&GBuffer::new(4, 2, 1).unwrap()),
+            viewing: Default::default(),
+            flip: Default::default(),
+            over: Default::default(),
+            aggregate: crate::analysis::aggregate::aggregate(&rows, Default::default()),
+            detectors: vec![],
+            budget: None,
             rows,
             figures: vec![crate::analysis::row::Figure { file: "a.png".into(), caption: "A plot".into() }],
         };

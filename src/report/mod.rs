@@ -7,33 +7,58 @@ pub mod markdown;
 pub mod plot;
 pub mod write;
 
+use crate::analysis::aggregate::{aggregate, aggregate_detectors, BudgetChoice, Over};
 use crate::analysis::needs;
-use crate::analysis::row::Report;
-use crate::analysis::sweep::{self, SweepConfig};
+use crate::analysis::row::{Figure, Frame, Report, Row};
+use crate::analysis::sweep::{self, FlipRows, SweepConfig};
 use crate::analysis::{pruned_layout, ReportInput};
 use crate::error::Result;
+use crate::measure::image::Viewing;
 use crate::report::write::Attachment;
 
-/// Runs the needs analysis and the sweep, prunes, and builds the figures: everything a report folder holds.
-pub fn run(
+/// One frame's part of a report: its description, its rows, and its figures (file names prefixed as asked).
+#[derive(Clone, Debug)]
+pub struct FrameResult {
+    /// The frame.
+    pub frame: Frame,
+    /// Its rows (`frame` set to the frame's input name; fronts marked within the frame).
+    pub rows: Vec<Row>,
+    /// Figure files.
+    pub files: Vec<Attachment>,
+    /// Their captions.
+    pub figures: Vec<Figure>,
+}
+
+/// Runs the needs analysis and the sweep on one frame, prunes, and builds the frame's figures. With
+/// `with_plots` the scatter plots of this frame are drawn (a single-frame report); `prefix` starts the figures'
+/// file names.
+pub fn run_frame(
     input: &ReportInput<'_>,
     cfg: &SweepConfig,
+    with_plots: bool,
+    prefix: &str,
     progress: sweep::Progress<'_>,
-) -> Result<(Report, Vec<Attachment>)> {
+) -> Result<FrameResult> {
     let gb = input.gbuffer;
     let mut needs = needs::analyze(gb);
-    let out = sweep::sweep(gb, input.lights, cfg, progress)?;
-    let (mut files, figures) = figures::figures(gb, &out)?;
+    let mut out = sweep::sweep(gb, input.lights, cfg, progress)?;
+    for r in &mut out.rows {
+        r.frame.clone_from(&input.name);
+    }
+    for d in &mut out.detectors {
+        d.frame.clone_from(&input.name);
+    }
+    let (mut files, figures) = figures::figures(gb, &out, with_plots, prefix)?;
     if let Some((p, layout)) = pruned_layout(input, &needs, cfg, &out) {
         if !p.changes.is_empty() {
             if let Ok(text) = layout.spec().to_text(crate::layout::SpecSyntax::Toml) {
-                files.push(Attachment { name: "pruned_layout.toml".into(), bytes: text.into_bytes() });
+                files.push(Attachment { name: format!("{prefix}pruned_layout.toml"), bytes: text.into_bytes() });
             }
         }
         needs.pruned_layout = Some(p);
     }
     let covered = gb.len() - gb.background_samples();
-    let rep = Report {
+    let frame = Frame {
         input: input.name.clone(),
         width: gb.width,
         height: gb.height,
@@ -41,12 +66,80 @@ pub fn run(
         coverage: if gb.is_empty() { 0.0 } else { covered as f64 / gb.len() as f64 },
         lights: input.lights.len(),
         lights_source: input.lights_source.clone(),
-        runs: cfg.runs.max(1),
         reference: Some(out.reference_timing),
         sweep_seconds: out.seconds,
         needs,
-        rows: out.rows,
+        detectors: out.detectors,
+    };
+    Ok(FrameResult { frame, rows: out.rows, files, figures })
+}
+
+/// How per-frame results are put together: the settings they were measured with and how to aggregate them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Assembly {
+    /// Timing runs per stage.
+    pub runs: usize,
+    /// How the images were shown for FLIP.
+    pub viewing: Viewing,
+    /// Which rows got FLIP.
+    pub flip: FlipRows,
+    /// Mean or worst frame.
+    pub over: Over,
+    /// A byte budget to pick the winning layout for.
+    pub max_bytes: Option<u32>,
+}
+
+impl Assembly {
+    /// The settings of `cfg`, aggregated by `over`.
+    #[must_use]
+    pub fn of(cfg: &SweepConfig, over: Over, max_bytes: Option<u32>) -> Self {
+        Assembly { runs: cfg.runs.max(1), viewing: cfg.viewing, flip: cfg.flip, over, max_bytes }
+    }
+}
+
+/// Assembles a report from per-frame results (of one run, or read back from several `report.json` files):
+/// aggregates the rows and detectors over the frames and, for more than one frame, draws the aggregate plots.
+/// Returns the report and the plot files (the frames' own figures are the caller's).
+pub fn assemble(
+    frames: Vec<Frame>,
+    rows: Vec<Row>,
+    mut figures: Vec<Figure>,
+    how: &Assembly,
+) -> Result<(Report, Vec<Attachment>)> {
+    let over = how.over;
+    let aggregate_rows = aggregate(&rows, over);
+    let budget = how.max_bytes.map(|b| BudgetChoice::of(&aggregate_rows, b, over));
+    let detectors: Vec<_> = frames.iter().flat_map(|f| f.detectors.iter().cloned()).collect();
+    let detectors = aggregate_detectors(&detectors, over);
+    let mut files = Vec::new();
+    if frames.len() > 1 {
+        let (f, figs) = figures::aggregate_figures(&aggregate_rows, over)?;
+        files = f;
+        figures.splice(0..0, figs);
+    }
+    let rep = Report {
+        frames,
+        runs: how.runs,
+        viewing: how.viewing,
+        flip: how.flip,
+        over,
+        rows,
+        aggregate: aggregate_rows,
+        detectors,
+        budget,
         figures,
     };
+    Ok((rep, files))
+}
+
+/// A single-frame report: [`run_frame`] and [`assemble`].
+pub fn run(
+    input: &ReportInput<'_>,
+    cfg: &SweepConfig,
+    progress: sweep::Progress<'_>,
+) -> Result<(Report, Vec<Attachment>)> {
+    let f = run_frame(input, cfg, true, "", progress)?;
+    let (rep, mut files) = assemble(vec![f.frame], f.rows, f.figures, &Assembly::of(cfg, Over::default(), None))?;
+    files.extend(f.files);
     Ok((rep, files))
 }

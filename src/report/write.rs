@@ -43,6 +43,7 @@ pub fn write_folder(dir: &Path, rep: &Report, attachments: &[Attachment]) -> Res
         put(&a.name, &a.bytes)?;
     }
     put("report.csv", csv::to_csv(&rep.rows).as_bytes())?;
+    put("aggregate.csv", csv::aggregate_csv(&rep.aggregate).as_bytes())?;
     put("report.json", to_json(rep)?.as_bytes())?;
     put("report.md", markdown::to_markdown(rep).as_bytes())?;
     Ok(written)
@@ -55,19 +56,37 @@ mod tests {
     use crate::analysis::row::Row;
 
     fn rep() -> Report {
+        let rows = vec![Row {
+            layout: "x".into(),
+            layout_error: Some(crate::measure::image::ErrorSet {
+                psnr_db: f64::INFINITY,
+                rmse: 0.0,
+                ..Default::default()
+            }),
+            ..Default::default()
+        }];
         Report {
-            input: "t".into(),
-            width: 2,
-            height: 2,
-            samples: 1,
-            coverage: 1.0,
-            lights: 1,
-            lights_source: "test".into(),
+            frames: vec![crate::analysis::row::Frame {
+                input: "t".into(),
+                width: 2,
+                height: 2,
+                samples: 1,
+                coverage: 1.0,
+                lights: 1,
+                lights_source: "test".into(),
+                reference: None,
+                sweep_seconds: 0.0,
+                needs: analyze(&crate::GBuffer::new(2, 2, 1).unwrap()),
+                detectors: vec![],
+            }],
             runs: 1,
-            reference: None,
-            sweep_seconds: 0.0,
-            needs: analyze(&crate::GBuffer::new(2, 2, 1).unwrap()),
-            rows: vec![Row { layout: "x".into(), psnr_db: Some(f64::INFINITY), rmse: Some(0.0), ..Default::default() }],
+            viewing: Default::default(),
+            flip: Default::default(),
+            over: Default::default(),
+            aggregate: crate::analysis::aggregate::aggregate(&rows, Default::default()),
+            detectors: vec![],
+            budget: None,
+            rows,
             figures: vec![],
         }
     }
@@ -80,16 +99,19 @@ mod tests {
         std::fs::write(dir.join("mine.txt"), "keep").unwrap();
         let att = [Attachment { name: "p.svg".into(), bytes: b"<svg/>".to_vec() }];
         let w = write_folder(&dir, &rep(), &att).unwrap();
-        assert_eq!(w.len(), 4);
+        assert_eq!(w.len(), 5);
         assert_eq!(std::fs::read_to_string(dir.join("mine.txt")).unwrap(), "keep");
         let json: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
         assert_eq!(json["rows"][0]["layout"], "x");
-        assert_eq!(json["rows"][0]["rmse"], 0.0);
-        assert!(json["needs"]["absent"].as_array().unwrap().len() == 12);
+        assert_eq!(json["rows"][0]["layout_error"]["rmse"], 0.0);
+        assert!(json["rows"][0]["layout_error"]["psnr_db"].is_null(), "an infinite PSNR is null");
+        assert!(json["frames"][0]["needs"]["absent"].as_array().unwrap().len() == 12);
+        let back: Report = serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+        assert_eq!(back.rows[0].layout, "x", "report.json reads back (what `gbuf merge` does)");
         let names: Vec<String> =
             std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
-        assert_eq!(names.len(), 5, "no temporary files left: {names:?}");
+        assert_eq!(names.len(), 6, "no temporary files left: {names:?}");
         assert!(write_folder(&dir, &rep(), &[Attachment { name: "../x".into(), bytes: vec![] }]).is_err());
     }
 }
