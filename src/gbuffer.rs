@@ -270,6 +270,29 @@ impl GBuffer {
         })
     }
 
+    /// Replaces the plane of `attr` by `other`'s (absent there: absent here). False, and nothing changed, when
+    /// the two G-buffers differ in size.
+    pub fn copy_plane_from(&mut self, other: &GBuffer, attr: Attribute) -> bool {
+        if (self.width, self.height, self.samples) != (other.width, other.height, other.samples) {
+            return false;
+        }
+        match attr {
+            Attribute::Depth => self.depth.clone_from(&other.depth),
+            Attribute::Position => self.position.clone_from(&other.position),
+            Attribute::Normal => self.normal.clone_from(&other.normal),
+            Attribute::Albedo => self.albedo.clone_from(&other.albedo),
+            Attribute::Specular => self.specular.clone_from(&other.specular),
+            Attribute::SpecularPower => self.specular_power.clone_from(&other.specular_power),
+            Attribute::Roughness => self.roughness.clone_from(&other.roughness),
+            Attribute::Metallic => self.metallic.clone_from(&other.metallic),
+            Attribute::MaterialId => self.material_id.clone_from(&other.material_id),
+            Attribute::ObjectId => self.object_id.clone_from(&other.object_id),
+            Attribute::PrimitiveId => self.primitive_id.clone_from(&other.primitive_id),
+            Attribute::Motion => self.motion.clone_from(&other.motion),
+        }
+        true
+    }
+
     /// Removes `attr` (makes it absent).
     pub fn remove(&mut self, attr: Attribute) {
         match attr {

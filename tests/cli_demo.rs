@@ -137,3 +137,112 @@ fn budget_writes_a_layout_that_loads() {
     let l = gbuf::layout::Layout::load(&toml).unwrap();
     assert_eq!(l.bytes_per_sample() as u64, bytes);
 }
+
+/// Rows recomputed from report.json: each flagged row is non-dominated in (bytes, layout error) and in (resolve
+/// pass time, layout error) among its frame's rows; unflagged rows are dominated.
+fn check_fronts(rows: &[serde_json::Value]) {
+    let num = |v: &serde_json::Value| v.as_f64().unwrap_or(f64::NAN);
+    for r in rows {
+        let same: Vec<&serde_json::Value> = rows.iter().filter(|q| q["frame"] == r["frame"]).collect();
+        for (axis, cost) in [("bytes", "bytes_per_sample"), ("time", "resolve_pass_ms")] {
+            let p = (num(&r[cost]), num(&r["layout_error"]["rmse"]));
+            let dominated = same.iter().any(|q| {
+                let q = (num(&q[cost]), num(&q["layout_error"]["rmse"]));
+                q.0 <= p.0 && q.1 <= p.1 && (q.0 < p.0 || q.1 < p.1)
+            });
+            let on = r["pareto"][axis].as_bool().unwrap();
+            assert_eq!(on, !dominated && p.0.is_finite() && p.1.is_finite(), "{axis}: {} {}", r["frame"], r["layout"]);
+        }
+    }
+}
+
+#[test]
+fn report_over_several_frames_merges_to_the_same_answer() {
+    let dir = tempfile::tempdir().unwrap();
+    let frames = dir.path().join("capture");
+    std::fs::create_dir_all(&frames).unwrap();
+    for (name, w, h) in [("a", "40", "24"), ("b", "48", "27")] {
+        let o = gbuf()
+            .args(["scene", "room", "--width", w, "--height", h, "--msaa", "2", "-o"])
+            .arg(frames.join(format!("{name}.exr")))
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "scene: {}", String::from_utf8_lossy(&o.stderr));
+    }
+    let common = ["--layouts", "minimal-8,destiny-96,reference-f32", "--detectors", "lauritzen,ssaa", "--runs", "1"];
+    // One run over the directory (both frames).
+    let all = dir.path().join("all");
+    let o = gbuf()
+        .arg("report")
+        .arg(&frames)
+        .args(common)
+        .args(["--max-bytes", "12", "--json", "-o"])
+        .arg(&all)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "report: {}", String::from_utf8_lossy(&o.stderr));
+    let one: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(one["frames"].as_array().unwrap().len(), 2);
+    let rows = one["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2 * 3 * 2);
+    check_fronts(rows);
+    for r in rows.iter().filter(|r| r["layout"] == "reference-f32") {
+        assert_eq!(r["layout_error"]["rmse"], 0.0, "lossless: layout error 0");
+    }
+    let agg = one["aggregate"].as_array().unwrap();
+    assert_eq!(agg.len(), 3 * 2);
+    for a in agg {
+        assert_eq!(a["frames"], 2);
+        let st = &a["layout_rmse"];
+        assert!(st["worst"].as_f64().unwrap() >= st["mean"].as_f64().unwrap());
+        assert!(st["worst_frame"].as_str().unwrap().ends_with(".exr"));
+    }
+    let choice = &one["budget"];
+    assert_eq!(choice["max_bytes"], 12);
+    assert!(["minimal-8", "destiny-96"].contains(&choice["layout"].as_str().unwrap()), "{choice}");
+    for f in ["report.md", "aggregate.csv", "error_vs_bytes.png", "frame1_reference.png", "frame2_reference.png"] {
+        assert!(all.join(f).is_file(), "{f} missing");
+    }
+
+    // One run per frame, merged: the same aggregate, fronts and budget choice.
+    let mut jsons = Vec::new();
+    for name in ["a", "b"] {
+        let out = dir.path().join(format!("rep-{name}"));
+        let o = gbuf()
+            .arg("report")
+            .arg(frames.join(format!("{name}.exr")))
+            .args(common)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "report {name}: {}", String::from_utf8_lossy(&o.stderr));
+        jsons.push(out.join("report.json"));
+    }
+    let merged = dir.path().join("merged");
+    let o = gbuf().arg("merge").args(&jsons).args(["--max-bytes", "12", "--json", "-o"]).arg(&merged).output().unwrap();
+    assert!(o.status.success(), "merge: {}", String::from_utf8_lossy(&o.stderr));
+    let m: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let key =
+        |a: &serde_json::Value| (a["layout"].clone(), a["detector"].clone(), a["pareto"].clone(), a["frames"].clone());
+    let (ka, kb): (Vec<_>, Vec<_>) =
+        (agg.iter().map(key).collect(), m["aggregate"].as_array().unwrap().iter().map(key).collect());
+    assert_eq!(ka, kb, "same aggregate rows and fronts");
+    assert_eq!(m["budget"]["layout"], choice["layout"]);
+    assert!(merged.join("report.md").is_file() && merged.join("aggregate.csv").is_file());
+    // Merging a frame twice is refused.
+    let o = gbuf().arg("merge").arg(&jsons[0]).arg(&jsons[0]).arg("-o").arg(dir.path().join("x")).output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("each frame once"));
+
+    // The budget over both frames: the winner's error is reported on each frame, the worst one decides.
+    let o = gbuf().arg("budget").arg(&frames).args(["--max-bytes", "12", "--json"]).output().unwrap();
+    assert!(o.status.success(), "budget: {}", String::from_utf8_lossy(&o.stderr));
+    let b: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let w = &b["winner"];
+    let per: Vec<f64> =
+        w["frames"].as_array().unwrap().iter().map(|f| f["layout_error"]["rmse"].as_f64().unwrap()).collect();
+    assert_eq!(per.len(), 2);
+    assert_eq!(w["rmse"].as_f64().unwrap(), per.iter().copied().fold(0.0, f64::max), "worst frame decides");
+    assert!(w["bytes_per_sample"].as_u64().unwrap() <= 12);
+}

@@ -14,6 +14,7 @@ fn cfg(max_bytes: u32, max_error: Option<f64>) -> BudgetConfig {
         detector: Detector::Lauritzen,
         detector_config: DetectorConfig::default(),
         resolve: ResolveConfig::default(),
+        over: Default::default(),
     }
 }
 
@@ -34,6 +35,15 @@ fn budget_fits_beats_builtins_and_round_trips_through_a_file() {
                 assert!(c.rmse.unwrap_or(f64::INFINITY) >= w.rmse.unwrap(), "{} beats the winner", c.name);
             }
         }
+        // Every finalist is measured by layout error and predicted by the same model, built-ins too; the
+        // prediction ratio is the measured over the predicted value.
+        for c in res.measured.iter().filter(|c| c.error.is_none()) {
+            let (m, p) = (c.rmse.unwrap(), c.predicted_rmse.unwrap());
+            if p > 0.0 {
+                assert!((c.prediction_ratio.unwrap() - m / p).abs() <= 1e-12 * (m / p), "{}", c.name);
+            }
+        }
+        assert!(res.prediction.finalists >= 2 && res.prediction.median_ratio.is_some());
         for b in Layout::builtins().iter().filter(|b| b.bytes_per_sample() as u32 <= max) {
             assert!(res.measured.iter().any(|c| c.name == b.name()), "{} fits but was not measured", b.name());
         }
@@ -61,5 +71,10 @@ fn error_cap_picks_a_layout_under_it_and_impossible_budgets_fail() {
     assert!(capped.winner.rmse.unwrap() <= cap);
     assert!(capped.winner.bytes_per_sample <= loose.winner.bytes_per_sample);
     assert!(search(&gb, &lights, &cfg(0, None)).is_err());
+    // The lossless layout measures layout error 0 (it fits in 96 bytes).
+    let wide = search(&gb, &lights, &cfg(96, None)).unwrap();
+    let lossless = wide.measured.iter().find(|c| c.name == "reference-f32").unwrap();
+    assert_eq!(lossless.rmse, Some(0.0));
+    assert_eq!(wide.winner.rmse, Some(0.0), "nothing beats no error");
     assert!(search(&gb, &lights, &cfg(1, None)).is_err(), "nothing useful fits in one byte");
 }

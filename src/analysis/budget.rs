@@ -13,8 +13,16 @@
 //! pixel; its squared image error against the same lighting of the exact G-buffer is that option's cost. (2) Every
 //! combination that fits the budget gets a predicted error (the root of the summed costs). (3) The best predicted
 //! combinations and every fitting built-in are packed into real words, unpacked, run through the detector and the
-//! full resolve, and compared with the reference; the measured error decides.
+//! full resolve, and compared with the exact G-buffer lit the same way: the measured *layout error* decides (the
+//! same metric as the report's fronts; the detector's aliasing is the same for every layout and left out).
+//! Every finalist also gets a prediction by the same model — built-ins too: each attribute of its roundtrip
+//! applied alone, the costs summed — so the result says how far the model was off.
+//!
+//! Several frames: [`propose`] runs steps (1)–(2) on each frame, the union of the proposals is measured on every
+//! frame ([`measure_frame`]), and [`decide`] picks by each candidate's mean or worst frame. Frames are visited one
+//! at a time, so memory is that of one frame.
 
+use crate::analysis::aggregate::{Over, Stat};
 use crate::analysis::needs::{self, Needs, MATERIAL_PARAMETERS};
 use crate::analysis::prune::prune_spec;
 use crate::codec::{self, NormalScheme};
@@ -25,6 +33,7 @@ use crate::image::HdrImage;
 use crate::layout::{ConstantValue, FieldSpec, IndirectionSpec, Layout, LayoutSpec, TargetSpec, DEFAULT_DEPTH_RANGE};
 use crate::light::Light;
 use crate::measure;
+use crate::measure::image::ErrorSet;
 use crate::resolve::{self, ResolveConfig};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -40,7 +49,7 @@ const SCREEN_SAMPLES: usize = 50_000;
 pub struct BudgetConfig {
     /// Largest layout size in bytes per sample.
     pub max_bytes: u32,
-    /// With a cap: the smallest layout whose image RMSE stays at or under it (ties → lower error).
+    /// With a cap: the smallest layout whose layout error (RMSE) stays at or under it (ties → lower error).
     pub max_error: Option<f64>,
     /// The detector the verification runs.
     pub detector: Detector,
@@ -48,6 +57,21 @@ pub struct BudgetConfig {
     pub detector_config: DetectorConfig,
     /// Resolve settings.
     pub resolve: ResolveConfig,
+    /// Over several frames: rank by each candidate's mean or worst frame.
+    pub over: Over,
+}
+
+/// A candidate's numbers on one frame.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrameMeasure {
+    /// The frame.
+    pub frame: String,
+    /// Predicted layout error (RMSE) by the single-option model.
+    pub predicted_rmse: Option<f64>,
+    /// Measured layout error against the exact G-buffer lit with the same detector.
+    pub layout_error: Option<ErrorSet>,
+    /// Why it could not be measured.
+    pub error: Option<String>,
 }
 
 /// One measured (or predicted) candidate.
@@ -61,12 +85,18 @@ pub struct Candidate {
     pub bytes_per_sample: u32,
     /// What it stores, in one line.
     pub summary: String,
-    /// Predicted image RMSE (generated layouts only).
+    /// Predicted layout error RMSE (mean or worst frame, as [`BudgetConfig::over`]).
     pub predicted_rmse: Option<f64>,
-    /// Measured image RMSE against the reference.
+    /// Measured layout error RMSE (mean or worst frame, as [`BudgetConfig::over`]).
     pub rmse: Option<f64>,
-    /// Measured PSNR in dB.
+    /// Measured PSNR in dB of the same frame's layout error (single frame), or the worst frame's.
     pub psnr_db: Option<f64>,
+    /// Measured over predicted error: how far the model was off (1 = exact; ∞ when the model predicted 0).
+    pub prediction_ratio: Option<f64>,
+    /// The frame with the largest measured layout error.
+    pub worst_frame: Option<String>,
+    /// Per frame: predicted and measured.
+    pub frames: Vec<FrameMeasure>,
     /// Why it could not be measured.
     pub error: Option<String>,
     /// The layout spec.
@@ -81,6 +111,10 @@ pub struct BudgetResult {
     pub max_bytes: u32,
     /// The error cap, if any.
     pub max_error: Option<f64>,
+    /// What the ranking used: the mean or the worst frame.
+    pub over: Over,
+    /// The frames searched.
+    pub frame_names: Vec<String>,
     /// The winning layout.
     pub winner: Candidate,
     /// Every measured candidate, best first (the winner included).
@@ -89,14 +123,30 @@ pub struct BudgetResult {
     pub best_builtin: Option<String>,
     /// True when a built-in layout (as shipped) is the best the search found.
     pub builtin_is_best: bool,
-    /// Generated combinations that fit the budget.
+    /// Generated combinations that fit the budget (summed over frames).
     pub combinations: usize,
-    /// Single-option costs, per dimension: (option, bits, image RMSE when applied alone).
+    /// Single-option costs of the first frame, per dimension: (option, bits, image RMSE when applied alone).
     pub option_costs: BTreeMap<String, Vec<(String, u32, f64)>>,
-    /// The scene-needs analysis the search used.
+    /// The scene-needs analysis of the first frame.
     pub needs: Needs,
+    /// How far the predictions were off over the finalists: the median and the largest of measured / predicted
+    /// (and its candidate).
+    pub prediction: PredictionSummary,
     /// Wall time in seconds.
     pub seconds: f64,
+}
+
+/// How far the single-option model was from the measurement over the finalists.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct PredictionSummary {
+    /// Finalists with both numbers.
+    pub finalists: usize,
+    /// Median of measured / predicted.
+    pub median_ratio: Option<f64>,
+    /// The ratio furthest from 1 (in either direction).
+    pub worst_ratio: Option<f64>,
+    /// Its candidate.
+    pub worst_candidate: Option<String>,
 }
 
 /// One option of one dimension.
@@ -604,18 +654,42 @@ fn summary(spec: &LayoutSpec) -> String {
     parts.join(" + ")
 }
 
-/// Measures a layout: roundtrip, detector, full resolve, error against the reference.
+/// Measures a layout: roundtrip, detector, full resolve, error against `exact` (the exact G-buffer lit with the
+/// same detector).
 fn measure_layout(
     gb: &GBuffer,
     lights: &[Light],
-    reference: &HdrImage,
+    exact: &HdrImage,
     cfg: &BudgetConfig,
     layout: &Layout,
-) -> Result<measure::image::ImageError> {
+) -> Result<ErrorSet> {
     let decoded = layout.roundtrip(gb)?;
     let mask = detect::detect(&decoded, cfg.detector, &cfg.detector_config)?;
     let res = resolve::resolve(&decoded, lights, &mask, &cfg.resolve)?;
-    Ok(measure::image::compare(reference, &res.image))
+    Ok(ErrorSet::numeric(&measure::image::compare(exact, &res.image)))
+}
+
+/// The single-option model's prediction for any layout: each attribute of its roundtrip applied alone (the rest
+/// exact), lit once per pixel, the squared errors summed.
+fn predict_layout(pricer: &Pricer<'_>, layout: &Layout) -> Result<f64> {
+    let decoded = layout.roundtrip(pricer.gb)?;
+    let mut mse = 0.0;
+    for a in Attribute::ALL {
+        if !pricer.gb.has(a) || a.is_id() || a == Attribute::Position {
+            continue;
+        }
+        let mut g = pricer.gb.clone();
+        if !g.copy_plane_from(&decoded, a) {
+            continue;
+        }
+        if a == Attribute::Depth {
+            if let (Some(p), Some(q)) = (g.position.as_mut(), decoded.position.as_ref()) {
+                p.clone_from(q);
+            }
+        }
+        mse += pricer.mse(&g)?;
+    }
+    Ok(mse.sqrt())
 }
 
 fn candidate(spec: LayoutSpec, kind: &str, predicted: Option<f64>) -> Candidate {
@@ -627,22 +701,41 @@ fn candidate(spec: LayoutSpec, kind: &str, predicted: Option<f64>) -> Candidate 
         predicted_rmse: predicted,
         rmse: None,
         psnr_db: None,
+        prediction_ratio: None,
+        worst_frame: None,
+        frames: vec![],
         error: None,
         spec,
     }
 }
 
-/// Searches for the best layout within the budget on `gb` lit by `lights`.
-pub fn search(gb: &GBuffer, lights: &[Light], cfg: &BudgetConfig) -> Result<BudgetResult> {
-    let start = std::time::Instant::now();
+/// What one frame proposes: its generated finalists and the fitting (pruned) built-ins.
+#[derive(Clone, Debug)]
+pub struct Proposal {
+    /// The candidates (unmeasured).
+    pub candidates: Vec<Candidate>,
+    /// Generated combinations that fit.
+    pub combinations: usize,
+    /// The frame's single-option costs.
+    pub option_costs: BTreeMap<String, Vec<(String, u32, f64)>>,
+    /// The frame's needs.
+    pub needs: Needs,
+}
+
+fn pricer<'a>(gb: &'a GBuffer, lights: &'a [Light], cfg: &BudgetConfig) -> Result<Pricer<'a>> {
+    let once = detect::detect(gb, Detector::None, &cfg.detector_config)?;
+    let exact = resolve::resolve(gb, lights, &once, &cfg.resolve)?.image;
+    Ok(Pricer { gb, lights, cfg: cfg.resolve, mask: once, exact })
+}
+
+/// Steps (1) and (2) on one frame: prices every option, predicts every fitting combination, and proposes the
+/// best few with every fitting built-in and pruned built-in.
+pub fn propose(gb: &GBuffer, lights: &[Light], cfg: &BudgetConfig) -> Result<Proposal> {
     if cfg.max_bytes == 0 {
         return Err(Error::Argument("the byte budget must be at least 1 byte per sample".into()));
     }
     let needs = needs::analyze(gb);
-    let reference = resolve::reference(gb, lights, &cfg.resolve)?;
-    let once = detect::detect(gb, Detector::None, &cfg.detector_config)?;
-    let exact = resolve::resolve(gb, lights, &once, &cfg.resolve)?.image;
-    let pricer = Pricer { gb, lights, cfg: cfg.resolve, mask: once, exact };
+    let pricer = pricer(gb, lights, cfg)?;
     let space = build_space(&pricer, &needs)?;
     let sets = target_sets();
 
@@ -679,20 +772,90 @@ pub fn search(gb: &GBuffer, lights: &[Light], cfg: &BudgetConfig) -> Result<Budg
             }
         }
     }
-    for c in &mut cands {
+    Ok(Proposal { candidates: cands, combinations, option_costs: option_costs(&space), needs })
+}
+
+/// Adds `new` to `into` unless an equal spec is there; a different spec under a taken name gets a `#k` suffix.
+pub fn merge_candidates(into: &mut Vec<Candidate>, new: Vec<Candidate>) {
+    for mut c in new {
+        if into.iter().any(|o| o.spec == c.spec) {
+            continue;
+        }
+        let mut k = 2;
+        let base = c.name.clone();
+        while into.iter().any(|o| o.name == c.name) {
+            c.name = format!("{base}#{k}");
+            k += 1;
+        }
+        c.spec.name.clone_from(&c.name);
+        into.push(c);
+    }
+}
+
+/// Measures every candidate on one frame: its layout error and, for candidates without one from this frame's
+/// search, the model's prediction.
+pub fn measure_frame(
+    name: &str,
+    gb: &GBuffer,
+    lights: &[Light],
+    cfg: &BudgetConfig,
+    cands: &mut [Candidate],
+    proposed_here: &[String],
+) -> Result<()> {
+    let mask = detect::detect(gb, cfg.detector, &cfg.detector_config)?;
+    let exact = resolve::resolve(gb, lights, &mask, &cfg.resolve)?.image;
+    let pricer = pricer(gb, lights, cfg)?;
+    for c in cands.iter_mut() {
+        let mut m = FrameMeasure { frame: name.to_string(), predicted_rmse: None, layout_error: None, error: None };
         match Layout::from_spec(c.spec.clone()) {
             Ok(l) => {
                 c.bytes_per_sample = l.bytes_per_sample() as u32;
-                match measure_layout(gb, lights, &reference, cfg, &l) {
-                    Ok(e) => {
-                        c.rmse = Some(e.rmse);
-                        c.psnr_db = Some(e.psnr_db);
-                    }
-                    Err(e) => c.error = Some(e.to_string()),
+                m.predicted_rmse = match (c.kind.as_str(), proposed_here.contains(&c.name)) {
+                    ("generated", true) => c.predicted_rmse,
+                    _ => predict_layout(&pricer, &l).ok(),
+                };
+                match measure_layout(gb, lights, &exact, cfg, &l) {
+                    Ok(e) => m.layout_error = Some(e),
+                    Err(e) => m.error = Some(e.to_string()),
                 }
             }
-            Err(e) => c.error = Some(e.to_string()),
+            Err(e) => m.error = Some(e.to_string()),
         }
+        c.frames.push(m);
+    }
+    Ok(())
+}
+
+/// Step (3) over the frames measured: ranks by measured layout error (mean or worst frame), checks the budget
+/// and the cap, and says how far the predictions were off.
+pub fn decide(
+    frame_names: Vec<String>,
+    mut cands: Vec<Candidate>,
+    first: Proposal,
+    combinations: usize,
+    cfg: &BudgetConfig,
+    seconds: f64,
+) -> Result<BudgetResult> {
+    let n = frame_names.len();
+    for c in &mut cands {
+        let failed = c.frames.iter().find_map(|m| m.error.clone());
+        let measured = Stat::of(c.frames.iter().map(|m| (m.frame.as_str(), m.layout_error.map(|e| e.rmse))));
+        let predicted = Stat::of(c.frames.iter().map(|m| (m.frame.as_str(), m.predicted_rmse)));
+        c.error = failed.map(|e| if n > 1 { format!("{e} (on at least one frame)") } else { e });
+        if c.error.is_none() && measured.as_ref().is_some_and(|s| s.frames == n) {
+            let st = measured.unwrap_or_else(|| unreachable!());
+            c.rmse = Some(st.over(cfg.over));
+            c.psnr_db =
+                c.frames.iter().find(|m| m.frame == st.worst_frame).and_then(|m| m.layout_error.map(|e| e.psnr_db));
+            c.worst_frame = Some(st.worst_frame.clone());
+        }
+        c.predicted_rmse = predicted.map(|p| p.over(cfg.over));
+        c.prediction_ratio = match (c.rmse, c.predicted_rmse) {
+            (Some(m), Some(p)) if p > 0.0 => Some(m / p),
+            (Some(m), Some(_)) if m > 0.0 => Some(f64::INFINITY),
+            (Some(_), Some(_)) => Some(1.0),
+            _ => None,
+        };
     }
     let key = |c: &Candidate| c.rmse.unwrap_or(f64::INFINITY);
     match cfg.max_error {
@@ -704,14 +867,15 @@ pub fn search(gb: &GBuffer, lights: &[Light], cfg: &BudgetConfig) -> Result<Budg
     let winner =
         cands.iter().find(|c| c.rmse.is_some() && c.bytes_per_sample <= cfg.max_bytes).cloned().ok_or_else(|| {
             Error::Argument(format!(
-                "no layout of at most {} bytes per sample could be measured on this scene",
-                cfg.max_bytes
+                "no layout of at most {} bytes per sample could be measured on {}",
+                cfg.max_bytes,
+                if n > 1 { "every frame" } else { "this scene" }
             ))
         })?;
     if let Some(e) = cfg.max_error {
         if winner.rmse.is_some_and(|r| r > e) {
             return Err(Error::Argument(format!(
-                "no layout of at most {} bytes per sample reaches RMSE ≤ {e}; the best is {} with {:.6}",
+                "no layout of at most {} bytes per sample reaches layout error RMSE ≤ {e}; the best is {} with {:.6}",
                 cfg.max_bytes,
                 winner.name,
                 winner.rmse.unwrap_or(f64::NAN)
@@ -719,18 +883,46 @@ pub fn search(gb: &GBuffer, lights: &[Light], cfg: &BudgetConfig) -> Result<Budg
         }
     }
     let best_builtin = cands.iter().find(|c| c.kind != "generated" && c.rmse.is_some()).map(|c| c.name.clone());
+    let mut ratios: Vec<(f64, &str)> = cands
+        .iter()
+        .filter_map(|c| c.prediction_ratio.filter(|r| r.is_finite()).map(|r| (r, c.name.as_str())))
+        .collect();
+    ratios.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let far = |r: f64| if r > 0.0 { r.max(1.0 / r) } else { f64::INFINITY };
+    let worst = ratios.iter().max_by(|a, b| far(a.0).total_cmp(&far(b.0)));
+    let prediction = PredictionSummary {
+        finalists: ratios.len(),
+        median_ratio: (!ratios.is_empty()).then(|| ratios[ratios.len() / 2].0),
+        worst_ratio: worst.map(|w| w.0),
+        worst_candidate: worst.map(|w| w.1.to_string()),
+    };
     Ok(BudgetResult {
         max_bytes: cfg.max_bytes,
         max_error: cfg.max_error,
+        over: cfg.over,
+        frame_names,
         builtin_is_best: winner.kind == "built-in",
         winner,
         measured: cands,
         best_builtin,
         combinations,
-        option_costs: option_costs(&space),
-        needs,
-        seconds: start.elapsed().as_secs_f64(),
+        option_costs: first.option_costs,
+        needs: first.needs,
+        prediction,
+        seconds,
     })
+}
+
+/// Searches for the best layout within the budget on one frame `gb` lit by `lights`.
+pub fn search(gb: &GBuffer, lights: &[Light], cfg: &BudgetConfig) -> Result<BudgetResult> {
+    let start = std::time::Instant::now();
+    let p = propose(gb, lights, cfg)?;
+    let mut cands = Vec::new();
+    merge_candidates(&mut cands, p.candidates.clone());
+    let here: Vec<String> = cands.iter().map(|c| c.name.clone()).collect();
+    measure_frame("frame", gb, lights, cfg, &mut cands, &here)?;
+    let combinations = p.combinations;
+    decide(vec!["frame".into()], cands, p, combinations, cfg, start.elapsed().as_secs_f64())
 }
 
 fn option_costs(space: &Space) -> BTreeMap<String, Vec<(String, u32, f64)>> {

@@ -1,10 +1,13 @@
-//! `gbuf budget FILE --max-bytes N [--max-error E] [--resolution WxH --msaa S] [-o LAYOUT.toml] [--json]`: the
-//! layout of at most N bytes per sample with the least image error on this dump (or the smallest under an error
-//! cap), why it won, and a layout file `--layout` accepts.
+//! `gbuf budget FILE… --max-bytes N [--over mean|worst] [--max-error E] [--resolution WxH --msaa S]
+//! [-o LAYOUT.toml] [--json]`: the layout of at most N bytes per sample with the least layout error over the
+//! dumps (each candidate's worst frame by default, or its mean; or the smallest under an error cap), why it won,
+//! how far the search's prediction was off, and a layout file `--layout` accepts.
 
-use crate::cli::common::{print_json, InputArgs, Resolution};
+use crate::cli::common::{print_json, FramesArgs, Resolution};
+use crate::cli::report::frame_lights;
 use anyhow::Context;
-use gbuf::analysis::budget::{search, BudgetConfig, BudgetResult};
+use gbuf::analysis::aggregate::Over;
+use gbuf::analysis::budget::{decide, measure_frame, merge_candidates, propose, BudgetConfig, BudgetResult};
 use gbuf::detect::{Detector, DetectorConfig};
 use gbuf::layout::Layout;
 use gbuf::report::markdown::fmt_opt;
@@ -15,13 +18,14 @@ use std::path::PathBuf;
 /// Flags of `gbuf budget`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The dump and how to read it.
+    /// The dumps and how to read them.
     #[command(flatten)]
-    pub input: InputArgs,
+    pub input: FramesArgs,
     /// Largest layout size in bytes per sample.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub max_bytes: u32,
-    /// Image RMSE cap: pick the smallest layout whose error stays at or under it.
+    /// Layout error cap (image RMSE against the exact G-buffer): pick the smallest layout whose error stays at or
+    /// under it.
     #[arg(long, value_name = "E")]
     pub max_error: Option<f64>,
     /// Resolution the footprint is quoted at (default: the dump's).
@@ -33,6 +37,9 @@ pub struct Args {
     /// Edge detector the candidates are measured with.
     #[arg(long, default_value = "lauritzen")]
     pub detector: Detector,
+    /// Over several dumps: rank each candidate by its mean or its worst frame.
+    #[arg(long, value_name = "HOW", default_value = "worst")]
+    pub over: Over,
     /// Point lights to scatter when the dump brings none.
     #[arg(long, default_value_t = 64)]
     pub lights: u32,
@@ -63,23 +70,57 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(e) = args.max_error {
         anyhow::ensure!(e.is_finite() && e >= 0.0, "--max-error must be a finite number ≥ 0, got {e}");
     }
-    let (rw, rh) = args.resolution.map_or((0, 0), |r| (r.width, r.height));
-    let loaded = args.input.load()?;
-    let gb = &loaded.gbuffer;
-    let (rw, rh) = if rw == 0 { (gb.width, gb.height) } else { (rw, rh) };
-    let msaa = args.msaa.unwrap_or(gb.samples);
-    let lights = match &loaded.lights {
-        Some(l) if !l.is_empty() => l.clone(),
-        _ => gbuf::scene::scatter_lights(gb, args.lights as usize, args.seed),
-    };
+    let paths = args.input.paths()?;
     let cfg = BudgetConfig {
         max_bytes: args.max_bytes,
         max_error: args.max_error,
         detector,
         detector_config: DetectorConfig::default(),
         resolve: ResolveConfig::default(),
+        over: args.over,
     };
-    let res = search(gb, &lights, &cfg).with_context(|| format!("{}: budget search", args.input.file.display()))?;
+    let start = std::time::Instant::now();
+    // Pass 1: every frame proposes its candidates. With one frame it is measured in the same visit.
+    let mut cands = Vec::new();
+    let mut first = None;
+    let mut combinations = 0;
+    let mut proposed: Vec<Vec<String>> = Vec::new();
+    let mut size = (0, 0, 0);
+    let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+    for (i, p) in paths.iter().enumerate() {
+        let loaded = args.input.load(p)?;
+        let gb = &loaded.gbuffer;
+        if i == 0 {
+            size = (gb.width, gb.height, gb.samples);
+        }
+        let (lights, _) = frame_lights(&loaded, args.lights, args.seed);
+        let prop = propose(gb, &lights, &cfg).with_context(|| format!("{}: budget search", p.display()))?;
+        combinations += prop.combinations;
+        let before: Vec<String> = cands.iter().map(|c: &gbuf::analysis::budget::Candidate| c.name.clone()).collect();
+        merge_candidates(&mut cands, prop.candidates.clone());
+        proposed.push(cands.iter().map(|c| c.name.clone()).filter(|n| !before.contains(n)).collect());
+        if paths.len() == 1 {
+            measure_frame(&names[0], gb, &lights, &cfg, &mut cands, &proposed[0])
+                .with_context(|| format!("{}: measuring the candidates", p.display()))?;
+        }
+        if first.is_none() {
+            first = Some(prop);
+        }
+    }
+    // Pass 2 (several frames): every candidate measured on every frame, one frame in memory at a time.
+    if paths.len() > 1 {
+        for (i, p) in paths.iter().enumerate() {
+            let loaded = args.input.load(p)?;
+            let (lights, _) = frame_lights(&loaded, args.lights, args.seed);
+            measure_frame(&names[i], &loaded.gbuffer, &lights, &cfg, &mut cands, &proposed[i])
+                .with_context(|| format!("{}: measuring the candidates", p.display()))?;
+        }
+    }
+    let first = first.context("no dump given")?;
+    let res = decide(names.clone(), cands, first, combinations, &cfg, start.elapsed().as_secs_f64())
+        .with_context(|| format!("budget over {}", names.join(", ")))?;
+    let (rw, rh) = args.resolution.map_or((size.0, size.1), |r| (r.width, r.height));
+    let msaa = args.msaa.unwrap_or(size.2);
     let layout = Layout::from_spec(res.winner.spec.clone())?;
     if let Some(path) = &args.out {
         layout.save(path).with_context(|| format!("writing the layout to {}", path.display()))?;
@@ -95,38 +136,68 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         });
     }
     let w = &res.winner;
+    let over = if names.len() > 1 { format!(" ({} of {} frames)", args.over, names.len()) } else { String::new() };
     println!(
-        "winner: {} ({}), {} B/sample = {:.1} MiB at {rw}×{rh} × {msaa}; image RMSE {} (PSNR {} dB) with {}",
+        "winner: {} ({}), {} B/sample = {:.1} MiB at {rw}×{rh} × {msaa}; layout error RMSE {}{over} (PSNR {} dB), \
+         predicted {} — with {}",
         w.name,
         w.kind,
         w.bytes_per_sample,
         footprint as f64 / (1024.0 * 1024.0),
         fmt_opt(w.rmse, 6),
         fmt_opt(w.psnr_db, 2),
+        fmt_opt(w.predicted_rmse, 6),
         args.detector
     );
     println!("  {}", w.summary);
+    if names.len() > 1 {
+        for m in &w.frames {
+            println!(
+                "  {}: layout error RMSE {} (predicted {})",
+                m.frame,
+                fmt_opt(m.layout_error.map(|e| e.rmse), 6),
+                fmt_opt(m.predicted_rmse, 6)
+            );
+        }
+    }
     println!("{}", res.needs.summary_line());
     if res.builtin_is_best {
         println!("a built-in layout is the best within {} B: {}", res.max_bytes, w.name);
     } else if let Some(b) = &res.best_builtin {
         let bb = res.measured.iter().find(|c| &c.name == b);
         println!(
-            "beats the best fitting built-in {b} ({} B, RMSE {})",
+            "beats the best fitting built-in {b} ({} B, layout error RMSE {})",
             bb.map_or(0, |c| c.bytes_per_sample),
             fmt_opt(bb.and_then(|c| c.rmse), 6)
         );
     } else {
         println!("no built-in layout fits in {} B", res.max_bytes);
     }
-    println!("rivals (measured, best first):");
-    for c in res.measured.iter().skip(1).take(6) {
+    println!("finalists (measured layout error, best first; predicted by the single-option model beside it):");
+    for c in res.measured.iter().take(8) {
         println!(
-            "  {:<48} {:>4} B  RMSE {:>10}  {}",
+            "  {:<48} {:>4} B  measured {:>10}  predicted {:>10}  ×{:<7} {}",
             c.name,
             c.bytes_per_sample,
-            c.error.as_ref().map_or(fmt_opt(c.rmse, 6), |e| format!("error: {e}")),
-            c.kind
+            c.error.as_ref().map_or(fmt_opt(c.rmse, 6), |_| "error".into()),
+            fmt_opt(c.predicted_rmse, 6),
+            fmt_opt(c.prediction_ratio, 2),
+            c.error.as_ref().map_or(c.kind.clone(), |e| format!("{}: {e}", c.kind))
+        );
+    }
+    let pr = &res.prediction;
+    if let (Some(med), Some(worst)) = (pr.median_ratio, pr.worst_ratio) {
+        println!(
+            "prediction: measured / predicted over {} finalists: median ×{:.2}, furthest ×{:.2} ({}){}",
+            pr.finalists,
+            med,
+            worst,
+            pr.worst_candidate.as_deref().unwrap_or("?"),
+            if !(0.5..=2.0).contains(&med) {
+                " — the single-option model is off by more than 2×: trust the measured column"
+            } else {
+                ""
+            }
         );
     }
     println!("searched {} generated combinations within budget in {:.1} s", res.combinations, res.seconds);
