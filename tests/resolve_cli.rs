@@ -128,12 +128,21 @@ fn layout_flag_packs_before_lighting_and_lossy_layouts_cost_error() {
     assert!(plain["layout"].is_null());
     // reference-f32 stores every attribute as f32: lighting it is lighting the original.
     assert_eq!(lossless["rmse"], plain["rmse"], "{lossless}");
+    // The errors apart: the lossless layout's layout error is 0 (FLIP too), its total is the AA error.
+    assert_eq!(lossless["layout_error"]["rmse"], 0.0);
+    assert_eq!(lossless["layout_error"]["flip_ldr"], 0.0);
+    assert_eq!(lossless["total_error"]["rmse"], lossless["aa_error"]["rmse"]);
+    assert!(plain["layout_error"].is_null(), "no layout: no layout error");
+    let flip = plain["total_error"]["flip_ldr"].as_f64().unwrap();
+    assert!((0.0..1.0).contains(&flip) && plain["total_error"]["flip_hdr"].as_f64().is_some());
+    assert_eq!(plain["viewing"]["tone_map"], "reinhard");
     let rmse = |v: &serde_json::Value| v["rmse"].as_f64().unwrap();
     for lossy in ["minimal-8", "lauritzen-15"] {
         let v = run(Some(lossy));
         assert_eq!(v["layout"], lossy);
         assert!(rmse(&v) > 10.0 * rmse(&lossless), "{lossy}: {} vs {}", rmse(&v), rmse(&lossless));
         assert!(v["psnr_db"].as_f64().unwrap() < lossless["psnr_db"].as_f64().unwrap(), "{lossy}");
+        assert!(v["layout_error"]["flip_ldr"].as_f64().unwrap() > 0.0, "{lossy}: a lossy layout is visible");
     }
     // 8 bytes per sample lose more than 15.
     assert!(rmse(&run(Some("minimal-8"))) > rmse(&run(Some("lauritzen-15"))));

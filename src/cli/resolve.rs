@@ -1,6 +1,7 @@
 //! `gbuf resolve FILE [--scene SIDECAR | --lights N --seed S] [--detector D] [--culling …] [--brdf …]
 //! [--falloff …] [--schedule …] [-o OUT.exr] [--png OUT.png] [--ldr gamma2.2] [--heatmap OUT.png] [--json]`:
-//! light the G-buffer on the CPU, measure it against the f64 reference, write the images.
+//! light the G-buffer on the CPU, measure it against the f64 reference (RMSE, PSNR and FLIP; with `--layout` the
+//! layout's and the detector's errors apart), write the images.
 
 use crate::cli::common::{print_json, InputArgs, ThresholdArgs};
 use anyhow::Context;
@@ -9,7 +10,7 @@ use gbuf::base::timing::{timed, StageMs};
 use gbuf::detect::{self, Detector};
 use gbuf::image::{LdrEncoding, ToneCurve, ToneMap};
 use gbuf::light::Light;
-use gbuf::measure::image::{against_full_deferred, compare, ImageError};
+use gbuf::measure::image::{against_full_deferred, compare, error_set, ErrorSet, ImageError, Viewing};
 use gbuf::resolve::{self, Brdf, Culling, Falloff, ResolveConfig, ResolveStats, Schedule};
 use gbuf::GBuffer;
 use serde::Serialize;
@@ -77,6 +78,12 @@ pub struct Args {
     /// Skip the f64 reference (no error numbers; much faster with many lights).
     #[arg(long)]
     pub no_reference: bool,
+    /// Pixels per degree of the viewer FLIP models (LDR-FLIP sees the PNG's tone map and exposure).
+    #[arg(long, value_name = "PPD", default_value_t = gbuf::measure::flip::default_ppd())]
+    pub ppd: f32,
+    /// Skip FLIP (the perceptual errors beside RMSE/PSNR).
+    #[arg(long)]
+    pub no_flip: bool,
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
@@ -119,6 +126,14 @@ struct Report {
     rel_mse: Option<f64>,
     error: Option<ImageError>,
     psnr_peak: &'static str,
+    /// Against the reference in every measure, FLIP included (unless `--no-flip`).
+    total_error: Option<ErrorSet>,
+    /// With `--layout`: the unpacked G-buffer's image against the exact G-buffer lit with the same detector.
+    layout_error: Option<ErrorSet>,
+    /// With `--layout`: the exact G-buffer lit with the detector against the reference.
+    aa_error: Option<ErrorSet>,
+    /// How the images were shown for FLIP.
+    viewing: Option<Viewing>,
     /// With `--schedule light-prepass`: the pre-pass image against full deferred shading of the same G-buffer,
     /// mask and lights (PSNR peak: the deferred image's largest channel value).
     prepass_vs_deferred: Option<ImageError>,
@@ -179,12 +194,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         (None, 0.0)
     };
 
-    let (error, t_ref) = if args.no_reference {
-        (None, 0.0)
+    anyhow::ensure!(args.ppd.is_finite() && args.ppd > 0.0, "--ppd must be a positive number, got {}", args.ppd);
+    let viewing = Viewing { tone_map: args.tonemap, exposure: args.exposure, pixels_per_degree: args.ppd };
+    let flip = (!args.no_flip).then_some(&viewing);
+    // With a layout, the exact G-buffer lit the same way separates the layout's loss from the detector's.
+    let exact = match &packed {
+        Some(_) => {
+            let m = detect::detect(&gb, args.detector, &det_cfg).with_context(|| format!("{file}: edge detector"))?;
+            Some(resolve::resolve(&gb, &lights, &m, &cfg).with_context(|| format!("{file}: exact resolve"))?.image)
+        }
+        None => None,
+    };
+    let layout_error = exact.as_ref().map(|x| error_set(x, &resolved.image, flip));
+    let (error, total_error, aa_error, t_ref) = if args.no_reference {
+        (None, None, None, 0.0)
     } else {
         let (reference, t) = timed(|| resolve::reference(&gb, &lights, &cfg));
         let reference = reference.with_context(|| format!("{file}: reference"))?;
-        (Some(compare(&reference, &resolved.image)), t)
+        let aa = exact.as_ref().map(|x| error_set(&reference, x, flip));
+        (Some(compare(&reference, &resolved.image)), Some(error_set(&reference, &resolved.image, flip)), aa, t)
     };
 
     if let Some(out) = &args.output {
@@ -228,6 +256,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         rel_mse: error.map(|e| e.rel_mse),
         error,
         psnr_peak: "the reference image's largest channel value",
+        total_error,
+        layout_error,
+        aa_error,
+        viewing: flip.copied(),
         prepass_vs_deferred,
         stats: s.clone(),
         ms: Ms {
@@ -266,6 +298,10 @@ fn pick_lights(
     }
 }
 
+fn fmt_flip(v: Option<f64>) -> String {
+    v.map_or("—".into(), |x| format!("{x:.4}"))
+}
+
 fn print_human(r: &Report) -> anyhow::Result<()> {
     let mut out = std::io::stdout().lock();
     writeln!(
@@ -293,6 +329,32 @@ fn print_human(r: &Report) -> anyhow::Result<()> {
             "error vs reference: rmse {:.3e}, psnr {:.2} dB (peak {:.3e} = reference max), max |Δ| {:.3e}, rel. mse {:.3e}",
             e.rmse, e.psnr_db, e.peak, e.max_abs, e.rel_mse
         )?;
+    }
+    if let (Some(t), Some(v)) = (&r.total_error, &r.viewing) {
+        writeln!(
+            out,
+            "FLIP vs reference: LDR {} (displayed: {} tone map, exposure {}), HDR {}, at {:.2} pixels per degree",
+            fmt_flip(t.flip_ldr),
+            v.tone_map,
+            v.exposure,
+            fmt_flip(t.flip_hdr),
+            v.pixels_per_degree
+        )?;
+    }
+    for (what, e) in [
+        ("layout error (vs exact G-buffer, same detector)", &r.layout_error),
+        ("AA error (exact G-buffer vs reference)", &r.aa_error),
+    ] {
+        if let Some(e) = e {
+            writeln!(
+                out,
+                "{what}: rmse {:.3e}, psnr {:.2} dB, FLIP LDR {} / HDR {}",
+                e.rmse,
+                e.psnr_db,
+                fmt_flip(e.flip_ldr),
+                fmt_flip(e.flip_hdr)
+            )?;
+        }
     }
     if let Some(e) = &r.prepass_vs_deferred {
         writeln!(

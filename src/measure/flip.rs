@@ -216,7 +216,7 @@ pub fn hdr_flip_with(
     assert!(start <= stop, "HDR-FLIP: start exposure ({start}) must not exceed stop exposure ({stop})");
     let n = match params.num_exposures {
         Some(n) => n,
-        None => (stop - start).ceil().max(2.0) as usize,
+        None => (stop - start).clamp(0.0, MAX_EXPOSURE_RANGE).ceil().max(2.0) as usize,
     };
     assert!(n >= 1, "HDR-FLIP: need at least one exposure");
     // With n == 1 the reference divides by zero (step = inf/NaN); we evaluate `start` only.
@@ -382,6 +382,11 @@ fn mean_f64(v: &[f32]) -> f64 {
 /// Start/stop exposures from the reference image, as in the HDR-FLIP paper (Sec. 4.2)
 /// and the reference code: `x_max` solves `tm(x) = 0.85`; `c_start = log2(x_max / Y_max)`,
 /// `c_stop = log2(x_max / Y_median)` (median = element `n/2` of the sorted luminances).
+///
+/// Where the reference code breaks — a median luminance of 0 (more than half the image black, as a G-buffer's
+/// background often is) makes `c_stop` infinite and its exposure count overflow — the median is taken over the
+/// pixels with positive luminance instead; a reference with no positive pixel gets the single exposure 0. The
+/// range is capped at [`MAX_EXPOSURE_RANGE`] stops.
 fn compute_exposures(img: &[f32], tm: ToneMapper) -> (f32, f32) {
     let tc = tm.coefficients();
     let t = 0.85f32;
@@ -400,12 +405,23 @@ fn compute_exposures(img: &[f32], tm: ToneMapper) -> (f32, f32) {
         return (0.0, 0.0);
     }
     let y_max = lum.par_iter().copied().reduce(|| -1e30f32, |a, b| if a > b { a } else { b });
+    if !(y_max > 0.0 && y_max.is_finite()) {
+        return (0.0, 0.0);
+    }
     let mid = lum.len() / 2;
-    let (_, &mut y_median, _) = lum.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
+    let (_, &mut mut y_median, _) = lum.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
+    if y_median <= 0.0 || !y_median.is_finite() {
+        lum.retain(|&y| y > 0.0 && y.is_finite());
+        let mid = lum.len() / 2;
+        y_median = *lum.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1;
+    }
     let start = ((x_max / y_max) as f64).log2() as f32;
     let stop = ((x_max / y_median) as f64).log2() as f32;
-    (start, stop)
+    (start, stop.min(start + MAX_EXPOSURE_RANGE))
 }
+
+/// The widest exposure range HDR-FLIP sweeps, in stops (f32 spans about 277 stops; real images a few dozen).
+pub const MAX_EXPOSURE_RANGE: f32 = 64.0;
 
 /// Number of f32 planes per horizontally filtered row: for each image
 /// (0 = reference, 1 = test) 7 planes: Y*gY, Cx*gCx, Cz*gCz1, Cz*gCz2 (CSF),
@@ -1299,5 +1315,29 @@ mod tests {
         assert_eq!(&rgb[6..9], &[0, 0, 4]);
         assert_eq!(&rgb[9..12], &[0, 0, 4]);
         assert_eq!(&rgb[12..15], &[252, 253, 191]);
+    }
+
+    #[test]
+    fn hdr_flip_of_a_mostly_black_reference_stays_finite() {
+        // 3/4 of the pixels black: the reference code's median is 0 and its stop exposure infinite.
+        let (w, h) = (16, 16);
+        let mut a = vec![0.0f32; w * h * 3];
+        for (i, v) in a.iter_mut().enumerate().take(w * h * 3 / 4) {
+            *v = if i % 3 == 0 { 4.0 } else { 0.5 };
+        }
+        let mut b = a.clone();
+        b[0] = 8.0;
+        let r = hdr_flip(&a, &b, w, h, &FlipOptions::default());
+        assert!(
+            r.start_exposure.is_finite() && r.stop_exposure.is_finite(),
+            "{} {}",
+            r.start_exposure,
+            r.stop_exposure
+        );
+        assert!(r.exposures.len() <= MAX_EXPOSURE_RANGE as usize + 1 && r.mean() > 0.0);
+        // An all-black reference: one exposure range [0, 0], still a number.
+        let black = vec![0.0f32; w * h * 3];
+        let r = hdr_flip(&black, &b, w, h, &FlipOptions::default());
+        assert!((r.start_exposure, r.stop_exposure) == (0.0, 0.0) && r.mean().is_finite());
     }
 }
