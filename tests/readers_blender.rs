@@ -394,3 +394,21 @@ fn colour_aovs_become_scalars_by_their_mean() {
         assert!((s - 2.0 * m).abs() < 1e-6);
     }
 }
+
+#[test]
+fn destiny_table_is_keyed_by_the_dumps_material_ids() {
+    // The fixture carries 16 material IDs and a textured roughness: the table holds one entry per ID (not a
+    // clustering of every distinct tuple), and its error is the variation inside each material.
+    let loaded = gbuf::io::load(&fixture("blender_gbuffer.exr"), &LoadOptions::default()).unwrap();
+    let gb = &loaded.gbuffer;
+    let ids = gb.material_id.as_deref().expect("the fixture has material IDs");
+    let mut distinct: Vec<u32> = ids.iter().zip(&gb.coverage).filter(|(_, c)| **c).map(|(i, _)| *i).collect();
+    distinct.sort_unstable();
+    distinct.dedup();
+    let layout = gbuf::layout::Layout::by_name("destiny-96").unwrap();
+    let packed = layout.pack(gb).unwrap();
+    let t = packed.material_table.as_ref().unwrap();
+    assert_eq!(t.key, "material-id");
+    assert!(t.entries.len() <= 16 && t.entries.len() == distinct.len(), "{} entries", t.entries.len());
+    assert_eq!(t.ids, distinct);
+}

@@ -534,6 +534,7 @@ impl Space {
             indirection = Some(IndirectionSpec {
                 bits,
                 parameters: self.scalars.iter().map(|(a, _)| a.name().to_string()).collect(),
+                key: Default::default(),
             });
             name.push_str(&format!("-mat{bits}"));
         } else {

@@ -126,8 +126,11 @@ fn destiny_96() -> LayoutSpec {
             t("normal_material", "rgba8", vec![f("normal", "oct-24", 0, 24), f("material_index", "", 24, 8)]),
         ],
     );
-    s.material_indirection =
-        Some(IndirectionSpec { bits: 8, parameters: super::spec::default_indirection_parameters() });
+    s.material_indirection = Some(IndirectionSpec {
+        bits: 8,
+        parameters: super::spec::default_indirection_parameters(),
+        key: Default::default(),
+    });
     s
 }
 

@@ -1,5 +1,10 @@
 //! Material-ID indirection (the Destiny idea): instead of storing specular, specular power, roughness and metallic
-//! per sample, store a k-bit index into a table of distinct parameter tuples.
+//! per sample, store a k-bit index into a table of material parameters.
+//!
+//! Two keys ([`MaterialKey`]). By the engine's material ID, as Destiny does: one entry per distinct ID over the
+//! covered samples (the index is the ID's rank among them), holding the per-ID mean of each parameter; the error
+//! is the per-sample variation inside a material (textured roughness, say). By palette, for dumps without IDs:
+//! the distinct parameter tuples, as follows.
 //!
 //! Lossless when the G-buffer has at most 2^k distinct tuples (over covered samples). Otherwise the tuples are
 //! clustered deterministically: a weighted median cut in normalized parameter space (each parameter divided by
@@ -8,6 +13,7 @@
 //! Non-finite parameter values are treated as 0 (documented; the codecs do the same).
 
 use crate::gbuffer::{Attribute, GBuffer, PlaneRef};
+use crate::layout::spec::MaterialKey;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
@@ -71,6 +77,19 @@ pub struct MaterialTable {
     pub max_abs_error: Vec<f32>,
     /// Per parameter: the mean |table value − input| over covered samples.
     pub mean_abs_error: Vec<f32>,
+    /// What indexed the table: `material-id` or `palette`.
+    #[serde(default = "palette_name")]
+    pub key: String,
+    /// With the `material-id` key: the engine's material ID of each entry.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub ids: Vec<u32>,
+    /// Why the table is not keyed as asked (e.g. more material IDs than entries), if so.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+}
+
+fn palette_name() -> String {
+    "palette".into()
 }
 
 fn clean(v: f32) -> f32 {
@@ -93,7 +112,67 @@ pub(crate) fn parameter_planes<'a>(gb: &'a GBuffer, wanted: &[Attribute]) -> Vec
 }
 
 impl MaterialTable {
-    /// Builds the table for `gb` and returns it with the per-sample index plane (0 at background samples).
+    /// Builds the table keyed as `key` asks (see [`MaterialKey`]) and returns it with the per-sample index plane
+    /// (0 at background samples).
+    #[must_use]
+    pub fn build_keyed(gb: &GBuffer, wanted: &[Attribute], bits: u32, key: MaterialKey) -> (MaterialTable, Vec<u32>) {
+        if key == MaterialKey::Palette {
+            return Self::build(gb, wanted, bits);
+        }
+        let Some(ids) = gb.material_id.as_deref() else {
+            let (mut t, i) = Self::build(gb, wanted, bits);
+            if key == MaterialKey::MaterialId {
+                t.note = Some("the dump has no material IDs: keyed by a palette of the parameter tuples".into());
+            }
+            return (t, i);
+        };
+        let mut distinct: Vec<u32> = (0..gb.len()).filter(|&i| gb.coverage[i]).map(|i| ids[i]).collect();
+        distinct.sort_unstable();
+        distinct.dedup();
+        let capacity = 1usize << bits;
+        if distinct.len() > capacity {
+            let (mut t, i) = Self::build(gb, wanted, bits);
+            t.note = Some(format!(
+                "{} material IDs do not fit {bits} index bits ({capacity} entries): keyed by a palette instead",
+                distinct.len()
+            ));
+            return (t, i);
+        }
+        let planes = parameter_planes(gb, wanted);
+        let np = planes.len();
+        let rank: HashMap<u32, u32> = distinct.iter().enumerate().map(|(r, &id)| (id, r as u32)).collect();
+        let index: Vec<u32> = (0..gb.len()).map(|i| if gb.coverage[i] { rank[&ids[i]] } else { 0 }).collect();
+        // Per-ID means, summed in f64 in sample order (deterministic).
+        let mut sums = vec![vec![0f64; np]; distinct.len().max(1)];
+        let mut counts = vec![0u64; distinct.len().max(1)];
+        for i in (0..gb.len()).filter(|&i| gb.coverage[i]) {
+            let e = index[i] as usize;
+            counts[e] += 1;
+            for (p, (_, plane)) in planes.iter().enumerate() {
+                sums[e][p] += f64::from(clean(plane[i]));
+            }
+        }
+        let entries: Vec<Vec<f32>> =
+            sums.iter().zip(&counts).map(|(s, &c)| s.iter().map(|v| (v / c.max(1) as f64) as f32).collect()).collect();
+        let (max_abs, mean_abs) = table_errors(&planes, &entries, &index, &gb.coverage);
+        let lossless = max_abs.iter().all(|&e| e == 0.0);
+        let table = MaterialTable {
+            parameters: planes.iter().map(|(a, _)| a.name().to_string()).collect(),
+            bits,
+            entries,
+            distinct_tuples: count_tuples(gb, &planes),
+            lossless,
+            max_abs_error: max_abs,
+            mean_abs_error: mean_abs,
+            key: MaterialKey::MaterialId.name().into(),
+            ids: distinct,
+            note: None,
+        };
+        (table, index)
+    }
+
+    /// Builds a palette table for `gb` (the distinct parameter tuples, clustered when there are more than
+    /// `2^bits`) and returns it with the per-sample index plane (0 at background samples).
     #[must_use]
     pub fn build(gb: &GBuffer, wanted: &[Attribute], bits: u32) -> (MaterialTable, Vec<u32>) {
         let planes = parameter_planes(gb, wanted);
@@ -136,17 +215,7 @@ impl MaterialTable {
         let lookup: KeyMap<u32> = keys.iter().map(|(k, _)| *k).zip(assign).collect();
         let index: Vec<u32> =
             (0..gb.len()).into_par_iter().map(|i| if gb.coverage[i] { lookup[&key_at(i)] } else { 0 }).collect();
-        let mut max_abs = vec![0f32; np];
-        let mut sum_abs = vec![0f64; np];
-        let mut covered = 0u64;
-        for i in (0..gb.len()).filter(|&i| gb.coverage[i]) {
-            covered += 1;
-            for (p, (_, plane)) in planes.iter().enumerate() {
-                let e = (entries[index[i] as usize][p] - clean(plane[i])).abs();
-                max_abs[p] = max_abs[p].max(e);
-                sum_abs[p] += f64::from(e);
-            }
-        }
+        let (max_abs, mean_abs) = table_errors(&planes, &entries, &index, &gb.coverage);
         let table = MaterialTable {
             parameters: planes.iter().map(|(a, _)| a.name().to_string()).collect(),
             bits,
@@ -154,7 +223,10 @@ impl MaterialTable {
             distinct_tuples: keys.len(),
             entries: if entries.is_empty() { vec![vec![0.0; np]] } else { entries },
             max_abs_error: max_abs,
-            mean_abs_error: sum_abs.iter().map(|s| (s / covered.max(1) as f64) as f32).collect(),
+            mean_abs_error: mean_abs,
+            key: palette_name(),
+            ids: Vec::new(),
+            note: None,
         };
         (table, index)
     }
@@ -164,6 +236,41 @@ impl MaterialTable {
     pub fn attributes(&self) -> Vec<Attribute> {
         self.parameters.iter().filter_map(|p| Attribute::from_name(p)).collect()
     }
+}
+
+/// Per parameter: the largest and the mean |table value − input| over covered samples.
+fn table_errors(
+    planes: &[(Attribute, &[f32])],
+    entries: &[Vec<f32>],
+    index: &[u32],
+    coverage: &[bool],
+) -> (Vec<f32>, Vec<f32>) {
+    let np = planes.len();
+    let mut max_abs = vec![0f32; np];
+    let mut sum_abs = vec![0f64; np];
+    let mut covered = 0u64;
+    for i in (0..index.len()).filter(|&i| coverage[i]) {
+        covered += 1;
+        for (p, (_, plane)) in planes.iter().enumerate() {
+            let e = (entries[index[i] as usize][p] - clean(plane[i])).abs();
+            max_abs[p] = max_abs[p].max(e);
+            sum_abs[p] += f64::from(e);
+        }
+    }
+    (max_abs, sum_abs.iter().map(|s| (s / covered.max(1) as f64) as f32).collect())
+}
+
+/// Distinct parameter tuples over covered samples.
+fn count_tuples(gb: &GBuffer, planes: &[(Attribute, &[f32])]) -> usize {
+    let mut set: KeyMap<()> = KeyMap::default();
+    for i in (0..gb.len()).filter(|&i| gb.coverage[i]) {
+        let mut k = [0u32; MAX_PARAMETERS];
+        for (p, (_, plane)) in planes.iter().enumerate() {
+            k[p] = clean(plane[i]).to_bits();
+        }
+        set.insert(k, ());
+    }
+    set.len()
 }
 
 /// Squared distance in normalized space.
@@ -322,5 +429,30 @@ mod tests {
         let gb = buffer(&[(f32::NAN, f32::INFINITY), (0.5, 0.5)]);
         let (t, _) = MaterialTable::build(&gb, &[Attribute::Roughness, Attribute::Metallic], 1);
         assert!(t.entries.iter().flatten().all(|v| v.is_finite()));
+    }
+
+    #[test]
+    fn keyed_by_material_id_one_entry_per_id_holding_the_mean() {
+        // Three materials; the second has a textured roughness (0.2 and 0.4 → mean 0.3).
+        let mut gb = buffer(&[(0.1, 0.0), (0.2, 1.0), (0.4, 1.0), (0.9, 0.5), (0.1, 0.0)]);
+        gb.material_id = Some(vec![70, 12, 12, 900, 70]);
+        let attrs = [Attribute::Roughness, Attribute::Metallic];
+        let (t, idx) = MaterialTable::build_keyed(&gb, &attrs, 2, MaterialKey::Auto);
+        assert_eq!((t.key.as_str(), t.ids.as_slice()), ("material-id", &[12, 70, 900][..]));
+        assert_eq!(t.entries.len(), 3);
+        assert_eq!(idx, [1, 0, 0, 2, 1], "the index is the ID's rank");
+        assert!((t.entries[0][0] - 0.3).abs() < 1e-7 && t.entries[0][1] == 1.0);
+        assert!(!t.lossless && (t.max_abs_error[0] - 0.1).abs() < 1e-6, "{:?}", t.max_abs_error);
+        assert_eq!(t.max_abs_error[1], 0.0);
+        assert_eq!(t.distinct_tuples, 4);
+        // More IDs than 2^bits entries: a palette, and the table says why.
+        let (t, _) = MaterialTable::build_keyed(&gb, &attrs, 1, MaterialKey::MaterialId);
+        assert_eq!(t.key, "palette");
+        assert!(t.note.as_deref().is_some_and(|n| n.contains("3 material IDs")), "{:?}", t.note);
+        // Asked for a palette, or no IDs at all: the palette.
+        assert_eq!(MaterialTable::build_keyed(&gb, &attrs, 2, MaterialKey::Palette).0.key, "palette");
+        gb.material_id = None;
+        let (t, _) = MaterialTable::build_keyed(&gb, &attrs, 2, MaterialKey::MaterialId);
+        assert!(t.key == "palette" && t.note.is_some());
     }
 }

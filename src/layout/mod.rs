@@ -19,7 +19,9 @@ pub use coder::{CodecKind, Slot};
 pub use formats::{Component, ComponentKind, Format};
 pub use material::MaterialTable;
 pub use pack::{Packed, TargetPlane};
-pub use spec::{ConstantValue, FieldSpec, IndirectionSpec, LayoutSpec, SpecSyntax, TargetSpec, DEFAULT_DEPTH_RANGE};
+pub use spec::{
+    ConstantValue, FieldSpec, IndirectionSpec, LayoutSpec, MaterialKey, SpecSyntax, TargetSpec, DEFAULT_DEPTH_RANGE,
+};
 pub use summary::LayoutSummary;
 
 use crate::error::{Error, Result};
@@ -49,6 +51,8 @@ pub struct Indirection {
     pub bits: u32,
     /// The parameters the table holds.
     pub parameters: Vec<Attribute>,
+    /// What indexes the table.
+    pub key: MaterialKey,
 }
 
 /// The most targets a layout may have: D3D12 and Vulkan bind at most 8 colour targets plus depth; 16 leaves room
@@ -330,7 +334,7 @@ fn validate(spec: &LayoutSpec) -> std::result::Result<Layout, String> {
             if parameters.is_empty() {
                 return Err("material_indirection has no parameters".into());
             }
-            Some(Indirection { bits: ind.bits, parameters })
+            Some(Indirection { bits: ind.bits, parameters, key: ind.key })
         }
     };
     let mut constants = Vec::new();

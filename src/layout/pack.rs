@@ -259,7 +259,7 @@ impl Layout {
         let coders = self.coders(depth_range)?;
         let (material_table, index) = match self.indirection() {
             Some(ind) => {
-                let (t, i) = MaterialTable::build(gb, &ind.parameters, ind.bits);
+                let (t, i) = MaterialTable::build_keyed(gb, &ind.parameters, ind.bits, ind.key);
                 (Some(t), i)
             }
             None => (None, Vec::new()),

@@ -95,6 +95,34 @@ pub struct IndirectionSpec {
     /// The parameters kept in the table (default: specular, specular_power, roughness, metallic).
     #[serde(default = "default_indirection_parameters")]
     pub parameters: Vec<String>,
+    /// What indexes the table: the engine's material IDs, a palette of the parameter tuples, or (default) the
+    /// IDs when the dump has them and they fit, else the palette.
+    #[serde(default, skip_serializing_if = "MaterialKey::is_auto")]
+    pub key: MaterialKey,
+}
+
+crate::named_enum! {
+    /// What indexes a material table.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub enum MaterialKey: "material table key" {
+        /// The engine's material IDs when the dump has them and at most 2^bits distinct ones cover the image,
+        /// else the palette.
+        #[default]
+        Auto => "auto",
+        /// The engine's material IDs (Destiny's scheme): one entry per ID, the per-ID mean of the parameters.
+        MaterialId => "material-id",
+        /// A palette: the distinct parameter tuples, clustered to 2^bits entries when there are more.
+        Palette => "palette",
+    }
+}
+
+impl MaterialKey {
+    /// Is this the default?
+    #[must_use]
+    pub fn is_auto(&self) -> bool {
+        *self == MaterialKey::Auto
+    }
 }
 
 /// The non-albedo material parameters: what the Destiny-style table holds by default.
@@ -179,7 +207,11 @@ mod tests {
             sources: vec!["nowhere".into()],
             depth_range: Some([0.5, 50.0]),
             constants: [("specular".to_string(), ConstantValue::Scalar(0.5))].into_iter().collect(),
-            material_indirection: Some(IndirectionSpec { bits: 4, parameters: default_indirection_parameters() }),
+            material_indirection: Some(IndirectionSpec {
+                bits: 4,
+                parameters: default_indirection_parameters(),
+                key: MaterialKey::Auto,
+            }),
             targets: vec![TargetSpec {
                 name: "rt0".into(),
                 format: "rgba8".into(),
