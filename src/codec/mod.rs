@@ -282,6 +282,13 @@ mod tests {
         assert!(ops("depth", "unorm24") > ops("depth", "f32"), "post-projection depth inverts the projection");
         assert!(ops("colour", "f16") > ops("colour", "unorm8"));
         assert!(ops("", "xyz-f16-48") > ops("", "xyz-snorm-48"));
+        // The table in docs/CODECS.md ("Decode cost").
+        for (name, want) in [("oct-16", 45), ("spheremap-cry-16", 64), ("spherical-16", 115), ("xyz-unorm-30", 32)] {
+            assert_eq!(ops("", name), want, "{name}: docs/CODECS.md says {want}");
+        }
+        for (name, want) in [("scalar unorm-8", 6), ("colour r11g11b10f", 106), ("depth unorm24", 9)] {
+            assert_eq!(ops("", name), want, "{name}: docs/CODECS.md says {want}");
+        }
     }
 
     #[test]

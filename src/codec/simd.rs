@@ -104,34 +104,30 @@ impl<C: Codec + ?Sized> Element<u64, C::Value> for Decode<'_, C> {
     }
 }
 
-/// A per-element function that also has a body for a whole block of [`BLOCK`] elements (which copies the block
-/// into structure-of-arrays form so the arithmetic runs on unit-stride lanes); run by [`BlockKernel`].
-pub trait BlockElement<A, B>: Element<A, B> {
+/// A per-element function with a second body for a whole block of [`BLOCK`] elements (which copies the block into
+/// structure-of-arrays form so the arithmetic runs on unit-stride lanes); run by [`BlockKernel`].
+pub trait BlockElement<A, B> {
+    /// One element (the remainder after the last whole block).
+    fn apply(&self, a: &A) -> B;
     /// `out[j] = self.apply(&input[j])` for the `BLOCK` elements of one block, bit-identically.
     fn apply_block(&self, input: &[A], out: &mut [B]);
 }
 
-/// The blocked slice body: whole blocks of [`BLOCK`] through [`BlockElement::apply_block`], the remainder element by
-/// element. Run under [`run`].
-pub struct BlockKernel<'a, A, B, F> {
-    /// Input elements.
-    pub input: &'a [A],
-    /// Output elements (same length).
-    pub out: &'a mut [B],
-    /// The block and element bodies.
-    pub f: F,
-}
+/// The blocked slice body over a [`MapKernel`]'s slices: whole blocks of [`BLOCK`] through
+/// [`BlockElement::apply_block`], the remainder element by element. Run under [`run`].
+pub struct BlockKernel<'a, A, B, F>(pub MapKernel<'a, A, B, F>);
 
 impl<A, B, F: BlockElement<A, B>> Kernel for BlockKernel<'_, A, B, F> {
     #[inline(always)]
     fn run(self) {
-        let mut ins = self.input.chunks_exact(BLOCK);
-        let mut outs = self.out.chunks_exact_mut(BLOCK);
+        let MapKernel { input, out, f } = self.0;
+        let mut ins = input.chunks_exact(BLOCK);
+        let mut outs = out.chunks_exact_mut(BLOCK);
         for (i, o) in (&mut ins).zip(&mut outs) {
-            self.f.apply_block(i, o);
+            f.apply_block(i, o);
         }
         for (i, o) in ins.remainder().iter().zip(outs.into_remainder()) {
-            *o = self.f.apply(i);
+            *o = f.apply(i);
         }
     }
 }

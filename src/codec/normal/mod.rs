@@ -12,7 +12,7 @@
 //!
 //! Codes: component 0 sits in the low `k` bits, component 1 in the next `k`, and so on.
 
-use super::simd::{f16_bits_to_f32, f32_to_f16_bits, run, BlockElement, BlockKernel, Element, BLOCK};
+use super::simd::{f16_bits_to_f32, f32_to_f16_bits, run, BlockElement, BlockKernel, MapKernel, BLOCK};
 use super::{mask, split_bits, Codec, NormalCodec};
 use crate::base::isa::Isa;
 use glam::{DVec3, Vec2, Vec3};
@@ -599,14 +599,11 @@ struct PlanarBody<P, Q> {
     q: Q,
 }
 
-impl<P: Projection, Q: Quantizer> Element<Vec3, u64> for PlanarBody<P, Q> {
+impl<P: Projection, Q: Quantizer> BlockElement<Vec3, u64> for PlanarBody<P, Q> {
     #[inline(always)]
     fn apply(&self, n: &Vec3) -> u64 {
         Planar::encode_with(self.proj, self.q, *n)
     }
-}
-
-impl<P: Projection, Q: Quantizer> BlockElement<Vec3, u64> for PlanarBody<P, Q> {
     #[inline(always)]
     fn apply_block(&self, i: &[Vec3], o: &mut [u64]) {
         let (x, y, z) = split_block(i);
@@ -621,14 +618,11 @@ impl<P: Projection, Q: Quantizer> BlockElement<Vec3, u64> for PlanarBody<P, Q> {
     }
 }
 
-impl<P: Projection, Q: Quantizer> Element<u64, Vec3> for PlanarBody<P, Q> {
+impl<P: Projection, Q: Quantizer> BlockElement<u64, Vec3> for PlanarBody<P, Q> {
     #[inline(always)]
     fn apply(&self, c: &u64) -> Vec3 {
         Planar::decode_with(self.proj, self.q, *c)
     }
-}
-
-impl<P: Projection, Q: Quantizer> BlockElement<u64, Vec3> for PlanarBody<P, Q> {
     #[inline(always)]
     fn apply_block(&self, c: &[u64], o: &mut [Vec3]) {
         let mut c32 = [0u32; BLOCK];
@@ -684,12 +678,18 @@ impl<P: Projection + std::fmt::Debug> Codec for Planar<P> {
     }
     fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
         assert_eq!(input.len(), out.len(), "encode_slice: {} normals into {} codes", input.len(), out.len());
-        with_quantizer!(self.quant, |q| run(isa, BlockKernel { input, out, f: PlanarBody { proj: self.proj, q } }))
+        with_quantizer!(self.quant, |q| run(
+            isa,
+            BlockKernel(MapKernel { input, out, f: PlanarBody { proj: self.proj, q } })
+        ))
     }
     fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Vec3]) {
         assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} normals", codes.len(), out.len());
         let input = codes;
-        with_quantizer!(self.quant, |q| run(isa, BlockKernel { input, out, f: PlanarBody { proj: self.proj, q } }))
+        with_quantizer!(self.quant, |q| run(
+            isa,
+            BlockKernel(MapKernel { input, out, f: PlanarBody { proj: self.proj, q } })
+        ))
     }
 }
 

@@ -15,7 +15,7 @@ use super::{
     FLOAT_SLACK_RAD,
 };
 use crate::base::isa::Isa;
-use crate::codec::simd::{run, BlockElement, BlockKernel, Element, BLOCK};
+use crate::codec::simd::{run, BlockElement, BlockKernel, MapKernel, BLOCK};
 use crate::codec::Codec;
 use glam::Vec3;
 
@@ -113,14 +113,11 @@ struct XyzBody<Q> {
     unorm: bool,
 }
 
-impl<Q: Quantizer> Element<Vec3, u64> for XyzBody<Q> {
+impl<Q: Quantizer> BlockElement<Vec3, u64> for XyzBody<Q> {
     #[inline(always)]
     fn apply(&self, n: &Vec3) -> u64 {
         encode_with(self.q, self.unorm, *n)
     }
-}
-
-impl<Q: Quantizer> BlockElement<Vec3, u64> for XyzBody<Q> {
     #[inline(always)]
     fn apply_block(&self, i: &[Vec3], o: &mut [u64]) {
         let (q, unorm) = (self.q, self.unorm);
@@ -136,14 +133,11 @@ impl<Q: Quantizer> BlockElement<Vec3, u64> for XyzBody<Q> {
     }
 }
 
-impl<Q: Quantizer> Element<u64, Vec3> for XyzBody<Q> {
+impl<Q: Quantizer> BlockElement<u64, Vec3> for XyzBody<Q> {
     #[inline(always)]
     fn apply(&self, c: &u64) -> Vec3 {
         decode_with(self.q, self.unorm, *c)
     }
-}
-
-impl<Q: Quantizer> BlockElement<u64, Vec3> for XyzBody<Q> {
     #[inline(always)]
     fn apply_block(&self, c: &[u64], o: &mut [Vec3]) {
         let (q, unorm) = (self.q, self.unorm);
@@ -197,12 +191,12 @@ impl Codec for Xyz {
     fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
         assert_eq!(input.len(), out.len(), "encode_slice: {} normals into {} codes", input.len(), out.len());
         let unorm = self.is_unorm();
-        with_quantizer!(self.quant, |q| run(isa, BlockKernel { input, out, f: XyzBody { q, unorm } }))
+        with_quantizer!(self.quant, |q| run(isa, BlockKernel(MapKernel { input, out, f: XyzBody { q, unorm } })))
     }
     fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Vec3]) {
         assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} normals", codes.len(), out.len());
         let (input, unorm) = (codes, self.is_unorm());
-        with_quantizer!(self.quant, |q| run(isa, BlockKernel { input, out, f: XyzBody { q, unorm } }))
+        with_quantizer!(self.quant, |q| run(isa, BlockKernel(MapKernel { input, out, f: XyzBody { q, unorm } })))
     }
 }
 
