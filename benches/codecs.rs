@@ -2,8 +2,8 @@
 //! bytes in the same run, on one thread and on all threads (rayon).
 //!
 //! First two ratio tables are printed (best of 9 passes each): normals/s of each codec's slice path on one thread
-//! (`encode_slice`/`decode_slice`, vectorised) and on all threads (`simd::par_encode_normals` /
-//! `par_decode_normals`), and the ratio of its time to a memcpy of the 12-byte f32×3 normals (one thread:
+//! (`encode_slice`/`decode_slice`, vectorised) and on all threads (`simd::par_encode` /
+//! `par_decode`), and the ratio of its time to a memcpy of the 12-byte f32×3 normals (one thread:
 //! `copy_from_slice`; all threads: the same copy split over the pool); then the same on one thread for a few
 //! scalar, depth and colour codecs against a memcpy of their input. Then criterion measures the same
 //! operations: `memcpy/normals-12B/1M`, `memcpy-par/...`, `encode/<codec>/1M`, `decode/<codec>/1M`,
@@ -14,7 +14,7 @@
 use criterion::{BenchmarkId, Criterion, Throughput};
 use gbuf::base::isa::Isa;
 use gbuf::codec::eval::{best_time, random_unit_vectors};
-use gbuf::codec::simd::{par_decode_normals, par_encode_normals, PAR_CHUNK};
+use gbuf::codec::simd::{par_decode, par_encode, PAR_CHUNK};
 use gbuf::codec::{color_codec, depth_codec, scalar_codec, NormalCodec, NormalScheme};
 use gbuf::util::SplitMix64;
 use glam::Vec3;
@@ -59,8 +59,8 @@ fn ratio_table(normals: &[Vec3]) {
     for c in codecs() {
         let e1 = best_time(REPS, || c.encode_slice(black_box(normals), &mut codes));
         let d1 = best_time(REPS, || c.decode_slice(black_box(&codes), &mut out));
-        let ep = best_time(REPS, || par_encode_normals(c.as_ref(), black_box(normals), &mut codes));
-        let dp = best_time(REPS, || par_decode_normals(c.as_ref(), black_box(&codes), &mut out));
+        let ep = best_time(REPS, || par_encode(c.as_ref(), black_box(normals), &mut codes));
+        let dp = best_time(REPS, || par_decode(c.as_ref(), black_box(&codes), &mut out));
         let rate = |t: f64| COUNT as f64 / t / 1e6;
         println!(
             "{:<20} {:>10.0} {:>7.2} {:>10.0} {:>7.2} | {:>10.0} {:>7.2} {:>10.0} {:>7.2}",
@@ -151,10 +151,10 @@ fn bench(c: &mut Criterion, normals: &[Vec3]) {
             b.iter(|| codec.decode_slice(black_box(&codes), black_box(&mut out)));
         });
         group.bench_function(BenchmarkId::new("encode-par", format!("{name}/1M")), |b| {
-            b.iter(|| par_encode_normals(codec.as_ref(), black_box(normals), black_box(&mut codes)));
+            b.iter(|| par_encode(codec.as_ref(), black_box(normals), black_box(&mut codes)));
         });
         group.bench_function(BenchmarkId::new("decode-par", format!("{name}/1M")), |b| {
-            b.iter(|| par_decode_normals(codec.as_ref(), black_box(&codes), black_box(&mut out)));
+            b.iter(|| par_decode(codec.as_ref(), black_box(&codes), black_box(&mut out)));
         });
     }
     group.finish();

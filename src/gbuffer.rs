@@ -233,6 +233,25 @@ impl GBuffer {
         (y as usize * self.width as usize + x as usize) * self.samples as usize + s as usize
     }
 
+    /// Continuous pixel coordinate of sample `s` of pixel (`x`, `y`): the pixel centre plus the sample's offset
+    /// (the point a primary ray goes through, see [`crate::camera::Camera::view_ray`]).
+    #[inline]
+    #[must_use]
+    pub fn sample_px(&self, x: u32, y: u32, s: u32) -> Vec2 {
+        let o = self.sample_positions[s as usize];
+        Vec2::new(x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y)
+    }
+
+    /// [`Self::sample_px`] of plane index `i`.
+    #[inline]
+    #[must_use]
+    pub fn sample_px_of(&self, i: usize) -> Vec2 {
+        let s = self.samples as usize;
+        let pixel = i / s;
+        let (x, y) = (pixel % self.width as usize, pixel / self.width as usize);
+        self.sample_px(x as u32, y as u32, (i % s) as u32)
+    }
+
     /// Number of background (uncovered) samples.
     #[must_use]
     pub fn background_samples(&self) -> usize {
@@ -359,9 +378,7 @@ impl GBuffer {
                     for s in 0..self.samples {
                         let i = self.index(x, y, s);
                         if self.coverage[i] {
-                            let o = self.sample_positions[s as usize];
-                            let px = Vec2::new(x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y);
-                            pos[i] = cam.view_position(px, depth[i], self.width, self.height);
+                            pos[i] = cam.view_position(self.sample_px(x, y, s), depth[i], self.width, self.height);
                         }
                     }
                 }

@@ -293,30 +293,30 @@ fn parallel_wrappers_equal_the_scalar_path() {
     for name in ["oct-16", "xyz-snorm-30", "oct-precise-20", "spherical-16", "lambert-f16-32"] {
         let c = gbuf::codec::normal_codec(name).unwrap();
         let mut codes = vec![0u64; n];
-        simd::par_encode_normals(c.as_ref(), &normals, &mut codes);
+        simd::par_encode(c.as_ref(), &normals, &mut codes);
         assert!(codes.iter().zip(&normals).all(|(k, v)| *k == c.encode(*v)), "{name}");
         let mut back = vec![Vec3::ZERO; n];
-        simd::par_decode_normals(c.as_ref(), &codes, &mut back);
+        simd::par_decode(c.as_ref(), &codes, &mut back);
         assert!(back.iter().zip(&codes).all(|(b, k)| bits3(*b) == bits3(c.decode(*k))), "{name}");
     }
     let vals: Vec<f32> = (0..n).map(|_| rng.range_f32(-0.5, 1.5)).collect();
     let c = scalar_codec("unorm-8").unwrap();
     let mut codes = vec![0u64; n];
-    simd::par_encode_scalars(c.as_ref(), &vals, &mut codes);
+    simd::par_encode(c.as_ref(), &vals, &mut codes);
     assert!(codes.iter().zip(&vals).all(|(k, v)| *k == c.encode(*v)));
     let mut back = vec![0f32; n];
-    simd::par_decode_scalars(c.as_ref(), &codes, &mut back);
+    simd::par_decode(c.as_ref(), &codes, &mut back);
     assert!(back.iter().zip(&codes).all(|(b, k)| b.to_bits() == c.decode(*k).to_bits()));
     let d = depth_codec("unorm24", 0.1, 100.0).unwrap();
-    simd::par_encode_depths(d.as_ref(), &vals, &mut codes);
+    simd::par_encode(d.as_ref(), &vals, &mut codes);
     assert!(codes.iter().zip(&vals).all(|(k, v)| *k == d.encode(*v)));
-    simd::par_decode_depths(d.as_ref(), &codes, &mut back);
+    simd::par_decode(d.as_ref(), &codes, &mut back);
     assert!(back.iter().zip(&codes).all(|(b, k)| b.to_bits() == d.decode(*k).to_bits()));
     let col = color_codec("unorm8").unwrap();
-    simd::par_encode_colors(col.as_ref(), &normals, &mut codes);
+    simd::par_encode(col.as_ref(), &normals, &mut codes);
     assert!(codes.iter().zip(&normals).all(|(k, v)| *k == col.encode(*v)));
     let mut back = vec![Vec3::ZERO; n];
-    simd::par_decode_colors(col.as_ref(), &codes, &mut back);
+    simd::par_decode(col.as_ref(), &codes, &mut back);
     assert!(back.iter().zip(&codes).all(|(b, k)| bits3(*b) == bits3(col.decode(*k))));
 }
 

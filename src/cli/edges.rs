@@ -4,10 +4,8 @@
 use crate::cli::common::{print_json, InputArgs, ThresholdArgs};
 use anyhow::Context;
 use gbuf::base::names::{NameParser, Named};
-use gbuf::detect::{self, truth, Detector, DetectorConfig, EdgeMask};
-use gbuf::measure::edges::{
-    evaluate_against, shading_truth, truth_agreement, EdgeStats, ShadingTolerance, TruthAgreement,
-};
+use gbuf::detect::{self, Detector, DetectorConfig};
+use gbuf::measure::edges::{true_fraction, truth_agreement, MaskScores, ShadingTolerance, TruthAgreement, Truths};
 use gbuf::resolve::{Brdf, Falloff};
 use gbuf::GBuffer;
 use std::io::Write;
@@ -121,29 +119,10 @@ struct Row {
     /// `None` when the detector could not run on this G-buffer (the reason is in `skipped`).
     #[serde(skip_serializing_if = "Option::is_none")]
     skipped: Option<String>,
-    edge_fraction: f64,
-    shading_fraction: f64,
-    /// Scores against the ID truth; `None` without object IDs.
+    /// Cost and scores against each truth the dump gives (all zero / absent for a skipped detector).
     #[serde(flatten)]
-    stats: Option<Scores>,
-    /// Scores against the shading truth; `None` without lights.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    shading: Option<Scores>,
-    /// Scores against the primitive-ID truth (the rate forward MSAA shades at); `None` without primitive IDs.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    primitive: Option<Scores>,
+    scores: MaskScores,
     ms: f64,
-}
-
-/// The truth-dependent part of a row.
-#[derive(Debug, serde::Serialize)]
-struct Scores {
-    precision: f64,
-    recall: f64,
-    tp: u64,
-    fp: u64,
-    #[serde(rename = "fn")]
-    fn_: u64,
 }
 
 /// The whole output.
@@ -198,18 +177,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     tolerance.validate().context("--shading-tolerance / --exposure")?;
     let loaded = args.input.load()?;
     let gb = &loaded.gbuffer;
-    let truth = truth::object_truth(gb);
-    let prim_truth = truth::id_truth(gb, truth::TruthSource::Primitive);
     // The shading truth needs the reference radiance, so lights: from the sidecar or the dump.
     let resolve_cfg = gbuf::resolve::ResolveConfig { brdf: args.brdf, falloff: args.falloff, ..Default::default() };
-    let shading = match loaded.lights.as_deref() {
-        Some(lights) if !lights.is_empty() => {
-            let radiance = gbuf::resolve::reference_per_sample(gb, lights, &resolve_cfg)
-                .with_context(|| format!("{}: reference shading", args.input.file.display()))?;
-            Some((shading_truth(gb, &radiance, tolerance), lights.len()))
-        }
-        _ => None,
-    };
+    let lights = loaded.lights.as_deref();
+    let truths = Truths::of(gb, lights, &resolve_cfg, tolerance)
+        .with_context(|| format!("{}: reference shading", args.input.file.display()))?;
     let mut rows = Vec::new();
     let mut last_mask = None;
     for &d in &detectors {
@@ -218,39 +190,23 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let ms = t0.elapsed().as_secs_f64() * 1e3;
         match result {
             Ok(mask) => {
-                let truths = Truths {
-                    ids: truth.as_deref(),
-                    shading: shading.as_ref().map(|s| s.0.as_slice()),
-                    primitives: prim_truth.as_deref(),
-                };
-                rows.push(row(d, &mask, &truths, ms));
+                rows.push(Row { detector: d, skipped: None, scores: truths.score(&mask), ms });
                 last_mask = Some(mask);
             }
             // A single detector that cannot run is an error; in `all` mode it is a skipped row.
             Err(e) if detectors.len() == 1 => {
                 return Err(e).with_context(|| format!("{}: detector {d}", args.input.file.display()))
             }
-            Err(e) => rows.push(Row {
-                detector: d,
-                skipped: Some(e.to_string()),
-                edge_fraction: 0.0,
-                shading_fraction: 0.0,
-                stats: None,
-                shading: None,
-                primitive: None,
-                ms,
-            }),
+            Err(e) => rows.push(Row { detector: d, skipped: Some(e.to_string()), scores: MaskScores::default(), ms }),
         }
     }
     let mut mask_truth = None;
     if let (Some(path), Some(mask)) = (&args.mask, &last_mask) {
-        let shading_flags = shading.as_ref().map(|s| s.0.as_slice());
+        let (ids, shading_flags) = (truths.ids.as_deref(), truths.shading.as_deref());
         let picked = match args.mask_truth {
             Some(MaskTruth::Id) => Some((
                 MaskTruth::Id,
-                truth
-                    .as_deref()
-                    .with_context(|| format!("--mask-truth id: {} has no object IDs", args.input.file.display()))?,
+                ids.with_context(|| format!("--mask-truth id: {} has no object IDs", args.input.file.display()))?,
             )),
             Some(MaskTruth::Shading) => Some((
                 MaskTruth::Shading,
@@ -261,7 +217,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     )
                 })?,
             )),
-            None => truth.as_deref().map(|t| (MaskTruth::Id, t)).or(shading_flags.map(|t| (MaskTruth::Shading, t))),
+            None => ids.map(|t| (MaskTruth::Id, t)).or(shading_flags.map(|t| (MaskTruth::Shading, t))),
         };
         mask_truth = picked.map(|(which, _)| which.name());
         detect::picture::write_png(path, gb, mask, picked.map(|(_, t)| t))
@@ -272,17 +228,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         width: gb.width,
         height: gb.height,
         samples: gb.samples,
-        truth: truth.as_ref().map(|_| "object"),
-        true_edge_fraction: truth.as_deref().map(true_fraction),
-        primitive_true_edge_fraction: prim_truth.as_deref().map(true_fraction),
-        shading_truth: shading.as_ref().map(|(t, lights)| ShadingTruth {
+        truth: truths.ids.as_ref().map(|_| "object"),
+        true_edge_fraction: truths.ids.as_deref().map(true_fraction),
+        primitive_true_edge_fraction: truths.primitives.as_deref().map(true_fraction),
+        shading_truth: truths.shading.as_deref().map(|t| ShadingTruth {
             tolerance,
             rule: tolerance.to_string(),
-            lights: *lights,
+            lights: lights.map_or(0, <[_]>::len),
             brdf: resolve_cfg.brdf.name(),
             falloff: resolve_cfg.falloff.name(),
             true_edge_fraction: true_fraction(t),
-            agreement_with_id_truth: truth.as_deref().map(|ids| truth_agreement(t, ids)),
+            agreement_with_id_truth: truths.ids.as_deref().map(|ids| truth_agreement(t, ids)),
         }),
         mask_truth,
         thresholds: cfg,
@@ -292,40 +248,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         print_json(&out)
     } else {
         print_table(&out, gb)
-    }
-}
-
-/// Fraction of `true` flags.
-fn true_fraction(t: &[bool]) -> f64 {
-    if t.is_empty() {
-        0.0
-    } else {
-        t.iter().filter(|&&e| e).count() as f64 / t.len() as f64
-    }
-}
-
-fn scores(mask: &EdgeMask, truth: &[bool]) -> Scores {
-    let s: EdgeStats = evaluate_against(mask, truth);
-    Scores { precision: s.precision, recall: s.recall, tp: s.tp, fp: s.fp, fn_: s.fn_ }
-}
-
-/// The truths a mask is scored against (each absent when the dump cannot give it).
-struct Truths<'a> {
-    ids: Option<&'a [bool]>,
-    shading: Option<&'a [bool]>,
-    primitives: Option<&'a [bool]>,
-}
-
-fn row(detector: Detector, mask: &EdgeMask, truths: &Truths<'_>, ms: f64) -> Row {
-    Row {
-        detector,
-        skipped: None,
-        edge_fraction: mask.edge_fraction(),
-        shading_fraction: mask.shading_fraction(),
-        stats: truths.ids.map(|t| scores(mask, t)),
-        shading: truths.shading.map(|t| scores(mask, t)),
-        primitive: truths.primitives.map(|t| scores(mask, t)),
-        ms,
     }
 }
 
@@ -379,11 +301,11 @@ fn print_table(out: &Output, gb: &GBuffer) -> anyhow::Result<()> {
             writeln!(w, "{:<13} skipped: {why}", r.detector.name())?;
             continue;
         }
-        let ids = match &r.stats {
+        let ids = match &r.scores.ids {
             Some(s) => format!("{:>9.4} {:>7.4} {:>9} {:>9} {:>9}", s.precision, s.recall, s.tp, s.fp, s.fn_),
             None => [dash(9), dash(7), dash(9), dash(9), dash(9)].join(" "),
         };
-        let shading = match &r.shading {
+        let shading = match &r.scores.shading {
             Some(s) => format!("{:>9.4} {:>9.4}", s.precision, s.recall),
             None => [dash(9), dash(9)].join(" "),
         };
@@ -391,8 +313,8 @@ fn print_table(out: &Output, gb: &GBuffer) -> anyhow::Result<()> {
             w,
             "{:<13} {:>7.3} {:>10.3} {ids} {shading} {:>8.2}",
             r.detector.name(),
-            100.0 * r.edge_fraction,
-            100.0 * r.shading_fraction,
+            100.0 * r.scores.edge_fraction,
+            100.0 * r.scores.shading_fraction,
             r.ms
         )?;
     }

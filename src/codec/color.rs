@@ -13,9 +13,9 @@
 //! floats take negatives to 0, never to NaN or Inf). Decoders return finite values for every code (Inf/NaN bit
 //! patterns of the float formats decode to the largest finite value / 0).
 
-use super::normal::{f16_to_finite, round_in_range, F16_MAX};
+use super::normal::{f16_to_finite, round_in_range, F16_MAX, F16_TO_FINITE_OPS};
 use super::simd::{f32_to_f16_bits, run, Element, MapKernel};
-use super::{mask, split_bits, ColorCodec};
+use super::{mask, split_bits, Codec, ColorCodec, TRANSCENDENTAL_OPS};
 use crate::base::isa::Isa;
 use glam::Vec3;
 use std::sync::OnceLock;
@@ -128,7 +128,8 @@ impl<const SRGB: bool> Element<u64, Vec3> for UnormRgbDec<SRGB> {
     }
 }
 
-impl ColorCodec for UnormRgb {
+impl Codec for UnormRgb {
+    type Value = Vec3;
     fn name(&self) -> String {
         match (self.srgb, self.bits) {
             (true, _) => "srgb8".into(),
@@ -155,6 +156,11 @@ impl ColorCodec for UnormRgb {
             self.decode_with::<false>(code)
         }
     }
+    fn decode_ops(&self) -> u32 {
+        // two shifts split the code; per channel and, then int→float and div (linear) or and 0xff and a
+        // table lookup (sRGB): 2 + 3 × 3
+        11
+    }
     fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
         assert_eq!(input.len(), out.len(), "encode_slice: {} colours into {} codes", input.len(), out.len());
         // One loop per curve, so the linear one has no libm call in it and vectorises.
@@ -172,6 +178,9 @@ impl ColorCodec for UnormRgb {
             run(isa, MapKernel { input: codes, out, f: UnormRgbDec::<false>(*self) });
         }
     }
+}
+
+impl ColorCodec for UnormRgb {
     fn domain(&self) -> (f32, f32) {
         (0.0, 1.0)
     }
@@ -214,6 +223,11 @@ fn encode_ufloat(v: f32, m: u32) -> u32 {
     (((e + 15) as u32) << m) | (mant - (1 << m))
 }
 
+/// [`Codec::decode_ops`] of [`decode_ufloat`], both arms counted: shift, and, and (3); exponent compares (2);
+/// denormal `mant·2^(−14−m)` (int→float, mul: 2); normal `(1 + mant/2^m)·2^(e−15)` (int→float, div, add, sub, powi
+/// — a libm call with a variable exponent —, mul: 5 + [`TRANSCENDENTAL_OPS`]); two selects (2).
+const UFLOAT_DECODE_OPS: u32 = 3 + 2 + 2 + 5 + TRANSCENDENTAL_OPS + 2;
+
 #[inline]
 fn decode_ufloat(bits: u32, m: u32) -> f32 {
     let exp = (bits >> m) & 31;
@@ -234,7 +248,8 @@ fn ufloat_max(m: u32) -> f32 {
 #[derive(Clone, Copy, Debug)]
 pub struct R11G11B10F;
 
-impl ColorCodec for R11G11B10F {
+impl Codec for R11G11B10F {
+    type Value = Vec3;
     fn name(&self) -> String {
         "r11g11b10f".into()
     }
@@ -253,6 +268,13 @@ impl ColorCodec for R11G11B10F {
         let code = code as u32;
         Vec3::new(decode_ufloat(code & 0x7ff, 6), decode_ufloat((code >> 11) & 0x7ff, 6), decode_ufloat(code >> 22, 5))
     }
+    fn decode_ops(&self) -> u32 {
+        // and, shift + and, shift split the code; decode_ufloat per channel
+        4 + 3 * UFLOAT_DECODE_OPS
+    }
+}
+
+impl ColorCodec for R11G11B10F {
     fn domain(&self) -> (f32, f32) {
         (0.0, ufloat_max(6))
     }
@@ -270,7 +292,8 @@ pub struct Rgb9e5;
 /// Largest RGB9E5 channel value: (511/512)·2^16.
 pub const RGB9E5_MAX: f32 = 65408.0;
 
-impl ColorCodec for Rgb9e5 {
+impl Codec for Rgb9e5 {
+    type Value = Vec3;
     fn name(&self) -> String {
         "rgb9e5".into()
     }
@@ -300,6 +323,14 @@ impl ColorCodec for Rgb9e5 {
         let scale = 2f32.powi((code >> 27) as i32 - 15 - 9);
         Vec3::new((code & 511) as f32, ((code >> 9) & 511) as f32, ((code >> 18) & 511) as f32) * scale
     }
+    fn decode_ops(&self) -> u32 {
+        // shift, sub for the exponent; 2^e through powi (a libm call); and, 2 × (shift + and) for
+        // the mantissas; 3 int→float; 3 mul
+        2 + TRANSCENDENTAL_OPS + 5 + 3 + 3
+    }
+}
+
+impl ColorCodec for Rgb9e5 {
     fn domain(&self) -> (f32, f32) {
         (0.0, RGB9E5_MAX)
     }
@@ -313,7 +344,8 @@ impl ColorCodec for Rgb9e5 {
 #[derive(Clone, Copy, Debug)]
 pub struct RgbF16;
 
-impl ColorCodec for RgbF16 {
+impl Codec for RgbF16 {
+    type Value = Vec3;
     fn name(&self) -> String {
         "f16".into()
     }
@@ -330,6 +362,13 @@ impl ColorCodec for RgbF16 {
         let d = |c: u64| f16_to_finite((c & 0xffff) as u16);
         Vec3::new(d(code), d(code >> 16), d(code >> 32))
     }
+    fn decode_ops(&self) -> u32 {
+        // two shifts; per channel and, f16_to_finite
+        2 + 3 * (1 + F16_TO_FINITE_OPS)
+    }
+}
+
+impl ColorCodec for RgbF16 {
     fn domain(&self) -> (f32, f32) {
         (-F16_MAX, F16_MAX)
     }
@@ -343,7 +382,8 @@ impl ColorCodec for RgbF16 {
 #[derive(Clone, Copy, Debug)]
 pub struct RgbF32;
 
-impl ColorCodec for RgbF32 {
+impl Codec for RgbF32 {
+    type Value = Vec3;
     fn name(&self) -> String {
         "f32".into()
     }
@@ -358,6 +398,13 @@ impl ColorCodec for RgbF32 {
     fn decode(&self, code: u64) -> Vec3 {
         self.decode_wide(u128::from(code))
     }
+    fn decode_ops(&self) -> u32 {
+        // two shifts (from_bits is free); per channel NaN compare, select, clamp
+        2 + 3 * 3
+    }
+}
+
+impl ColorCodec for RgbF32 {
     fn encode_wide(&self, c: Vec3) -> u128 {
         let f = |v: f32| u128::from(clean(v, f32::MIN, f32::MAX).to_bits());
         f(c.x) | (f(c.y) << 32) | (f(c.z) << 64)

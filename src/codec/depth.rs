@@ -18,9 +18,9 @@
 //! plane clamp to it; zero, negative depths and −Inf clamp to the near plane (linear codecs: to their smallest
 //! positive value). Every decode is finite and positive.
 
-use super::normal::{f16_to_finite, round_in_range_f64, F16_MAX};
+use super::normal::{f16_to_finite, round_in_range_f64, F16_MAX, F16_TO_FINITE_OPS};
 use super::simd::f32_to_f16_bits;
-use super::{mask, DepthCodec};
+use super::{mask, Codec, DepthCodec};
 use crate::camera::Camera;
 use glam::{Vec2, Vec3};
 
@@ -71,7 +71,8 @@ pub struct LinearF32 {
     zfar: f32,
 }
 
-impl DepthCodec for LinearF32 {
+impl Codec for LinearF32 {
+    type Value = f32;
     fn name(&self) -> String {
         "f32".into()
     }
@@ -92,6 +93,13 @@ impl DepthCodec for LinearF32 {
             z.clamp(f32::MIN_POSITIVE, f32::MAX)
         }
     }
+    fn decode_ops(&self) -> u32 {
+        // from_bits is free; NaN compare, select, clamp
+        3
+    }
+}
+
+impl DepthCodec for LinearF32 {
     fn error_bound(&self, _depth: f32) -> f32 {
         0.0
     }
@@ -105,7 +113,8 @@ pub struct LinearF16 {
 
 const F16_MIN_POSITIVE: f32 = 5.960_464_5e-8; // 2^-24, the smallest subnormal
 
-impl DepthCodec for LinearF16 {
+impl Codec for LinearF16 {
+    type Value = f32;
     fn name(&self) -> String {
         "f16".into()
     }
@@ -121,6 +130,13 @@ impl DepthCodec for LinearF16 {
     fn decode(&self, code: u64) -> f32 {
         f16_to_finite((code & 0xffff) as u16).clamp(F16_MIN_POSITIVE, F16_MAX)
     }
+    fn decode_ops(&self) -> u32 {
+        // and, f16_to_finite, clamp
+        2 + F16_TO_FINITE_OPS
+    }
+}
+
+impl DepthCodec for LinearF16 {
     fn domain(&self) -> (f32, f32) {
         (F16_MIN_POSITIVE, F16_MAX)
     }
@@ -183,7 +199,8 @@ impl PostProjection {
     }
 }
 
-impl DepthCodec for PostProjection {
+impl Codec for PostProjection {
+    type Value = f32;
     fn name(&self) -> String {
         let base = match self.storage {
             DepthStorage::Unorm(k) => format!("unorm{k}"),
@@ -227,6 +244,14 @@ impl DepthCodec for PostProjection {
         };
         self.z_of(d) as f32
     }
+    fn decode_ops(&self) -> u32 {
+        // unorm: and, int→f64, div (3); f32: NaN compare, select, f32→f64 (3; d_of(f) is a constant);
+        // z_of: clamp, mul, add or sub, div (n·f and f − n are constants), clamp (5); f64→f32 (1)
+        9
+    }
+}
+
+impl DepthCodec for PostProjection {
     fn domain(&self) -> (f32, f32) {
         (self.n as f32, self.f as f32)
     }

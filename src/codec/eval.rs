@@ -172,8 +172,8 @@ pub fn exhaustive(codec: &dyn NormalCodec) -> Option<Exhaustive> {
 }
 
 /// Nanoseconds per normal for encode and for decode over `inputs`, through the slice path
-/// ([`NormalCodec::encode_slice`] / [`NormalCodec::decode_slice`]: one thread, vectorised with the widest
-/// instruction set the CPU has), best of `reps` passes.
+/// ([`Codec::encode_slice`](super::Codec::encode_slice) / [`Codec::decode_slice`](super::Codec::decode_slice):
+/// one thread, vectorised with the widest instruction set the CPU has), best of `reps` passes.
 #[must_use]
 pub fn time_codec(codec: &dyn NormalCodec, inputs: &[Vec3], reps: usize) -> (f64, f64) {
     let mut codes = vec![0u64; inputs.len()];

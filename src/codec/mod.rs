@@ -35,16 +35,58 @@ pub use depth::depth_codec;
 pub use normal::{angle_deg, normal_codec, NormalScheme};
 pub use scalar::scalar_codec;
 
-/// A unit-normal encoding.
-pub trait NormalCodec: Send + Sync {
-    /// Short kebab-case name including the bit count, e.g. `oct-16`.
+/// What every codec is: a value type, a name, a bit count, `encode`/`decode`, the decoder's cost, and the slice
+/// paths. The four kinds ([`NormalCodec`], [`ScalarCodec`], [`ColorCodec`], [`DepthCodec`]) add what is particular
+/// to their values (error bounds, domains) on top.
+///
+/// The slice methods are written once here for every codec; a codec with a vectorised body overrides
+/// [`Self::encode_slice_isa`] / [`Self::decode_slice_isa`].
+pub trait Codec: Send + Sync {
+    /// What is encoded: `Vec3` for normals and colours, `f32` for scalars and depths.
+    type Value: Copy + Send + Sync;
+    /// Short kebab-case name including the bit count where it varies, e.g. `oct-16`, `unorm-8`, `srgb8`.
     fn name(&self) -> String;
-    /// Total bits per normal.
+    /// Total bits per value.
     fn bits(&self) -> u32;
-    /// Encodes a (nominally unit) view-space normal.
-    fn encode(&self, n: Vec3) -> u64;
-    /// Decodes a code; always a finite unit vector.
-    fn decode(&self, code: u64) -> Vec3;
+    /// Encodes a value (see each kind for the domain and what happens outside it).
+    fn encode(&self, v: Self::Value) -> u64;
+    /// Decodes a code; always finite (a unit vector for normals, positive for depths).
+    fn decode(&self, code: u64) -> Self::Value;
+    /// Scalar arithmetic operations [`Self::decode`] performs per value, counted from its source by the rule in
+    /// docs/CODECS.md ("Decode cost"): one per add, sub, mul, fma, div, sqrt, min, max, clamp, compare/select,
+    /// shift, and, or, int↔float conversion and table lookup; [`TRANSCENDENTAL_OPS`] per exp2, log2, pow, sin,
+    /// cos, atan2, …. No default: every codec states its own count.
+    fn decode_ops(&self) -> u32;
+    /// Encodes a slice on the calling thread with the widest instruction set this CPU has ([`Isa::detect`]);
+    /// bit-identical to [`Self::encode`] element by element. Panics if `out.len() != input.len()`. For all
+    /// threads see [`simd::par_encode`].
+    fn encode_slice(&self, input: &[Self::Value], out: &mut [u64]) {
+        self.encode_slice_isa(Isa::detect(), input, out);
+    }
+    /// Decodes a slice on the calling thread (see [`Self::encode_slice`]). Panics if the lengths differ.
+    fn decode_slice(&self, codes: &[u64], out: &mut [Self::Value]) {
+        self.decode_slice_isa(Isa::detect(), codes, out);
+    }
+    /// [`Self::encode_slice`] compiled for `isa` (clamped to what the CPU has). The default runs
+    /// [`Self::encode`] in a loop; the cheap codecs override it with a vectorised body.
+    fn encode_slice_isa(&self, isa: Isa, input: &[Self::Value], out: &mut [u64]) {
+        assert_eq!(input.len(), out.len(), "encode_slice: {} values into {} codes", input.len(), out.len());
+        simd::run(isa, simd::MapKernel { input, out, f: simd::Encode(self) });
+    }
+    /// [`Self::decode_slice`] compiled for `isa` (see [`Self::encode_slice_isa`]).
+    fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Self::Value]) {
+        assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} values", codes.len(), out.len());
+        simd::run(isa, simd::MapKernel { input: codes, out, f: simd::Decode(self) });
+    }
+}
+
+/// Operations [`Codec::decode_ops`] counts for one transcendental call (exp2, log2, pow, sin, cos, atan2, acos,
+/// …): about what a libm or vectorised polynomial implementation spends (range reduction, a degree-6 to -8
+/// polynomial, reconstruction). One fixed weight so that counts compare across codecs.
+pub const TRANSCENDENTAL_OPS: u32 = 20;
+
+/// A unit-normal encoding: [`Codec`] over `Vec3` whose `decode` is always a finite unit vector.
+pub trait NormalCodec: Codec<Value = Vec3> {
     /// Documented upper bound, in degrees, on the angle between a unit input inside [`Self::in_domain`] and its
     /// decoded code. Tests hold every codec to it.
     fn max_error_deg(&self) -> f32 {
@@ -61,39 +103,10 @@ pub trait NormalCodec: Send + Sync {
     fn is_idempotent(&self) -> bool {
         true
     }
-    /// Encodes a slice on the calling thread with the widest instruction set this CPU has ([`Isa::detect`]);
-    /// bit-identical to [`Self::encode`] element by element. Panics if `out.len() != input.len()`. For all
-    /// threads see [`simd::par_encode_normals`].
-    fn encode_slice(&self, input: &[Vec3], out: &mut [u64]) {
-        self.encode_slice_isa(Isa::detect(), input, out);
-    }
-    /// Decodes a slice on the calling thread (see [`Self::encode_slice`]). Panics if the lengths differ.
-    fn decode_slice(&self, codes: &[u64], out: &mut [Vec3]) {
-        self.decode_slice_isa(Isa::detect(), codes, out);
-    }
-    /// [`Self::encode_slice`] compiled for `isa` (clamped to what the CPU has). The default runs
-    /// [`Self::encode`] in a loop; the cheap codecs override it with a vectorised body.
-    fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
-        assert_eq!(input.len(), out.len(), "encode_slice: {} normals into {} codes", input.len(), out.len());
-        simd::run(isa, simd::MapKernel { input, out, f: simd::NormalEnc(self) });
-    }
-    /// [`Self::decode_slice`] compiled for `isa` (see [`Self::encode_slice_isa`]).
-    fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Vec3]) {
-        assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} normals", codes.len(), out.len());
-        simd::run(isa, simd::MapKernel { input: codes, out, f: simd::NormalDec(self) });
-    }
 }
 
-/// A scalar encoding (specular, roughness, metallic, AO, specular power).
-pub trait ScalarCodec: Send + Sync {
-    /// Short kebab-case name, e.g. `unorm-8`.
-    fn name(&self) -> String;
-    /// Bits per value.
-    fn bits(&self) -> u32;
-    /// Encodes a value.
-    fn encode(&self, v: f32) -> u64;
-    /// Decodes a code; always finite.
-    fn decode(&self, code: u64) -> f32;
+/// A scalar encoding (specular, roughness, metallic, AO, specular power): [`Codec`] over `f32`.
+pub trait ScalarCodec: Codec<Value = f32> {
     /// The closed interval of values this codec represents; inputs outside are clamped into it.
     fn domain(&self) -> (f32, f32) {
         (f32::MIN, f32::MAX)
@@ -103,38 +116,10 @@ pub trait ScalarCodec: Send + Sync {
         let _ = v;
         f32::INFINITY
     }
-    /// Encodes a slice on the calling thread with the widest instruction set this CPU has; bit-identical to
-    /// [`Self::encode`] element by element. Panics if the lengths differ.
-    fn encode_slice(&self, input: &[f32], out: &mut [u64]) {
-        self.encode_slice_isa(Isa::detect(), input, out);
-    }
-    /// Decodes a slice on the calling thread (see [`Self::encode_slice`]). Panics if the lengths differ.
-    fn decode_slice(&self, codes: &[u64], out: &mut [f32]) {
-        self.decode_slice_isa(Isa::detect(), codes, out);
-    }
-    /// [`Self::encode_slice`] compiled for `isa` (clamped to what the CPU has). The default runs
-    /// [`Self::encode`] in a loop; the cheap codecs override it with a vectorised body.
-    fn encode_slice_isa(&self, isa: Isa, input: &[f32], out: &mut [u64]) {
-        assert_eq!(input.len(), out.len(), "encode_slice: {} values into {} codes", input.len(), out.len());
-        simd::run(isa, simd::MapKernel { input, out, f: simd::ScalarEnc(self) });
-    }
-    /// [`Self::decode_slice`] compiled for `isa` (see [`Self::encode_slice_isa`]).
-    fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [f32]) {
-        assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} values", codes.len(), out.len());
-        simd::run(isa, simd::MapKernel { input: codes, out, f: simd::ScalarDec(self) });
-    }
 }
 
-/// An RGB colour encoding.
-pub trait ColorCodec: Send + Sync {
-    /// Short kebab-case name, e.g. `srgb8`.
-    fn name(&self) -> String;
-    /// Bits per colour.
-    fn bits(&self) -> u32;
-    /// Encodes a linear RGB colour.
-    fn encode(&self, c: Vec3) -> u64;
-    /// Decodes a code to linear RGB; always finite.
-    fn decode(&self, code: u64) -> Vec3;
+/// An RGB colour encoding: [`Codec`] over linear RGB `Vec3`.
+pub trait ColorCodec: Codec<Value = Vec3> {
     /// The closed interval every channel is clamped into before encoding.
     fn domain(&self) -> (f32, f32) {
         (f32::MIN, f32::MAX)
@@ -146,7 +131,7 @@ pub trait ColorCodec: Send + Sync {
         Vec3::INFINITY
     }
     /// Encodes into a code of up to 128 bits. Codecs wider than 64 bits (`f32`, 96 bits) must be used through
-    /// this pair; for the others it equals [`Self::encode`].
+    /// this pair; for the others it equals [`Codec::encode`].
     fn encode_wide(&self, c: Vec3) -> u128 {
         u128::from(self.encode(c))
     }
@@ -154,38 +139,11 @@ pub trait ColorCodec: Send + Sync {
     fn decode_wide(&self, code: u128) -> Vec3 {
         self.decode(code as u64)
     }
-    /// Encodes a slice on the calling thread with the widest instruction set this CPU has; bit-identical to
-    /// [`Self::encode`] element by element. Panics if the lengths differ.
-    fn encode_slice(&self, input: &[Vec3], out: &mut [u64]) {
-        self.encode_slice_isa(Isa::detect(), input, out);
-    }
-    /// Decodes a slice on the calling thread (see [`Self::encode_slice`]). Panics if the lengths differ.
-    fn decode_slice(&self, codes: &[u64], out: &mut [Vec3]) {
-        self.decode_slice_isa(Isa::detect(), codes, out);
-    }
-    /// [`Self::encode_slice`] compiled for `isa` (clamped to what the CPU has). The default runs
-    /// [`Self::encode`] in a loop; the cheap codecs override it with a vectorised body.
-    fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
-        assert_eq!(input.len(), out.len(), "encode_slice: {} colours into {} codes", input.len(), out.len());
-        simd::run(isa, simd::MapKernel { input, out, f: simd::ColorEnc(self) });
-    }
-    /// [`Self::decode_slice`] compiled for `isa` (see [`Self::encode_slice_isa`]).
-    fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Vec3]) {
-        assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} colours", codes.len(), out.len());
-        simd::run(isa, simd::MapKernel { input: codes, out, f: simd::ColorDec(self) });
-    }
 }
 
-/// A view-depth encoding. Codecs that depend on the projection are built with the near/far planes.
-pub trait DepthCodec: Send + Sync {
-    /// Short kebab-case name, e.g. `unorm24`.
-    fn name(&self) -> String;
-    /// Bits per depth.
-    fn bits(&self) -> u32;
-    /// Encodes a positive view depth.
-    fn encode(&self, depth: f32) -> u64;
-    /// Decodes a code to view depth; always finite and positive.
-    fn decode(&self, code: u64) -> f32;
+/// A view-depth encoding: [`Codec`] over positive view depths. Codecs that depend on the projection are built
+/// with the near/far planes.
+pub trait DepthCodec: Codec<Value = f32> {
     /// The closed interval of depths this codec represents; inputs outside are clamped into it.
     fn domain(&self) -> (f32, f32) {
         (f32::MIN_POSITIVE, f32::MAX)
@@ -194,26 +152,6 @@ pub trait DepthCodec: Send + Sync {
     fn error_bound(&self, depth: f32) -> f32 {
         let _ = depth;
         f32::INFINITY
-    }
-    /// Encodes a slice on the calling thread with the widest instruction set this CPU has; bit-identical to
-    /// [`Self::encode`] element by element. Panics if the lengths differ.
-    fn encode_slice(&self, input: &[f32], out: &mut [u64]) {
-        self.encode_slice_isa(Isa::detect(), input, out);
-    }
-    /// Decodes a slice on the calling thread (see [`Self::encode_slice`]). Panics if the lengths differ.
-    fn decode_slice(&self, codes: &[u64], out: &mut [f32]) {
-        self.decode_slice_isa(Isa::detect(), codes, out);
-    }
-    /// [`Self::encode_slice`] compiled for `isa` (clamped to what the CPU has). The default runs
-    /// [`Self::encode`] in a loop; the cheap codecs override it with a vectorised body.
-    fn encode_slice_isa(&self, isa: Isa, input: &[f32], out: &mut [u64]) {
-        assert_eq!(input.len(), out.len(), "encode_slice: {} depths into {} codes", input.len(), out.len());
-        simd::run(isa, simd::MapKernel { input, out, f: simd::DepthEnc(self) });
-    }
-    /// [`Self::decode_slice`] compiled for `isa` (see [`Self::encode_slice_isa`]).
-    fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [f32]) {
-        assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} depths", codes.len(), out.len());
-        simd::run(isa, simd::MapKernel { input: codes, out, f: simd::DepthDec(self) });
     }
 }
 
@@ -287,6 +225,70 @@ mod tests {
         assert!(try_color_codec("srgb9").is_err());
         assert!(try_depth_codec("unorm24", 1.0, 0.5).err().unwrap().to_string().contains("znear < zfar"));
         assert!(try_depth_codec("unorm23", 0.1, 100.0).err().unwrap().to_string().contains("unorm24-reversed"));
+    }
+
+    /// Every name the four registries accept (each bit count of each pattern).
+    fn every_codec() -> Vec<(String, u32)> {
+        let mut all = Vec::new();
+        for s in NormalScheme::ALL {
+            for b in s.valid_bits() {
+                let c = normal_codec(&format!("{}-{b}", s.name())).unwrap();
+                all.push((c.name(), c.decode_ops()));
+            }
+        }
+        let mut scalars: Vec<String> = ["f16", "f32", "snorm-8:32"].map(String::from).to_vec();
+        for n in 1..=24 {
+            scalars.extend(["unorm", "snorm", "log2-unorm", "specpow-unorm"].map(|p| format!("{p}-{n}")));
+        }
+        all.extend(
+            scalars.iter().filter_map(|n| scalar_codec(n)).map(|c| (format!("scalar {}", c.name()), c.decode_ops())),
+        );
+        let mut colors: Vec<String> =
+            ["unorm8", "srgb8", "r11g11b10f", "rgb9e5", "f16", "f32"].map(String::from).to_vec();
+        colors.extend((1..=16).map(|n| format!("unorm-{n}")));
+        all.extend(
+            colors.iter().map(|n| color_codec(n).unwrap()).map(|c| (format!("colour {}", c.name()), c.decode_ops())),
+        );
+        for n in depth::VALID_NAMES {
+            let c = depth_codec(n, 0.1, 100.0).unwrap();
+            all.push((format!("depth {}", c.name()), c.decode_ops()));
+        }
+        all
+    }
+
+    #[test]
+    fn every_codec_counts_its_decode_ops() {
+        let all = every_codec();
+        assert!(all.len() > 200, "{} codecs", all.len());
+        for (name, ops) in &all {
+            assert!(*ops > 0, "{name}: decode_ops = 0");
+        }
+        let ops = |kind: &str, name: &str| -> u32 {
+            let key = if kind.is_empty() { name.to_string() } else { format!("{kind} {name}") };
+            all.iter().find(|(n, _)| *n == key).unwrap_or_else(|| panic!("{key} missing")).1
+        };
+        // Identity-like decoders are cheaper than any projection that has to rebuild a unit vector.
+        let identities = [ops("depth", "f32"), ops("scalar", "f32"), ops("colour", "f32")];
+        for n in ["oct-16", "oct-precise-16", "spheremap-cry-16", "spheremap-ispc-16", "lambert-16", "stereo-16"] {
+            for id in identities {
+                assert!(id < ops("", n), "identity {id} vs {n} {}", ops("", n));
+            }
+        }
+        // Monotone where one decoder does the other's work and more.
+        assert!(ops("", "oct-precise-16") >= ops("", "oct-16"));
+        assert!(ops("", "oct-f16-32") > ops("", "oct-16"), "f16 storage needs the half-float decode");
+        assert!(ops("", "spherical-16") > ops("", "oct-16"), "spherical needs sin and cos");
+        assert!(ops("scalar", "log2-unorm-8") > ops("scalar", "unorm-8"), "log2 decodes unorm and then exp2");
+        assert!(ops("depth", "unorm24") > ops("depth", "f32"), "post-projection depth inverts the projection");
+        assert!(ops("colour", "f16") > ops("colour", "unorm8"));
+        assert!(ops("", "xyz-f16-48") > ops("", "xyz-snorm-48"));
+        // The table in docs/CODECS.md ("Decode cost").
+        for (name, want) in [("oct-16", 45), ("spheremap-cry-16", 64), ("spherical-16", 115), ("xyz-unorm-30", 32)] {
+            assert_eq!(ops("", name), want, "{name}: docs/CODECS.md says {want}");
+        }
+        for (name, want) in [("scalar unorm-8", 6), ("colour r11g11b10f", 106), ("depth unorm24", 9)] {
+            assert_eq!(ops("", name), want, "{name}: docs/CODECS.md says {want}");
+        }
     }
 
     #[test]

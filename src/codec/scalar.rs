@@ -16,9 +16,9 @@
 //! magnitudes below 2^-25 flush to ±0. Decoders only ever return finite values (f16 Inf/NaN codes decode to
 //! ±65504 / 0).
 
-use super::normal::{f16_to_finite, round_in_range_f64};
+use super::normal::{f16_to_finite, round_in_range_f64, F16_TO_FINITE_OPS};
 use super::simd::f32_to_f16_bits;
-use super::{mask, split_bits, ScalarCodec};
+use super::{mask, split_bits, Codec, ScalarCodec, TRANSCENDENTAL_OPS};
 
 /// Every valid name pattern (for error messages).
 pub const VALID_NAMES: &[&str] = &[
@@ -110,7 +110,8 @@ impl Snorm {
     }
 }
 
-impl ScalarCodec for Snorm {
+impl Codec for Snorm {
+    type Value = f32;
     fn name(&self) -> String {
         if self.range == 1.0 {
             format!("snorm-{}", self.bits)
@@ -134,6 +135,13 @@ impl ScalarCodec for Snorm {
         let s = ((((code & mask(k)) as u32) << (32 - k)) as i32) >> (32 - k);
         ((f64::from(s) / self.max_code()).max(-1.0) * f64::from(self.range)) as f32
     }
+    fn decode_ops(&self) -> u32 {
+        // and, shl, sar (sign-extend), int→f64, div, max(−1), mul by R, f64→f32
+        8
+    }
+}
+
+impl ScalarCodec for Snorm {
     fn domain(&self) -> (f32, f32) {
         (-self.range, self.range)
     }
@@ -143,7 +151,8 @@ impl ScalarCodec for Snorm {
     }
 }
 
-impl ScalarCodec for Unorm {
+impl Codec for Unorm {
+    type Value = f32;
     fn name(&self) -> String {
         format!("{}-{}", self.prefix, self.bits)
     }
@@ -161,6 +170,13 @@ impl ScalarCodec for Unorm {
         let t = f64::from((code & mask(self.bits)) as i32) / self.max_code();
         (f64::from(self.lo) + t * f64::from(self.hi - self.lo)) as f32
     }
+    fn decode_ops(&self) -> u32 {
+        // and, int→f64, div, mul, add, f64→f32 (the scale and offset are per-codec constants)
+        6
+    }
+}
+
+impl ScalarCodec for Unorm {
     fn domain(&self) -> (f32, f32) {
         (self.lo, self.hi)
     }
@@ -176,7 +192,8 @@ pub struct Log2Unorm {
     inner: Unorm,
 }
 
-impl ScalarCodec for Log2Unorm {
+impl Codec for Log2Unorm {
+    type Value = f32;
     fn name(&self) -> String {
         format!("log2-unorm-{}", self.inner.bits)
     }
@@ -193,6 +210,13 @@ impl ScalarCodec for Log2Unorm {
     fn decode(&self, code: u64) -> f32 {
         (self.inner.decode(code) * LOG2_MAX_POWER).exp2().clamp(1.0, MAX_SPECULAR_POWER)
     }
+    fn decode_ops(&self) -> u32 {
+        // the unorm decode, mul by 12, exp2, clamp
+        self.inner.decode_ops() + 2 + TRANSCENDENTAL_OPS
+    }
+}
+
+impl ScalarCodec for Log2Unorm {
     fn domain(&self) -> (f32, f32) {
         (1.0, MAX_SPECULAR_POWER)
     }
@@ -206,7 +230,8 @@ impl ScalarCodec for Log2Unorm {
 #[derive(Clone, Copy, Debug)]
 pub struct ScalarF16;
 
-impl ScalarCodec for ScalarF16 {
+impl Codec for ScalarF16 {
+    type Value = f32;
     fn name(&self) -> String {
         "f16".into()
     }
@@ -222,6 +247,13 @@ impl ScalarCodec for ScalarF16 {
     fn decode(&self, code: u64) -> f32 {
         f16_to_finite((code & 0xffff) as u16)
     }
+    fn decode_ops(&self) -> u32 {
+        // and, f16_to_finite
+        1 + F16_TO_FINITE_OPS
+    }
+}
+
+impl ScalarCodec for ScalarF16 {
     fn domain(&self) -> (f32, f32) {
         (-super::normal::F16_MAX, super::normal::F16_MAX)
     }
@@ -234,7 +266,8 @@ impl ScalarCodec for ScalarF16 {
 #[derive(Clone, Copy, Debug)]
 pub struct ScalarF32;
 
-impl ScalarCodec for ScalarF32 {
+impl Codec for ScalarF32 {
+    type Value = f32;
     fn name(&self) -> String {
         "f32".into()
     }
@@ -255,6 +288,13 @@ impl ScalarCodec for ScalarF32 {
             v.clamp(f32::MIN, f32::MAX)
         }
     }
+    fn decode_ops(&self) -> u32 {
+        // from_bits is free; NaN compare, select, clamp
+        3
+    }
+}
+
+impl ScalarCodec for ScalarF32 {
     fn error_bound(&self, _v: f32) -> f32 {
         0.0
     }

@@ -9,12 +9,11 @@
 //! same order and the results are bit-identical to the scalar path — `tests/codec_slices.rs` checks it for every
 //! codec × bit count × instruction set on adversarial and random input.
 //!
-//! [`par_encode_normals`] and friends split large slices into chunks of [`PAR_CHUNK`] over the rayon pool; each
+//! [`par_encode`] and [`par_decode`] split large slices into chunks of [`PAR_CHUNK`] over the rayon pool; each
 //! chunk runs the codec's single-threaded slice path.
 
-use super::{ColorCodec, DepthCodec, NormalCodec, ScalarCodec};
+use super::Codec;
 use crate::base::isa::Isa;
-use glam::Vec3;
 use rayon::prelude::*;
 
 /// A slice loop to run under [`run`]. Implementations mark `run` `#[inline(always)]` so that its body is compiled
@@ -85,52 +84,53 @@ impl<A, B, F: Element<A, B>> Kernel for MapKernel<'_, A, B, F> {
     }
 }
 
-macro_rules! element {
-    ($(#[$doc:meta])* $name:ident, $codec:ident, $a:ty, $b:ty, |$c:ident, $v:ident| $body:expr) => {
-        $(#[$doc])*
-        pub struct $name<'c, C: ?Sized>(pub &'c C);
-        impl<C: $codec + ?Sized> Element<$a, $b> for $name<'_, C> {
-            #[inline(always)]
-            fn apply(&self, $v: &$a) -> $b {
-                let $c = self.0;
-                $body
-            }
-        }
-    };
+/// [`Codec::encode`] as an [`Element`].
+pub struct Encode<'c, C: ?Sized>(pub &'c C);
+
+impl<C: Codec + ?Sized> Element<C::Value, u64> for Encode<'_, C> {
+    #[inline(always)]
+    fn apply(&self, v: &C::Value) -> u64 {
+        self.0.encode(*v)
+    }
 }
 
-element!(
-    /// [`NormalCodec::encode`] as an [`Element`].
-    NormalEnc, NormalCodec, Vec3, u64, |c, v| c.encode(*v)
-);
-element!(
-    /// [`NormalCodec::decode`] as an [`Element`].
-    NormalDec, NormalCodec, u64, Vec3, |c, v| c.decode(*v)
-);
-element!(
-    /// [`ScalarCodec::encode`] as an [`Element`].
-    ScalarEnc, ScalarCodec, f32, u64, |c, v| c.encode(*v)
-);
-element!(
-    /// [`ScalarCodec::decode`] as an [`Element`].
-    ScalarDec, ScalarCodec, u64, f32, |c, v| c.decode(*v)
-);
-element!(
-    /// [`ColorCodec::encode`] as an [`Element`].
-    ColorEnc, ColorCodec, Vec3, u64, |c, v| c.encode(*v)
-);
-element!(
-    /// [`ColorCodec::decode`] as an [`Element`].
-    ColorDec, ColorCodec, u64, Vec3, |c, v| c.decode(*v)
-);
-element!(
-    /// [`DepthCodec::encode`] as an [`Element`].
-    DepthEnc, DepthCodec, f32, u64, |c, v| c.encode(*v)
-);
-element!(
-    /// [`DepthCodec::decode`] as an [`Element`].
-    DepthDec, DepthCodec, u64, f32, |c, v| c.decode(*v)
-);
+/// [`Codec::decode`] as an [`Element`].
+pub struct Decode<'c, C: ?Sized>(pub &'c C);
+
+impl<C: Codec + ?Sized> Element<u64, C::Value> for Decode<'_, C> {
+    #[inline(always)]
+    fn apply(&self, c: &u64) -> C::Value {
+        self.0.decode(*c)
+    }
+}
+
+/// A per-element function with a second body for a whole block of [`BLOCK`] elements (which copies the block into
+/// structure-of-arrays form so the arithmetic runs on unit-stride lanes); run by [`BlockKernel`].
+pub trait BlockElement<A, B> {
+    /// One element (the remainder after the last whole block).
+    fn apply(&self, a: &A) -> B;
+    /// `out[j] = self.apply(&input[j])` for the `BLOCK` elements of one block, bit-identically.
+    fn apply_block(&self, input: &[A], out: &mut [B]);
+}
+
+/// The blocked slice body over a [`MapKernel`]'s slices: whole blocks of [`BLOCK`] through
+/// [`BlockElement::apply_block`], the remainder element by element. Run under [`run`].
+pub struct BlockKernel<'a, A, B, F>(pub MapKernel<'a, A, B, F>);
+
+impl<A, B, F: BlockElement<A, B>> Kernel for BlockKernel<'_, A, B, F> {
+    #[inline(always)]
+    fn run(self) {
+        let MapKernel { input, out, f } = self.0;
+        let mut ins = input.chunks_exact(BLOCK);
+        let mut outs = out.chunks_exact_mut(BLOCK);
+        for (i, o) in (&mut ins).zip(&mut outs) {
+            f.apply_block(i, o);
+        }
+        for (i, o) in ins.remainder().iter().zip(outs.into_remainder()) {
+            *o = f.apply(i);
+        }
+    }
+}
 
 /// Elements per block of the blocked kernels: input is copied into stack arrays of this many lanes (SoA) so the
 /// arithmetic loop has unit-stride operands; a multiple of every vector width.
@@ -200,43 +200,14 @@ fn par_zip<A: Sync, B: Send>(input: &[A], out: &mut [B], f: impl Fn(&[A], &mut [
     input.par_chunks(PAR_CHUNK).zip(out.par_chunks_mut(PAR_CHUNK)).for_each(|(i, o)| f(i, o));
 }
 
-/// [`NormalCodec::encode_slice`] over the rayon pool (chunks of [`PAR_CHUNK`]). Panics if the lengths differ.
-pub fn par_encode_normals(codec: &dyn NormalCodec, input: &[Vec3], out: &mut [u64]) {
+/// [`Codec::encode_slice`] over the rayon pool (chunks of [`PAR_CHUNK`]), for any codec (`&dyn NormalCodec`,
+/// `&dyn ScalarCodec`, …). Panics if the lengths differ.
+pub fn par_encode<C: Codec + ?Sized>(codec: &C, input: &[C::Value], out: &mut [u64]) {
     par_zip(input, out, |i, o| codec.encode_slice(i, o));
 }
 
-/// [`NormalCodec::decode_slice`] over the rayon pool. Panics if the lengths differ.
-pub fn par_decode_normals(codec: &dyn NormalCodec, codes: &[u64], out: &mut [Vec3]) {
-    par_zip(codes, out, |i, o| codec.decode_slice(i, o));
-}
-
-/// [`ScalarCodec::encode_slice`] over the rayon pool. Panics if the lengths differ.
-pub fn par_encode_scalars(codec: &dyn ScalarCodec, input: &[f32], out: &mut [u64]) {
-    par_zip(input, out, |i, o| codec.encode_slice(i, o));
-}
-
-/// [`ScalarCodec::decode_slice`] over the rayon pool. Panics if the lengths differ.
-pub fn par_decode_scalars(codec: &dyn ScalarCodec, codes: &[u64], out: &mut [f32]) {
-    par_zip(codes, out, |i, o| codec.decode_slice(i, o));
-}
-
-/// [`ColorCodec::encode_slice`] over the rayon pool. Panics if the lengths differ.
-pub fn par_encode_colors(codec: &dyn ColorCodec, input: &[Vec3], out: &mut [u64]) {
-    par_zip(input, out, |i, o| codec.encode_slice(i, o));
-}
-
-/// [`ColorCodec::decode_slice`] over the rayon pool. Panics if the lengths differ.
-pub fn par_decode_colors(codec: &dyn ColorCodec, codes: &[u64], out: &mut [Vec3]) {
-    par_zip(codes, out, |i, o| codec.decode_slice(i, o));
-}
-
-/// [`DepthCodec::encode_slice`] over the rayon pool. Panics if the lengths differ.
-pub fn par_encode_depths(codec: &dyn DepthCodec, input: &[f32], out: &mut [u64]) {
-    par_zip(input, out, |i, o| codec.encode_slice(i, o));
-}
-
-/// [`DepthCodec::decode_slice`] over the rayon pool. Panics if the lengths differ.
-pub fn par_decode_depths(codec: &dyn DepthCodec, codes: &[u64], out: &mut [f32]) {
+/// [`Codec::decode_slice`] over the rayon pool. Panics if the lengths differ.
+pub fn par_decode<C: Codec + ?Sized>(codec: &C, codes: &[u64], out: &mut [C::Value]) {
     par_zip(codes, out, |i, o| codec.decode_slice(i, o));
 }
 

@@ -9,9 +9,11 @@
 
 use crate::base::mask::EdgeMask;
 use crate::base::picture::srgb_encode;
-use crate::detect::truth::object_truth;
+use crate::detect::truth::{id_truth, object_truth, TruthSource};
 use crate::gbuffer::GBuffer;
 use crate::image::ToneMap;
+use crate::light::Light;
+use crate::resolve::{reference_per_sample, ResolveConfig};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -300,6 +302,101 @@ pub fn truth_agreement(a: &[bool], b: &[bool]) -> TruthAgreement {
         b_covered_by_a: ratio(both, both + only_b),
         a_covered_by_b: ratio(both, both + only_a),
     }
+}
+
+/// Fraction of `true` flags (0 for an empty slice): the true-edge fraction of a truth.
+#[must_use]
+pub fn true_fraction(t: &[bool]) -> f64 {
+    if t.is_empty() {
+        0.0
+    } else {
+        t.iter().filter(|&&e| e).count() as f64 / t.len() as f64
+    }
+}
+
+/// The truths an edge mask is scored against, each `None` when the G-buffer cannot give it.
+#[derive(Clone, Debug, Default)]
+pub struct Truths {
+    /// The object-ID truth ([`object_truth`]); needs object IDs.
+    pub ids: Option<Vec<bool>>,
+    /// The primitive-ID truth (the rate forward MSAA shades at); needs primitive IDs.
+    pub primitives: Option<Vec<bool>>,
+    /// The shading truth ([`shading_truth`]); needs lights.
+    pub shading: Option<Vec<bool>>,
+}
+
+impl Truths {
+    /// Every truth `gb` can give: the ID truths from its IDs, and with (non-empty) `lights` the shading truth of the
+    /// per-sample reference shading under `cfg` (its BRDF and falloff).
+    pub fn of(
+        gb: &GBuffer,
+        lights: Option<&[Light]>,
+        cfg: &ResolveConfig,
+        tolerance: ShadingTolerance,
+    ) -> crate::Result<Truths> {
+        let shading = match lights {
+            Some(lights) if !lights.is_empty() => {
+                let radiance = reference_per_sample(gb, lights, cfg)?;
+                Some(shading_truth(gb, &radiance, tolerance))
+            }
+            _ => None,
+        };
+        Ok(Truths { ids: object_truth(gb), primitives: id_truth(gb, TruthSource::Primitive), shading })
+    }
+
+    /// Scores `mask` against every truth there is.
+    #[must_use]
+    pub fn score(&self, mask: &EdgeMask) -> MaskScores {
+        let scores = |t: &Option<Vec<bool>>| t.as_deref().map(|t| Scores::from(evaluate_against(mask, t)));
+        MaskScores {
+            edge_fraction: mask.edge_fraction(),
+            shading_fraction: mask.shading_fraction(),
+            ids: scores(&self.ids),
+            shading: scores(&self.shading),
+            primitive: scores(&self.primitives),
+        }
+    }
+}
+
+/// The truth-dependent part of [`EdgeStats`]: what a detector's row reports per truth.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Scores {
+    /// See [`EdgeStats::precision`].
+    pub precision: f64,
+    /// See [`EdgeStats::recall`].
+    pub recall: f64,
+    /// See [`EdgeStats::tp`].
+    pub tp: u64,
+    /// See [`EdgeStats::fp`].
+    pub fp: u64,
+    /// See [`EdgeStats::fn_`].
+    #[serde(rename = "fn")]
+    pub fn_: u64,
+}
+
+impl From<EdgeStats> for Scores {
+    fn from(s: EdgeStats) -> Scores {
+        Scores { precision: s.precision, recall: s.recall, tp: s.tp, fp: s.fp, fn_: s.fn_ }
+    }
+}
+
+/// One mask scored against every [`Truths`]: its cost and, per truth there is, its scores. Serialised with the
+/// ID-truth scores inline (`precision`, `recall`, …) and the others under `shading` and `primitive`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct MaskScores {
+    /// See [`EdgeMask::edge_fraction`].
+    pub edge_fraction: f64,
+    /// See [`EdgeMask::shading_fraction`].
+    pub shading_fraction: f64,
+    /// Against the object-ID truth.
+    #[serde(flatten)]
+    pub ids: Option<Scores>,
+    /// Against the shading truth.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shading: Option<Scores>,
+    /// Against the primitive-ID truth.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub primitive: Option<Scores>,
 }
 
 #[cfg(test)]

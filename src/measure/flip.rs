@@ -587,18 +587,28 @@ fn run_bands(ctx: &Ctx, r: &[f32], t: &[f32], enc: Encoding, out: &mut [f32], me
     let min_band = (4 * ctx.rmax).max(16);
     let nbands = (threads * 3).min(h.div_ceil(min_band)).max(1);
     let band_h = h.div_ceil(nbands).next_multiple_of(2); // rows are produced in pairs
+    let inp = Inputs { ctx, r, t, enc };
     match merge {
-        None => out.par_chunks_mut(band_h * w).enumerate().for_each(|(b, o)| band(ctx, r, t, enc, b * band_h, o, None)),
+        None => out.par_chunks_mut(band_h * w).enumerate().for_each(|(b, o)| band(&inp, b * band_h, o, None)),
         Some((em, tag)) => out
             .par_chunks_mut(band_h * w)
             .zip(em.par_chunks_mut(band_h * w))
             .enumerate()
-            .for_each(|(b, (o, e))| band(ctx, r, t, enc, b * band_h, o, Some((e, tag)))),
+            .for_each(|(b, (o, e))| band(&inp, b * band_h, o, Some((e, tag)))),
     }
 }
 
+/// What every band of one evaluation reads: the filters, the two images and their encoding.
+#[derive(Clone, Copy)]
+struct Inputs<'a> {
+    ctx: &'a Ctx,
+    r: &'a [f32],
+    t: &'a [f32],
+    enc: Encoding,
+}
+
 /// Runtime dispatch to an AVX2 build of the band kernel on x86-64.
-fn band(ctx: &Ctx, r: &[f32], t: &[f32], enc: Encoding, y0: usize, out: &mut [f32], merge: Option<(&mut [f32], f32)>) {
+fn band(inp: &Inputs<'_>, y0: usize, out: &mut [f32], merge: Option<(&mut [f32], f32)>) {
     #[cfg(target_arch = "x86_64")]
     {
         #[cfg(test)]
@@ -607,25 +617,17 @@ fn band(ctx: &Ctx, r: &[f32], t: &[f32], enc: Encoding, y0: usize, out: &mut [f3
         let generic = false;
         if !generic && crate::base::isa::Isa::detect() >= crate::base::isa::Isa::Avx2 {
             // SAFETY: the CPU supports AVX2 and FMA (checked by `Isa::detect`).
-            unsafe { band_avx2(ctx, r, t, enc, y0, out, merge) };
+            unsafe { band_avx2(inp, y0, out, merge) };
             return;
         }
     }
-    band_impl(ctx, r, t, enc, y0, out, merge)
+    band_impl(inp, y0, out, merge)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn band_avx2(
-    ctx: &Ctx,
-    r: &[f32],
-    t: &[f32],
-    enc: Encoding,
-    y0: usize,
-    out: &mut [f32],
-    merge: Option<(&mut [f32], f32)>,
-) {
-    band_impl(ctx, r, t, enc, y0, out, merge)
+unsafe fn band_avx2(inp: &Inputs<'_>, y0: usize, out: &mut [f32], merge: Option<(&mut [f32], f32)>) {
+    band_impl(inp, y0, out, merge)
 }
 
 /// Column tile width: a tile's ring of horizontally filtered rows
@@ -637,15 +639,8 @@ const LANES: usize = 8;
 const COLS: usize = 4 * LANES;
 
 #[inline(always)]
-fn band_impl(
-    ctx: &Ctx,
-    r: &[f32],
-    t: &[f32],
-    enc: Encoding,
-    y0: usize,
-    out: &mut [f32],
-    mut merge: Option<(&mut [f32], f32)>,
-) {
+fn band_impl(inp: &Inputs<'_>, y0: usize, out: &mut [f32], mut merge: Option<(&mut [f32], f32)>) {
+    let Inputs { ctx, r, t, enc } = *inp;
     let (w, h) = (ctx.w, ctx.h);
     let rows = out.len() / w;
     // Ring rows hold NH planes with the constant stride TW (cheap addressing).

@@ -8,8 +8,9 @@ use crate::camera::Camera;
 use crate::error::Result;
 use crate::gbuffer::GBuffer;
 use crate::light::Light;
+use crate::scene::raycast::{ray_plane, ray_sphere};
 use crate::util::SplitMix64;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 /// One sphere of the fixture: centre (view space), radius, albedo, specular power, roughness, metallic.
 type Ball = (Vec3, f32, Vec3, f32, f32, f32);
@@ -23,6 +24,8 @@ const BALLS: [Ball; 6] = [
     (Vec3::new(-4.0, 1.5, -18.0), 1.2, Vec3::new(0.5, 0.3, 0.8), 32.0, 0.5, 0.0),
 ];
 const GROUND_Y: f32 = -1.0;
+/// The ground plane ends at this distance (beyond it: sky).
+const GROUND_EXTENT: f32 = 200.0;
 
 /// Ground plane at `y = −1` and six spheres seen by a camera at the origin (60° vertical field of view), with
 /// `samples` per pixel at the standard positions. Every attribute is filled (IDs: 0 = ground, 1.. = spheres).
@@ -58,8 +61,7 @@ fn build(width: u32, height: u32, samples: u32, wall: bool) -> Result<GBuffer> {
         for x in 0..width {
             for s in 0..samples {
                 let i = gb.index(x, y, s);
-                let o = gb.sample_positions[s as usize];
-                let ray = cam.view_ray(Vec2::new(x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y), width, height);
+                let ray = cam.view_ray(gb.sample_px(x, y, s), width, height);
                 let hit = match intersect(ray) {
                     Some(h) if !wall || h.0 < WALL_DEPTH => Some(h),
                     _ if wall => Some((WALL_DEPTH, BALLS.len() as u32 + 1)),
@@ -104,24 +106,13 @@ fn build(width: u32, height: u32, samples: u32, wall: bool) -> Result<GBuffer> {
 
 /// Nearest hit along `ray` (ray = direction with z = −1, point = ray · t, t = view depth): (t, object id).
 fn intersect(ray: Vec3) -> Option<(f32, u32)> {
-    let mut best: Option<(f32, u32)> = None;
-    if ray.y < 0.0 {
-        let t = GROUND_Y / ray.y;
-        if t > 0.0 && t < 200.0 {
-            best = Some((t, 0));
-        }
-    }
+    let mut best =
+        ray_plane(ray, Vec3::Y, Vec3::new(0.0, GROUND_Y, 0.0)).filter(|&t| t < GROUND_EXTENT).map(|t| (t, 0));
     for (k, &(c, r, ..)) in BALLS.iter().enumerate() {
-        // |ray·t − c|² = r²  →  a t² − 2 b t + (|c|² − r²) = 0.
-        let a = ray.length_squared();
-        let b = ray.dot(c);
-        let disc = b * b - a * (c.length_squared() - r * r);
-        if disc < 0.0 {
-            continue;
-        }
-        let t = (b - disc.sqrt()) / a;
-        if t > 0.0 && best.is_none_or(|(bt, _)| t < bt) {
-            best = Some((t, k as u32 + 1));
+        if let Some(t) = ray_sphere(ray, c, r) {
+            if best.is_none_or(|(bt, _)| t < bt) {
+                best = Some((t, k as u32 + 1));
+            }
         }
     }
     best

@@ -102,8 +102,12 @@ pub struct LightRec {
     pub r2: f32,
 }
 
-/// The kernel's light list: one [`LightRec`] per light, same order as the input, and the culling spheres again
-/// as structure of arrays (the kernel tests 16 lights at a time against a vector of samples' bounding box).
+/// The one light list of a resolve: one [`LightRec`] per light, same order as the input, and the culling
+/// spheres as structure of arrays — read by the tile culling (centre and radius, 16 lights at a time against a
+/// tile's bounds) and by the kernel (centre and squared radius against a vector of samples' bounding box).
+///
+/// The centre is the uniform light vector's `pos` (−direction for directional lights, whose radius is ∞: any
+/// finite centre passes every test, so the culling result is the same as with the light's position).
 #[derive(Clone, Debug, Default)]
 pub struct LightTable {
     /// The records.
@@ -114,6 +118,8 @@ pub struct LightTable {
     pub y: Vec<f32>,
     /// `rec[i].pz`.
     pub z: Vec<f32>,
+    /// Radius of the culling sphere ([`light_sphere`]; `rec[i].r2` is its square).
+    pub r: Vec<f32>,
     /// `rec[i].r2`.
     pub r2: Vec<f32>,
     /// Some light is a spot light (the kernel then evaluates the cone factor for every light of the list: exactly 1
@@ -130,7 +136,7 @@ impl LightTable {
     pub fn new(lights: &[Light], falloff: Falloff) -> Self {
         let mut t = LightTable::default();
         for l in lights {
-            t.push(LightRec::new(l, falloff));
+            t.push(LightRec::new(l, falloff), light_sphere(l).1);
         }
         t
     }
@@ -150,23 +156,25 @@ impl LightTable {
 
     /// Appends light `i` of `other` (used to gather a tile's light list contiguously).
     pub fn push_from(&mut self, other: &LightTable, i: usize) {
-        self.push(other.rec[i]);
+        self.push(other.rec[i], other.r[i]);
     }
 
-    /// Appends a record.
-    pub fn push(&mut self, r: LightRec) {
-        self.rec.push(r);
-        self.x.push(r.px);
-        self.y.push(r.py);
-        self.z.push(r.pz);
-        self.r2.push(r.r2);
-        self.any_spot |= r.cs != 0.0;
+    /// Appends a record and its culling radius (`radius² == rec.r2`).
+    pub fn push(&mut self, rec: LightRec, radius: f32) {
+        debug_assert_eq!((radius * radius).to_bits(), rec.r2.to_bits());
+        self.rec.push(rec);
+        self.x.push(rec.px);
+        self.y.push(rec.py);
+        self.z.push(rec.pz);
+        self.r.push(radius);
+        self.r2.push(rec.r2);
+        self.any_spot |= rec.cs != 0.0;
     }
 
     /// Empties the list, keeping its capacity.
     pub fn clear(&mut self) {
         self.rec.clear();
-        for v in [&mut self.x, &mut self.y, &mut self.z, &mut self.r2] {
+        for v in [&mut self.x, &mut self.y, &mut self.z, &mut self.r, &mut self.r2] {
             v.clear();
         }
         self.any_spot = false;

@@ -8,7 +8,7 @@
 //! takes its one shaded sample's value for the whole pixel (that sample stands for the pixel, as in the demo).
 
 use super::config::{Culling, ResolveConfig, Schedule};
-use super::culling::{light_sphere, quad_rects, Bounds};
+use super::culling::{quad_rects, Bounds};
 use super::kernel::{finish_prepass, shade, Variant, BLOCK};
 use super::lights::LightTable;
 #[cfg(target_arch = "x86_64")]
@@ -32,27 +32,12 @@ pub struct Frame<'a> {
     pub mask: &'a EdgeMask,
     /// Sanitised lights.
     pub lights: &'a [Light],
-    /// Their kernel constants.
+    /// Their kernel constants and culling spheres.
     pub table: LightTable,
-    /// Culling spheres: centres and grown radii.
-    pub spheres: Spheres,
     /// Quad rectangles (quad culling only).
     pub quads: QuadSoa,
     /// The configuration.
     pub cfg: ResolveConfig,
-}
-
-/// Light culling spheres as structure of arrays (so the per-tile test vectorises over lights).
-#[derive(Clone, Debug, Default)]
-pub struct Spheres {
-    /// Centre x.
-    pub x: Vec<f32>,
-    /// Centre y.
-    pub y: Vec<f32>,
-    /// Centre z.
-    pub z: Vec<f32>,
-    /// Radius (∞ = never culled).
-    pub r: Vec<f32>,
 }
 
 impl<'a> Frame<'a> {
@@ -60,16 +45,8 @@ impl<'a> Frame<'a> {
     #[must_use]
     pub fn new(reader: SurfaceReader<'a>, mask: &'a EdgeMask, lights: &'a [Light], cfg: ResolveConfig) -> Self {
         let table = LightTable::new(lights, cfg.falloff);
-        let mut spheres = Spheres::default();
-        for l in lights {
-            let (c, r) = light_sphere(l);
-            spheres.x.push(c.x);
-            spheres.y.push(c.y);
-            spheres.z.push(c.z);
-            spheres.r.push(r);
-        }
         let quads = if cfg.culling == Culling::Quad { quad_rects(lights) } else { QuadSoa::default() };
-        Frame { reader, mask, lights, table, spheres, quads, cfg }
+        Frame { reader, mask, lights, table, quads, cfg }
     }
 }
 
@@ -569,7 +546,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
 /// Tests every light's sphere against `bounds` (branch-free over lights, vectorised for the CPU at hand), writing
 /// survivors' indices into `sc.tile_lights`.
 fn cull_tile_list(frame: &Frame<'_>, b: &Bounds, sc: &mut Scratch) {
-    let s = &frame.spheres;
+    let s = &frame.table;
     sc.tile_lights.clear();
     #[cfg(target_arch = "x86_64")]
     match Isa::detect() {
@@ -599,13 +576,13 @@ fn tile_bounds(it: &Items, range: std::ops::Range<usize>) -> Option<Bounds> {
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
-fn touching_avx512(b: &Bounds, s: &Spheres, out: &mut Vec<u32>) {
+fn touching_avx512(b: &Bounds, s: &LightTable, out: &mut Vec<u32>) {
     b.touching::<Avx512>(&s.x, &s.y, &s.z, &s.r, out);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn touching_avx2(b: &Bounds, s: &Spheres, out: &mut Vec<u32>) {
+fn touching_avx2(b: &Bounds, s: &LightTable, out: &mut Vec<u32>) {
     b.touching::<Portable<true>>(&s.x, &s.y, &s.z, &s.r, out);
 }
 
@@ -623,7 +600,7 @@ fn cull_into(frame: &Frame<'_>, b: &Bounds, subset: Option<&[u32]>, sc: &mut Scr
     };
     match subset {
         Some(list) => {
-            let s = &frame.spheres;
+            let s = &frame.table;
             for &i in list {
                 let i = i as usize;
                 if b.may_touch(Vec3::new(s.x[i], s.y[i], s.z[i]), s.r[i]) {

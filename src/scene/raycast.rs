@@ -9,7 +9,7 @@ use super::bvh::{Bvh, Hit};
 use super::geometry::{Mesh, Triangle};
 use crate::camera::Camera;
 use crate::gbuffer::GBuffer;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 
 /// Relative slack on the near clip: geometry placed exactly on the near plane must not be lost to the rounding
@@ -31,14 +31,34 @@ pub struct ViewScene {
     pub mesh: Mesh,
 }
 
-/// The continuous pixel coordinate of plane index `i` (pixel-major layout).
+/// Nearest hit `t > 0` of the view ray `dir · t` (from the eye at the origin; `t` is the view depth when
+/// `dir.z = −1`) with the sphere of `centre` and `radius`; `None` for a miss or a non-finite `t`. The analytic
+/// scenes of the tests and of the resolve's fixture use it beside the triangle [`Bvh`].
 #[inline]
-fn sample_px(gb: &GBuffer, i: usize) -> Vec2 {
-    let s = gb.samples as usize;
-    let pixel = i / s;
-    let (x, y) = (pixel % gb.width as usize, pixel / gb.width as usize);
-    let o = gb.sample_positions[i % s];
-    Vec2::new(x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y)
+#[must_use]
+pub fn ray_sphere(dir: Vec3, centre: Vec3, radius: f32) -> Option<f32> {
+    // |dir·t − c|² = r²  →  a t² − 2 b t + (|c|² − r²) = 0.
+    let a = dir.length_squared();
+    let b = dir.dot(centre);
+    let disc = b * b - a * (centre.length_squared() - radius * radius);
+    if disc < 0.0 {
+        return None;
+    }
+    let t = (b - disc.sqrt()) / a;
+    (t > 0.0 && t.is_finite()).then_some(t)
+}
+
+/// Hit `t > 0` of the view ray `dir · t` with the plane through `point` with normal `normal`; `None` when the ray
+/// is parallel to it (|n·dir| < 1e-12), points away from it, or `t` is not finite.
+#[inline]
+#[must_use]
+pub fn ray_plane(dir: Vec3, normal: Vec3, point: Vec3) -> Option<f32> {
+    let denom = normal.dot(dir);
+    if denom.abs() < 1e-12 {
+        return None;
+    }
+    let t = normal.dot(point) / denom;
+    (t > 0.0 && t.is_finite()).then_some(t)
 }
 
 /// Renders `scene` into `gb` (whose size, samples and sample positions are already set): fills `coverage` and
@@ -54,7 +74,7 @@ pub fn render_into(scene: &ViewScene, gb: &mut GBuffer) {
         let gbr: &GBuffer = gb;
         hits.par_chunks_mut(row_len.max(1)).enumerate().for_each(|(y, row)| {
             for (k, hit) in row.iter_mut().enumerate() {
-                let dir = cam.view_ray(sample_px(gbr, y * row_len + k), w, ht);
+                let dir = cam.view_ray(gbr.sample_px_of(y * row_len + k), w, ht);
                 if let Some(found) = bvh.intersect(Vec3::ZERO, dir, t_min, t_max) {
                     *hit = found;
                 }
@@ -76,7 +96,7 @@ pub fn render_into(scene: &ViewScene, gb: &mut GBuffer) {
     let position: Vec<Vec3> = hits
         .par_iter()
         .enumerate()
-        .map(|(i, h)| if h.tri == MISS { Vec3::ZERO } else { cam.view_ray(sample_px(g, i), w, ht) * h.t })
+        .map(|(i, h)| if h.tri == MISS { Vec3::ZERO } else { cam.view_ray(g.sample_px_of(i), w, ht) * h.t })
         .collect();
     let normal: Vec<Vec3> = hits
         .par_iter()
@@ -85,7 +105,7 @@ pub fn render_into(scene: &ViewScene, gb: &mut GBuffer) {
             if h.tri == MISS {
                 Vec3::ZERO
             } else {
-                shading_normal(&tris[h.tri as usize], h, cam.view_ray(sample_px(g, i), w, ht))
+                shading_normal(&tris[h.tri as usize], h, cam.view_ray(g.sample_px_of(i), w, ht))
             }
         })
         .collect();

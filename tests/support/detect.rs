@@ -3,8 +3,9 @@
 #![allow(dead_code)]
 
 use gbuf::camera::Camera;
+use gbuf::scene::raycast::{ray_plane, ray_sphere};
 use gbuf::GBuffer;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 /// Vertical field of view of the test camera.
 pub const YFOV: f32 = 0.8;
@@ -40,29 +41,14 @@ impl Surface {
     fn hit(&self, ray: Vec3) -> Option<(f32, Vec3)> {
         let (t, n) = match self.shape {
             Shape::Plane { normal, point } => {
-                let denom = normal.dot(ray);
-                if denom.abs() < 1e-12 {
-                    return None;
-                }
-                let t = normal.dot(point) / denom;
-                (t, if denom > 0.0 { -normal } else { normal })
+                let t = ray_plane(ray, normal, point)?;
+                (t, if normal.dot(ray) > 0.0 { -normal } else { normal })
             }
             Shape::Sphere { center, radius } => {
-                // |ray·t − c|² = r²: a t² − 2 b t + c2 = 0.
-                let a = ray.dot(ray);
-                let b = ray.dot(center);
-                let c2 = center.dot(center) - radius * radius;
-                let disc = b * b - a * c2;
-                if disc < 0.0 {
-                    return None;
-                }
-                let t = (b - disc.sqrt()) / a;
+                let t = ray_sphere(ray, center, radius)?;
                 (t, (ray * t - center).normalize())
             }
         };
-        if !(t > 0.0 && t.is_finite()) {
-            return None;
-        }
         if self.keep.is_some_and(|k| !k(ray * t)) {
             return None;
         }
@@ -87,8 +73,7 @@ pub fn render(w: u32, h: u32, samples: u32, surfaces: &[Surface]) -> GBuffer {
         for x in 0..w {
             for s in 0..samples {
                 let i = gb.index(x, y, s);
-                let o = gb.sample_positions[s as usize];
-                let ray = cam.view_ray(Vec2::new(x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y), w, h);
+                let ray = cam.view_ray(gb.sample_px(x, y, s), w, h);
                 let best = surfaces
                     .iter()
                     .filter_map(|sf| sf.hit(ray).map(|(t, n)| (t, n, sf)))

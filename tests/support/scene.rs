@@ -13,11 +13,7 @@ pub const POSITION_REL_TOL: f32 = 1e-5;
 
 /// Continuous pixel coordinate of plane index `i`.
 pub fn sample_px(gb: &GBuffer, i: usize) -> Vec2 {
-    let s = gb.samples as usize;
-    let p = i / s;
-    let (x, y) = (p % gb.width as usize, p / gb.width as usize);
-    let o = gb.sample_positions[i % s];
-    Vec2::new(x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y)
+    gb.sample_px_of(i)
 }
 
 /// Checks every per-sample invariant the scenes promise; panics with the first violation.

@@ -36,6 +36,10 @@ impl Projection for XyHemi {
         let p = p.clamp(Vec2::NEG_ONE, Vec2::ONE);
         Vec3::new(p.x, p.y, (1.0 - p.length_squared()).max(0.0).sqrt())
     }
+    fn decode_ops(&self) -> u32 {
+        // clamp ×2; z = √max(1 − |p|², 0) (2 mul, add, sub, max, sqrt).
+        8
+    }
     fn bound_rad(&self, hx: f32, hy: f32, _q: Quant) -> f32 {
         let h = hx.hypot(hy);
         (1.0 - h).max(-1.0).acos() + h

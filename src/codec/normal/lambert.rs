@@ -60,6 +60,10 @@ impl Projection for Lambert {
     fn decode_plane(&self, p: Vec2) -> Vec3 {
         Lambert::unproject(p)
     }
+    fn decode_ops(&self) -> u32 {
+        // s = min(|q|², 1) (4); q·2√(1 − s) (sub, sqrt, mul, 2 mul: 5); 1 − 2s (2).
+        11
+    }
     fn bound_rad(&self, hx: f32, hy: f32, _q: Quant) -> f32 {
         equal_area_bound(hx.hypot(hy))
     }

@@ -12,8 +12,8 @@
 //!
 //! Codes: component 0 sits in the low `k` bits, component 1 in the next `k`, and so on.
 
-use super::simd::{f16_bits_to_f32, f32_to_f16_bits, run, Kernel, BLOCK};
-use super::{mask, split_bits, NormalCodec};
+use super::simd::{f16_bits_to_f32, f32_to_f16_bits, run, BlockElement, BlockKernel, MapKernel, BLOCK};
+use super::{mask, split_bits, Codec, NormalCodec};
 use crate::base::isa::Isa;
 use glam::{DVec3, Vec2, Vec3};
 
@@ -238,6 +238,17 @@ pub fn sign_not_zero(v: f32) -> f32 {
     }
 }
 
+/// [`Codec::decode_ops`] of [`finish`]: squared length (3 mul, 2 add), sqrt, 3 div, 2 compares, and, 3 selects.
+pub(crate) const FINISH_OPS: u32 = 15;
+
+/// [`Codec::decode_ops`] of [`f16_to_finite`]: [`f16_bits_to_f32`] (and, shift, and, 3 int adds, fsub, 2
+/// compares, 2 selects, and, shift, or: 14), then the NaN compare, its select and the clamp.
+pub(crate) const F16_TO_FINITE_OPS: u32 = 17;
+
+/// [`Codec::decode_ops`] of [`normalize2_or_x`]: 2 abs, max, 2 div, length (2 mul, add, sqrt), 2 div, 3 checks,
+/// 2 or, 2 selects.
+pub(crate) const NORMALIZE2_OPS: u32 = 18;
+
 /// Final step of every decoder: a finite unit vector, +Z if the arithmetic degenerated.
 #[inline(always)]
 #[must_use]
@@ -250,6 +261,27 @@ pub(crate) fn finish(v: Vec3) -> Vec3 {
         Vec3::Z
     }
 }
+
+/// Runs `$body` with `$q` bound to the [`Quantizer`] of a [`Quant`] (one monomorphised body per storage).
+macro_rules! with_quantizer {
+    ($quant:expr, |$q:ident| $body:expr) => {
+        match $quant {
+            $crate::codec::normal::Quant::Snorm(k) => {
+                let $q = $crate::codec::normal::SnormQ::new(k);
+                $body
+            }
+            $crate::codec::normal::Quant::Unorm(k) => {
+                let $q = $crate::codec::normal::UnormQ::new(k);
+                $body
+            }
+            $crate::codec::normal::Quant::F16 => {
+                let $q = $crate::codec::normal::F16Q;
+                $body
+            }
+        }
+    };
+}
+pub(crate) use with_quantizer;
 
 /// How the plane coordinates of a projection are stored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -288,11 +320,13 @@ impl Quant {
     #[inline]
     #[must_use]
     pub fn encode(self, v: f32) -> u64 {
-        u64::from(match self {
-            Quant::Snorm(k) => SnormQ::new(k).enc(v),
-            Quant::Unorm(k) => UnormQ::new(k).enc(v),
-            Quant::F16 => F16Q.enc(v),
-        })
+        u64::from(with_quantizer!(self, |q| q.enc(v)))
+    }
+
+    /// [`Codec::decode_ops`] of [`Self::decode`] (see [`Quantizer::dec_ops`]).
+    #[must_use]
+    pub fn decode_ops(self) -> u32 {
+        with_quantizer!(self, |q| q.dec_ops())
     }
 
     /// Dequantizes one coordinate (only the low `bits()` bits of `c` are read). Always finite.
@@ -300,11 +334,7 @@ impl Quant {
     #[must_use]
     pub fn decode(self, c: u64) -> f32 {
         // Bits above `bits()` ≤ 16 are ignored, so truncating to u32 first changes nothing.
-        match self {
-            Quant::Snorm(k) => SnormQ::new(k).dec(c as u32),
-            Quant::Unorm(k) => UnormQ::new(k).dec(c as u32),
-            Quant::F16 => F16Q.dec(c as u32),
-        }
+        with_quantizer!(self, |q| q.dec(c as u32))
     }
 }
 
@@ -317,6 +347,8 @@ pub trait Quantizer: Copy + Send + Sync + 'static {
     fn enc(self, v: f32) -> u32;
     /// Dequantizes the low `bits()` bits of `c`; always finite.
     fn dec(self, c: u32) -> f32;
+    /// [`Codec::decode_ops`] of [`Self::dec`].
+    fn dec_ops(self) -> u32;
 }
 
 /// [`Quant::Snorm`] with its scale and mask.
@@ -352,6 +384,9 @@ impl Quantizer for SnormQ {
         let s = (((c & self.mask) << (32 - self.k)) as i32) >> (32 - self.k);
         (s as f32 / self.m).max(-1.0)
     }
+    fn dec_ops(self) -> u32 {
+        6 // and, shl, sar, int→float, div, max
+    }
 }
 
 /// [`Quant::Unorm`] with its scale and mask.
@@ -385,6 +420,9 @@ impl Quantizer for UnormQ {
     fn dec(self, c: u32) -> f32 {
         (c & self.mask) as f32 / self.m
     }
+    fn dec_ops(self) -> u32 {
+        3 // and, int→float, div
+    }
 }
 
 /// [`Quant::F16`].
@@ -404,6 +442,9 @@ impl Quantizer for F16Q {
     #[inline(always)]
     fn dec(self, c: u32) -> f32 {
         f16_to_finite(c as u16)
+    }
+    fn dec_ops(self) -> u32 {
+        F16_TO_FINITE_OPS
     }
 }
 
@@ -478,6 +519,9 @@ pub trait Projection: Send + Sync + Copy + 'static {
     fn encode_plane(&self, n: Vec3) -> Vec2;
     /// Unit vector of any plane point (finite input; coordinates outside the square are clamped/handled).
     fn decode_plane(&self, p: Vec2) -> Vec3;
+    /// [`Codec::decode_ops`] of [`Self::decode_plane`] (both arms of a select counted, as a branch-free decoder
+    /// computes them).
+    fn decode_ops(&self) -> u32;
     /// Angular error bound in radians when each plane coordinate is off by at most `hx`, `hy`, for inputs in
     /// [`Self::in_domain`]; `q` is passed for projections whose bound depends on the storage.
     fn bound_rad(&self, hx: f32, hy: f32, q: Quant) -> f32;
@@ -547,67 +591,50 @@ impl<P: Projection> Planar<P> {
     }
 }
 
-/// Slice encode of a [`Planar`] codec: blocks of [`BLOCK`] normals are split into x, y, z arrays first so the
-/// arithmetic runs on unit-stride lanes.
-struct PlanarEncode<'a, P, Q> {
+/// The per-element bodies of a [`Planar`] codec for one quantizer, as [`BlockElement`]s: blocks of [`BLOCK`]
+/// normals are split into x, y, z arrays first so the arithmetic runs on unit-stride lanes.
+#[derive(Clone, Copy)]
+struct PlanarBody<P, Q> {
     proj: P,
     q: Q,
-    input: &'a [Vec3],
-    out: &'a mut [u64],
 }
 
-impl<P: Projection, Q: Quantizer> Kernel for PlanarEncode<'_, P, Q> {
+impl<P: Projection, Q: Quantizer> BlockElement<Vec3, u64> for PlanarBody<P, Q> {
     #[inline(always)]
-    fn run(self) {
-        let (proj, q) = (self.proj, self.q);
-        let mut ins = self.input.chunks_exact(BLOCK);
-        let mut outs = self.out.chunks_exact_mut(BLOCK);
-        for (i, o) in (&mut ins).zip(&mut outs) {
-            let (x, y, z) = split_block(i);
-            // 32-bit codes first (16 f32 lanes per AVX-512 vector instead of 8), widened afterwards.
-            let mut c = [0u32; BLOCK];
-            for j in 0..BLOCK {
-                c[j] = Planar::encode32(proj, q, Vec3::new(x[j], y[j], z[j]));
-            }
-            for j in 0..BLOCK {
-                o[j] = u64::from(c[j]);
-            }
+    fn apply(&self, n: &Vec3) -> u64 {
+        Planar::encode_with(self.proj, self.q, *n)
+    }
+    #[inline(always)]
+    fn apply_block(&self, i: &[Vec3], o: &mut [u64]) {
+        let (x, y, z) = split_block(i);
+        // 32-bit codes first (16 f32 lanes per AVX-512 vector instead of 8), widened afterwards.
+        let mut c = [0u32; BLOCK];
+        for j in 0..BLOCK {
+            c[j] = Planar::encode32(self.proj, self.q, Vec3::new(x[j], y[j], z[j]));
         }
-        for (n, o) in ins.remainder().iter().zip(outs.into_remainder()) {
-            *o = Planar::encode_with(proj, q, *n);
+        for j in 0..BLOCK {
+            o[j] = u64::from(c[j]);
         }
     }
 }
 
-/// Slice decode of a [`Planar`] codec (blocks decoded into x, y, z arrays, then interleaved).
-struct PlanarDecode<'a, P, Q> {
-    proj: P,
-    q: Q,
-    codes: &'a [u64],
-    out: &'a mut [Vec3],
-}
-
-impl<P: Projection, Q: Quantizer> Kernel for PlanarDecode<'_, P, Q> {
+impl<P: Projection, Q: Quantizer> BlockElement<u64, Vec3> for PlanarBody<P, Q> {
     #[inline(always)]
-    fn run(self) {
-        let (proj, q) = (self.proj, self.q);
-        let mut ins = self.codes.chunks_exact(BLOCK);
-        let mut outs = self.out.chunks_exact_mut(BLOCK);
-        for (c, o) in (&mut ins).zip(&mut outs) {
-            let mut c32 = [0u32; BLOCK];
-            for j in 0..BLOCK {
-                c32[j] = c[j] as u32;
-            }
-            let (mut x, mut y, mut z) = ([0f32; BLOCK], [0f32; BLOCK], [0f32; BLOCK]);
-            for j in 0..BLOCK {
-                let v = Planar::decode32(proj, q, c32[j]);
-                (x[j], y[j], z[j]) = (v.x, v.y, v.z);
-            }
-            join_block(&x, &y, &z, o);
+    fn apply(&self, c: &u64) -> Vec3 {
+        Planar::decode_with(self.proj, self.q, *c)
+    }
+    #[inline(always)]
+    fn apply_block(&self, c: &[u64], o: &mut [Vec3]) {
+        let mut c32 = [0u32; BLOCK];
+        for j in 0..BLOCK {
+            c32[j] = c[j] as u32;
         }
-        for (c, o) in ins.remainder().iter().zip(outs.into_remainder()) {
-            *o = Planar::decode_with(proj, q, *c);
+        let (mut x, mut y, mut z) = ([0f32; BLOCK], [0f32; BLOCK], [0f32; BLOCK]);
+        for j in 0..BLOCK {
+            let v = Planar::decode32(self.proj, self.q, c32[j]);
+            (x[j], y[j], z[j]) = (v.x, v.y, v.z);
         }
+        join_block(&x, &y, &z, o);
     }
 }
 
@@ -629,7 +656,8 @@ pub(crate) fn join_block(x: &[f32; BLOCK], y: &[f32; BLOCK], z: &[f32; BLOCK], o
     }
 }
 
-impl<P: Projection + std::fmt::Debug> NormalCodec for Planar<P> {
+impl<P: Projection + std::fmt::Debug> Codec for Planar<P> {
+    type Value = Vec3;
     fn name(&self) -> String {
         format!("{}-{}", self.proj.scheme_name(self.quant), self.bits())
     }
@@ -638,20 +666,34 @@ impl<P: Projection + std::fmt::Debug> NormalCodec for Planar<P> {
     }
     #[inline]
     fn encode(&self, n: Vec3) -> u64 {
-        match self.quant {
-            Quant::Snorm(k) => Self::encode_with(self.proj, SnormQ::new(k), n),
-            Quant::Unorm(k) => Self::encode_with(self.proj, UnormQ::new(k), n),
-            Quant::F16 => Self::encode_with(self.proj, F16Q, n),
-        }
+        with_quantizer!(self.quant, |q| Self::encode_with(self.proj, q, n))
     }
     #[inline]
     fn decode(&self, code: u64) -> Vec3 {
-        match self.quant {
-            Quant::Snorm(k) => Self::decode_with(self.proj, SnormQ::new(k), code),
-            Quant::Unorm(k) => Self::decode_with(self.proj, UnormQ::new(k), code),
-            Quant::F16 => Self::decode_with(self.proj, F16Q, code),
-        }
+        with_quantizer!(self.quant, |q| Self::decode_with(self.proj, q, code))
     }
+    fn decode_ops(&self) -> u32 {
+        // A shift splits the code, two coordinates dequantize, the projection inverts, `finish` normalises.
+        1 + 2 * self.quant.decode_ops() + self.proj.decode_ops() + FINISH_OPS
+    }
+    fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
+        assert_eq!(input.len(), out.len(), "encode_slice: {} normals into {} codes", input.len(), out.len());
+        with_quantizer!(self.quant, |q| run(
+            isa,
+            BlockKernel(MapKernel { input, out, f: PlanarBody { proj: self.proj, q } })
+        ))
+    }
+    fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Vec3]) {
+        assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} normals", codes.len(), out.len());
+        let input = codes;
+        with_quantizer!(self.quant, |q| run(
+            isa,
+            BlockKernel(MapKernel { input, out, f: PlanarBody { proj: self.proj, q } })
+        ))
+    }
+}
+
+impl<P: Projection + std::fmt::Debug> NormalCodec for Planar<P> {
     fn max_error_deg(&self) -> f32 {
         let h = self.quant.half_step(self.proj.plane_extent());
         (self.proj.bound_rad(h, h, self.quant) + FLOAT_SLACK_RAD).to_degrees().min(180.0)
@@ -661,24 +703,6 @@ impl<P: Projection + std::fmt::Debug> NormalCodec for Planar<P> {
     }
     fn is_idempotent(&self) -> bool {
         self.proj.is_idempotent(self.quant)
-    }
-    fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
-        assert_eq!(input.len(), out.len(), "encode_slice: {} normals into {} codes", input.len(), out.len());
-        let proj = self.proj;
-        match self.quant {
-            Quant::Snorm(k) => run(isa, PlanarEncode { proj, q: SnormQ::new(k), input, out }),
-            Quant::Unorm(k) => run(isa, PlanarEncode { proj, q: UnormQ::new(k), input, out }),
-            Quant::F16 => run(isa, PlanarEncode { proj, q: F16Q, input, out }),
-        }
-    }
-    fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Vec3]) {
-        assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} normals", codes.len(), out.len());
-        let proj = self.proj;
-        match self.quant {
-            Quant::Snorm(k) => run(isa, PlanarDecode { proj, q: SnormQ::new(k), codes, out }),
-            Quant::Unorm(k) => run(isa, PlanarDecode { proj, q: UnormQ::new(k), codes, out }),
-            Quant::F16 => run(isa, PlanarDecode { proj, q: F16Q, codes, out }),
-        }
     }
 }
 

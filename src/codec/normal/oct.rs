@@ -14,6 +14,7 @@
 use super::{finish, sanitize, sign_not_zero, NormalCodec, Planar, Projection, Quant};
 use crate::base::isa::Isa;
 use crate::codec::mask;
+use crate::codec::Codec;
 use glam::{Vec2, Vec3};
 
 /// The octahedral projection (plane coordinates in [−1, 1]², snorm or f16).
@@ -67,6 +68,11 @@ impl Projection for Oct {
     fn decode_plane(&self, p: Vec2) -> Vec3 {
         Oct::unproject(p)
     }
+    fn decode_ops(&self) -> u32 {
+        // clamp ×2, abs ×2, z = 1 − |x| − |y| (2), z ≥ 0 (1); the fold: 1 − |·| ×2, signNotZero ×2 (compare +
+        // select), mul ×2 (8); select x, y (2).
+        17
+    }
     fn bound_rad(&self, hx: f32, hy: f32, _q: Quant) -> f32 {
         OCT_MAX_STRETCH * hx.hypot(hy)
     }
@@ -88,7 +94,8 @@ impl OctPrecise {
     }
 }
 
-impl NormalCodec for OctPrecise {
+impl Codec for OctPrecise {
+    type Value = Vec3;
     fn name(&self) -> String {
         format!("oct-precise-{}", 2 * self.k)
     }
@@ -118,13 +125,20 @@ impl NormalCodec for OctPrecise {
     fn decode(&self, code: u64) -> Vec3 {
         finish(Oct::unproject(self.plain.plane_of(code)))
     }
-    fn max_error_deg(&self) -> f32 {
-        self.plain.max_error_deg()
+    fn decode_ops(&self) -> u32 {
+        // The plain snorm octahedral decoder: only the encoder searches.
+        self.plain.decode_ops()
     }
     fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Vec3]) {
         // The same decoder as plain snorm octahedral, so its vectorised slice path (the encode search stays
         // scalar: the precise variant does not need to be cheap).
         self.plain.decode_slice_isa(isa, codes, out);
+    }
+}
+
+impl NormalCodec for OctPrecise {
+    fn max_error_deg(&self) -> f32 {
+        self.plain.max_error_deg()
     }
 }
 

@@ -25,7 +25,7 @@
 //! h = √(hx²+hy²) — loose away from +Z; e.g. spheremap-cry-16 ≤ 12.7°, measured 11.6° near +Z (see
 //! docs/CODECS.md). Domain: the whole sphere.
 
-use super::{normalize2_or_x, Projection, Quant};
+use super::{normalize2_or_x, Projection, Quant, NORMALIZE2_OPS};
 use glam::{Vec2, Vec3};
 
 /// CryEngine 3 spheremap (plane coordinates g in the unit disc, snorm or f16).
@@ -77,6 +77,11 @@ impl Projection for SpheremapCry {
     fn decode_plane(&self, p: Vec2) -> Vec3 {
         SpheremapCry::unproject(p)
     }
+    fn decode_ops(&self) -> u32 {
+        // z = clamp(2|g|² − 1) (6: 2 mul, add, mul, sub, clamp); r = √max(1 − z², 0) (4); normalize2_or_x(g)·r
+        // (NORMALIZE2_OPS + 2 mul); the g = 0 test (2 compares, and) and its select of x, y, z (3).
+        6 + 4 + NORMALIZE2_OPS + 2 + 3 + 3
+    }
     fn bound_rad(&self, hx: f32, hy: f32, _q: Quant) -> f32 {
         equal_area_bound(hx.hypot(hy))
     }
@@ -116,6 +121,10 @@ impl Projection for SpheremapIspc {
     #[inline(always)]
     fn decode_plane(&self, p: Vec2) -> Vec3 {
         ispc_spheremap_decode(p)
+    }
+    fn decode_ops(&self) -> u32 {
+        // f = (x − x²) + (y − y²) (5); m = √max(4f − 1, 0) (4); m·(4x − 2), m·(4y − 2) (6); 3 − 8f (2).
+        17
     }
     fn bound_rad(&self, hx: f32, hy: f32, _q: Quant) -> f32 {
         // Unorm steps in e are half as large in g = 2e − 1 units... the other way: twice as large.

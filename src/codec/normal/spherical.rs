@@ -11,6 +11,7 @@
 //! (spherical-16 ≤ 0.79°). Domain: the whole sphere.
 
 use super::{Projection, Quant};
+use crate::codec::TRANSCENDENTAL_OPS;
 use glam::{Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
 
@@ -41,6 +42,11 @@ impl Projection for Spherical {
         let (st, ct) = theta.sin_cos();
         let (sp, cp) = phi.sin_cos();
         Vec3::new(st * cp, st * sp, ct)
+    }
+    fn decode_ops(&self) -> u32 {
+        // South-pole test and its select of x, y, z (4); θ = max(u, 0)·π (2); v: compare, max, select (3);
+        // φ = v·2π − π (2); sin and cos of θ and of φ (4 transcendentals); st·cp, st·sp (2).
+        4 + 2 + 3 + 2 + 4 * TRANSCENDENTAL_OPS + 2
     }
     fn bound_rad(&self, hx: f32, hy: f32, _q: Quant) -> f32 {
         (PI * hx).hypot(TAU * hy)

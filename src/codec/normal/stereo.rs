@@ -76,6 +76,10 @@ impl Projection for Stereo {
             Vec3::NEG_Z
         }
     }
+    fn decode_ops(&self) -> u32 {
+        // p·S (2); r² (3); d = 1 + r² (1); 2x/d, 2y/d (4); (1 − r²)/d (2); is_finite and its select of x, y, z (4).
+        16
+    }
     fn bound_rad(&self, hx: f32, hy: f32, q: Quant) -> f32 {
         if q == Quant::F16 {
             // Relative rounding: |dP| ≤ |P|·2^-11·√2 and the angular stretch at |P| is 2/(1+|P|²).

@@ -11,10 +11,12 @@
 //! neighbouring code (within the bound). The all-zero snorm code decodes to +Z.
 
 use super::{
-    finish, join_block, sanitize, split_block, NormalCodec, Quant, Quantizer, SnormQ, UnormQ, F16Q, FLOAT_SLACK_RAD,
+    finish, join_block, sanitize, split_block, with_quantizer, NormalCodec, Quant, Quantizer, FINISH_OPS,
+    FLOAT_SLACK_RAD,
 };
 use crate::base::isa::Isa;
-use crate::codec::simd::{run, Kernel, BLOCK};
+use crate::codec::simd::{run, BlockElement, BlockKernel, MapKernel, BLOCK};
+use crate::codec::Codec;
 use glam::Vec3;
 
 /// How each xyz component is stored.
@@ -103,69 +105,64 @@ fn decode_with<Q: Quantizer>(q: Q, unorm: bool, code: u64) -> Vec3 {
     decode3(q, unorm, split3(q.bits(), code))
 }
 
-struct XyzEncode<'a, Q> {
+/// The per-element bodies of [`Xyz`] for one quantizer, as [`BlockElement`]s (blocks split into component
+/// arrays, as for the planar codecs).
+#[derive(Clone, Copy)]
+struct XyzBody<Q> {
     q: Q,
     unorm: bool,
-    input: &'a [Vec3],
-    out: &'a mut [u64],
 }
 
-impl<Q: Quantizer> Kernel for XyzEncode<'_, Q> {
+impl<Q: Quantizer> BlockElement<Vec3, u64> for XyzBody<Q> {
     #[inline(always)]
-    fn run(self) {
+    fn apply(&self, n: &Vec3) -> u64 {
+        encode_with(self.q, self.unorm, *n)
+    }
+    #[inline(always)]
+    fn apply_block(&self, i: &[Vec3], o: &mut [u64]) {
         let (q, unorm) = (self.q, self.unorm);
-        let mut ins = self.input.chunks_exact(BLOCK);
-        let mut outs = self.out.chunks_exact_mut(BLOCK);
         let k = q.bits();
-        for (i, o) in (&mut ins).zip(&mut outs) {
-            let (x, y, z) = split_block(i);
-            let (mut cx, mut cy, mut cz) = ([0u32; BLOCK], [0u32; BLOCK], [0u32; BLOCK]);
-            for j in 0..BLOCK {
-                [cx[j], cy[j], cz[j]] = encode3(q, unorm, Vec3::new(x[j], y[j], z[j]));
-            }
-            for j in 0..BLOCK {
-                o[j] = join3(k, [cx[j], cy[j], cz[j]]);
-            }
+        let (x, y, z) = split_block(i);
+        let (mut cx, mut cy, mut cz) = ([0u32; BLOCK], [0u32; BLOCK], [0u32; BLOCK]);
+        for j in 0..BLOCK {
+            [cx[j], cy[j], cz[j]] = encode3(q, unorm, Vec3::new(x[j], y[j], z[j]));
         }
-        for (n, o) in ins.remainder().iter().zip(outs.into_remainder()) {
-            *o = encode_with(q, unorm, *n);
+        for j in 0..BLOCK {
+            o[j] = join3(k, [cx[j], cy[j], cz[j]]);
         }
     }
 }
 
-struct XyzDecode<'a, Q> {
-    q: Q,
-    unorm: bool,
-    codes: &'a [u64],
-    out: &'a mut [Vec3],
-}
-
-impl<Q: Quantizer> Kernel for XyzDecode<'_, Q> {
+impl<Q: Quantizer> BlockElement<u64, Vec3> for XyzBody<Q> {
     #[inline(always)]
-    fn run(self) {
+    fn apply(&self, c: &u64) -> Vec3 {
+        decode_with(self.q, self.unorm, *c)
+    }
+    #[inline(always)]
+    fn apply_block(&self, c: &[u64], o: &mut [Vec3]) {
         let (q, unorm) = (self.q, self.unorm);
-        let mut ins = self.codes.chunks_exact(BLOCK);
-        let mut outs = self.out.chunks_exact_mut(BLOCK);
         let k = q.bits();
-        for (c, o) in (&mut ins).zip(&mut outs) {
-            let (mut cx, mut cy, mut cz) = ([0u32; BLOCK], [0u32; BLOCK], [0u32; BLOCK]);
-            for j in 0..BLOCK {
-                [cx[j], cy[j], cz[j]] = split3(k, c[j]);
-            }
-            let (mut x, mut y, mut z) = ([0f32; BLOCK], [0f32; BLOCK], [0f32; BLOCK]);
-            for j in 0..BLOCK {
-                let v = decode3(q, unorm, [cx[j], cy[j], cz[j]]);
-                (x[j], y[j], z[j]) = (v.x, v.y, v.z);
-            }
-            join_block(&x, &y, &z, o);
+        let (mut cx, mut cy, mut cz) = ([0u32; BLOCK], [0u32; BLOCK], [0u32; BLOCK]);
+        for j in 0..BLOCK {
+            [cx[j], cy[j], cz[j]] = split3(k, c[j]);
         }
-        for (c, o) in ins.remainder().iter().zip(outs.into_remainder()) {
-            *o = decode_with(q, unorm, *c);
+        let (mut x, mut y, mut z) = ([0f32; BLOCK], [0f32; BLOCK], [0f32; BLOCK]);
+        for j in 0..BLOCK {
+            let v = decode3(q, unorm, [cx[j], cy[j], cz[j]]);
+            (x[j], y[j], z[j]) = (v.x, v.y, v.z);
         }
+        join_block(&x, &y, &z, o);
     }
 }
 
-impl NormalCodec for Xyz {
+impl Xyz {
+    fn is_unorm(&self) -> bool {
+        matches!(self.storage, XyzStorage::Unorm(_))
+    }
+}
+
+impl Codec for Xyz {
+    type Value = Vec3;
     fn name(&self) -> String {
         match self.storage {
             XyzStorage::Snorm(k) => format!("xyz-snorm-{}", 3 * k),
@@ -178,36 +175,32 @@ impl NormalCodec for Xyz {
     }
     #[inline]
     fn encode(&self, n: Vec3) -> u64 {
-        match self.storage {
-            XyzStorage::Snorm(k) => encode_with(SnormQ::new(k), false, n),
-            XyzStorage::Unorm(k) => encode_with(UnormQ::new(k), true, n),
-            XyzStorage::F16 => encode_with(F16Q, false, n),
-        }
+        let unorm = self.is_unorm();
+        with_quantizer!(self.quant, |q| encode_with(q, unorm, n))
     }
     #[inline]
     fn decode(&self, code: u64) -> Vec3 {
-        match self.storage {
-            XyzStorage::Snorm(k) => decode_with(SnormQ::new(k), false, code),
-            XyzStorage::Unorm(k) => decode_with(UnormQ::new(k), true, code),
-            XyzStorage::F16 => decode_with(F16Q, false, code),
-        }
+        let unorm = self.is_unorm();
+        with_quantizer!(self.quant, |q| decode_with(q, unorm, code))
+    }
+    fn decode_ops(&self) -> u32 {
+        // Two shifts split the code; per component the dequantizer plus, for unorm, `v·2 − 1`; then `finish`.
+        let per_component = self.quant.decode_ops() + if self.is_unorm() { 2 } else { 0 };
+        2 + 3 * per_component + FINISH_OPS
     }
     fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
         assert_eq!(input.len(), out.len(), "encode_slice: {} normals into {} codes", input.len(), out.len());
-        match self.storage {
-            XyzStorage::Snorm(k) => run(isa, XyzEncode { q: SnormQ::new(k), unorm: false, input, out }),
-            XyzStorage::Unorm(k) => run(isa, XyzEncode { q: UnormQ::new(k), unorm: true, input, out }),
-            XyzStorage::F16 => run(isa, XyzEncode { q: F16Q, unorm: false, input, out }),
-        }
+        let unorm = self.is_unorm();
+        with_quantizer!(self.quant, |q| run(isa, BlockKernel(MapKernel { input, out, f: XyzBody { q, unorm } })))
     }
     fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Vec3]) {
         assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} normals", codes.len(), out.len());
-        match self.storage {
-            XyzStorage::Snorm(k) => run(isa, XyzDecode { q: SnormQ::new(k), unorm: false, codes, out }),
-            XyzStorage::Unorm(k) => run(isa, XyzDecode { q: UnormQ::new(k), unorm: true, codes, out }),
-            XyzStorage::F16 => run(isa, XyzDecode { q: F16Q, unorm: false, codes, out }),
-        }
+        let (input, unorm) = (codes, self.is_unorm());
+        with_quantizer!(self.quant, |q| run(isa, BlockKernel(MapKernel { input, out, f: XyzBody { q, unorm } })))
     }
+}
+
+impl NormalCodec for Xyz {
     fn max_error_deg(&self) -> f32 {
         // Half a step in n units: unorm steps are twice as large in n = 2v − 1.
         let h = match self.storage {
