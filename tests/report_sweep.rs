@@ -70,6 +70,14 @@ fn sweep_rows_match_layouts_and_lossless_is_exact() {
     assert_eq!(total.rmse, e0.rmse, "the f32 roundtrip is bit-exact");
     assert!(total.rel_mse <= RESOLVE_VS_REFERENCE_REL_MSE, "{total:?}");
     assert_eq!(exact.normal_max_deg, Some(0.0));
+    // Decode work: the lossless f32 layout decodes cheaper than the packed ones (no unpacking math).
+    let ops = |l: &str| out.rows.iter().find(|r| r.layout == l).unwrap().decode_ops_per_sample.unwrap();
+    assert!(
+        ops("reference-f32") > 0 && ops("reference-f32") < ops("fat-20"),
+        "{} {}",
+        ops("reference-f32"),
+        ops("fat-20")
+    );
     // The lossless layout has layout error 0 with every detector, by construction; its total error is the AA
     // error alone.
     for r in out.rows.iter().filter(|r| r.layout == "reference-f32") {

@@ -262,6 +262,7 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, progress: Progre
             bytes_per_sample: bytes,
             footprint_bytes: layout.footprint_bytes(gb.width, gb.height, gb.samples),
             bandwidth_mb: bandwidth(gb, bytes, None),
+            decode_ops_per_sample: Some(layout.decode_ops_per_sample()),
             ..Default::default()
         };
         progress(done, total, &format!("{}: pack/unpack", layout.name()));

@@ -132,6 +132,20 @@ pub enum Coder {
     None,
 }
 
+impl Coder {
+    /// Operations its decoder spends per value ([`crate::codec::Codec::decode_ops`]; an ID or no codec: 0).
+    #[must_use]
+    pub fn decode_ops(&self) -> u32 {
+        match self {
+            Coder::Normal(c) => c.decode_ops(),
+            Coder::Depth(c) => c.decode_ops(),
+            Coder::Color(c) => c.decode_ops(),
+            Coder::Scalar(c) => c.decode_ops(),
+            Coder::Id(_) | Coder::None => 0,
+        }
+    }
+}
+
 /// Parses `uint-N` (1 ≤ N ≤ 32).
 fn id_bits(name: &str) -> Option<u32> {
     let n: u32 = name.strip_prefix("uint-").or_else(|| name.strip_prefix("uint"))?.parse().ok()?;

@@ -242,6 +242,26 @@ impl Layout {
         }
     }
 
+    /// Arithmetic operations a lighting pass spends decoding one sample of this layout: per stored field, 2 to
+    /// extract its bits from the texel word (shift, mask) plus its codec's [`crate::codec::Codec::decode_ops`];
+    /// an ID field is the extraction alone; the material index adds one table lookup per parameter. Reserved bits
+    /// are not read. Rebuilding position from depth is the lighting's, the same for every layout, and not counted.
+    #[must_use]
+    pub fn decode_ops_per_sample(&self) -> u32 {
+        const EXTRACT: u32 = 2;
+        let coders = self.coders(DEFAULT_DEPTH_RANGE).unwrap_or_default();
+        let lookups = self.indirection().map_or(0, |i| i.parameters.len() as u32);
+        self.fields()
+            .iter()
+            .zip(&coders)
+            .map(|(f, c)| match f.slot {
+                Slot::Reserved => 0,
+                Slot::MaterialIndex => EXTRACT + lookups,
+                _ => EXTRACT + c.decode_ops(),
+            })
+            .sum()
+    }
+
     fn coders(&self, [znear, zfar]: [f32; 2]) -> Result<Vec<Coder>> {
         self.fields()
             .iter()
