@@ -246,3 +246,41 @@ fn report_over_several_frames_merges_to_the_same_answer() {
     assert_eq!(w["rmse"].as_f64().unwrap(), per.iter().copied().fold(0.0, f64::max), "worst frame decides");
     assert!(w["bytes_per_sample"].as_u64().unwrap() <= 12);
 }
+
+#[test]
+fn fronts_hold_on_the_shipped_fixtures() {
+    // A real rasterizer's 4× MSAA G-buffer (Mesa llvmpipe) and Blender's Cycles dump: the fronts recomputed from
+    // report.json, and the lossless layout at layout error 0 on each.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
+    for fixture in ["raster_4x.exr", "blender_gbuffer.exr"] {
+        let dir = tempfile::tempdir().unwrap();
+        let o = gbuf()
+            .arg("report")
+            .arg(root.join(fixture))
+            .args([
+                "--layouts",
+                "minimal-8,destiny-96,bevy-deferred,reference-f32",
+                "--detectors",
+                "lauritzen,combined",
+            ])
+            .args(["--runs", "1", "--json", "-o"])
+            .arg(dir.path())
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{fixture}: {}", String::from_utf8_lossy(&o.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let rows = v["rows"].as_array().unwrap();
+        check_fronts(rows);
+        for r in rows.iter().filter(|r| r["layout"] == "reference-f32") {
+            assert_eq!(r["layout_error"]["rmse"], 0.0, "{fixture}");
+        }
+        // The lossless layout is never behind a lossy one on the bytes front's error axis.
+        let min_lossy = rows
+            .iter()
+            .filter(|r| r["layout"] != "reference-f32")
+            .map(|r| r["layout_error"]["rmse"].as_f64().unwrap())
+            .fold(f64::INFINITY, f64::min);
+        assert!(min_lossy >= 0.0);
+        assert!(dir.path().join("flip_worst_layout.png").is_file(), "{fixture}: FLIP map of the worst layout");
+    }
+}

@@ -297,6 +297,21 @@ fn material_indirection_clusters_and_reports_when_it_does_not_fit() {
         *r = rng.next_f32(); // ~1000 distinct tuples into 256 entries
     }
     let layout = Layout::by_name("destiny-96").unwrap();
+    // With the dump's material IDs the table is keyed by them: one entry per ID, the error the variation inside
+    // each material, as measured on the unpacked buffer.
+    let packed = layout.pack(&gb).unwrap();
+    let table = packed.material_table.as_ref().unwrap();
+    let mut ids: Vec<u32> = gb.material_id.clone().unwrap();
+    ids.sort_unstable();
+    ids.dedup();
+    assert_eq!((table.key.as_str(), table.entries.len()), ("material-id", table.ids.len()));
+    assert!(table.ids.iter().all(|i| ids.contains(i)));
+    let k = table.parameters.iter().position(|p| p == "roughness").unwrap();
+    let back = layout.unpack(&packed, &gb).unwrap();
+    let measured = gbuf::measure::gbuffer::compare(&gb, &back).unwrap().scalar(Attribute::Roughness).unwrap().max_abs;
+    assert!((measured - f64::from(table.max_abs_error[k])).abs() < 1e-6, "{measured} vs {:?}", table.max_abs_error);
+    // Without IDs: a palette of the tuples, clustered.
+    gb.material_id = None;
     let packed = layout.pack(&gb).unwrap();
     let table = packed.material_table.as_ref().unwrap();
     assert!(!table.lossless);
