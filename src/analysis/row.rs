@@ -271,6 +271,36 @@ pub struct Report {
     pub figures: Vec<Figure>,
 }
 
+/// A one-frame report of `rows` on an empty `width` × `height` G-buffer, for the writers' tests.
+#[cfg(test)]
+pub(crate) fn test_report(input: &str, width: u32, height: u32, rows: Vec<Row>, figures: Vec<Figure>) -> Report {
+    let gb = crate::GBuffer::new(width, height, 1).expect("a small G-buffer");
+    Report {
+        frames: vec![Frame {
+            input: input.into(),
+            width,
+            height,
+            samples: 1,
+            coverage: 0.0,
+            lights: 0,
+            lights_source: "none".into(),
+            reference: None,
+            sweep_seconds: 0.5,
+            needs: crate::analysis::needs::analyze(&gb),
+            detectors: vec![],
+        }],
+        runs: 3,
+        viewing: Viewing::default(),
+        flip: FlipRows::default(),
+        over: Over::default(),
+        aggregate: crate::analysis::aggregate::aggregate(&rows, Over::default()),
+        detectors: vec![],
+        budget: None,
+        rows,
+        figures,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -208,26 +208,25 @@ fn write_csv<T: Serialize>(lines: &[T]) -> String {
     String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
 }
 
+/// The CSV text of `rows`, one line each by `line` (header first); with no rows, the header alone (of `blank`).
+fn table<'a, R, L: Serialize>(rows: &'a [R], blank: &'a R, line: impl Fn(&'a R) -> L) -> String {
+    if rows.is_empty() {
+        let text = write_csv(&[line(blank)]);
+        return text.lines().next().map(|h| format!("{h}\n")).unwrap_or_default();
+    }
+    write_csv(&rows.iter().map(line).collect::<Vec<_>>())
+}
+
 /// The text of `aggregate.csv` (header line first).
 #[must_use]
 pub fn aggregate_csv(rows: &[AggregateRow]) -> String {
-    if rows.is_empty() {
-        let blank = AggregateRow::default();
-        let text = write_csv(&[AggregateCsvRow::of(&blank)]);
-        return text.lines().next().map(|h| format!("{h}\n")).unwrap_or_default();
-    }
-    write_csv(&rows.iter().map(AggregateCsvRow::of).collect::<Vec<_>>())
+    table(rows, &AggregateRow::default(), AggregateCsvRow::of)
 }
 
 /// The CSV text for `rows` (header line first, RFC 4180 quoting). An empty report still has its header.
 #[must_use]
 pub fn to_csv(rows: &[Row]) -> String {
-    if rows.is_empty() {
-        let blank = Row::default();
-        let text = write_csv(&[CsvRow::of(&blank)]);
-        return text.lines().next().map(|h| format!("{h}\n")).unwrap_or_default();
-    }
-    write_csv(&rows.iter().map(CsvRow::of).collect::<Vec<_>>())
+    table(rows, &Row::default(), CsvRow::of)
 }
 
 #[cfg(test)]

@@ -390,8 +390,6 @@ pub fn to_markdown(rep: &Report) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::needs::analyze;
-    use crate::GBuffer;
 
     #[test]
     fn markdown_has_every_row_and_figure() {
@@ -412,30 +410,8 @@ mod tests {
                 ..Default::default()
             },
         ];
-        let rep = Report {
-            frames: vec![Frame {
-                input: "room".into(),
-                width: 4,
-                height: 2,
-                samples: 1,
-                coverage: 0.0,
-                lights: 0,
-                lights_source: "none".into(),
-                reference: None,
-                sweep_seconds: 0.5,
-                needs: analyze(&GBuffer::new(4, 2, 1).unwrap()),
-                detectors: vec![],
-            }],
-            runs: 3,
-            viewing: Default::default(),
-            flip: Default::default(),
-            over: Default::default(),
-            aggregate: crate::analysis::aggregate::aggregate(&rows, Default::default()),
-            detectors: vec![],
-            budget: None,
-            rows,
-            figures: vec![crate::analysis::row::Figure { file: "a.png".into(), caption: "A plot".into() }],
-        };
+        let figures = vec![crate::analysis::row::Figure { file: "a.png".into(), caption: "A plot".into() }];
+        let rep = crate::analysis::row::test_report("room", 4, 2, rows, figures);
         let md = to_markdown(&rep);
         assert!(md.contains("| fat-20 | 20 |"));
         assert!(md.contains("error: no / way"), "pipes in errors are escaped");

@@ -52,7 +52,6 @@ pub fn write_folder(dir: &Path, rep: &Report, attachments: &[Attachment]) -> Res
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::needs::analyze;
     use crate::analysis::row::Row;
 
     fn rep() -> Report {
@@ -65,30 +64,7 @@ mod tests {
             }),
             ..Default::default()
         }];
-        Report {
-            frames: vec![crate::analysis::row::Frame {
-                input: "t".into(),
-                width: 2,
-                height: 2,
-                samples: 1,
-                coverage: 1.0,
-                lights: 1,
-                lights_source: "test".into(),
-                reference: None,
-                sweep_seconds: 0.0,
-                needs: analyze(&crate::GBuffer::new(2, 2, 1).unwrap()),
-                detectors: vec![],
-            }],
-            runs: 1,
-            viewing: Default::default(),
-            flip: Default::default(),
-            over: Default::default(),
-            aggregate: crate::analysis::aggregate::aggregate(&rows, Default::default()),
-            detectors: vec![],
-            budget: None,
-            rows,
-            figures: vec![],
-        }
+        crate::analysis::row::test_report("t", 2, 2, rows, vec![])
     }
 
     #[test]
