@@ -172,6 +172,72 @@ pub struct GBuffer {
     pub primitive_id: Option<Vec<u32>>,
     /// Screen-space motion in pixels.
     pub motion: Option<Vec<Vec2>>,
+    /// The engine's material catalogue, when a sidecar gives one (`materials`): parameters per material ID, which
+    /// material-ID indirection uses as its table instead of per-ID means. Empty when unknown.
+    pub materials: Vec<MaterialParams>,
+}
+
+/// One engine material as a sidecar declares it: its material ID and whichever scalar parameters it states
+/// (absent ones are taken from the dump, as the per-ID mean).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialParams {
+    /// The material ID the engine writes into the G-buffer.
+    pub id: u32,
+    /// The engine's name for it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Specular amount / scalar F0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub specular: Option<f32>,
+    /// Blinn-Phong specular power.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub specular_power: Option<f32>,
+    /// Perceptual roughness.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub roughness: Option<f32>,
+    /// Metallic.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub metallic: Option<f32>,
+}
+
+impl MaterialParams {
+    /// The declared value of scalar attribute `attr`, if this material states it.
+    #[must_use]
+    pub fn get(&self, attr: Attribute) -> Option<f32> {
+        match attr {
+            Attribute::Specular => self.specular,
+            Attribute::SpecularPower => self.specular_power,
+            Attribute::Roughness => self.roughness,
+            Attribute::Metallic => self.metallic,
+            _ => None,
+        }
+    }
+
+    /// Checks a catalogue: IDs unique, every stated value finite (and roughness, metallic in [0, 1], specular
+    /// power ≥ 0). The message names the offending entry.
+    pub fn validate_all(materials: &[MaterialParams]) -> std::result::Result<(), String> {
+        let mut seen = std::collections::HashSet::new();
+        for (i, m) in materials.iter().enumerate() {
+            if !seen.insert(m.id) {
+                return Err(format!("materials[{i}]: material ID {} is listed twice", m.id));
+            }
+            for (attr, v) in [Attribute::Specular, Attribute::SpecularPower, Attribute::Roughness, Attribute::Metallic]
+                .into_iter()
+                .filter_map(|a| m.get(a).map(|v| (a, v)))
+            {
+                let ok = v.is_finite()
+                    && match attr {
+                        Attribute::Roughness | Attribute::Metallic => (0.0..=1.0).contains(&v),
+                        _ => v >= 0.0,
+                    };
+                if !ok {
+                    return Err(format!("materials[{i}] (ID {}): {} = {v} is out of range", m.id, attr.name()));
+                }
+            }
+        }
+        Ok(())
+    }
 }
 
 /// A borrowed view of one attribute plane, for code that walks attributes generically.

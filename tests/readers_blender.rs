@@ -412,3 +412,83 @@ fn destiny_table_is_keyed_by_the_dumps_material_ids() {
     assert!(t.entries.len() <= 16 && t.entries.len() == distinct.len(), "{} entries", t.entries.len());
     assert_eq!(t.ids, distinct);
 }
+
+/// The fixture's sidecar with a `materials` list added, written to a temporary directory beside a copy of the dump.
+fn with_materials(materials: serde_json::Value) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let dump = dir.path().join("frame.exr");
+    std::fs::copy(fixture("blender_gbuffer.exr"), &dump).unwrap();
+    let mut side: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fixture("blender_gbuffer.json")).unwrap()).unwrap();
+    side["materials"] = materials;
+    std::fs::write(dir.path().join("frame.json"), serde_json::to_string(&side).unwrap()).unwrap();
+    (dir, dump)
+}
+
+#[test]
+fn sidecar_materials_become_the_table_and_the_error_is_the_variation_around_them() {
+    // IDs 1 and 2 declared with the script's roughness and metallic; the other IDs are left to the per-ID mean.
+    let (_dir, dump) = with_materials(serde_json::json!([
+        { "id": MATERIALS[0].0, "name": "floor", "roughness": 0.5, "metallic": MATERIALS[0].2 },
+        { "id": MATERIALS[1].0, "roughness": MATERIALS[1].1 },
+        { "id": 999, "roughness": 0.1 }
+    ]));
+    let loaded = gbuf::io::load(&dump, &LoadOptions::default()).unwrap();
+    let gb = &loaded.gbuffer;
+    assert_eq!(gb.materials.len(), 3);
+    let info = serde_json::to_value(gbuf::io::stats::info(&loaded, &dump)).unwrap();
+    assert_eq!(info["materials"][0]["name"], "floor");
+
+    let layout = gbuf::layout::Layout::by_name("destiny-96").unwrap();
+    let t = layout.pack(gb).unwrap().material_table.unwrap();
+    assert_eq!(t.key, "material-id");
+    let col = |name: &str| t.parameters.iter().position(|p| p == name).unwrap();
+    let (r, m) = (col("roughness"), col("metallic"));
+    let e1 = t.ids.iter().position(|&id| id == MATERIALS[0].0).unwrap();
+    let e2 = t.ids.iter().position(|&id| id == MATERIALS[1].0).unwrap();
+    assert_eq!(t.entries[e1][r], 0.5);
+    assert_eq!(t.entries[e1][m], MATERIALS[0].2);
+    assert_eq!(t.entries[e2][r], MATERIALS[1].1);
+    assert_eq!(t.from_sidecar, 3);
+    let note = t.note.as_deref().unwrap();
+    assert!(note.contains(&format!("{} of {} material IDs", t.ids.len() - 2, t.ids.len())), "{note}");
+
+    // Undeclared entries are the per-ID mean; the error covers the distance to the declared 0.5.
+    let ids = gb.material_id.as_deref().unwrap();
+    let rough = gb.roughness.as_deref().unwrap();
+    let mut worst = 0f32;
+    for (e, &id) in t.ids.iter().enumerate().filter(|(e, _)| *e != e1 && *e != e2) {
+        let vals: Vec<f64> =
+            (0..gb.len()).filter(|&i| gb.coverage[i] && ids[i] == id).map(|i| f64::from(rough[i])).collect();
+        let mean = (vals.iter().sum::<f64>() / vals.len() as f64) as f32;
+        assert!((t.entries[e][r] - mean).abs() <= 1e-6 * mean.abs().max(1.0), "ID {id}");
+    }
+    for i in (0..gb.len()).filter(|&i| gb.coverage[i] && ids[i] == MATERIALS[0].0) {
+        worst = worst.max((rough[i] - 0.5).abs());
+    }
+    assert!(worst > 0.0 && t.max_abs_error[r] >= worst, "{} < {worst}", t.max_abs_error[r]);
+
+    // The unpacked G-buffer carries the declared value on every sample of material 1.
+    let un = layout.unpack(&layout.pack(gb).unwrap(), gb).unwrap();
+    let ur = un.roughness.as_deref().unwrap();
+    assert!((0..gb.len()).filter(|&i| gb.coverage[i] && ids[i] == MATERIALS[0].0).all(|i| ur[i] == 0.5));
+
+    // The canonical EXR keeps the catalogue.
+    let canon = _dir.path().join("canonical.exr");
+    gbuf::io::canonical::write(&canon, gb).unwrap();
+    let back = gbuf::io::load(&canon, &LoadOptions::default()).unwrap();
+    assert_eq!(back.gbuffer.materials, gb.materials);
+}
+
+#[test]
+fn sidecar_materials_that_cannot_be_right_are_refused_naming_the_sidecar() {
+    for (bad, what) in [
+        (serde_json::json!([{ "id": 1, "roughness": 0.5 }, { "id": 1 }]), "listed twice"),
+        (serde_json::json!([{ "id": 1, "roughness": 2.0 }]), "roughness = 2 is out of range"),
+        (serde_json::json!([{ "id": 1, "glossiness": 0.5 }]), "unknown field"),
+    ] {
+        let (_dir, dump) = with_materials(bad);
+        let err = gbuf::io::load(&dump, &LoadOptions::default()).unwrap_err().to_string();
+        assert!(err.contains("frame.json") && err.contains(what), "{err}");
+    }
+}

@@ -68,6 +68,15 @@ pub struct MaterialTableRow {
     pub lossless: bool,
     /// Per parameter, the largest error the table introduces.
     pub max_abs_error: Vec<f32>,
+    /// Per parameter, the mean error over covered samples.
+    pub mean_abs_error: Vec<f32>,
+    /// What indexes the table: `material-id` (the engine's IDs) or `palette` (clustered tuples).
+    pub key: String,
+    /// Table values taken from the sidecar's `materials` (the rest are per-ID means).
+    pub from_sidecar: usize,
+    /// Why the table is not what the layout asked for, if so.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
 }
 
 impl From<&MaterialTable> for MaterialTableRow {
@@ -79,6 +88,10 @@ impl From<&MaterialTable> for MaterialTableRow {
             bits: t.bits,
             lossless: t.lossless,
             max_abs_error: t.max_abs_error.clone(),
+            mean_abs_error: t.mean_abs_error.clone(),
+            key: t.key.clone(),
+            from_sidecar: t.from_sidecar,
+            note: t.note.clone(),
         }
     }
 }
@@ -176,15 +189,25 @@ fn print_text(r: &Row) -> anyhow::Result<()> {
         writeln!(out, "  {:<14} {} mismatches{first}", id.attribute, id.mismatches)?;
     }
     if let Some(t) = &r.material_table {
+        let how = match (t.key.as_str(), t.lossless) {
+            ("material-id", _) if t.from_sidecar > 0 => {
+                format!("keyed by material ID, {} values from the sidecar's materials", t.from_sidecar)
+            }
+            ("material-id", _) => "keyed by material ID (per-ID means)".to_string(),
+            (_, true) => "palette, lossless".to_string(),
+            (_, false) => "palette, clustered".to_string(),
+        };
         writeln!(
             out,
-            "  material table: {} distinct tuples → {} entries ({}-bit), {}; max error {:?}",
+            "  material table: {} distinct tuples → {} entries ({}-bit), {how}; max error {:?}",
             t.distinct_tuples,
             t.entries,
             t.bits,
-            if t.lossless { "lossless" } else { "clustered" },
             t.parameters.iter().zip(&t.max_abs_error).map(|(p, e)| format!("{p} {e:.3e}")).collect::<Vec<_>>()
         )?;
+        if let Some(n) = &t.note {
+            writeln!(out, "  material table note: {n}")?;
+        }
     }
     if !r.dropped.is_empty() {
         writeln!(out, "  not stored by the layout: {}", r.dropped.join(", "))?;

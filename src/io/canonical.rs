@@ -8,7 +8,9 @@
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};
-use crate::gbuffer::{checked_len, ordered_grid_positions, standard_sample_positions, Attribute, GBuffer, MAX_SAMPLES};
+use crate::gbuffer::{
+    checked_len, ordered_grid_positions, standard_sample_positions, Attribute, GBuffer, MaterialParams, MAX_SAMPLES,
+};
 use crate::io::exr::{RawChannel, RawData, RawImage};
 use crate::io::sidecar::SidecarCamera;
 use crate::io::LoadOptions;
@@ -30,6 +32,8 @@ pub const ATTR_SAMPLE_POSITIONS: &str = "gbuf.sample_positions";
 /// Header attribute: the camera, JSON in the sidecar's camera form (row-major `world_to_view`, `yfov`, `aspect`,
 /// `znear`, `zfar`).
 pub const ATTR_CAMERA: &str = "gbuf.camera";
+/// Header attribute: the engine's material catalogue, JSON in the sidecar's `materials` form (written when known).
+pub const ATTR_MATERIALS: &str = "gbuf.materials";
 /// Layer name of the coverage mask (component `V`, uint: 1 = surface, 0 = background).
 pub const COVERAGE: &str = "coverage";
 
@@ -94,6 +98,10 @@ pub fn to_raw(gb: &GBuffer) -> RawImage {
         let json = serde_json::to_string(&SidecarCamera::from_camera(cam)).expect("plain floats");
         attributes.push((ATTR_CAMERA.to_string(), json));
     }
+    if !gb.materials.is_empty() {
+        let json = serde_json::to_string(&gb.materials).expect("plain values");
+        attributes.push((ATTR_MATERIALS.to_string(), json));
+    }
     attributes.sort();
     RawImage { width: gb.width, height: gb.height, channels, compression: "ZIP16".into(), lossy: false, attributes }
 }
@@ -144,6 +152,16 @@ pub fn from_raw(raw: &RawImage, path: &Path) -> Result<GBuffer> {
             Some(cam)
         }
     };
+    let materials: Vec<MaterialParams> = match header(raw, ATTR_MATERIALS) {
+        None => Vec::new(),
+        Some(text) => {
+            let m: Vec<MaterialParams> = serde_json::from_str(text)
+                .map_err(|e| Error::invalid(path, format!("{ATTR_MATERIALS} header attribute: {e}")))?;
+            MaterialParams::validate_all(&m)
+                .map_err(|e| Error::invalid(path, format!("{ATTR_MATERIALS} header attribute: {e}")))?;
+            m
+        }
+    };
     let len = checked_len(raw.width, raw.height, samples).map_err(|e| Error::invalid(path, e.to_string()))?;
     let spp = samples as usize;
     let n = raw.width as usize * raw.height as usize;
@@ -154,6 +172,7 @@ pub fn from_raw(raw: &RawImage, path: &Path) -> Result<GBuffer> {
         sample_positions,
         camera,
         coverage: vec![false; len],
+        materials,
         ..Default::default()
     };
     let reader = Reader { raw, path, samples, n };

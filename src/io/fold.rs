@@ -52,6 +52,7 @@ pub fn fold(gb: &GBuffer, k: u32) -> Result<GBuffer> {
         object_id: gb.object_id.as_deref().map(|p| map.gather(p)),
         primitive_id: gb.primitive_id.as_deref().map(|p| map.gather(p)),
         motion: gb.motion.as_deref().map(|p| map.gather(p)),
+        materials: gb.materials.clone(),
     })
 }
 

@@ -246,6 +246,9 @@ fn finish(mut loaded: Loaded, path: &Path, side: Option<(&Sidecar, &Path)>, opts
                 loaded.camera_source = CameraSource::Sidecar;
             }
         }
+        if loaded.gbuffer.materials.is_empty() {
+            loaded.gbuffer.materials.clone_from(&s.materials);
+        }
         if loaded.lights.is_none() && !s.lights.is_empty() {
             loaded.lights = Some(s.view_lights(loaded.gbuffer.camera.as_ref(), sp)?);
         }

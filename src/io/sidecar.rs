@@ -2,6 +2,7 @@
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};
+use crate::gbuffer::MaterialParams;
 use crate::light::{Light, LightKind};
 use glam::{Mat4, Vec3};
 use serde::{Deserialize, Serialize};
@@ -76,6 +77,9 @@ pub struct Sidecar {
     /// "world" (default) or "view".
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lights_space: Option<String>,
+    /// The engine's materials: parameters per material ID (material-ID indirection uses them as its table).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub materials: Vec<MaterialParams>,
 }
 
 impl SidecarCamera {
@@ -127,6 +131,7 @@ impl Sidecar {
                 return Err(Error::Parse { path: path.into(), what: format!("supersample {k} outside 1..=8") });
             }
         }
+        MaterialParams::validate_all(&s.materials).map_err(|what| Error::Parse { path: path.into(), what })?;
         match s.lights_space.as_deref() {
             None | Some("world") | Some("view") => {}
             Some(other) => {

@@ -100,6 +100,9 @@ pub struct Info {
     pub camera: CameraInfo,
     /// Number of lights (from the sidecar or the dump), `None` when there are none.
     pub lights: Option<usize>,
+    /// The engine's materials the sidecar declares (empty when none).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub materials: Vec<crate::gbuffer::MaterialParams>,
 }
 
 /// Min, max and mean of each component over covered samples, accumulated in f64.
@@ -173,6 +176,7 @@ pub fn info(loaded: &Loaded, file: &std::path::Path) -> Info {
         compression: loaded.compression.as_ref().map(|(m, l)| CompressionInfo { method: m.clone(), lossy: *l }),
         camera: CameraInfo { source: loaded.camera_source, params: gb.camera.as_ref().map(SidecarCamera::from_camera) },
         lights: loaded.lights.as_ref().map(Vec::len),
+        materials: gb.materials.clone(),
     }
 }
 
@@ -215,6 +219,13 @@ impl Info {
             }
         }
         let _ = writeln!(t, "lights      {}", self.lights.map_or("none".to_string(), |n| n.to_string()));
+        if !self.materials.is_empty() {
+            let _ = writeln!(
+                t,
+                "materials   {} declared (material-ID indirection uses their values as its table)",
+                self.materials.len()
+            );
+        }
         let _ = writeln!(t, "attributes  (statistics over covered samples)");
         for (name, a) in &self.attributes.0 {
             let chans = if a.channels.is_empty() { "-".to_string() } else { a.channels.join(" ") };

@@ -3,7 +3,9 @@
 //!
 //! Two keys ([`MaterialKey`]). By the engine's material ID, as Destiny does: one entry per distinct ID over the
 //! covered samples (the index is the ID's rank among them), holding the per-ID mean of each parameter; the error
-//! is the per-sample variation inside a material (textured roughness, say). By palette, for dumps without IDs:
+//! is the per-sample variation inside a material (textured roughness, say). When the dump's sidecar declares the
+//! engine's materials (`materials`, see docs/FORMAT.md), their stated values replace the means: the table is the
+//! engine's, and the error is how far the G-buffer's per-sample values stray from it. By palette, for dumps without IDs:
 //! the distinct parameter tuples, as follows.
 //!
 //! Lossless when the G-buffer has at most 2^k distinct tuples (over covered samples). Otherwise the tuples are
@@ -12,7 +14,7 @@
 //! iterations; the table holds the weighted cluster means and reports the error per parameter.
 //! Non-finite parameter values are treated as 0 (documented; the codecs do the same).
 
-use crate::gbuffer::{Attribute, GBuffer, PlaneRef};
+use crate::gbuffer::{Attribute, GBuffer, MaterialParams, PlaneRef};
 use crate::layout::spec::MaterialKey;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -83,9 +85,17 @@ pub struct MaterialTable {
     /// With the `material-id` key: the engine's material ID of each entry.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub ids: Vec<u32>,
+    /// Table values (entry × parameter) taken from the sidecar's `materials` rather than the per-ID mean.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub from_sidecar: usize,
     /// Why the table is not keyed as asked (e.g. more material IDs than entries), if so.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
+}
+
+#[allow(clippy::trivially_copy_pass_by_ref)] // serde's skip_serializing_if passes a reference
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 fn palette_name() -> String {
@@ -152,8 +162,39 @@ impl MaterialTable {
                 sums[e][p] += f64::from(clean(plane[i]));
             }
         }
-        let entries: Vec<Vec<f32>> =
-            sums.iter().zip(&counts).map(|(s, &c)| s.iter().map(|v| (v / c.max(1) as f64) as f32).collect()).collect();
+        // The engine's own values where the sidecar declares them, else the per-ID mean.
+        let catalogue: HashMap<u32, &MaterialParams> = gb.materials.iter().map(|m| (m.id, m)).collect();
+        let mut from_sidecar = 0;
+        let mut undeclared = 0;
+        let entries: Vec<Vec<f32>> = sums
+            .iter()
+            .zip(&counts)
+            .enumerate()
+            .map(|(e, (s, &c))| {
+                let declared = distinct.get(e).and_then(|id| catalogue.get(id));
+                let row: Vec<f32> = s
+                    .iter()
+                    .zip(&planes)
+                    .map(|(v, (attr, _))| match declared.and_then(|m| m.get(*attr)) {
+                        Some(d) => {
+                            from_sidecar += 1;
+                            d
+                        }
+                        None => (v / c.max(1) as f64) as f32,
+                    })
+                    .collect();
+                if !catalogue.is_empty() && declared.is_none() && e < distinct.len() {
+                    undeclared += 1;
+                }
+                row
+            })
+            .collect();
+        let note = (undeclared > 0).then(|| {
+            format!(
+                "{undeclared} of {} material IDs are not in the sidecar's materials: their entries are per-ID means",
+                distinct.len()
+            )
+        });
         let (max_abs, mean_abs) = table_errors(&planes, &entries, &index, &gb.coverage);
         let lossless = max_abs.iter().all(|&e| e == 0.0);
         let table = MaterialTable {
@@ -166,7 +207,8 @@ impl MaterialTable {
             mean_abs_error: mean_abs,
             key: MaterialKey::MaterialId.name().into(),
             ids: distinct,
-            note: None,
+            from_sidecar,
+            note,
         };
         (table, index)
     }
@@ -226,6 +268,7 @@ impl MaterialTable {
             mean_abs_error: mean_abs,
             key: palette_name(),
             ids: Vec::new(),
+            from_sidecar: 0,
             note: None,
         };
         (table, index)

@@ -334,6 +334,7 @@ impl Layout {
             sample_positions: like.sample_positions.clone(),
             camera: like.camera,
             coverage: like.coverage.clone(),
+            materials: like.materials.clone(),
             ..GBuffer::default()
         };
         let row = like.width as usize * like.samples as usize;

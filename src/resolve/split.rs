@@ -86,6 +86,7 @@ impl SplitSamples {
                 specular_power: plane(&gb.specular_power, p, s),
                 roughness: plane(&gb.roughness, p, s),
                 metallic: plane(&gb.metallic, p, s),
+                materials: gb.materials.clone(),
                 ..Default::default()
             },
         })

@@ -194,5 +194,6 @@ pub fn scene_sidecar(gb: &GBuffer, lights: &[Light]) -> Sidecar {
         supersample: None,
         lights: lights.iter().map(sidecar_light).collect(),
         lights_space: Some("view".into()),
+        materials: gb.materials.clone(),
     }
 }
