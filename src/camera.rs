@@ -20,19 +20,30 @@ pub struct Camera {
     pub znear: f32,
     /// Far plane distance (> znear).
     pub zfar: f32,
+    /// Principal point: where the optical axis meets the image, as an offset from the image centre in NDC units
+    /// (+x right, +y up; ±1 = the image edge). Zero for a centred camera; a sidecar's `intrinsics` set it.
+    #[serde(default)]
+    pub principal: Vec2,
 }
 
 impl Camera {
     /// A camera at the world origin looking along −Z.
     #[must_use]
     pub fn identity(yfov: f32, aspect: f32, znear: f32, zfar: f32) -> Self {
-        Camera { world_to_view: Mat4::IDENTITY, yfov, aspect, znear, zfar }
+        Camera { world_to_view: Mat4::IDENTITY, yfov, aspect, znear, zfar, principal: Vec2::ZERO }
     }
 
     /// A camera at `eye` looking at `target` with `up` (right-handed, −Z forward).
     #[must_use]
     pub fn look_at(eye: Vec3, target: Vec3, up: Vec3, yfov: f32, aspect: f32, znear: f32, zfar: f32) -> Self {
-        Camera { world_to_view: glam::camera::rh::view::look_at_mat4(eye, target, up), yfov, aspect, znear, zfar }
+        Camera {
+            world_to_view: glam::camera::rh::view::look_at_mat4(eye, target, up),
+            yfov,
+            aspect,
+            znear,
+            zfar,
+            principal: Vec2::ZERO,
+        }
     }
 
     /// tan(yfov / 2).
@@ -46,8 +57,8 @@ impl Camera {
     #[must_use]
     pub fn view_ray(&self, px: Vec2, width: u32, height: u32) -> Vec3 {
         let t = self.tan_half_fov();
-        let ndc_x = px.x / width as f32 * 2.0 - 1.0;
-        let ndc_y = 1.0 - px.y / height as f32 * 2.0;
+        let ndc_x = px.x / width as f32 * 2.0 - 1.0 - self.principal.x;
+        let ndc_y = 1.0 - px.y / height as f32 * 2.0 - self.principal.y;
         Vec3::new(ndc_x * t * self.aspect, ndc_y * t, -1.0)
     }
 
@@ -64,8 +75,8 @@ impl Camera {
             return None;
         }
         let t = self.tan_half_fov();
-        let ndc_x = p.x / (-p.z * t * self.aspect);
-        let ndc_y = p.y / (-p.z * t);
+        let ndc_x = p.x / (-p.z * t * self.aspect) + self.principal.x;
+        let ndc_y = p.y / (-p.z * t) + self.principal.y;
         Some(Vec2::new((ndc_x + 1.0) * 0.5 * width as f32, (1.0 - ndc_y) * 0.5 * height as f32))
     }
 
@@ -107,6 +118,7 @@ impl Camera {
             && self.aspect.is_finite()
             && self.znear > 0.0
             && self.zfar > self.znear
+            && self.principal.is_finite()
     }
 }
 

@@ -62,7 +62,7 @@ fn main() -> ExitCode {
             for cause in err.chain().skip(1) {
                 eprintln!("  caused by: {cause}");
             }
-            ExitCode::from(1)
+            ExitCode::from(if cli::is_usage(&err) { 2 } else { 1 })
         }
     }
 }

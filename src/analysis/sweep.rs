@@ -244,6 +244,7 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, progress: Progre
     let mut done = 0;
     progress(done, total, "reference");
     let (reference, reference_timing) = time_runs(1, || resolve::reference(gb, lights, &cfg.resolve))?;
+    resolve::check_meaningful(gb, lights, &reference)?;
     done += 1;
     progress(done, total, "detectors on the exact G-buffer");
     // The resolve is bit-identical across culling modes, so one exact image per detector serves every culling.

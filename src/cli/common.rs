@@ -17,9 +17,37 @@ pub struct ReadArgs {
     /// Fold k×k pixel blocks of a supersampled dump into k² samples per pixel.
     #[arg(long, value_name = "K")]
     pub fold: Option<u32>,
-    /// Attribute → channel overrides: `normal=N.X;N.Y;N.Z,depth=Z` (components separated by `;`).
-    #[arg(long, value_name = "ATTR=CHANNEL,…")]
+    /// Attribute → channel overrides: `normal=N.X;N.Y;N.Z,depth=Z` (components separated by `;`), or another
+    /// file: `depth=DEPTH.exr:R`, `material_id=ids.png` (relative to the dump's directory).
+    #[arg(long, value_name = "ATTR=[FILE:]CHANNEL,…")]
     pub map: Option<String>,
+    /// File-set preset (default: detected from the file names): luxcore, unreal, unity-hdrp, blender-file-output.
+    #[arg(long, value_name = "NAME")]
+    pub preset: Option<String>,
+    /// Space of positions and normals read by naming (`--map`, file sets): world needs the sidecar's camera.
+    #[arg(long)]
+    pub space: Option<gbuf::io::conventions::Space>,
+    /// What depth read by naming measures: view-z, ray (from the eye), ray-from-near, ndc.
+    #[arg(long)]
+    pub depth: Option<gbuf::io::conventions::DepthKind>,
+    /// Near plane for `--depth ray-from-near|ndc` (default: the camera's).
+    #[arg(long)]
+    pub znear: Option<f32>,
+    /// Far plane for `--depth ndc` (default: the camera's).
+    #[arg(long)]
+    pub zfar: Option<f32>,
+    /// With `--depth ndc`: 1 at the near plane.
+    #[arg(long)]
+    pub reversed_z: bool,
+    /// How IDs read by naming are stored: float, u32, rgb8 (R + 256·G + 65536·B).
+    #[arg(long)]
+    pub ids: Option<gbuf::io::conventions::IdEncoding>,
+    /// Background marker for data read by naming: auto, inf, nan, alpha, or a depth value.
+    #[arg(long, value_name = "VALUE")]
+    pub background: Option<String>,
+    /// Normal encoding for data read by naming: signed, unorm (n·0.5 + 0.5).
+    #[arg(long)]
+    pub normals: Option<gbuf::io::conventions::NormalEncoding>,
     /// Refuse files whose decoded samples would need more than this many MiB.
     #[arg(long, value_name = "MIB", default_value_t = 4096)]
     pub max_memory: u64,
@@ -32,6 +60,7 @@ impl ReadArgs {
     /// Library load options from the flags.
     pub fn options(&self) -> anyhow::Result<LoadOptions> {
         let mut map = Vec::new();
+        let mut files = Vec::new();
         if let Some(spec) = &self.map {
             for item in spec.split(',').filter(|s| !s.trim().is_empty()) {
                 let (attr, chans) =
@@ -39,7 +68,25 @@ impl ReadArgs {
                 let a = Attribute::from_name(attr.trim()).with_context(|| {
                     format!("--map: unknown attribute {attr:?}; known: {}", Attribute::ALL.map(|a| a.name()).join(", "))
                 })?;
-                let chans: Vec<String> = chans.split(';').map(|c| c.trim().to_string()).collect();
+                let chans = chans.trim();
+                let is_image = |f: &str| {
+                    let f = f.to_ascii_lowercase();
+                    f.ends_with(".exr") || f.ends_with(".png")
+                };
+                let (file, chans) = match chans.split_once(':') {
+                    Some((f, c)) if is_image(f) => (Some(f), c),
+                    _ if is_image(chans) => (Some(chans), ""),
+                    _ => (None, chans),
+                };
+                let chans: Vec<String> =
+                    chans.split(';').map(|c| c.trim().to_string()).filter(|c| !c.is_empty()).collect();
+                if let Some(f) = file {
+                    if !chans.is_empty() && chans.len() != a.components() {
+                        anyhow::bail!("--map: {} needs {} channel(s), got {}", a.name(), a.components(), chans.len());
+                    }
+                    files.push((a, PathBuf::from(f), chans));
+                    continue;
+                }
                 if chans.len() != a.components() {
                     anyhow::bail!("--map: {} needs {} channel(s), got {}", a.name(), a.components(), chans.len());
                 }
@@ -50,6 +97,23 @@ impl ReadArgs {
             sidecar: self.scene.clone(),
             fold: self.fold,
             map,
+            files,
+            preset: self.preset.clone(),
+            conventions: gbuf::io::conventions::Overrides {
+                space: self.space,
+                depth: self.depth,
+                reversed_z: self.reversed_z,
+                znear: self.znear,
+                zfar: self.zfar,
+                ids: self.ids,
+                background: self
+                    .background
+                    .as_deref()
+                    .map(gbuf::io::conventions::Background::parse)
+                    .transpose()
+                    .map_err(|e| anyhow::anyhow!("--background: {e}"))?,
+                normals: self.normals,
+            },
             limits: ReadLimits { max_bytes: self.max_memory.saturating_mul(1 << 20), allow_dwa: self.allow_dwa },
         })
     }
@@ -71,10 +135,19 @@ impl InputArgs {
         self.read.options()
     }
 
-    /// Loads the dump.
+    /// Loads the dump and prints its plausibility warnings on stderr.
     pub fn load(&self) -> anyhow::Result<Loaded> {
         let opts = self.options()?;
-        Ok(gbuf::io::load(&self.file, &opts)?)
+        let loaded = gbuf::io::load(&self.file, &opts)?;
+        print_warnings(&self.file, &loaded);
+        Ok(loaded)
+    }
+}
+
+/// Prints a loaded dump's plausibility warnings on stderr (`warning: FILE: …`).
+pub fn print_warnings(file: &std::path::Path, loaded: &Loaded) {
+    for w in &loaded.warnings {
+        eprintln!("warning: {}: {}", file.display(), w.message);
     }
 }
 
@@ -95,18 +168,26 @@ impl FramesArgs {
         let mut out: Vec<PathBuf> = Vec::new();
         for p in &self.files {
             let text = p.to_string_lossy();
-            if p.is_dir() {
+            if p.is_dir() && gbuf::io::fileset::looks_like_file_set(p) {
+                out.push(p.clone());
+            } else if p.is_dir() {
                 let mut found: Vec<PathBuf> = std::fs::read_dir(p)
                     .with_context(|| format!("reading the directory {}", p.display()))?
                     .filter_map(|e| e.ok().map(|e| e.path()))
                     .filter(|f| {
-                        f.is_file()
+                        (f.is_file()
                             && f.extension()
-                                .is_some_and(|e| e.eq_ignore_ascii_case("exr") || e.eq_ignore_ascii_case("bin"))
+                                .is_some_and(|e| e.eq_ignore_ascii_case("exr") || e.eq_ignore_ascii_case("bin")))
+                            || (f.is_dir() && gbuf::io::fileset::looks_like_file_set(f))
                     })
                     .collect();
                 found.sort();
-                anyhow::ensure!(!found.is_empty(), "{}: the directory holds no .exr or .bin dump", p.display());
+                anyhow::ensure!(
+                    !found.is_empty(),
+                    "{}: the directory is neither a file set (LuxCore, Unreal, Unity HDRP or Blender File Output \
+                     images; --preset, --map attr=FILE) nor holds .exr/.bin dumps or file-set directories",
+                    p.display()
+                );
                 out.extend(found);
             } else if !p.exists() && text.contains(['*', '?', '[']) {
                 let mut found: Vec<PathBuf> = glob::glob(&text)
@@ -137,7 +218,9 @@ impl FramesArgs {
     /// Loads one of the dumps.
     pub fn load(&self, path: &std::path::Path) -> anyhow::Result<Loaded> {
         let opts = self.read.options()?;
-        gbuf::io::load(path, &opts).with_context(|| format!("loading {}", path.display()))
+        let loaded = gbuf::io::load(path, &opts).with_context(|| format!("loading {}", path.display()))?;
+        print_warnings(path, &loaded);
+        Ok(loaded)
     }
 }
 

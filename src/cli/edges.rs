@@ -165,10 +165,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let cfg = args.thresholds.config()?;
     let detectors = args.detector.detectors();
     if args.mask.is_some() && detectors.len() > 1 {
-        anyhow::bail!("--mask draws one detector's mask; pick one with --detector instead of `all`");
+        crate::usage!("--mask draws one detector's mask; pick one with --detector instead of `all`");
     }
     if args.mask_truth.is_some() && args.mask.is_none() {
-        anyhow::bail!("--mask-truth chooses the colours of the --mask picture; give --mask OUT.png too");
+        crate::usage!("--mask-truth chooses the colours of the --mask picture; give --mask OUT.png too");
     }
     let tolerance = match args.shading_tolerance {
         ShadingTolerance::Display { codes, .. } => ShadingTolerance::Display { codes, exposure: args.exposure },

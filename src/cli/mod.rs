@@ -17,3 +17,28 @@ pub mod scene;
 pub fn is_broken_pipe(err: &anyhow::Error) -> bool {
     err.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe))
 }
+
+/// A usage error: flags that do not go together. `gbuf` exits with status 2 for these (1 is bad input).
+#[derive(Debug)]
+pub struct UsageError(pub String);
+
+impl std::fmt::Display for UsageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for UsageError {}
+
+/// Returns early with a [`UsageError`] (exit status 2).
+#[macro_export]
+macro_rules! usage {
+    ($($t:tt)*) => {
+        return Err(anyhow::Error::new($crate::cli::UsageError(format!($($t)*))))
+    };
+}
+
+/// Is this error a usage error (exit 2)?
+pub fn is_usage(err: &anyhow::Error) -> bool {
+    err.chain().any(|c| c.downcast_ref::<UsageError>().is_some())
+}

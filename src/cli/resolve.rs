@@ -154,7 +154,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     cfg.validate().context("resolve configuration")?;
     if args.ldr.is_some() && args.png.is_none() {
-        anyhow::bail!("--ldr gamma2.2 selects the encoding of --png; give --png OUT.png too");
+        crate::usage!("--ldr gamma2.2 selects the encoding of --png; give --png OUT.png too");
     }
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
         anyhow::bail!("--exposure must be a positive number, got {}", args.exposure);
@@ -181,6 +181,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mask = mask.with_context(|| format!("{file}: edge detector {}", args.detector))?;
 
     let resolved = resolve::resolve(lit_gb, &lights, &mask, &cfg).with_context(|| format!("{file}: resolve"))?;
+    anyhow::ensure!(
+        resolved.stats.shading_evaluations > 0,
+        "{file}: the resolve shaded no sample ({} covered of {}): nothing was lit",
+        gb.coverage.iter().filter(|c| **c).count(),
+        gb.len()
+    );
     let mut stage = StageMs { decode: t_decode, detect: t_detect, ..resolved.stats.ms };
     stage.total += t_decode + t_detect;
 
@@ -211,6 +217,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         let (reference, t) = timed(|| resolve::reference(&gb, &lights, &cfg));
         let reference = reference.with_context(|| format!("{file}: reference"))?;
+        resolve::check_meaningful(&gb, &lights, &reference).with_context(|| format!("{file}: nothing to compare"))?;
         let aa = exact.as_ref().map(|x| error_set(&reference, x, flip));
         (Some(compare(&reference, &resolved.image)), Some(error_set(&reference, &resolved.image, flip)), aa, t)
     };

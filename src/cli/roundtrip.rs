@@ -162,6 +162,13 @@ fn print_text(r: &Row) -> anyhow::Result<()> {
             n.max_deg,
             worst(n.max_deg, &n.worst)
         )?;
+        if n.skipped_invalid > 0 {
+            writeln!(
+                out,
+                "                 ({} samples with a zero or non-unit normal in the dump left out)",
+                n.skipped_invalid
+            )?;
+        }
     }
     if let Some(d) = &e.depth {
         writeln!(

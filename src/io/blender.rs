@@ -247,6 +247,9 @@ pub fn read(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
         camera_source: cam.source,
         compression: Some((raw.compression.clone(), raw.lossy)),
         sanitized: Vec::new(),
+        warnings: Vec::new(),
+        reading: None,
+        positions_assumed: false,
     })
 }
 
@@ -391,7 +394,7 @@ pub(super) fn resolve_camera(
     path: &Path,
 ) -> Result<CameraChoice> {
     if let Some(c) = sidecar.and_then(|s| s.camera.as_ref()) {
-        let camera = c.to_camera();
+        let camera = c.to_camera_for(w, h);
         let mut detail = "sidecar camera".to_string();
         if let Some(err) = world_pos.and_then(|p| median_reprojection_px(&camera, p, coverage, w, h)) {
             if err.is_nan() || err > SIDECAR_MAX_MEDIAN_REPROJECTION_PX {

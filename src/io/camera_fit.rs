@@ -231,6 +231,7 @@ impl Model {
             aspect: self.aspect as f32,
             znear: znear as f32,
             zfar: zfar as f32,
+            principal: glam::Vec2::ZERO,
         }
     }
 }

@@ -63,7 +63,8 @@ pub fn matches(raw: &RawImage) -> bool {
     header(raw, ATTR_FORMAT) == Some(FORMAT_NAME) || raw.channel(&channel_name(0, COVERAGE, "V")).is_some()
 }
 
-fn header<'a>(raw: &'a RawImage, key: &str) -> Option<&'a str> {
+/// A text header attribute of `raw`, if present.
+pub fn header<'a>(raw: &'a RawImage, key: &str) -> Option<&'a str> {
     raw.attributes.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str())
 }
 

@@ -352,6 +352,9 @@ fn decode(h: &Header, chunk: &[u8], path: &Path) -> Result<Loaded> {
         camera_source: super::CameraSource::File,
         compression: None,
         sanitized: Vec::new(),
+        warnings: Vec::new(),
+        reading: None,
+        positions_assumed: false,
     })
 }
 

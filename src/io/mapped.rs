@@ -6,15 +6,16 @@
 //! [`BACKGROUND_DEPTH`] (renderers write 0, 1e10 or +Inf for sky), or, without depth, when its position is
 //! exactly zero. Float-coded IDs are rounded; negative or non-finite ones become 0.
 
+use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::gbuffer::{Attribute, GBuffer};
+use crate::io::conventions::Conventions;
 use crate::io::exr::{RawChannel, RawData, RawImage};
 use crate::io::{AttributeSource, LoadOptions, Loaded, SourceFormat};
 use glam::{Vec2, Vec3};
 use std::path::Path;
 
-/// Depths at or beyond this are background (Blender writes 1e10 for sky).
-pub const BACKGROUND_DEPTH: f32 = 1e9;
+pub use crate::io::conventions::BACKGROUND_DEPTH;
 
 /// The `--map` hint appended to errors about unknown naming.
 pub const MAP_HINT: &str = "name the channels with --map attr=channel,… (components separated by `;`), e.g. \
@@ -54,8 +55,9 @@ fn floats(ch: &RawChannel) -> Vec<f32> {
     }
 }
 
-/// Reads `raw` with the explicit mapping `opts.map` (see the module docs). Needs depth or position.
-pub fn read(raw: &RawImage, path: &Path, opts: &LoadOptions) -> Result<Loaded> {
+/// Reads `raw` with the explicit mapping `opts.map` (see the module docs) under the declared conventions
+/// (`opts.conventions` over the defaults: view space, view-z depth, automatic background). Needs depth or position.
+pub fn read(raw: &RawImage, path: &Path, camera: Option<&Camera>, opts: &LoadOptions) -> Result<Loaded> {
     let has = |a: Attribute| opts.map.iter().any(|(m, _)| *m == a);
     if !has(Attribute::Depth) && !has(Attribute::Position) {
         let what = if opts.map.is_empty() {
@@ -71,6 +73,7 @@ pub fn read(raw: &RawImage, path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     }
     let mut gb = GBuffer::new(raw.width, raw.height, 1).map_err(|e| Error::invalid(path, e.to_string()))?;
     let mut sources = Vec::new();
+    let conventions = Conventions::default().with(&opts.conventions);
     for (attr, names) in &opts.map {
         if names.len() != attr.components() {
             return Err(Error::Argument(format!(
@@ -82,25 +85,16 @@ pub fn read(raw: &RawImage, path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         }
         let chans = names.iter().map(|n| channel(raw, path, n)).collect::<Result<Vec<_>>>()?;
         let file_type = chans.iter().map(|c| c.data.type_name()).collect::<Vec<_>>().join("/");
-        let mut note = Some("mapped with --map; assumed view space".to_string());
+        let note = Some(format!("mapped with --map ({})", conventions.space.name()));
         set_plane(&mut gb, *attr, &chans);
-        if *attr == Attribute::Depth {
-            let d = gb.depth.as_mut().expect("just set");
-            let negative = d.iter().filter(|v| **v < 0.0).count();
-            let positive = d.iter().filter(|v| **v > 0.0 && **v < BACKGROUND_DEPTH).count();
-            if negative > positive {
-                d.iter_mut().for_each(|v| *v = -*v);
-                note = Some("mapped with --map; negated (the channel holds view-space z)".into());
-            }
-        }
         sources.push(AttributeSource { attribute: attr.name(), channels: names.clone(), file_type, note });
     }
-    gb.coverage = match (&gb.depth, &gb.position) {
-        (Some(d), _) => d.iter().map(|&v| !(v == 0.0 || v.abs() >= BACKGROUND_DEPTH)).collect(),
-        (None, Some(p)) => p.iter().map(|&v| v != Vec3::ZERO).collect(),
-        (None, None) => unreachable!("checked above"),
-    };
-    zero_background(&mut gb);
+    let alpha: Option<Vec<f32>> = raw.channel("A").map(|c| (0..c.data.len()).map(|i| c.data.f32_at(i)).collect());
+    for (attr, note) in conventions.apply(&mut gb, camera, alpha.as_deref(), path)? {
+        if let Some(s) = sources.iter_mut().find(|s| s.attribute == attr) {
+            s.note = Some(format!("{}; {note}", s.note.take().unwrap_or_default()));
+        }
+    }
     Ok(Loaded {
         gbuffer: gb,
         format: SourceFormat::Mapped,
@@ -109,6 +103,9 @@ pub fn read(raw: &RawImage, path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         camera_source: super::CameraSource::Unknown,
         compression: Some((raw.compression.clone(), raw.lossy)),
         sanitized: Vec::new(),
+        warnings: Vec::new(),
+        reading: Some(super::fileset::Reading { preset: None, conventions, basis: None }),
+        positions_assumed: false,
     })
 }
 

@@ -271,6 +271,9 @@ pub fn read(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
         camera_source: cam.source,
         compression: Some((raw.compression.clone(), raw.lossy)),
         sanitized: Vec::new(),
+        warnings: Vec::new(),
+        reading: None,
+        positions_assumed: false,
     })
 }
 

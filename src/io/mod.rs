@@ -1,14 +1,17 @@
-//! Loading G-buffer dumps (canonical EXR, Blender multilayer EXR, Mitsuba AOV EXR, ISPC `deferred` `.bin`) and
-//! writing our canonical EXR. Conversions to the crate's view-space convention happen here and nowhere else.
+//! Loading G-buffer dumps (canonical EXR, Blender multilayer EXR, Mitsuba AOV EXR, ISPC `deferred` `.bin`, file
+//! sets of one image per buffer) and writing our canonical EXR. Conversions to the crate's view-space convention happen here and nowhere else.
 
 pub mod blender;
 pub mod camera_fit;
 pub mod canonical;
+pub mod conventions;
 pub mod exr;
+pub mod fileset;
 pub mod fold;
 pub mod ispc;
 pub mod mapped;
 pub mod mitsuba;
+pub mod plausible;
 pub mod sanitize;
 pub mod sidecar;
 pub mod stats;
@@ -35,6 +38,8 @@ pub enum SourceFormat {
     IspcBin,
     /// Generic EXR mapped with `--map`.
     Mapped,
+    /// A file set: one image per buffer (a directory, or files named with `--map attr=FILE`).
+    FileSet,
 }
 
 /// How to load a dump.
@@ -46,6 +51,13 @@ pub struct LoadOptions {
     pub fold: Option<u32>,
     /// Explicit attribute → channel mapping (`--map attr=channel,…`); channels are comma-free names.
     pub map: Vec<(Attribute, Vec<String>)>,
+    /// Attributes read from other files (`--map attr=FILE[:CHANNEL;…]`): attribute, file (relative to the dump's
+    /// directory), channels (empty: the default).
+    pub files: Vec<(Attribute, PathBuf, Vec<String>)>,
+    /// File-set preset (`--preset`); detected from the file names when `None`.
+    pub preset: Option<String>,
+    /// Declared conventions (`--space`, `--depth`, `--ids`, `--background`, …) for data read by naming.
+    pub conventions: conventions::Overrides,
     /// Header limits.
     pub limits: ReadLimits,
 }
@@ -102,6 +114,12 @@ pub struct Loaded {
     pub compression: Option<(String, bool)>,
     /// NaN / Inf values found (and replaced by finite values) per attribute: (attribute, nan, inf).
     pub sanitized: Vec<(&'static str, u64, u64)>,
+    /// Plausibility findings ([`plausible::check`]), with the numbers.
+    pub warnings: Vec<plausible::Warning>,
+    /// For data read by naming (file sets, `--map`): the preset and conventions used.
+    pub reading: Option<fileset::Reading>,
+    /// True when the dump has several samples per pixel but no sample positions: the standard pattern was assumed.
+    pub positions_assumed: bool,
 }
 
 /// Loads a dump from `path`, whatever its format: resolves the sidecar, detects the format by content, reads,
@@ -109,7 +127,19 @@ pub struct Loaded {
 /// by finite values (counted in [`Loaded::sanitized`]) and validates the result.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     let side = resolve_sidecar(path, opts)?;
+    if path.is_dir() || !opts.files.is_empty() {
+        let camera = side.as_ref().and_then(|(s, _)| s.camera.as_ref());
+        let loaded = fileset::read(path, camera, opts)?;
+        return finish(loaded, path, side.as_ref().map(|(s, p)| (s, p.as_path())), opts);
+    }
     let (head, len) = read_head(path)?;
+    if head.starts_with(&PNG_MAGIC) {
+        return Err(Error::invalid(
+            path,
+            "a PNG on its own is not a dump: give the directory of the file set it belongs to (LuxCore, Unreal, Unity, \
+             Blender File Output presets), or name each buffer's file with --map attr=FILE[:CHANNEL;…]",
+        ));
+    }
     let loaded = if ispc::matches_file(&head, len) {
         ispc::read(path, side.as_ref().map(|s| &s.0), opts)?
     } else if head.starts_with(&EXR_MAGIC) {
@@ -138,6 +168,8 @@ pub fn load_bytes(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<Loade
 
 /// The OpenEXR magic number.
 const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+/// The PNG signature.
+const PNG_MAGIC: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
 
 fn not_a_dump(path: &Path, head: &[u8]) -> Error {
     let shown: Vec<String> = head.iter().take(8).map(|b| format!("{b:02x}")).collect();
@@ -164,6 +196,10 @@ fn read_head(path: &Path) -> Result<(Vec<u8>, u64)> {
 fn resolve_sidecar(path: &Path, opts: &LoadOptions) -> Result<Option<(Sidecar, PathBuf)>> {
     let p = match &opts.sidecar {
         Some(p) => p.clone(),
+        None if path.is_dir() => match dir_sidecar(path)? {
+            Some(p) => p,
+            None => return Ok(None),
+        },
         None => {
             let p = path.with_extension("json");
             if p == path || !p.is_file() {
@@ -173,6 +209,34 @@ fn resolve_sidecar(path: &Path, opts: &LoadOptions) -> Result<Option<(Sidecar, P
         }
     };
     Ok(Some((Sidecar::load(&p)?, p)))
+}
+
+/// The sidecar of a file-set directory: `scene.json` in it, else its only `.json` file, else `<dir>.json` beside it.
+fn dir_sidecar(dir: &Path) -> Result<Option<PathBuf>> {
+    let scene = dir.join("scene.json");
+    if scene.is_file() {
+        return Ok(Some(scene));
+    }
+    let jsons: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(|e| Error::io(dir, e))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("json")))
+        .collect();
+    match jsons.as_slice() {
+        [one] => Ok(Some(one.clone())),
+        [] => {
+            let beside = dir.with_extension("json");
+            Ok(beside.is_file().then_some(beside))
+        }
+        many => Err(Error::invalid(
+            dir,
+            format!(
+                "{} JSON files and none is scene.json: name the sidecar with --scene ({})",
+                many.len(),
+                many.iter().filter_map(|p| p.file_name()?.to_str()).collect::<Vec<_>>().join(", ")
+            ),
+        )),
+    }
 }
 
 /// Picks the EXR reader: canonical; the `--map` reader when the map names depth or position; Blender; Mitsuba;
@@ -191,20 +255,24 @@ fn read_exr(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
             camera_source,
             compression: Some((raw.compression.clone(), raw.lossy)),
             sanitized: Vec::new(),
+            warnings: Vec::new(),
+            reading: None,
+            positions_assumed: canonical::header(raw, canonical::ATTR_SAMPLE_POSITIONS).is_none(),
         };
         mapped::override_scalars(&mut loaded, raw, path, opts)?;
         return Ok(loaded);
     }
     // A map naming the geometry (depth or position) describes the whole file: read it as view space as mapped.
     let geometry_mapped = opts.map.iter().any(|(a, _)| matches!(a, Attribute::Depth | Attribute::Position));
+    let camera = sidecar.and_then(|s| s.camera.as_ref()).map(|c| c.to_camera_for(raw.width, raw.height));
     let mut loaded = if geometry_mapped {
-        return mapped::read(raw, path, opts);
+        return mapped::read(raw, path, camera.as_ref(), opts);
     } else if blender::matches(raw) {
         blender::read(raw, path, sidecar, opts)?
     } else if mitsuba::matches(raw) {
         mitsuba::read(raw, path, sidecar, opts)?
     } else {
-        return mapped::read(raw, path, opts);
+        return mapped::read(raw, path, camera.as_ref(), opts);
     };
     mapped::override_scalars(&mut loaded, raw, path, opts)?;
     Ok(loaded)
@@ -228,8 +296,10 @@ fn finish(mut loaded: Loaded, path: &Path, side: Option<(&Sidecar, &Path)>, opts
         })?;
     }
     if let Some((s, sp)) = side {
-        if let Some(c) = &s.camera {
+        if let Some(sc) = &s.camera {
             let (w, h) = (loaded.gbuffer.width, loaded.gbuffer.height);
+            let k = fold_k.unwrap_or(1).max(1);
+            let c = sc.to_camera_for(w * k, h * k);
             let image_aspect = w as f32 / h.max(1) as f32;
             if (c.aspect / image_aspect - 1.0).abs() > ASPECT_TOLERANCE {
                 return Err(Error::Parse {
@@ -242,7 +312,7 @@ fn finish(mut loaded: Loaded, path: &Path, side: Option<(&Sidecar, &Path)>, opts
                 });
             }
             if loaded.gbuffer.camera.is_none() {
-                loaded.gbuffer.camera = Some(c.to_camera());
+                loaded.gbuffer.camera = Some(c);
                 loaded.camera_source = CameraSource::Sidecar;
             }
         }
@@ -261,8 +331,11 @@ fn finish(mut loaded: Loaded, path: &Path, side: Option<(&Sidecar, &Path)>, opts
             note: Some("derived from position (depth = −z)".into()),
         });
     }
+    let depth_read = loaded.sources.iter().any(|s| s.attribute == Attribute::Depth.name() && !s.channels.is_empty());
     loaded.sanitized = sanitize::sanitize(&mut loaded.gbuffer);
     loaded.gbuffer.validate().map_err(|e| Error::invalid(path, e.to_string()))?;
+    let mut warnings = plausible::check(&loaded.gbuffer, depth_read, loaded.positions_assumed, path)?;
+    loaded.warnings.append(&mut warnings);
     Ok(loaded)
 }
 

@@ -13,14 +13,23 @@ use std::path::Path;
 pub struct SidecarCamera {
     /// World → view, row-major (4 rows of 4).
     pub world_to_view: [[f32; 4]; 4],
-    /// Vertical field of view, radians.
+    /// Vertical field of view, radians (may be left out when `intrinsics` are given).
+    #[serde(default)]
     pub yfov: f32,
-    /// Width / height.
+    /// Width / height (may be left out when `intrinsics` are given).
+    #[serde(default)]
     pub aspect: f32,
     /// Near plane.
     pub znear: f32,
     /// Far plane.
     pub zfar: f32,
+    /// Principal point as an offset from the image centre in NDC units (+x right, +y up); what gbuf writes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub principal_point: Option<[f32; 2]>,
+    /// Pinhole intrinsics in pixels of the image as stored (before folding): `[fx, fy, cx, cy]`, +y down, pixel
+    /// (0, 0)'s corner at (0, 0). They set the field of view, aspect and principal point (and override those).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub intrinsics: Option<[f32; 4]>,
 }
 
 /// A light as written in a sidecar (KHR_lights_punctual fields, plus `begin` for the linear falloff).
@@ -92,18 +101,37 @@ impl SidecarCamera {
             aspect: c.aspect,
             znear: c.znear,
             zfar: c.zfar,
+            principal_point: (c.principal != glam::Vec2::ZERO).then_some([c.principal.x, c.principal.y]),
+            intrinsics: None,
         }
     }
-    /// To a [`Camera`] (not yet validated).
+    /// To a [`Camera`] (not yet validated). `intrinsics` need the image size: see [`SidecarCamera::to_camera_for`];
+    /// here they are ignored.
     #[must_use]
     pub fn to_camera(&self) -> Camera {
+        let p = self.principal_point.unwrap_or([0.0; 2]);
         Camera {
             world_to_view: Mat4::from_cols_array_2d(&self.world_to_view).transpose(),
             yfov: self.yfov,
             aspect: self.aspect,
             znear: self.znear,
             zfar: self.zfar,
+            principal: glam::Vec2::new(p[0], p[1]),
         }
+    }
+
+    /// To a [`Camera`] for an image stored at `width × height` pixels (before folding): `intrinsics`, when given,
+    /// set the field of view, aspect and principal point.
+    #[must_use]
+    pub fn to_camera_for(&self, width: u32, height: u32) -> Camera {
+        let mut c = self.to_camera();
+        if let Some([fx, fy, cx, cy]) = self.intrinsics {
+            let (w, h) = (width as f32, height as f32);
+            c.yfov = 2.0 * (0.5 * h / fy).atan();
+            c.aspect = (w / fx) / (h / fy);
+            c.principal = glam::Vec2::new((cx - 0.5 * w) / (0.5 * w), -(cy - 0.5 * h) / (0.5 * h));
+        }
+        c
     }
 }
 
@@ -119,10 +147,13 @@ impl Sidecar {
         let s: Sidecar = serde_json::from_str(text)
             .map_err(|e| Error::Parse { path: path.into(), what: format!("sidecar JSON: {e}") })?;
         if let Some(c) = &s.camera {
-            if !c.to_camera().is_valid() {
+            let intrinsics_ok =
+                c.intrinsics.is_none_or(|v| v.iter().all(|x| x.is_finite()) && v[0] > 0.0 && v[1] > 0.0);
+            let probe = if c.intrinsics.is_some() { c.to_camera_for(2, 2) } else { c.to_camera() };
+            if !intrinsics_ok || !probe.is_valid() {
                 return Err(Error::Parse {
                     path: path.into(),
-                    what: "sidecar camera is not usable (need finite invertible matrix, 0 < yfov < π, aspect > 0, 0 < znear < zfar)".into(),
+                    what: "sidecar camera is not usable (need finite invertible matrix, 0 < yfov < π and aspect > 0 or intrinsics fx, fy > 0, 0 < znear < zfar)".into(),
                 });
             }
         }

@@ -100,6 +100,14 @@ pub struct Info {
     pub camera: CameraInfo,
     /// Number of lights (from the sidecar or the dump), `None` when there are none.
     pub lights: Option<usize>,
+    /// Positions reprojected through the camera: [median, max] distance from their sample, pixels.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reprojection_px: Option<[f32; 2]>,
+    /// Plausibility warnings, with the numbers.
+    pub warnings: Vec<crate::io::plausible::Warning>,
+    /// For data read by naming: preset and conventions.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reading: Option<crate::io::fileset::Reading>,
     /// The engine's materials the sidecar declares (empty when none).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub materials: Vec<crate::gbuffer::MaterialParams>,
@@ -177,6 +185,9 @@ pub fn info(loaded: &Loaded, file: &std::path::Path) -> Info {
         camera: CameraInfo { source: loaded.camera_source, params: gb.camera.as_ref().map(SidecarCamera::from_camera) },
         lights: loaded.lights.as_ref().map(Vec::len),
         materials: gb.materials.clone(),
+        reprojection_px: crate::io::plausible::reprojection(gb).map(|(m, x, _)| [m, x]),
+        warnings: loaded.warnings.clone(),
+        reading: loaded.reading.clone(),
     }
 }
 
@@ -225,6 +236,26 @@ impl Info {
                 "materials   {} declared (material-ID indirection uses their values as its table)",
                 self.materials.len()
             );
+        }
+        if let Some([m, x]) = self.reprojection_px {
+            let _ = writeln!(
+                t,
+                "reprojection positions through the camera: median {m:.3} px, max {x:.3} px from their sample"
+            );
+        }
+        if let Some(r) = &self.reading {
+            let _ = writeln!(
+                t,
+                "read as     {}{}",
+                r.preset.as_ref().map_or(String::new(), |p| format!("preset {p}: ")),
+                r.conventions.describe()
+            );
+            if let Some(b) = &r.basis {
+                let _ = writeln!(t, "            (conventions {b})");
+            }
+        }
+        for w in &self.warnings {
+            let _ = writeln!(t, "WARNING     [{}] {}", w.code, w.message);
         }
         let _ = writeln!(t, "attributes  (statistics over covered samples)");
         for (name, a) in &self.attributes.0 {

@@ -34,6 +34,10 @@ pub struct NormalErrors {
     pub max_deg: f64,
     /// The sample with the largest angle.
     pub worst: SampleAt,
+    /// Covered samples left out because the reference normal itself is zero or not unit length (see
+    /// [`crate::io::plausible::normal_is_valid`]): an angle to it means nothing.
+    #[serde(default)]
+    pub skipped_invalid: u64,
 }
 
 /// Depth error.
@@ -193,15 +197,18 @@ pub fn compare(reference: &GBuffer, test: &GBuffer) -> Result<AttributeErrors> {
 }
 
 fn normals(gb: &GBuffer, covered: &[usize], r: &[Vec3], t: &[Vec3]) -> NormalErrors {
+    let valid: Vec<usize> = covered.iter().copied().filter(|&i| crate::io::plausible::normal_is_valid(r[i])).collect();
+    let skipped_invalid = (covered.len() - valid.len()) as u64;
+    let covered = &valid[..];
     let mut angles: Vec<f64> = covered.iter().map(|&i| angle_deg(r[i], t[i])).collect();
     if angles.is_empty() {
-        return NormalErrors::default();
+        return NormalErrors { skipped_invalid, ..NormalErrors::default() };
     }
     let (wi, max) = angles.iter().enumerate().fold((0, -1.0), |b, (k, &a)| if a > b.1 { (k, a) } else { b });
     let mean = angles.iter().sum::<f64>() / angles.len() as f64;
     let k = ((angles.len() as f64 * 0.95).ceil() as usize).clamp(1, angles.len()) - 1;
     let (_, p95, _) = angles.select_nth_unstable_by(k, f64::total_cmp);
-    NormalErrors { mean_deg: mean, p95_deg: *p95, max_deg: max, worst: at(gb, covered[wi]) }
+    NormalErrors { mean_deg: mean, p95_deg: *p95, max_deg: max, worst: at(gb, covered[wi]), skipped_invalid }
 }
 
 fn depth(gb: &GBuffer, covered: &[usize], r: &[f32], t: &[f32], nonfinite: &mut u64) -> DepthErrors {

@@ -31,7 +31,7 @@ pub use config::{
     MAX_TILE_SIZE,
 };
 pub use kernel::instruction_set;
-pub use reference::{reference, reference_per_sample};
+pub use reference::{check_meaningful, reference, reference_per_sample};
 pub use split::{ResolveInput, SplitSamples};
 pub use surface::SanitizedCounts;
 

@@ -7,7 +7,7 @@ use super::brdf;
 use super::config::ResolveConfig;
 use super::lights::sanitize;
 use super::surface::{SanitizedCounts, SurfaceReader};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gbuffer::GBuffer;
 use crate::image::HdrImage;
 use crate::light::Light;
@@ -61,4 +61,28 @@ pub fn reference(gb: &GBuffer, lights: &[Light], cfg: &ResolveConfig) -> Result<
         *px = (sum / s as f64).as_vec3();
     }
     Ok(img)
+}
+
+/// Refuses a lighting result that cannot be right: no covered sample to shade, no light, or a reference that is
+/// black everywhere although samples are covered (no light reaches any surface: lights in the wrong space, out of
+/// range, or behind every surface). A report on such a frame would rank layouts by an error of 0.
+pub fn check_meaningful(gb: &GBuffer, lights: &[Light], reference: &HdrImage) -> Result<()> {
+    let covered = gb.coverage.iter().filter(|c| **c).count();
+    if covered == 0 {
+        return Err(Error::Argument(format!(
+            "no covered sample: all {} samples are background, nothing to shade (is the background marker right?)",
+            gb.len()
+        )));
+    }
+    if lights.is_empty() {
+        return Err(Error::Argument("no lights: every image would be black".into()));
+    }
+    if reference.rgb.iter().all(|c| *c == Vec3::ZERO) {
+        return Err(Error::Argument(format!(
+            "the reference image is black: none of the {} lights reaches any of the {covered} covered samples \
+             (lights in another space than the G-buffer, out of range, or behind every surface?)",
+            lights.len()
+        )));
+    }
+    Ok(())
 }

@@ -1,0 +1,212 @@
+//! Plausibility checks every load ends with: data that cannot be what the reader took it for is counted and
+//! reported as warnings with the numbers (`gbuf info` prints them, `--json` lists them, every command prints them
+//! on stderr), and data that cannot be right at all (most positions behind the camera: not view space) is an error.
+
+use crate::error::{Error, Result};
+use crate::gbuffer::GBuffer;
+use glam::Vec2;
+use serde::Serialize;
+use std::path::Path;
+
+/// One finding.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Warning {
+    /// Stable identifier (`invalid-normals`, `normals-face-away`, `position-depth`, `reprojection`,
+    /// `behind-camera`, `depth-convention`, `sample-positions-assumed`, `no-surface`).
+    pub code: &'static str,
+    /// Samples affected.
+    pub count: u64,
+    /// Of how many (covered samples, or all samples).
+    pub of: u64,
+    /// What it means and what to do.
+    pub message: String,
+}
+
+/// A normal whose length is off 1 by more than this is non-unit (f16 storage is good to ~1e-3).
+pub const UNIT_TOLERANCE: f32 = 1e-2;
+/// Below this length a normal is zero.
+pub const ZERO_NORMAL: f32 = 1e-3;
+/// Positions reprojecting further than this from their sample (pixels) disagree with the camera.
+pub const REPROJECTION_PX: f32 = 1.0;
+/// Position and depth disagree when `|−z − depth|` exceeds this fraction of the depth.
+pub const POSITION_DEPTH_REL: f32 = 1e-3;
+/// When at least this fraction of covered positions is behind the camera, loading fails.
+pub const BEHIND_CAMERA_FAIL: f64 = 0.5;
+
+/// Is the normal `n` usable (non-zero, unit within [`UNIT_TOLERANCE`])?
+#[must_use]
+pub fn normal_is_valid(n: glam::Vec3) -> bool {
+    let l = n.length();
+    l.is_finite() && (l - 1.0).abs() <= UNIT_TOLERANCE
+}
+
+/// Runs every check on `gb`. `depth_read` says the depth plane came from the file (not derived from positions);
+/// `positions_assumed` that the sample positions were not in the file.
+pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Path) -> Result<Vec<Warning>> {
+    let mut out = Vec::new();
+    let covered: Vec<usize> = (0..gb.len()).filter(|&i| gb.coverage[i]).collect();
+    let nc = covered.len() as u64;
+    let pct = |k: u64| 100.0 * k as f64 / nc.max(1) as f64;
+    if nc == 0 {
+        out.push(Warning {
+            code: "no-surface",
+            count: gb.len() as u64,
+            of: gb.len() as u64,
+            message: "every sample is background: nothing to shade (is the background marker right? --background)"
+                .into(),
+        });
+        return Ok(out);
+    }
+    if let Some(n) = &gb.normal {
+        let zero = covered.iter().filter(|&&i| n[i].length() < ZERO_NORMAL).count() as u64;
+        let bad = covered.iter().filter(|&&i| !normal_is_valid(n[i])).count() as u64;
+        if bad > 0 {
+            out.push(Warning {
+                code: "invalid-normals",
+                count: bad,
+                of: nc,
+                message: format!(
+                    "{bad} of {nc} covered samples ({:.2}%) have invalid normals: {zero} zero, {} not unit length \
+                     (|len − 1| > {UNIT_TOLERANCE}); codec errors skip them{}",
+                    pct(bad),
+                    bad - zero,
+                    if bad * 2 > nc {
+                        " — most normals are not unit: is another buffer mapped as normal?"
+                    } else {
+                        ""
+                    }
+                ),
+            });
+        }
+        // Facing: against the view direction when positions are known, else +z.
+        let away = covered
+            .iter()
+            .filter(|&&i| normal_is_valid(n[i]))
+            .filter(|&&i| match &gb.position {
+                Some(p) => n[i].dot(-p[i]) < 0.0,
+                None => n[i].z < 0.0,
+            })
+            .count() as u64;
+        if away * 4 > nc {
+            out.push(Warning {
+                code: "normals-face-away",
+                count: away,
+                of: nc,
+                message: format!(
+                    "{away} of {nc} covered normals ({:.1}%) face away from the camera: world-space normals read \
+                     as view space (--space world), a flipped axis, or n·0.5+0.5 read as signed (--normals unorm)?",
+                    pct(away)
+                ),
+            });
+        }
+    }
+    if let Some(p) = &gb.position {
+        let behind = covered.iter().filter(|&&i| p[i].z >= 0.0).count() as u64;
+        if behind > 0 {
+            let msg = format!(
+                "{behind} of {nc} covered positions ({:.1}%) are behind the camera (z ≥ 0 in view space): \
+                 world-space positions read as view space? (--space world with a camera, or the preset)",
+                pct(behind)
+            );
+            if behind as f64 >= BEHIND_CAMERA_FAIL * nc as f64 {
+                return Err(Error::invalid(path, format!("{msg}. These cannot be view-space positions.")));
+            }
+            out.push(Warning { code: "behind-camera", count: behind, of: nc, message: msg });
+        }
+        if let (Some(d), true) = (&gb.depth, depth_read) {
+            let off: Vec<usize> = covered
+                .iter()
+                .copied()
+                .filter(|&i| (-p[i].z - d[i]).abs() > POSITION_DEPTH_REL * d[i].abs().max(1e-3))
+                .collect();
+            if !off.is_empty() {
+                let mut ratios: Vec<f32> = off.iter().map(|&i| d[i] / -p[i].z).filter(|r| r.is_finite()).collect();
+                ratios.sort_by(f32::total_cmp);
+                let median = ratios.get(ratios.len() / 2).copied().unwrap_or(f32::NAN);
+                let hint = if median > 1.0 && median < 2.0 {
+                    " — depth is larger than −z by about the ray length: ray distance (--depth ray or ray-from-near)?"
+                } else if median < 0.2 {
+                    " — depth is far smaller than −z: normalised or NDC depth (--depth ndc)?"
+                } else {
+                    ""
+                };
+                out.push(Warning {
+                    code: "position-depth",
+                    count: off.len() as u64,
+                    of: nc,
+                    message: format!(
+                        "{} of {nc} covered samples have depth ≠ −position.z by more than {POSITION_DEPTH_REL} \
+                         relative (median depth / −z = {median:.4}){hint}",
+                        off.len()
+                    ),
+                });
+            }
+        }
+        if let Some((median, max, far)) = reprojection(gb) {
+            if far > 0 {
+                out.push(Warning {
+                    code: "reprojection",
+                    count: far,
+                    of: nc,
+                    message: format!(
+                        "{far} of {nc} covered positions reproject through the camera more than {REPROJECTION_PX} px \
+                         from their sample (median {median:.3} px, max {max:.2} px): the camera (field of view, \
+                         aspect, principal point: sidecar `intrinsics`) or the positions' space is off"
+                    ),
+                });
+            }
+        }
+    }
+    if let (Some(d), Some(cam)) = (&gb.depth, &gb.camera) {
+        let below = covered.iter().filter(|&&i| d[i] < cam.znear * 0.999).count() as u64;
+        if below * 2 > nc {
+            out.push(Warning {
+                code: "depth-convention",
+                count: below,
+                of: nc,
+                message: format!(
+                    "{below} of {nc} covered depths ({:.1}%) are nearer than the camera's near plane {}: NDC or \
+                     normalised depth read as view depth (--depth ndc)?",
+                    pct(below),
+                    cam.znear
+                ),
+            });
+        }
+    }
+    if positions_assumed && gb.samples > 1 {
+        out.push(Warning {
+            code: "sample-positions-assumed",
+            count: gb.len() as u64,
+            of: gb.len() as u64,
+            message: format!(
+                "the file gives no sample positions: assumed the standard D3D/Vulkan {}× pattern (an OpenGL dump \
+                 stored top row first has it mirrored in y); give gbuf.sample_positions to be sure",
+                gb.samples
+            ),
+        });
+    }
+    Ok(out)
+}
+
+/// How far covered positions in front of the camera reproject from their own sample, in pixels: (median, max,
+/// count beyond [`REPROJECTION_PX`]). `None` without positions, camera or such samples.
+#[must_use]
+pub fn reprojection(gb: &GBuffer) -> Option<(f32, f32, u64)> {
+    let (p, cam) = (gb.position.as_ref()?, gb.camera.as_ref()?);
+    let spp = gb.samples as usize;
+    let mut errs: Vec<f32> = (0..gb.len())
+        .filter(|&i| gb.coverage[i] && p[i].z < 0.0)
+        .filter_map(|i| {
+            let pix = i / spp;
+            let at = Vec2::new((pix as u32 % gb.width) as f32 + 0.5, (pix as u32 / gb.width) as f32 + 0.5)
+                + gb.sample_positions[i % spp];
+            cam.project(p[i], gb.width, gb.height).map(|q| (q - at).length())
+        })
+        .collect();
+    if errs.is_empty() {
+        return None;
+    }
+    let far = errs.iter().filter(|e| **e > REPROJECTION_PX).count() as u64;
+    errs.sort_by(f32::total_cmp);
+    Some((errs[errs.len() / 2], errs[errs.len() - 1], far))
+}
