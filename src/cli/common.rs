@@ -40,8 +40,8 @@ pub struct ReadArgs {
     #[arg(long)]
     pub reversed_z: bool,
     /// How IDs read by naming are stored: float, u32, rgb8 (R + 256·G + 65536·B).
-    #[arg(long)]
-    pub ids: Option<gbuf::io::conventions::IdEncoding>,
+    #[arg(long, value_name = "ENCODING")]
+    pub id_encoding: Option<gbuf::io::conventions::IdEncoding>,
     /// Background marker for data read by naming: auto, inf, nan, alpha, or a depth value.
     #[arg(long, value_name = "VALUE")]
     pub background: Option<String>,
@@ -105,7 +105,7 @@ impl ReadArgs {
                 reversed_z: self.reversed_z,
                 znear: self.znear,
                 zfar: self.zfar,
-                ids: self.ids,
+                ids: self.id_encoding,
                 background: self
                     .background
                     .as_deref()

@@ -3,7 +3,7 @@
 //!
 //! Format-specific readers (canonical, Blender, Mitsuba, ISPC) know their conventions. Data read by naming — a
 //! file set of single-purpose images, or `--map` — gets them from a preset ([`crate::io::fileset::Preset`]) or the
-//! user's flags (`--space`, `--depth`, `--ids`, `--background`, …), which override the preset field by field
+//! user's flags (`--space`, `--depth`, `--id-encoding`, `--background`, …), which override the preset field by field
 //! ([`Overrides`]). [`Conventions::apply`] does the conversion once, on the file's own one-sample grid (before any
 //! folding), with the camera.
 

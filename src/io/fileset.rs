@@ -251,20 +251,33 @@ pub fn looks_like_file_set(dir: &Path) -> bool {
 }
 
 /// Picks the preset for the files in `dir`: `--preset` when given, else the one preset whose depth or position
-/// file is there (most buffers found wins; a tie is ambiguous and asks for `--preset`).
+/// file is there (most buffers found wins, then most names in the tool's letter case; a tie is ambiguous and asks
+/// for `--preset`).
 pub fn detect(dir: &Path, files: &[PathBuf], asked: Option<&str>) -> Result<&'static Preset> {
     if let Some(name) = asked {
         return preset(name)
             .ok_or_else(|| Error::Argument(format!("unknown preset {name:?}; known: {}", preset_names())));
     }
-    let mut scored: Vec<(usize, &'static Preset)> = PRESETS
+    // Score: buffers found, then how many of them carry the name in the tool's own letter case (LuxCore writes
+    // DEPTH.exr, Blender Depth0001.exr).
+    let mut scored: Vec<((usize, usize), &'static Preset)> = PRESETS
         .iter()
         .filter_map(|p| {
             let a = assign(p, files).ok()?;
-            a.iter().any(|(f, _)| matches!(f.attr, Attribute::Depth | Attribute::Position)).then_some((a.len(), p))
+            let exact = a
+                .iter()
+                .filter(|(pf, f)| {
+                    let stem = f.file_stem().and_then(|s| s.to_str()).unwrap_or("");
+                    let stem = stem.trim_end_matches(|c: char| c.is_ascii_digit() || matches!(c, '_' | '.' | '-'));
+                    pf.names.iter().any(|n| stem.ends_with(n))
+                })
+                .count();
+            a.iter()
+                .any(|(f, _)| matches!(f.attr, Attribute::Depth | Attribute::Position))
+                .then_some(((a.len(), exact), p))
         })
         .collect();
-    scored.sort_by(|a, b| b.0.cmp(&a.0));
+    scored.sort_by_key(|s| std::cmp::Reverse(s.0));
     match scored.as_slice() {
         [] => Err(not_a_file_set(dir, files)),
         [(_, p)] => Ok(p),
@@ -573,7 +586,7 @@ fn exr_ids(data: &RawData, enc: Option<IdEncoding>, path: &Path) -> Result<Vec<u
     match (data, enc) {
         (_, Some(IdEncoding::Rgb8)) => Err(Error::invalid(
             path,
-            "IDs in rgb8 encoding need an 8-bit RGB PNG; this is an EXR (use --ids float or u32)",
+            "IDs in rgb8 encoding need an 8-bit RGB PNG; this is an EXR (use --id-encoding float or u32)",
         )),
         (RawData::U32(v), _) => Ok(v.clone()),
         (other, _) => Ok((0..other.len())
@@ -654,7 +667,10 @@ fn png_plane(
                 if !grey {
                     return Err(Error::invalid(
                         path,
-                        format!("IDs as {} need a grey PNG; this one is {color:?} (use --ids rgb8)", enc.name()),
+                        format!(
+                            "IDs as {} need a grey PNG; this one is {color:?} (use --id-encoding rgb8)",
+                            enc.name()
+                        ),
                     ));
                 }
                 (
