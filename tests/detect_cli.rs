@@ -194,8 +194,9 @@ fn bad_input_exits_1_with_the_file_name_and_bad_usage_exits_2() {
     let fwd = v["results"].as_array().unwrap().iter().find(|r| r["detector"] == "forward-msaa").unwrap();
     assert!(fwd["skipped"].as_str().unwrap().contains("primitive_id"));
 
+    // A usage error (flags that do not go together): exit 2, as the README promises.
     let out = gbuf_cmd(dir.path(), &["edges", "scene.exr", "--detector", "all", "--mask", "x.png"]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     assert!(!dir.path().join("x.png").exists());
 }
 
@@ -235,6 +236,6 @@ fn mask_picture_can_be_coloured_against_the_shading_truth() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no object IDs"));
     let out = gbuf_cmd(dir.path(), &["edges", "scene.exr", "--mask-truth", "shading"]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--mask OUT.png"));
 }

@@ -232,6 +232,11 @@ fn map_overrides_and_bad_channels_are_clear_errors() {
     let mut only = raw.clone();
     only.channels.retain(|c| c.name.len() == 1 || c.name.starts_with("uv."));
     assert!(!mitsuba::matches(&only));
+    // A merge of passes with position, normal and albedo groups but no Mitsuba depth/index AOV is not called a
+    // Mitsuba dump (it goes to the --map reader, which asks for its conventions).
+    let mut merge = raw.clone();
+    merge.channels.retain(|c| ["position.", "sh_normal.", "albedo."].iter().any(|p| c.name.starts_with(p)));
+    assert!(!merge.channels.is_empty() && !mitsuba::matches(&merge));
     let e = read(&only, None).unwrap_err().to_string();
     assert!(e.contains("uv.U") && e.contains("--map"), "{e}");
 }

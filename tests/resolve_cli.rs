@@ -36,7 +36,7 @@ fn unknown_choices_are_usage_errors_listing_the_known_ones() {
 fn inconsistent_flags_are_refused_before_loading() {
     let dir = tempfile::tempdir().unwrap();
     let o = gbuf(dir.path(), &["resolve", "x.exr", "--ldr", "gamma2.2"]);
-    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(o.status.code(), Some(2), "a usage error");
     assert!(stderr(&o).contains("--png"), "{}", stderr(&o));
     let o = gbuf(dir.path(), &["resolve", "x.exr", "--tile-size", "0"]);
     assert_eq!(o.status.code(), Some(1));

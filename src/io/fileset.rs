@@ -689,7 +689,7 @@ fn png_plane(
     let mut note = None;
     if attr == Attribute::Albedo {
         for p in &mut planes {
-            p.iter_mut().for_each(|v| *v = crate::codec::color::srgb_to_linear(*v));
+            p.iter_mut().for_each(|v| *v = crate::base::picture::srgb_decode(*v));
         }
         note = Some("PNG albedo decoded from sRGB".to_string());
     }

@@ -92,15 +92,14 @@ fn groups(raw: &RawImage) -> Vec<Group> {
     out
 }
 
-/// Does `raw` look like a Mitsuba `aov` EXR: a depth (`.T`) or index (`.I`) group, or an XYZ group named like a
-/// normal or position — and not a canonical or Blender file?
+/// Does `raw` look like a Mitsuba `aov` EXR: a depth (`.T`) or index (`.I`) group — the channel suffixes only
+/// Mitsuba's `aov` integrator writes — and not a canonical or Blender file? XYZ and RGB groups alone (any merge
+/// of passes has them) are not enough: such files go to the `--map` reader, which asks for their conventions.
 #[must_use]
 pub fn matches(raw: &RawImage) -> bool {
     !super::canonical::matches(raw)
         && !super::blender::matches(raw)
-        && groups(raw).iter().any(|g| {
-            matches!(g.kind, Kind::Depth | Kind::ShapeIndex | Kind::PrimIndex | Kind::Position | Kind::Normal(_))
-        })
+        && groups(raw).iter().any(|g| matches!(g.kind, Kind::Depth | Kind::ShapeIndex | Kind::PrimIndex))
 }
 
 /// Reads a Mitsuba 3 `aov` EXR into a single-sample G-buffer (folding is the caller's job).
