@@ -29,6 +29,10 @@ const KERNEL_VS_REFERENCE_REL_MSE: f64 = 1e-8;
 /// Per channel of a pixel, relative: the kernel's `PATH_TOLERANCE` (src/resolve/kernel.rs), log2's 2e-6 absolute
 /// error times Blinn-Phong's p·ln 2 for p ≤ 256 is ≲ 4e-4, rsqrt and f32 sums far less.
 const PIXEL_REL_TOL: f32 = 1e-3;
+/// Largest Blinn-Phong power where the accuracy is checked: the fast log2's 2e-6 absolute error becomes
+/// `p·ln 2·2e-6` relative in `(N·H)^p`, 1.4e-3 at p = 1000 (the existing reference tests stay at p ≤ 128).
+/// Stiffer powers are checked for finiteness only.
+const MAX_CHECKED_POWER: f32 = 256.0;
 /// Absolute floor of the per-channel tolerance, as a fraction of the image's brightest channel: a light ending at
 /// a distance within f32 rounding of the sample (linear falloff at `d ≈ range`) has a relative error of order
 /// `1e-7·range/(range − d)`, but an absolute one far below this.
@@ -248,14 +252,14 @@ fn arb_placement() -> impl Strategy<Value = Placement> {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
 
-    /// Random placements near the view rays at random powers.
+    /// Random placements near the view rays at random powers (accuracy checked up to [`MAX_CHECKED_POWER`]).
     #[test]
     fn random_lights_near_the_view_ray_are_finite(
         placements in prop::collection::vec(arb_placement(), 1..40),
-        power in prop_oneof![0.0f32..300.0, Just(64.0f32), Just(1000.0f32)],
+        power in prop_oneof![0.0f32..MAX_CHECKED_POWER, Just(64.0f32), Just(1000.0f32), Just(1e5f32)],
     ) {
         let gb = frame(power, MIN_CHECKED_ROUGHNESS..1.0);
         let lights: Vec<Light> = placements.iter().map(|&p| place(&gb, p)).collect();
-        assert_matches_reference(&gb, &lights, &format!("power {power}"))?;
+        check_resolves(&gb, &lights, &format!("power {power}"), power <= MAX_CHECKED_POWER)?;
     }
 }

@@ -37,14 +37,7 @@ pub struct Variant {
 /// Shades items `range` of `it` (a whole number of vectors) against every light of `lights` (and, for quad
 /// culling, `quad`), overwriting the items' outputs, with the kernel compiled for `isa` (or the widest level
 /// below it that this CPU has).
-pub fn shade(
-    isa: Isa,
-    it: &mut Items,
-    range: std::ops::Range<usize>,
-    lights: &LightTable,
-    quad: &QuadSoa,
-    v: Variant,
-) {
+pub fn shade(isa: Isa, it: &mut Items, range: std::ops::Range<usize>, lights: &LightTable, quad: &QuadSoa, v: Variant) {
     macro_rules! pick {
         ($b:literal, $f:literal) => {
             match (v.quad, v.prepass) {
@@ -70,7 +63,6 @@ pub fn shade(
 pub fn shade_portable(it: &mut Items, range: std::ops::Range<usize>, lights: &LightTable, quad: &QuadSoa, v: Variant) {
     shade(Isa::Baseline, it, range, lights, quad, v);
 }
-
 
 /// The instruction set the kernel runs with on this CPU ([`Isa::detect`], shared with the codecs' slice paths):
 /// `avx512`, `avx2` (with FMA) or `baseline` (the portable kernel).
