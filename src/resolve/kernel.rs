@@ -427,12 +427,13 @@ fn step<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(k: &Ch
         // step, and off the dependency chain. pow's floor POW_MIN_BASE also clamps N·H below at (about) 0, and
         // the exponent is clamped at 0 above: N·H ≤ 1 (Cauchy–Schwarz), so (N·H)^p ≤ 1 and the factor stays finite
         // whatever rounding did to a near-zero half vector (see above). Clamping the exponent rather than N·H
-        // keeps the estimate's correction exact below 1.
+        // keeps the estimate's correction exact below 1, and `exp2_nonpositive` folds the clamp into exp2's own
+        // (no extra instruction on the portable and AVX2 paths).
         let y = h2.rsqrt_approx();
         let ndh_est = (ndl_raw + k.nv_raw) * y;
         let eps2 = (y * y).mul_add(h2, s(-1.0));
         let x_p = eps2.nmul_add(k.pw_c, k.pw * ndh_est.max(s(POW_MIN_BASE)).log2());
-        x[0] = k.sn * x_p.min(zero).exp2();
+        x[0] = k.sn * x_p.exp2_nonpositive();
         return Step { e, on, inside, x };
     }
     let hinv = h2.rsqrt();
