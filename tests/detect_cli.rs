@@ -52,7 +52,10 @@ fn all_detectors_json_matches_the_library() {
         assert_eq!(row["tp"].as_u64(), Some(s.tp), "{d}");
         assert_eq!(row["fp"].as_u64(), Some(s.fp), "{d}");
         assert_eq!(row["fn"].as_u64(), Some(s.fn_), "{d}");
-        assert_eq!(row["shading_fraction"].as_f64(), Some(mask.shading_fraction()), "{d}");
+        // What the mask costs (covered samples of per-sample pixels), not what it asks for (issue 16).
+        let covered = gbuf::detect::covered_per_pixel(&gb);
+        assert_eq!(row["shading_fraction"].as_f64(), Some(mask.evaluated_fraction(&covered)), "{d}");
+        assert_eq!(s.shading_fraction, mask.evaluated_fraction(&covered), "{d}");
         // The primitive-ID truth (the forward-MSAA rate) gets its own scores.
         let p = evaluate_against(&mask, &prim);
         assert_eq!(

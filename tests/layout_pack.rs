@@ -380,3 +380,48 @@ fn unstored_attributes_get_constants_or_stay_absent() {
     let spec: &LayoutSpec = layout.spec();
     assert!(spec.constants.contains_key("specular"));
 }
+
+/// `rgb9e5` as a render-target format (issue 16): one 32-bit target holding an RGB9E5 colour. Every code of each
+/// channel (32 exponents × 512 mantissas, the other channels 0), and the midpoints between neighbouring codes, pack
+/// to exactly the codec's word at offset 0, unpack to exactly the codec's decode, and round-trip within the codec's
+/// documented bound.
+#[test]
+fn rgb9e5_target_round_trips_every_channel_code() {
+    let text = r#"
+name = "hdr-9e5"
+[[targets]]
+name = "emissive"
+format = "rgb9e5"
+fields = [{ attribute = "albedo", codec = "rgb9e5", offset = 0, bits = 32 }]
+"#;
+    let spec = gbuf::layout::LayoutSpec::parse(std::path::Path::new("hdr-9e5.toml"), text).unwrap();
+    let layout = Layout::from_spec(spec).unwrap();
+    assert_eq!(layout.bytes_per_sample(), 4);
+    let c = codec::color_codec("rgb9e5").unwrap();
+    let mut values = Vec::new();
+    for k in 0..3 {
+        for e in 0u64..32 {
+            for m in 0u64..512 {
+                let code = (m << (9 * k)) | (e << 27);
+                let v = c.decode(code);
+                let step = c.decode((1 << (9 * k)) | (e << 27));
+                values.push(v);
+                values.push(v + step * 0.5);
+            }
+        }
+    }
+    let mut gb = GBuffer::new(values.len() as u32, 1, 1).unwrap();
+    gb.coverage = vec![true; values.len()];
+    gb.albedo = Some(values.clone());
+    let packed = layout.pack(&gb).unwrap();
+    let back = layout.unpack(&packed, &gb).unwrap();
+    let got = back.albedo.as_ref().unwrap();
+    for (i, v) in values.iter().enumerate() {
+        let word = u32::from_le_bytes(packed.targets[0].bytes[i * 4..i * 4 + 4].try_into().unwrap());
+        let code = c.encode(*v);
+        assert_eq!(u64::from(word), code, "value {v}: texel {word:#010x}, codec {code:#010x}");
+        assert_eq!(got[i].to_array().map(f32::to_bits), c.decode(code).to_array().map(f32::to_bits), "{v}");
+        let bound = c.error_bound(*v);
+        assert!((got[i] - *v).abs().cmple(bound).all(), "{v} → {}: off by {} > {bound}", got[i], (got[i] - *v).abs());
+    }
+}

@@ -327,3 +327,82 @@ fn other_files_do_not_match() {
     assert!(!ispc::matches_file(&[0u8; HEADER_BYTES], 10_000));
     assert!(!ispc::matches_file(&[], 0));
 }
+
+/// What `gbuf::io::load` (format detection included) says about `bytes` saved as `damaged.bin`; checks the
+/// message names the file.
+fn load_refusal(bytes: &[u8], what: &str) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("damaged.bin");
+    std::fs::write(&p, bytes).unwrap();
+    let msg = match gbuf::io::load(&p, &LoadOptions::default()) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("{what}: accepted"),
+    };
+    assert!(msg.contains("damaged.bin"), "{what}: error does not name the file: {msg}");
+    msg
+}
+
+fn patch_f32(bytes: &[u8], at: usize, v: f32) -> Vec<u8> {
+    let mut b = bytes.to_vec();
+    b[at..at + 4].copy_from_slice(&v.to_le_bytes());
+    b
+}
+
+/// Every header field, damaged, through the loader's format detection: the refusal names the file, the field and
+/// its value (issue 16: a huge width used to get "neither an OpenEXR file nor an ISPC .bin").
+#[test]
+fn every_bad_header_field_is_refused_by_name_and_value() {
+    let bytes = std::fs::read(fixture()).unwrap();
+    let h = Header::parse(&bytes).unwrap();
+    let expect = |b: Vec<u8>, what: &str, words: &[&str]| {
+        let msg = load_refusal(&b, what);
+        for w in words {
+            assert!(msg.contains(w), "{what}: {w:?} missing from: {msg}");
+        }
+        assert!(!msg.contains("neither"), "{what}: not recognised as a .bin: {msg}");
+    };
+    for (v, value) in [(100_000, "100000"), (0, "0"), (-64, "-64"), (i32::MAX, "2147483647")] {
+        expect(patch_i32(&bytes, 72, v), "width", &["width", value]);
+        expect(patch_i32(&bytes, 76, v), "height", &["height", value]);
+    }
+    expect(patch_i32(&bytes, 80, 1025), "numLights", &["numLights", "1025"]);
+    expect(patch_i32(&bytes, 80, -1), "numLights", &["numLights", "-1"]);
+    expect(patch_i32(&bytes, 84, -5), "chunk size", &["chunk size", "-5"]);
+    expect(patch_i32(&bytes, 84, i32::MAX), "chunk size", &["chunk", "2147483647"]);
+    expect(patch_i32(&bytes, 84, 100), "chunk size too small", &["chunk", "100"]);
+    expect(patch_f32(&bytes, 64, -1.0), "near", &["near", "-1"]);
+    expect(patch_f32(&bytes, 64, f32::NAN), "near NaN", &["near", "NaN"]);
+    expect(patch_f32(&bytes, 68, 0.25), "far < near", &["far", "0.25"]);
+    expect(patch_f32(&bytes, 68, f32::INFINITY), "far", &["far", "inf"]);
+    for r in 0..4 {
+        for c in 0..4 {
+            if (r, c) == (2, 3) {
+                continue; // the one entry the format is recognised by: below
+            }
+            let at = (r * 4 + c) * 4;
+            expect(patch_f32(&bytes, at, f32::NAN), "cameraProj NaN", &[&format!("cameraProj[{r}][{c}]"), "NaN"]);
+        }
+    }
+    expect(patch_f32(&bytes, 0, -2.0), "x scale", &["cameraProj[0][0]", "-2"]);
+    expect(patch_f32(&bytes, 20, 0.0), "y scale", &["cameraProj[1][1]", "= 0"]);
+    expect(patch_f32(&bytes, 56, 0.0), "[3][2]", &["cameraProj[3][2]", "= 0"]);
+    for (k, name) in ["zBuffer", "normalEncoded_x", "albedo_z", "lightPositionView_x", "lightAttenuationEnd"]
+        .iter()
+        .enumerate()
+        .map(|(i, n)| ([0, 1, 7, 8, 15][i], *n))
+    {
+        let at = 88 + 4 * k;
+        expect(patch_i32(&bytes, at, -8), name, &[name, &format!("offsets[{k}]"), "-8"]);
+        let past = h.chunk_size - 1;
+        expect(patch_i32(&bytes, at, past), name, &[name, &format!("offsets[{k}]"), &past.to_string()]);
+    }
+    for k in 0..16 {
+        expect(patch_i32(&bytes, 88 + 4 * k, i32::MIN), "offset", &[&format!("offsets[{k}]"), "-2147483648"]);
+    }
+    // Declared sizes beyond the memory limit: the limit's own error, naming the file.
+    let big = patch_i32(&patch_i32(&bytes, 72, 30_000), 76, 30_000);
+    load_refusal(&big, "30000²");
+    // The entry the format is recognised by: the file is not taken for a .bin, but the refusal still names it.
+    let msg = load_refusal(&patch_f32(&bytes, 44, 2.0), "[2][3]");
+    assert!(msg.contains("cameraProj[2][3] = 2"), "{msg}");
+}

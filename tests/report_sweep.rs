@@ -59,7 +59,8 @@ fn sweep_rows_match_layouts_and_lossless_is_exact() {
         assert!((0.0..=1.0).contains(&sf));
         if r.detector == "ssaa" {
             let covered = (gb.len() - gb.background_samples()) as f64 / gb.len() as f64;
-            assert!(sf >= covered - 1e-9, "ssaa shades every covered sample: {sf} vs {covered}");
+            // Every covered sample and nothing else (issue 16: it used to count `samples` per pixel with coverage).
+            assert!((sf - covered).abs() < 1e-12, "ssaa shades exactly the covered samples: {sf} vs {covered}");
         }
     }
     // The lossless layout with every sample shaded has exactly the error of resolving the unpacked input itself.

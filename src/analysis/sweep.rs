@@ -206,7 +206,7 @@ fn detector_results(
         });
         match lit {
             Ok((mask, res, quad)) => {
-                r.shading_fraction = Some(mask.shading_fraction());
+                r.shading_fraction = Some(mask.evaluated_fraction(&detect::covered_per_pixel(gb)));
                 r.edge_fraction = Some(mask.edge_fraction());
                 r.aa_error = Some(error_set(reference, &res.image, viewing));
                 r.quad_light_fragments = Some(quad);
@@ -256,6 +256,8 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, progress: Progre
     let mut masks = Vec::new();
     let mut lights_per_pixel = None;
     let mut worst_flip: Option<(String, FlipMap)> = None;
+    // Layouts keep the coverage: one count of covered samples serves every row's shading fraction.
+    let covered = detect::covered_per_pixel(gb);
     for (li, layout) in cfg.layouts.iter().enumerate() {
         let bytes = layout.bytes_per_sample() as u32;
         let base = Row {
@@ -316,7 +318,7 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, progress: Progre
                     continue;
                 }
             };
-            row.shading_fraction = Some(mask.shading_fraction());
+            row.shading_fraction = Some(mask.evaluated_fraction(&covered));
             row.edge_fraction = Some(mask.edge_fraction());
             match measure::edges::evaluate(gb, &mask) {
                 Some(s) => {

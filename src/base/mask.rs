@@ -59,7 +59,29 @@ impl EdgeMask {
         self.edge_pixels() as f64 / self.shade_count.len() as f64
     }
 
-    /// Shaded samples / (pixels × samples).
+    /// Shading evaluations the mask costs on a G-buffer whose pixel `p` has `covered[p]` covered samples — what
+    /// the resolve shades: a pixel shaded once costs its count (0 or 1); a pixel shaded per sample costs one
+    /// evaluation per covered sample, never more than its count. Background samples are never shaded, so `ssaa`
+    /// (`samples` for every pixel with any coverage) costs exactly the covered samples. [`Self::shaded_samples`]
+    /// is what the mask asks for, which over-counts pixels that mix surface and background.
+    #[must_use]
+    pub fn evaluations(&self, covered: &[u8]) -> u64 {
+        debug_assert_eq!(covered.len(), self.shade_count.len());
+        self.shade_count.iter().zip(covered).map(|(&c, &k)| u64::from(if c > 1 { c.min(k) } else { c })).sum()
+    }
+
+    /// [`Self::evaluations`] / (pixels × samples): the shading fraction reports and `gbuf edges` show.
+    #[must_use]
+    pub fn evaluated_fraction(&self, covered: &[u8]) -> f64 {
+        let total = self.shade_count.len() as f64 * f64::from(self.samples);
+        if total == 0.0 {
+            return 0.0;
+        }
+        self.evaluations(covered) as f64 / total
+    }
+
+    /// Shaded samples / (pixels × samples): what the mask asks for (see [`Self::evaluated_fraction`] for what it
+    /// costs).
     #[must_use]
     pub fn shading_fraction(&self) -> f64 {
         let total = self.shade_count.len() as f64 * f64::from(self.samples);

@@ -14,7 +14,11 @@ pub fn none(gb: &GBuffer) -> EdgeMask {
     per_pixel(gb, |_, _, base| u8::from(pixel_coverage(&gb.coverage, base, s) != PixelCoverage::Empty))
 }
 
-/// `ssaa`: `samples` evaluations per pixel with any covered sample, 0 for empty pixels.
+/// `ssaa`: every pixel with any covered sample shaded per sample (count `samples`), 0 for empty pixels. The mask
+/// asks for `samples` per such pixel, but the resolve shades only covered samples, so what it costs is the covered
+/// samples ([`EdgeMask::evaluations`], which the reported shading fractions use). The count stays `samples` even
+/// for a pixel with a single covered sample: a count of 1 would mean "sample 0 stands for the pixel" (full weight
+/// instead of the box filter's 1/samples).
 #[must_use]
 pub fn ssaa(gb: &GBuffer) -> EdgeMask {
     let s = gb.samples as usize;

@@ -134,44 +134,65 @@ impl Header {
         out
     }
 
-    /// Checks everything that does not need the file length: sizes, light count, camera, projection.
-    /// Returns the problem as text.
+    /// Checks everything that does not need the file length: sizes, light count, camera, projection. Returns the
+    /// first problem as text naming the field (as the sample's `deferred.h` spells it) and its value.
     fn check_fields(&self) -> std::result::Result<(), String> {
-        if !(1..=MAX_DIMENSION).contains(&self.width) || !(1..=MAX_DIMENSION).contains(&self.height) {
-            return Err(format!("width×height {}×{} outside 1..={MAX_DIMENSION}", self.width, self.height));
+        for (name, v) in [("width", self.width), ("height", self.height)] {
+            if !(1..=MAX_DIMENSION).contains(&v) {
+                return Err(format!("{name} {v} outside 1..={MAX_DIMENSION}"));
+            }
         }
         if !(0..=LIGHT_SLOTS as i32).contains(&self.num_lights) {
             return Err(format!("numLights {} outside 0..={LIGHT_SLOTS}", self.num_lights));
         }
         if self.chunk_size < 0 {
-            return Err(format!("negative chunk size {}", self.chunk_size));
+            return Err(format!("chunk size {} is negative", self.chunk_size));
         }
-        if !(self.near.is_finite() && self.far.is_finite() && self.near > 0.0 && self.far > self.near) {
-            return Err(format!("camera near/far {} / {} (need 0 < near < far)", self.near, self.far));
+        if !(self.near.is_finite() && self.near > 0.0) {
+            return Err(format!("camera near {} (need a finite near > 0)", self.near));
+        }
+        if !(self.far.is_finite() && self.far > self.near) {
+            return Err(format!("camera far {} (need a finite far > near = {})", self.far, self.near));
         }
         let p = &self.proj;
-        if p.iter().flatten().any(|v| !v.is_finite()) {
-            return Err("cameraProj has a non-finite entry".into());
+        for (r, row) in p.iter().enumerate() {
+            for (c, v) in row.iter().enumerate() {
+                if !v.is_finite() {
+                    return Err(format!("cameraProj[{r}][{c}] = {v} is not finite"));
+                }
+            }
         }
-        if p[0][0] <= 0.0 || p[1][1] <= 0.0 || p[3][2] == 0.0 || p[2][3] != 1.0 {
-            return Err(format!(
-                "cameraProj is not a D3D perspective projection ([0][0] = {}, [1][1] = {}, [2][3] = {}, [3][2] = {})",
-                p[0][0], p[1][1], p[2][3], p[3][2]
-            ));
+        let bad = |r: usize, c: usize, need: &str| Err(format!("cameraProj[{r}][{c}] = {} (need {need})", p[r][c]));
+        if p[0][0] <= 0.0 {
+            return bad(0, 0, "an x scale > 0");
+        }
+        if p[1][1] <= 0.0 {
+            return bad(1, 1, "a y scale > 0");
+        }
+        if p[2][3] != 1.0 {
+            return bad(2, 3, "1, a D3D perspective projection");
+        }
+        if p[3][2] == 0.0 {
+            return bad(3, 2, "−near·far/(far − near) ≠ 0");
         }
         Ok(())
     }
 
-    /// Checks every array's byte range against the chunk size.
+    /// Checks every array's byte range against the chunk size; the problem names the array, its offset field and
+    /// the value.
     fn check_arrays(&self) -> std::result::Result<(), String> {
         let pixels = self.width as u64 * self.height as u64;
         for (k, &(name, elem, per_pixel)) in ARRAYS.iter().enumerate() {
             let off = self.offsets[k];
             let count = if per_pixel { pixels } else { self.num_lights as u64 };
-            let fits = u64::try_from(off).is_ok_and(|o| o + count * elem <= self.chunk_size as u64);
-            if !fits {
+            let Ok(o) = u64::try_from(off) else {
+                return Err(format!("offset of array {name} (offsets[{k}]) {off} is negative"));
+            };
+            if o + count * elem > self.chunk_size as u64 {
                 return Err(format!(
-                    "array {name} at offset {off} with {count} × {elem} bytes ends past the {}-byte chunk",
+                    "offset of array {name} (offsets[{k}]) {off}: {count} × {elem} bytes from there end at byte {} \
+                     of the chunk, past its declared size {}",
+                    o + count * elem,
                     self.chunk_size
                 ));
             }
@@ -188,13 +209,28 @@ impl Header {
     }
 }
 
-/// Is this (by its first bytes and length) an ISPC `deferred` input file? Checks the header's plausibility: sizes,
-/// light count, camera and that every array fits in the declared chunk. A file shorter than its declared chunk
-/// still matches, so that the reader can say it is truncated.
+/// Is this (by its first bytes and length) an ISPC `deferred` input file? The format has no magic number; what
+/// every such file has is a D3D perspective projection, whose `cameraProj[2][3]` is exactly 1.0 (the bytes
+/// `00 00 80 3f` at offset 44), and at least the 152-byte header. That is all this checks — loosely, on purpose:
+/// a file that looks like a `.bin` header goes to [`read`], which refuses a bad field by its name and value
+/// (`width 100000 outside 1..=32768`) instead of calling the file unrecognisable.
 #[must_use]
 pub fn matches_file(head: &[u8], file_len: u64) -> bool {
     let Some(h) = Header::parse(head) else { return false };
-    file_len >= HEADER_BYTES as u64 && h.check_fields().is_ok() && h.check_arrays().is_ok()
+    file_len >= HEADER_BYTES as u64 && h.proj[2][3].to_bits() == 1.0f32.to_bits()
+}
+
+/// Why `head` is not a valid ISPC `.bin` header (for the error of a file no reader recognised): the first bad
+/// field with its value, or the missing header.
+#[must_use]
+pub fn header_problem(head: &[u8], file_len: u64) -> String {
+    match Header::parse(head) {
+        None => format!("{file_len} bytes, shorter than the {HEADER_BYTES}-byte header"),
+        Some(h) => match h.check_fields().and_then(|()| h.check_arrays()) {
+            Err(w) => w,
+            Ok(()) => "no problem with the header".into(),
+        },
+    }
 }
 
 /// Reads an ISPC `deferred` input file into a single-sample G-buffer with its lights. Only the header and the

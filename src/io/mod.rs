@@ -140,13 +140,14 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
              Blender File Output presets), or name each buffer's file with --map attr=FILE[:CHANNEL;…]",
         ));
     }
-    let loaded = if ispc::matches_file(&head, len) {
-        ispc::read(path, side.as_ref().map(|s| &s.0), opts)?
-    } else if head.starts_with(&EXR_MAGIC) {
+    // EXR first: it has a magic number; the `.bin` check is loose (see `ispc::matches_file`).
+    let loaded = if head.starts_with(&EXR_MAGIC) {
         let raw = exr::read_raw(path, &opts.limits)?;
         read_exr(&raw, path, side.as_ref().map(|s| &s.0), opts)?
+    } else if ispc::matches_file(&head, len) {
+        ispc::read(path, side.as_ref().map(|s| &s.0), opts)?
     } else {
-        return Err(not_a_dump(path, &head));
+        return Err(not_a_dump(path, &head, len));
     };
     finish(loaded, path, side.as_ref().map(|(s, p)| (s, p.as_path())), opts)
 }
@@ -155,13 +156,13 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
 /// errors and locates the default sidecar beside it).
 pub fn load_bytes(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     let side = resolve_sidecar(path, opts)?;
-    let loaded = if ispc::matches_file(bytes, bytes.len() as u64) {
-        ispc::read_bytes(bytes, path, side.as_ref().map(|s| &s.0), opts)?
-    } else if bytes.starts_with(&EXR_MAGIC) {
+    let loaded = if bytes.starts_with(&EXR_MAGIC) {
         let raw = exr::read_raw_bytes(bytes, path, &opts.limits)?;
         read_exr(&raw, path, side.as_ref().map(|s| &s.0), opts)?
+    } else if ispc::matches_file(bytes, bytes.len() as u64) {
+        ispc::read_bytes(bytes, path, side.as_ref().map(|s| &s.0), opts)?
     } else {
-        return Err(not_a_dump(path, bytes));
+        return Err(not_a_dump(path, bytes, bytes.len() as u64));
     };
     finish(loaded, path, side.as_ref().map(|(s, p)| (s, p.as_path())), opts)
 }
@@ -171,12 +172,16 @@ const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 /// The PNG signature.
 const PNG_MAGIC: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
 
-fn not_a_dump(path: &Path, head: &[u8]) -> Error {
+/// The error for a file no reader recognised: its first bytes, and what is wrong with it read as an ISPC `.bin`
+/// header (the format without a magic number: a damaged one must still be told by its field).
+fn not_a_dump(path: &Path, head: &[u8], len: u64) -> Error {
     let shown: Vec<String> = head.iter().take(8).map(|b| format!("{b:02x}")).collect();
     Error::invalid(
         path,
         format!(
-            "neither an OpenEXR file nor an ISPC `deferred` .bin (first bytes: {})",
+            "neither an OpenEXR file (no magic number) nor an ISPC `deferred` .bin (read as its header: {}; first \
+             bytes: {})",
+            ispc::header_problem(head, len),
             if shown.is_empty() { "none, the file is empty".to_string() } else { shown.join(" ") }
         ),
     )

@@ -24,6 +24,9 @@ pub enum ComponentKind {
     Uint,
     /// Stencil bits (unsigned integer).
     Stencil,
+    /// One part of a shared-exponent float (`rgb9e5`: three 9-bit mantissas without an implicit leading one and
+    /// their common 5-bit exponent, bias 15): the parts decode only together.
+    SharedExponent,
 }
 
 /// One component of a texel: a named bit range and its interpretation.
@@ -46,7 +49,7 @@ macro_rules! c {
     };
 }
 
-use ComponentKind::{Float, Snorm, Srgb, Stencil, Uint, Unorm};
+use ComponentKind::{Float, SharedExponent, Snorm, Srgb, Stencil, Uint, Unorm};
 
 /// A render-target (or depth-stencil) format. `ALL` lists every format; [`Format::name`] is the one spelling used
 /// in layout files and output (parsing also accepts upper case and `_`, e.g. `RGBA8_SRGB`).
@@ -69,6 +72,11 @@ pub enum Format {
     Rgb10A2,
     /// Unsigned floats: 11-bit red and green, 10-bit blue (no sign bit).
     R11G11B10F,
+    /// Three 9-bit mantissas sharing a 5-bit exponent (D3D `R9G9B9E5_SHAREDEXP`, Vulkan
+    /// `E5B9G9R9_UFLOAT_PACK32`): unsigned HDR colour up to 65408, 32 bits. Sampled and filtered by every GPU;
+    /// as a render target only on some (Vulkan lists it as an optional colour-attachment format), which is why
+    /// engines write it from compute or keep it for emissive/lighting buffers they fill themselves.
+    Rgb9e5,
     /// 16-bit float red.
     R16F,
     /// 2 × 16-bit float.
@@ -114,6 +122,7 @@ crate::named!(Format: "format" {
     Rgba8Snorm => "rgba8-snorm",
     Rgb10A2 => "rgb10a2",
     R11G11B10F => "r11g11b10f",
+    Rgb9e5 => "rgb9e5",
     R16F => "r16f",
     Rg16F => "rg16f",
     Rgba16F => "rgba16f",
@@ -160,6 +169,12 @@ impl Format {
                 &[c!("r", 0, 10, Unorm), c!("g", 10, 10, Unorm), c!("b", 20, 10, Unorm), c!("a", 30, 2, Unorm)]
             }
             Format::R11G11B10F => &[c!("r", 0, 11, Float), c!("g", 11, 11, Float), c!("b", 22, 10, Float)],
+            Format::Rgb9e5 => &[
+                c!("r", 0, 9, SharedExponent),
+                c!("g", 9, 9, SharedExponent),
+                c!("b", 18, 9, SharedExponent),
+                c!("e", 27, 5, SharedExponent),
+            ],
             Format::R16F => &[c!("r", 0, 16, Float)],
             Format::Rg16F => &[c!("r", 0, 16, Float), c!("g", 16, 16, Float)],
             Format::Rgba16F => {
@@ -238,6 +253,7 @@ mod tests {
             (Format::Rgba8, 4),
             (Format::Rgb10A2, 4),
             (Format::R11G11B10F, 4),
+            (Format::Rgb9e5, 4),
             (Format::Rg16F, 4),
             (Format::Rgba16F, 8),
             (Format::R32F, 4),

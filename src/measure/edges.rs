@@ -43,7 +43,9 @@ pub struct EdgeStats {
     pub edge_fraction: f64,
     /// true_edge_pixels / pixels.
     pub true_edge_fraction: f64,
-    /// Shading evaluations / (pixels × samples), from the mask's shade counts.
+    /// Shading evaluations / (pixels × samples): with [`evaluate`], what the mask costs on the G-buffer
+    /// ([`EdgeMask::evaluated_fraction`]: covered samples only); with [`evaluate_against`], which has no coverage,
+    /// what it asks for ([`EdgeMask::shading_fraction`]).
     pub shading_fraction: f64,
 }
 
@@ -55,7 +57,9 @@ pub fn evaluate(gb: &GBuffer, mask: &EdgeMask) -> Option<EdgeStats> {
         return None;
     }
     let truth = object_truth(gb)?;
-    Some(evaluate_against(mask, &truth))
+    let mut s = evaluate_against(mask, &truth);
+    s.shading_fraction = mask.evaluated_fraction(&crate::detect::covered_per_pixel(gb));
+    Some(s)
 }
 
 /// Scores `mask` against per-pixel truth flags (row-major). Pixels beyond the shorter of the two are ignored.
@@ -323,6 +327,8 @@ pub struct Truths {
     pub primitives: Option<Vec<bool>>,
     /// The shading truth ([`shading_truth`]); needs lights.
     pub shading: Option<Vec<bool>>,
+    /// Covered samples per pixel ([`crate::detect::covered_per_pixel`]): what a mask costs.
+    pub covered: Vec<u8>,
 }
 
 impl Truths {
@@ -341,7 +347,12 @@ impl Truths {
             }
             _ => None,
         };
-        Ok(Truths { ids: object_truth(gb), primitives: id_truth(gb, TruthSource::Primitive), shading })
+        Ok(Truths {
+            ids: object_truth(gb),
+            primitives: id_truth(gb, TruthSource::Primitive),
+            shading,
+            covered: crate::detect::covered_per_pixel(gb),
+        })
     }
 
     /// Scores `mask` against every truth there is.
@@ -350,7 +361,7 @@ impl Truths {
         let scores = |t: &Option<Vec<bool>>| t.as_deref().map(|t| Scores::from(evaluate_against(mask, t)));
         MaskScores {
             edge_fraction: mask.edge_fraction(),
-            shading_fraction: mask.shading_fraction(),
+            shading_fraction: mask.evaluated_fraction(&self.covered),
             ids: scores(&self.ids),
             shading: scores(&self.shading),
             primitive: scores(&self.primitives),

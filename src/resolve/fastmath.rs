@@ -36,7 +36,21 @@ pub fn log2(x: f32) -> f32 {
 #[inline(always)]
 #[must_use]
 pub fn exp2(x: f32) -> f32 {
-    let x = x.clamp(-126.0, 126.0);
+    exp2_below(x, 126.0)
+}
+
+/// `2^min(x, 0)`, in [0, 1]: [`exp2`] with its upper clamp at 0 instead of 126 (the same two comparisons, so a
+/// power known to be at most 1 — `(N·H)^p` with N·H ≤ 1 — costs nothing extra to keep finite).
+#[inline(always)]
+#[must_use]
+pub fn exp2_nonpositive(x: f32) -> f32 {
+    exp2_below(x, 0.0)
+}
+
+/// [`exp2`] with `x` clamped to [−126, `hi`] (`hi` ≤ 126).
+#[inline(always)]
+fn exp2_below(x: f32, hi: f32) -> f32 {
+    let x = x.clamp(-126.0, hi);
     // Round to nearest with the 1.5·2²³ trick: adding it leaves round(x) in the low mantissa bits. Unlike `floor`
     // (a libm call on baseline x86_64) or a saturating `as i32` (NaN/overflow fix-ups), this is plain vector
     // arithmetic.
@@ -91,6 +105,9 @@ mod tests {
         assert_eq!(exp2(0.0), 1.0);
         assert!(exp2(-1e9) >= 0.0 && exp2(-1e9) < 1e-37);
         assert!(exp2(1e9).is_finite());
+        assert_eq!(exp2_nonpositive(0.0), 1.0);
+        assert_eq!(exp2_nonpositive(1e30), 1.0);
+        assert_eq!(exp2_nonpositive(-3.0), exp2(-3.0));
     }
 
     #[test]

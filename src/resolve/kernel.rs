@@ -35,32 +35,16 @@ pub struct Variant {
 }
 
 /// Shades items `range` of `it` (a whole number of vectors) against every light of `lights` (and, for quad
-/// culling, `quad`), overwriting the items' outputs.
-pub fn shade(it: &mut Items, range: std::ops::Range<usize>, lights: &LightTable, quad: &QuadSoa, v: Variant) {
-    shade_with(false, it, range, lights, quad, v);
-}
-
-/// [`shade`] on the portable path whatever the CPU (to compare the vector paths against it).
-#[cfg_attr(not(test), allow(dead_code))] // the bound / scalar path the tests check against
-pub fn shade_portable(it: &mut Items, range: std::ops::Range<usize>, lights: &LightTable, quad: &QuadSoa, v: Variant) {
-    shade_with(true, it, range, lights, quad, v);
-}
-
-fn shade_with(
-    portable: bool,
-    it: &mut Items,
-    range: std::ops::Range<usize>,
-    lights: &LightTable,
-    quad: &QuadSoa,
-    v: Variant,
-) {
+/// culling, `quad`), overwriting the items' outputs, with the kernel compiled for `isa` (or the widest level
+/// below it that this CPU has).
+pub fn shade(isa: Isa, it: &mut Items, range: std::ops::Range<usize>, lights: &LightTable, quad: &QuadSoa, v: Variant) {
     macro_rules! pick {
         ($b:literal, $f:literal) => {
             match (v.quad, v.prepass) {
-                (false, false) => dispatch::<$b, $f, false, false>(portable, it, range, lights, quad),
-                (true, false) => dispatch::<$b, $f, true, false>(portable, it, range, lights, quad),
-                (false, true) => dispatch::<$b, $f, false, true>(portable, it, range, lights, quad),
-                (true, true) => dispatch::<$b, $f, true, true>(portable, it, range, lights, quad),
+                (false, false) => dispatch::<$b, $f, false, false>(isa, it, range, lights, quad),
+                (true, false) => dispatch::<$b, $f, true, false>(isa, it, range, lights, quad),
+                (false, true) => dispatch::<$b, $f, false, true>(isa, it, range, lights, quad),
+                (true, true) => dispatch::<$b, $f, true, true>(isa, it, range, lights, quad),
             }
         };
     }
@@ -74,6 +58,12 @@ fn shade_with(
     }
 }
 
+/// [`shade`] on the portable path whatever the CPU (to compare the vector paths against it).
+#[cfg_attr(not(test), allow(dead_code))] // the bound / scalar path the tests check against
+pub fn shade_portable(it: &mut Items, range: std::ops::Range<usize>, lights: &LightTable, quad: &QuadSoa, v: Variant) {
+    shade(Isa::Baseline, it, range, lights, quad, v);
+}
+
 /// The instruction set the kernel runs with on this CPU ([`Isa::detect`], shared with the codecs' slice paths):
 /// `avx512`, `avx2` (with FMA) or `baseline` (the portable kernel).
 #[must_use]
@@ -82,22 +72,22 @@ pub fn instruction_set() -> &'static str {
 }
 
 fn dispatch<const B: u8, const F: u8, const Q: bool, const P: bool>(
-    portable: bool,
+    isa: Isa,
     it: &mut Items,
     range: std::ops::Range<usize>,
     lights: &LightTable,
     quad: &QuadSoa,
 ) {
     #[cfg(target_arch = "x86_64")]
-    if !portable {
-        match Isa::detect() {
-            // SAFETY: `Isa::detect` found the features the function was compiled for on this CPU.
-            Isa::Avx512 => return unsafe { run_avx512::<B, F, Q, P>(it, range, lights, quad) },
-            // SAFETY: as above.
-            Isa::Avx2 => return unsafe { run_avx2::<B, F, Q, P>(it, range, lights, quad) },
-            Isa::Baseline => {}
-        }
+    match isa.min(Isa::detect()) {
+        // SAFETY: `Isa::detect` found the features the function was compiled for on this CPU.
+        Isa::Avx512 => return unsafe { run_avx512::<B, F, Q, P>(it, range, lights, quad) },
+        // SAFETY: as above.
+        Isa::Avx2 => return unsafe { run_avx2::<B, F, Q, P>(it, range, lights, quad) },
+        Isa::Baseline => {}
     }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = isa;
     run::<Portable<false>, B, F, Q, P>(it, range, lights, quad);
 }
 
@@ -376,8 +366,13 @@ fn both<V: Lanes>(k: &Chunk<V>) -> Chunk<Two<V>> {
     }
 }
 
-/// One light (or, for [`Two`], two) against one vector of samples. A light that cannot reach a lane gives
-/// exactly `e = 0` there, and every factor of `x` is finite, so its contribution is exactly 0.
+/// One light (or, for [`Two`], two) against one vector of samples. A light that cannot reach a lane (out of range,
+/// behind the surface, outside its cone or quad) gives exactly `e = 0` there, and its contribution `e·x` is exactly
+/// 0 because every factor of `x` is finite *by construction*, in range or not: N·H is clamped to [0, 1] before
+/// anything is raised to a power or divided by (the half vector can be almost zero — a light behind the surface
+/// near the view ray has L̂ ≈ −V, |H| is floored at [`MIN_HALF_LENGTH`] and N·H, a rounding residual divided by
+/// that floor, came out up to 10¹²: `(N·H)^p` overflowed to ∞ and 0·∞ was NaN; GGX's `D` divides by
+/// `((N·H)²(α² − 1) + 1)²`, which is 0 just above N·H = 1).
 #[inline(always)]
 fn step<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(k: &Chunk<V>, l: &LightK<V>) -> Step<V> {
     let s = V::splat;
@@ -429,16 +424,21 @@ fn step<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(k: &Ch
         // (N·H)^p = 2^(p·log2 N·H) with 1/|H| only estimated (y, relative error ε ≤ 2⁻¹⁴) and the estimate's error
         // taken out in the log domain: log2 N·H = log2((N·L̂ + N·V)·y) − log2(1 + ε), and log2(1 + ε) =
         // ½ log2(y²|H|²) = (y²|H|² − 1)/(2 ln 2) to within ε²/ln 2 < 6e-9. One instruction fewer than a Newton
-        // step, and off the dependency chain. pow's floor POW_MIN_BASE also clamps N·H below at (about) 0.
+        // step, and off the dependency chain. pow's floor POW_MIN_BASE also clamps N·H below at (about) 0, and
+        // the exponent is clamped at 0 above: N·H ≤ 1 (Cauchy–Schwarz), so (N·H)^p ≤ 1 and the factor stays finite
+        // whatever rounding did to a near-zero half vector (see above). Clamping the exponent rather than N·H
+        // keeps the estimate's correction exact below 1, and `exp2_nonpositive` folds the clamp into exp2's own
+        // (no extra instruction on the portable and AVX2 paths).
         let y = h2.rsqrt_approx();
         let ndh_est = (ndl_raw + k.nv_raw) * y;
         let eps2 = (y * y).mul_add(h2, s(-1.0));
         let x_p = eps2.nmul_add(k.pw_c, k.pw * ndh_est.max(s(POW_MIN_BASE)).log2());
-        x[0] = k.sn * x_p.exp2();
+        x[0] = k.sn * x_p.exp2_nonpositive();
         return Step { e, on, inside, x };
     }
     let hinv = h2.rsqrt();
-    let ndh = ((ndl_raw + k.nv_raw) * hinv).max(zero);
+    // N·H in [0, 1] (see above): then `t ≥ α² > 0` and `D·Vis` is finite.
+    let ndh = ((ndl_raw + k.nv_raw) * hinv).saturate();
     let vdh = (h2_raw * s(0.5) * hinv).max(zero);
     let a2 = k.a2;
     let t = (ndh * ndh).mul_add(a2 - s(1.0), s(1.0));
@@ -692,7 +692,7 @@ mod tests {
                         let v = Variant { brdf, falloff, quad, prepass };
                         let (mut a, mut b) = (items.clone(), items.clone());
                         let n = items.len();
-                        shade(&mut a, 0..n, &table, &rects, v);
+                        shade(Isa::detect(), &mut a, 0..n, &table, &rects, v);
                         shade_portable(&mut b, 0..n, &table, &rects, v);
                         let (mut lit_a, mut lit_b) = (0.0, 0.0);
                         for j in 0..n {
@@ -754,7 +754,7 @@ mod speed {
             let q = QuadSoa::default();
             type Path<'a> = (&'a str, Box<dyn Fn(&mut Items) + 'a>);
             let mut paths: Vec<Path> = Vec::new();
-            paths.push((instruction_set(), Box::new(|it: &mut Items| shade(it, 0..n, &table, &q, v))));
+            paths.push((instruction_set(), Box::new(|it: &mut Items| shade(Isa::detect(), it, 0..n, &table, &q, v))));
             #[cfg(target_arch = "x86_64")]
             if Isa::detect() == Isa::Avx512 {
                 // SAFETY: the CPU has AVX-512F, hence AVX2 and FMA.

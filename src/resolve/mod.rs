@@ -35,6 +35,7 @@ pub use reference::{check_meaningful, reference, reference_per_sample};
 pub use split::{ResolveInput, SplitSamples};
 pub use surface::SanitizedCounts;
 
+use crate::base::isa::Isa;
 use crate::base::mask::EdgeMask;
 use crate::base::timing::{ms, StageMs};
 use crate::error::{Error, Result};
@@ -105,8 +106,35 @@ pub fn resolve_into<'a>(
     cfg: &ResolveConfig,
     out: &mut Resolved,
 ) -> Result<()> {
+    resolve_into_isa(Isa::detect(), gb.into(), lights, mask, cfg, out)
+}
+
+/// [`resolve`] with every SIMD stage (work-list build, culling, light loop) compiled for `isa`, or for the widest
+/// level below it that this CPU has — as the codecs' `encode_slice_isa`. For tests and measurements that compare
+/// the vector paths: within one call every tile runs the same path, so the image's independence from culling, tile
+/// size and thread count holds per path; paths differ from each other by rounding.
+pub fn resolve_isa<'a>(
+    isa: Isa,
+    gb: impl Into<ResolveInput<'a>>,
+    lights: &[Light],
+    mask: &EdgeMask,
+    cfg: &ResolveConfig,
+) -> Result<Resolved> {
+    let mut out = Resolved::default();
+    resolve_into_isa(isa, gb.into(), lights, mask, cfg, &mut out)?;
+    Ok(out)
+}
+
+fn resolve_into_isa(
+    isa: Isa,
+    gb: ResolveInput<'_>,
+    lights: &[Light],
+    mask: &EdgeMask,
+    cfg: &ResolveConfig,
+    out: &mut Resolved,
+) -> Result<()> {
     let t_start = Instant::now();
-    let (gb, order) = gb.into().planes();
+    let (gb, order) = gb.planes();
     cfg.validate()?;
     if mask.width != gb.width || mask.height != gb.height || mask.shade_count.len() != gb.pixel_count() {
         return Err(Error::Argument(format!(
@@ -120,7 +148,7 @@ pub fn resolve_into<'a>(
     }
     let reader = surface::SurfaceReader::with_order(gb, order)?;
     let clean = lights::sanitize(lights);
-    let frame = schedule::Frame::new(reader, mask, &clean.lights, *cfg);
+    let frame = schedule::Frame::new(reader, mask, &clean.lights, *cfg, isa);
     let t_prep = t_start.elapsed();
 
     let t_par = Instant::now();

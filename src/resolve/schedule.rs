@@ -38,15 +38,23 @@ pub struct Frame<'a> {
     pub quads: QuadSoa,
     /// The configuration.
     pub cfg: ResolveConfig,
+    /// The instruction set every SIMD stage runs with (at most [`Isa::detect`]).
+    pub isa: Isa,
 }
 
 impl<'a> Frame<'a> {
-    /// Prepares the per-light data for `cfg`.
+    /// Prepares the per-light data for `cfg`, to run with `isa` (capped at what this CPU has).
     #[must_use]
-    pub fn new(reader: SurfaceReader<'a>, mask: &'a EdgeMask, lights: &'a [Light], cfg: ResolveConfig) -> Self {
+    pub fn new(
+        reader: SurfaceReader<'a>,
+        mask: &'a EdgeMask,
+        lights: &'a [Light],
+        cfg: ResolveConfig,
+        isa: Isa,
+    ) -> Self {
         let table = LightTable::new(lights, cfg.falloff);
         let quads = if cfg.culling == Culling::Quad { quad_rects(lights) } else { QuadSoa::default() };
-        Frame { reader, mask, lights, table, quads, cfg }
+        Frame { reader, mask, lights, table, quads, cfg, isa: isa.min(Isa::detect()) }
     }
 }
 
@@ -143,8 +151,8 @@ pub fn run_tiles(frame: &Frame<'_>, rgb: &mut [Vec3], heat: &mut [u32]) -> TileS
         .map_init(Scratch::default, |sc, (band, (rgb, heat))| {
             let y0 = band as u32 * ts;
             #[cfg(target_arch = "x86_64")]
-            match Isa::detect() {
-                // SAFETY: `Isa::detect` found the features the function is compiled for on this CPU.
+            match frame.isa {
+                // SAFETY: `Frame::new` capped `isa` at what `Isa::detect` found on this CPU.
                 Isa::Avx512 => return unsafe { run_band_avx512(frame, y0, sc, rgb, heat) },
                 // SAFETY: as above.
                 Isa::Avx2 => return unsafe { run_band_avx2(frame, y0, sc, rgb, heat) },
@@ -324,30 +332,30 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats)
     let mut t_shade = Duration::ZERO;
     let items = match frame.cfg.culling {
         Culling::None => {
-            shade(&mut sc.items, 0..n, &frame.table, &frame.quads, variant);
+            shade(frame.isa, &mut sc.items, 0..n, &frame.table, &frame.quads, variant);
             t_shade += lap();
             &mut sc.items
         }
         Culling::Tiled | Culling::Quad => {
-            let bounds = tile_bounds(&sc.items, 0..n).expect("nonempty");
+            let bounds = tile_bounds(frame.isa, &sc.items, 0..n).expect("nonempty");
             cull_into(frame, &bounds, None, sc);
             t_cull += lap();
-            shade(&mut sc.items, 0..n, &sc.lights, &sc.quads, variant);
+            shade(frame.isa, &mut sc.items, 0..n, &sc.lights, &sc.quads, variant);
             t_shade += lap();
             &mut sc.items
         }
         Culling::Clustered => {
-            let bounds = tile_bounds(&sc.items, 0..n).expect("nonempty");
+            let bounds = tile_bounds(frame.isa, &sc.items, 0..n).expect("nonempty");
             cull_tile_list(frame, &bounds, sc);
             let ranges = sort_by_slice(&bounds, frame.cfg.depth_slices, n_real, sc);
             t_cull += lap();
             for range in ranges {
-                let b = tile_bounds(&sc.sorted, range.clone()).expect("nonempty slice");
+                let b = tile_bounds(frame.isa, &sc.sorted, range.clone()).expect("nonempty slice");
                 let list = std::mem::take(&mut sc.tile_lights);
                 cull_into(frame, &b, Some(&list), sc);
                 sc.tile_lights = list;
                 t_cull += lap();
-                shade(&mut sc.sorted, range, &sc.lights, &sc.quads, variant);
+                shade(frame.isa, &mut sc.sorted, range, &sc.lights, &sc.quads, variant);
                 t_shade += lap();
             }
             // Back to tile order, so the box filter adds samples in the same order whatever the culling.
@@ -538,7 +546,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
             let (i, p) = (sc.src[n_real - 1], glam::Vec3::new(it.px[n_real - 1], it.py[n_real - 1], it.pz[n_real - 1]));
             push(it, &mut sc.src, p, i, PAD_PIXEL, 0.0);
         }
-        frame.reader.fill_attributes(&sc.src, it, frame.cfg.brdf, counts);
+        frame.reader.fill_attributes(frame.isa, &sc.src, it, frame.cfg.brdf, counts);
     }
     (n_first, n_real)
 }
@@ -549,8 +557,8 @@ fn cull_tile_list(frame: &Frame<'_>, b: &Bounds, sc: &mut Scratch) {
     let s = &frame.table;
     sc.tile_lights.clear();
     #[cfg(target_arch = "x86_64")]
-    match Isa::detect() {
-        // SAFETY: `Isa::detect` found the features the function is compiled for on this CPU.
+    match frame.isa {
+        // SAFETY: `Frame::new` capped `isa` at what `Isa::detect` found on this CPU.
         Isa::Avx512 => unsafe { touching_avx512(b, s, &mut sc.tile_lights) },
         // SAFETY: as above.
         Isa::Avx2 => unsafe { touching_avx2(b, s, &mut sc.tile_lights) },
@@ -560,17 +568,19 @@ fn cull_tile_list(frame: &Frame<'_>, b: &Bounds, sc: &mut Scratch) {
     b.touching::<Portable<false>>(&s.x, &s.y, &s.z, &s.r, &mut sc.tile_lights);
 }
 
-/// [`Bounds::of_items_in`] with the vector lanes of this CPU.
-fn tile_bounds(it: &Items, range: std::ops::Range<usize>) -> Option<Bounds> {
+/// [`Bounds::of_items_in`] with the vector lanes of `isa` (at most [`Isa::detect`]).
+fn tile_bounds(isa: Isa, it: &Items, range: std::ops::Range<usize>) -> Option<Bounds> {
     #[cfg(target_arch = "x86_64")]
-    if Isa::detect() == Isa::Avx512 {
+    if isa == Isa::Avx512 {
         #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
         fn avx512(it: &Items, range: std::ops::Range<usize>) -> Option<Bounds> {
             Bounds::of_items_in::<Avx512>(it, range)
         }
-        // SAFETY: `Isa::detect` found AVX-512F on this CPU.
+        // SAFETY: `isa` is at most what `Isa::detect` found on this CPU: it has AVX-512F.
         return unsafe { avx512(it, range) };
     }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = isa;
     Bounds::of_items(it, range)
 }
 

@@ -65,6 +65,12 @@ pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = S
     /// any value in [0, 2⁻¹²⁶], above 126 any value ≥ 2¹²⁶ (the portable lanes clamp there, AVX-512 overflows to
     /// +∞ above 128).
     fn exp2(self) -> Self;
+    /// `2^min(self, 0)`: [`Lanes::exp2`] of a non-positive exponent, in [0, 1] for any finite lane (the portable
+    /// lanes fold the bound into `exp2`'s own clamp; AVX-512 takes the minimum first).
+    #[inline(always)]
+    fn exp2_nonpositive(self) -> Self {
+        self.min(Self::splat(0.0)).exp2()
+    }
     /// Lanes where `self > o`.
     fn gt(self, o: Self) -> Self::Mask;
     /// Lanes where `self >= o`.
@@ -230,6 +236,10 @@ impl<const FMA: bool> Lanes for Portable<FMA> {
         self.each(fastmath::exp2)
     }
     #[inline(always)]
+    fn exp2_nonpositive(self) -> Self {
+        self.each(fastmath::exp2_nonpositive)
+    }
+    #[inline(always)]
     fn gt(self, o: Self) -> Self::Mask {
         self.cmp(o, |x, y| x > y)
     }
@@ -377,6 +387,10 @@ impl<V: Lanes> Lanes for Two<V> {
     #[inline(always)]
     fn exp2(self) -> Self {
         Two(self.0.exp2(), self.1.exp2())
+    }
+    #[inline(always)]
+    fn exp2_nonpositive(self) -> Self {
+        Two(self.0.exp2_nonpositive(), self.1.exp2_nonpositive())
     }
     #[inline(always)]
     fn gt(self, o: Self) -> Self::Mask {
@@ -690,6 +704,15 @@ mod tests {
                 let rel = (f64::from(y) - want).abs() / want;
                 assert!(rel < f64::from(fastmath::EXP2_MAX_REL_ERROR), "exp2({x}) = {y}, want {want}");
             }
+        }
+        for c in ex.chunks(V::N) {
+            // The bounded form equals exp2 of the clamped exponent on every path, and never exceeds 1.
+            V::load(c).exp2_nonpositive().store(&mut out);
+            let mut want = vec![0.0f32; V::N];
+            let clamped: Vec<f32> = c.iter().map(|x| x.min(0.0)).collect();
+            V::load(&clamped).exp2().store(&mut want);
+            assert_eq!(out, want, "exp2_nonpositive({c:?})");
+            assert!(out.iter().all(|&y| (0.0..=1.0).contains(&y)));
         }
         let a = V::load(&ex[..V::N]);
         let b = V::load(&ex[V::N..2 * V::N]);

@@ -292,14 +292,17 @@ impl<'a> SurfaceReader<'a> {
     /// the other surface arrays `brdf` reads (see [`Reads`]) with the same defaults, sanitisation and counts as
     /// `read`; the arrays it does not read keep whatever they held, and their planes are neither read nor counted.
     /// Works a vector of items at a time: a vector whose samples are consecutive (a tile row at one sample per
-    /// pixel) is read as one slice (in AVX-512 vectors where the CPU has them), other vectors gather; the sanitising
+    /// pixel) is read as one slice (in AVX-512 vectors when `isa` is AVX-512), other vectors gather; the sanitising
     /// arithmetic has no branches.
     #[inline(always)]
-    pub fn fill_attributes(&self, src: &[usize], it: &mut Items, brdf: Brdf, counts: &mut SanitizedCounts) {
+    pub fn fill_attributes(&self, isa: Isa, src: &[usize], it: &mut Items, brdf: Brdf, counts: &mut SanitizedCounts) {
         #[cfg(target_arch = "x86_64")]
-        let vector = Isa::detect() == Isa::Avx512;
+        let vector = isa.min(Isa::detect()) == Isa::Avx512;
         #[cfg(not(target_arch = "x86_64"))]
-        let vector = false;
+        let vector = {
+            let _ = isa;
+            false
+        };
         self.fill_with(vector, src, it, brdf, counts);
     }
 
