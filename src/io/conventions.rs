@@ -138,19 +138,23 @@ pub struct Conventions {
     pub normals: NormalEncoding,
 }
 
+/// What `--map` on one EXR has always assumed: view space, view-z depth, automatic background, signed normals.
+/// Presets state only where they differ (`Conventions { space: Space::World, ..MAP_DEFAULT }`).
+pub const MAP_DEFAULT: Conventions = Conventions {
+    space: Space::View,
+    depth: DepthKind::ViewZ,
+    reversed_z: false,
+    znear: None,
+    zfar: None,
+    ids: None,
+    background: Background::Auto,
+    normals: NormalEncoding::Signed,
+};
+
 impl Default for Conventions {
-    /// What `--map` on one EXR has always assumed: view space, view-z depth, automatic background, signed normals.
+    /// [`MAP_DEFAULT`].
     fn default() -> Self {
-        Conventions {
-            space: Space::View,
-            depth: DepthKind::ViewZ,
-            reversed_z: false,
-            znear: None,
-            zfar: None,
-            ids: None,
-            background: Background::Auto,
-            normals: NormalEncoding::Signed,
-        }
+        MAP_DEFAULT
     }
 }
 

@@ -11,7 +11,7 @@
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::gbuffer::{Attribute, GBuffer};
-use crate::io::conventions::{Background, Conventions, DepthKind, IdEncoding, NormalEncoding, Space};
+use crate::io::conventions::{Background, Conventions, DepthKind, IdEncoding, NormalEncoding, Space, MAP_DEFAULT};
 use crate::io::exr::{RawData, RawImage, ReadLimits};
 use crate::io::sidecar::SidecarCamera;
 use crate::io::{AttributeSource, LoadOptions, Loaded, SourceFormat};
@@ -78,16 +78,7 @@ pub const PRESETS: &[Preset] = &[
             file(Attribute::MaterialId, &["MATERIAL_ID"], R),
             file(Attribute::ObjectId, &["OBJECT_ID"], R),
         ],
-        conventions: Conventions {
-            space: Space::World,
-            depth: DepthKind::RayFromNear,
-            reversed_z: false,
-            znear: None,
-            zfar: None,
-            ids: Some(IdEncoding::Rgb8),
-            background: Background::Inf,
-            normals: NormalEncoding::Signed,
-        },
+        conventions: Conventions { space: Space::World, depth: DepthKind::RayFromNear, ids: Some(IdEncoding::Rgb8), background: Background::Inf, ..MAP_DEFAULT },
         basis: "measured on pyluxcore 2.11.2 output (fixtures/luxcore/CONVENTIONS.md)",
     },
     Preset {
@@ -101,16 +92,7 @@ pub const PRESETS: &[Preset] = &[
             file(Attribute::Metallic, &["Metallic"], R),
             file(Attribute::Specular, &["Specular"], R),
         ],
-        conventions: Conventions {
-            space: Space::World,
-            depth: DepthKind::ViewZ,
-            reversed_z: false,
-            znear: None,
-            zfar: None,
-            ids: None,
-            background: Background::Auto,
-            normals: NormalEncoding::Signed,
-        },
+        conventions: Conventions { space: Space::World, ..MAP_DEFAULT },
         basis: "from Unreal's public source and documentation, not measured: `<shot>_<Buffer>.exr` (half RGBA), \
                 SceneDepthWorldUnits = planar view depth in world units (cm), WorldNormal in world space taken \
                 as signed (its encoding is not documented; give --normals unorm if it is n·0.5+0.5)",
@@ -125,16 +107,7 @@ pub const PRESETS: &[Preset] = &[
             PresetFile { attr: Attribute::Roughness, names: &["Smoothness"], channels: R, transform: Transform::OneMinus },
             file(Attribute::Metallic, &["Metal"], R),
         ],
-        conventions: Conventions {
-            space: Space::World,
-            depth: DepthKind::Ndc,
-            reversed_z: true,
-            znear: None,
-            zfar: None,
-            ids: None,
-            background: Background::Auto,
-            normals: NormalEncoding::Unorm,
-        },
+        conventions: Conventions { space: Space::World, depth: DepthKind::Ndc, reversed_z: true, normals: NormalEncoding::Unorm, ..MAP_DEFAULT },
         basis: "from the Unity Recorder documentation and HDRP source, not measured: `<Recorder>_<AOV>_<Take>_<Frame>.exr`, \
                 Normal world space as n·0.5+0.5, Depth the raw reversed-Z device depth (1 at near, 0 = far = \
                 background; some HDRP versions export linear depth: give --depth view-z then), roughness = 1 − Smoothness",
@@ -151,16 +124,7 @@ pub const PRESETS: &[Preset] = &[
             file(Attribute::ObjectId, &["IndexOB"], R),
             file(Attribute::Roughness, &["Roughness"], R),
         ],
-        conventions: Conventions {
-            space: Space::World,
-            depth: DepthKind::ViewZ,
-            reversed_z: false,
-            znear: None,
-            zfar: None,
-            ids: Some(IdEncoding::Float),
-            background: Background::Auto,
-            normals: NormalEncoding::Signed,
-        },
+        conventions: Conventions { space: Space::World, ids: Some(IdEncoding::Float), ..MAP_DEFAULT },
         basis: "from Blender's documentation and source, not measured on File Output files: `<slot><frame>.exr` \
                 with R, G, B channels, Depth = view-axis distance (1e10 for sky), Normal and Position in world space, \
                 IndexMA/IndexOB as floats",
