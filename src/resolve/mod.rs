@@ -91,9 +91,7 @@ pub fn resolve<'a>(
     mask: &EdgeMask,
     cfg: &ResolveConfig,
 ) -> Result<Resolved> {
-    let mut out = Resolved::default();
-    resolve_into(gb, lights, mask, cfg, &mut out)?;
-    Ok(out)
+    resolve_isa(Isa::detect(), gb, lights, mask, cfg)
 }
 
 /// [`resolve`] into `out`, reusing its image and heatmap storage: a renderer lighting frame after frame keeps one
