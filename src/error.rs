@@ -56,7 +56,7 @@ pub enum Error {
         found: String,
     },
     /// A file declares more data than the configured memory limit allows.
-    #[error("{path}: declares {bytes} bytes of samples, over the limit of {limit} bytes (raise it with --max-memory)")]
+    #[error("{path}: declares {bytes} bytes of samples, over the limit of {limit} bytes ({why}; raise it with --max-memory MIB)")]
     TooLarge {
         /// The file.
         path: PathBuf,
@@ -64,6 +64,8 @@ pub enum Error {
         bytes: u64,
         /// The limit in force.
         limit: u64,
+        /// Where the limit comes from ([`crate::io::ReadLimits::describe`]).
+        why: String,
     },
     /// The file is structurally valid but holds something we do not support (deep data, subsampling, ...).
     #[error("{path}: unsupported: {what}")]

@@ -48,9 +48,10 @@ pub struct ReadArgs {
     /// Normal encoding for data read by naming: signed, unorm (n·0.5 + 0.5).
     #[arg(long)]
     pub normals: Option<gbuf::io::conventions::NormalEncoding>,
-    /// Refuse files whose decoded samples would need more than this many MiB.
-    #[arg(long, value_name = "MIB", default_value_t = 4096)]
-    pub max_memory: u64,
+    /// Refuse files whose decoded samples would need more than this many MiB [default: a quarter of the
+    /// machine's available memory].
+    #[arg(long, value_name = "MIB")]
+    pub max_memory: Option<u64>,
     /// Decode DWAA/DWAB-compressed EXRs (lossy; the decoder is less hardened).
     #[arg(long)]
     pub allow_dwa: bool,
@@ -114,7 +115,10 @@ impl ReadArgs {
                     .map_err(|e| anyhow::anyhow!("--background: {e}"))?,
                 normals: self.normals,
             },
-            limits: ReadLimits { max_bytes: self.max_memory.saturating_mul(1 << 20), allow_dwa: self.allow_dwa },
+            limits: ReadLimits {
+                max_bytes: self.max_memory.map_or_else(ReadLimits::machine_max_bytes, |m| m.saturating_mul(1 << 20)),
+                allow_dwa: self.allow_dwa,
+            },
         })
     }
 }

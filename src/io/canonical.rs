@@ -121,6 +121,45 @@ fn plane_channel(gb: &GBuffer, attr: Attribute, ci: usize, s: usize, n: usize, s
 
 /// Builds a G-buffer from a canonical file's channels and header (`path` names the file in errors).
 pub fn from_raw(raw: &RawImage, path: &Path) -> Result<GBuffer> {
+    build(Source::Keep(raw), path)
+}
+
+/// [`from_raw`], releasing each attribute's samples once they are in the G-buffer (the channels stay, empty, with
+/// their names and types, for [`sources`]): loading then holds the file's samples and the G-buffer together one
+/// attribute at a time instead of whole, so its peak stays near the G-buffer's own size.
+pub fn from_raw_releasing(raw: &mut RawImage, path: &Path) -> Result<GBuffer> {
+    build(Source::Release(raw), path)
+}
+
+/// The channels a G-buffer is built from: borrowed, or owned and emptied attribute by attribute.
+enum Source<'a> {
+    Keep(&'a RawImage),
+    Release(&'a mut RawImage),
+}
+
+impl Source<'_> {
+    fn raw(&self) -> &RawImage {
+        match self {
+            Source::Keep(r) => r,
+            Source::Release(r) => r,
+        }
+    }
+    /// Empties (and frees) every channel of `layer`, whatever its sample.
+    fn release(&mut self, layer: &str) {
+        if let Source::Release(r) = self {
+            for ch in r.channels.iter_mut().filter(|c| c.name.split('.').nth(1) == Some(layer)) {
+                ch.data = match ch.data {
+                    RawData::F16(_) => RawData::F16(Vec::new()),
+                    RawData::F32(_) => RawData::F32(Vec::new()),
+                    RawData::U32(_) => RawData::U32(Vec::new()),
+                };
+            }
+        }
+    }
+}
+
+fn build(mut src: Source<'_>, path: &Path) -> Result<GBuffer> {
+    let raw = src.raw();
     let version: u32 = header(raw, ATTR_VERSION)
         .ok_or_else(|| Error::invalid(path, format!("canonical file without the {ATTR_VERSION} header attribute")))?
         .trim()
@@ -183,7 +222,10 @@ pub fn from_raw(raw: &RawImage, path: &Path) -> Result<GBuffer> {
             gb.coverage[p * spp + s] = ch.data.f32_at(p) != 0.0;
         }
     }
+    src.release(COVERAGE);
     for attr in Attribute::ALL {
+        let raw = src.raw();
+        let reader = Reader { raw, path, samples, n };
         let comps = components(attr);
         let present = comps.iter().any(|c| raw.channel(&channel_name(0, attr.name(), c)).is_some());
         if !present {
@@ -205,24 +247,28 @@ pub fn from_raw(raw: &RawImage, path: &Path) -> Result<GBuffer> {
                 }
             }
             set_u32(&mut gb, attr, v);
+            src.release(attr.name());
             continue;
         }
-        // Float attributes: gather every component into a flat [len × comps] buffer first.
-        let k = comps.len();
-        let mut flat = vec![0f32; len * k];
-        for s in 0..spp {
-            for (ci, comp) in comps.iter().enumerate() {
-                let ch = reader.float_channel(s as u32, attr.name(), comp)?;
-                for p in 0..n {
-                    flat[(p * spp + s) * k + ci] = ch.data.f32_at(p);
-                }
+        // Float attributes: each component of each sample straight into its place in the plane.
+        let channels: Vec<Vec<&RawChannel>> = (0..spp)
+            .map(|s| comps.iter().map(|comp| reader.float_channel(s as u32, attr.name(), comp)).collect())
+            .collect::<Result<_>>()?;
+        let at = |s: usize, ci: usize, p: usize| channels[s][ci].data.f32_at(p);
+        let gather = |c: usize| -> Vec<f32> { (0..len).map(|i| at(i % spp, c, i / spp)).collect() };
+        match comps.len() {
+            1 => set_f32(&mut gb, attr, gather(0)),
+            2 => {
+                gb.motion =
+                    Some((0..len).map(|i| Vec2::new(at(i % spp, 0, i / spp), at(i % spp, 1, i / spp))).collect())
             }
-        }
-        match k {
-            1 => set_f32(&mut gb, attr, flat),
-            2 => gb.motion = Some(flat.chunks_exact(2).map(|c| Vec2::new(c[0], c[1])).collect()),
             _ => {
-                let v: Vec<Vec3> = flat.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+                let v: Vec<Vec3> = (0..len)
+                    .map(|i| {
+                        let (s, p) = (i % spp, i / spp);
+                        Vec3::new(at(s, 0, p), at(s, 1, p), at(s, 2, p))
+                    })
+                    .collect();
                 match attr {
                     Attribute::Position => gb.position = Some(v),
                     Attribute::Normal => gb.normal = Some(v),
@@ -230,6 +276,8 @@ pub fn from_raw(raw: &RawImage, path: &Path) -> Result<GBuffer> {
                 }
             }
         }
+        drop(channels);
+        src.release(attr.name());
     }
     gb.validate().map_err(|e| Error::invalid(path, e.to_string()))?;
     Ok(gb)

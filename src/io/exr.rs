@@ -16,9 +16,51 @@ pub struct ReadLimits {
     pub allow_dwa: bool,
 }
 
+/// The share of the machine's available memory a file's declared samples may take by default: loading holds the
+/// decoded samples and the f32 G-buffer built from them (twice their size for half floats) at once, briefly.
+pub const DEFAULT_MEMORY_SHARE: u64 = 4;
+
+/// The default limit where the available memory cannot be read (not Linux).
+pub const FALLBACK_MAX_BYTES: u64 = 4 << 30;
+
+impl ReadLimits {
+    /// The default byte limit on this machine: a [`DEFAULT_MEMORY_SHARE`]th of its available memory
+    /// (`MemAvailable` of /proc/meminfo), at least 64 MiB; [`FALLBACK_MAX_BYTES`] where that cannot be read.
+    #[must_use]
+    pub fn machine_max_bytes() -> u64 {
+        available_memory().map_or(FALLBACK_MAX_BYTES, |a| (a / DEFAULT_MEMORY_SHARE).max(64 << 20))
+    }
+
+    /// Where the limit in force comes from, for the refusal's message.
+    #[must_use]
+    pub fn describe(&self) -> String {
+        match available_memory() {
+            Some(a) if self.max_bytes == (a / DEFAULT_MEMORY_SHARE).max(64 << 20) => format!(
+                "the default: a quarter of the {:.1} GiB this machine has available",
+                a as f64 / f64::from(1u32 << 30)
+            ),
+            None if self.max_bytes == FALLBACK_MAX_BYTES => "the default".to_string(),
+            _ => "the limit given".to_string(),
+        }
+    }
+}
+
+/// `MemAvailable` of /proc/meminfo in bytes, read once per process so that the default and its description agree
+/// (`None` elsewhere, or when it cannot be read).
+fn available_memory() -> Option<u64> {
+    static AVAILABLE: std::sync::OnceLock<Option<u64>> = std::sync::OnceLock::new();
+    *AVAILABLE.get_or_init(|| {
+        let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+        let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+        let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+        Some(kib * 1024)
+    })
+}
+
 impl Default for ReadLimits {
+    /// [`ReadLimits::machine_max_bytes`], DWA refused.
     fn default() -> Self {
-        ReadLimits { max_bytes: 4 << 30, allow_dwa: false }
+        ReadLimits { max_bytes: Self::machine_max_bytes(), allow_dwa: false }
     }
 }
 
@@ -108,21 +150,34 @@ impl RawImage {
     }
 }
 
-/// Reads all flat channels of the EXR at `path` (headers are checked against `limits` before any pixel is read).
+/// Reads all flat channels of the EXR at `path` (headers and the chunk table are checked against `limits` and the
+/// file's length before any pixel is allocated).
 pub fn read_raw(path: &Path, limits: &ReadLimits) -> Result<RawImage> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
-    read_raw_from(std::io::BufReader::new(file), len, path, limits)
+    let read_at = |at: u64, buf: &mut [u8]| {
+        use std::io::{Read, Seek};
+        let mut f = &file;
+        f.seek(std::io::SeekFrom::Start(at))?;
+        f.read_exact(buf)
+    };
+    read_raw_from(std::io::BufReader::new(&file), read_at, len, path, limits)
 }
 
 /// Reads all flat channels of an EXR held in memory (`path` only names it in errors).
 pub fn read_raw_bytes(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<RawImage> {
-    read_raw_from(std::io::Cursor::new(bytes), bytes.len() as u64, path, limits)
+    let read_at = |at: u64, buf: &mut [u8]| {
+        let src = usize::try_from(at).ok().and_then(|a| bytes.get(a..a.checked_add(buf.len())?));
+        let src = src.ok_or_else(|| std::io::Error::from(std::io::ErrorKind::UnexpectedEof))?;
+        buf.copy_from_slice(src);
+        Ok(())
+    };
+    read_raw_from(std::io::Cursor::new(bytes), read_at, bytes.len() as u64, path, limits)
 }
 
-/// Largest factor by which a compression method can expand its input, for the methods where one is known:
-/// a file declaring more decoded bytes than `factor × file size` cannot hold them and is refused before the exr
-/// crate allocates its buffers. `None` for methods without a useful bound (PIZ, DWA, HTJ2K).
+/// Largest factor by which a compression method can expand the bytes of a chunk: a part declaring more decoded
+/// bytes than `factor ×` the bytes its chunks really occupy in the file cannot hold them and is refused before the
+/// exr crate allocates its buffers. `None` only for methods the exr crate cannot decode anyway (HTJ2K).
 fn max_expansion(c: ::exr::compression::Compression) -> Option<u64> {
     use ::exr::compression::Compression as C;
     match c {
@@ -135,6 +190,14 @@ fn max_expansion(c: ::exr::compression::Compression) -> Option<u64> {
         C::PXR24 => Some(1376),
         // A flat 4×4 half block (32 bytes) costs at least 3 bytes; other types are stored raw.
         C::B44 | C::B44A => Some(11),
+        // PIZ: the wavelet and the value bitmap keep the count of 16-bit values; the Huffman stage's longest
+        // expansion is its run code (≥ 1 bit) + an 8-bit count repeating the last value up to 255 times: 4080 bits
+        // out of 9, 453:1.
+        C::PIZ => Some(512),
+        // DWA: zlib (≤ 1032:1) of OpenEXR's byte RLE (≤ 64:1) for the RLE-coded channels; the lossy channels' DC
+        // plane is zlib of 2 bytes per 8×8 block (128 decoded bytes) and their AC end-of-block codes are Huffman
+        // run codes, which is less. A loose bound, but a bound: the chunk table check proves the bytes exist.
+        C::DWAA(_) | C::DWAB(_) => Some(1032 * 64),
         _ => None,
     }
 }
@@ -203,7 +266,6 @@ fn check_headers(meta: &::exr::meta::MetaData, file_len: u64, path: &Path, limit
     }
     let mut declared: u128 = 0;
     let mut chunks: u128 = 0;
-    let mut bounded: u128 = 0; // decoded bytes of parts whose compression has a known expansion bound
     let mut lossy = false;
     for (i, h) in meta.headers.iter().enumerate() {
         if h.deep {
@@ -235,19 +297,15 @@ fn check_headers(meta: &::exr::meta::MetaData, file_len: u64, path: &Path, limit
                 ),
             });
         }
-        let pixel_bytes: u128 = h.channels.list.iter().map(|c| c.sample_type.bytes_per_sample() as u128).sum();
-        let bytes = h.layer_size.0 as u128 * h.layer_size.1 as u128 * pixel_bytes;
-        declared += bytes;
+        declared += part_bytes(h);
         chunks += h.chunk_count as u128;
-        if let Some(f) = max_expansion(h.compression) {
-            bounded += bytes / u128::from(f);
-        }
     }
     if declared > u128::from(limits.max_bytes) {
         return Err(Error::TooLarge {
             path: path.into(),
             bytes: declared.min(u64::MAX as u128) as u64,
             limit: limits.max_bytes,
+            why: limits.describe(),
         });
     }
     // Every chunk costs at least an 8-byte offset-table entry and an 8-byte chunk header.
@@ -257,15 +315,137 @@ fn check_headers(meta: &::exr::meta::MetaData, file_len: u64, path: &Path, limit
             format!("declares {chunks} chunks, more than a {file_len}-byte file can hold (truncated or damaged)"),
         ));
     }
-    if bounded > u128::from(file_len) {
-        return Err(Error::invalid(
-            path,
-            format!("declares {declared} bytes of samples, more than its compression can store in {file_len} bytes (truncated or damaged)"),
-        ));
-    }
     check_channel_names(meta, path)?;
     let first = meta.headers[0].compression;
     Ok(Plan { compression: compression_name(first).to_string(), lossy, parallel: declared > 4 << 20 })
+}
+
+/// Decoded bytes of one part's samples, as its header declares them.
+fn part_bytes(h: &::exr::meta::header::Header) -> u128 {
+    let pixel_bytes: u128 = h.channels.list.iter().map(|c| c.sample_type.bytes_per_sample() as u128).sum();
+    h.layer_size.0 as u128 * h.layer_size.1 as u128 * pixel_bytes
+}
+
+/// Proves, before any pixel is allocated, that the chunks the headers promise are in the file: reads the offset
+/// tables and every chunk's own header (part number, position, byte count) and checks that each chunk lies inside
+/// the file, that no two overlap and that multi-part chunks name the part whose table points at them. Then each
+/// part's declared samples must fit in what its chunks can decode to ([`max_expansion`] × their bytes). A file
+/// whose tables point past its end (a few KB declaring gigabytes) is refused here, at the cost of reading a few
+/// bytes per chunk. `read_at` reads exactly `buf.len()` bytes at an offset.
+fn check_chunks(
+    meta: &::exr::meta::MetaData,
+    mut read_at: impl FnMut(u64, &mut [u8]) -> std::io::Result<()>,
+    file_len: u64,
+    path: &Path,
+) -> Result<()> {
+    use ::exr::meta::BlockDescription;
+    let damaged = |what: String| Error::invalid(path, format!("{what} (truncated or damaged)"));
+    let in_header = || damaged(format!("ends at byte {file_len}, inside its header"));
+    let word = |at: u64, read_at: &mut dyn FnMut(u64, &mut [u8]) -> std::io::Result<()>| -> Result<u32> {
+        let mut four = [0u8; 4];
+        read_at(at, &mut four).map_err(|_| in_header())?;
+        Ok(u32::from_le_bytes(four))
+    };
+    // Where the NUL that ends the string at `at` is (names are at most 255 bytes).
+    let string_end = |at: u64, read_at: &mut dyn FnMut(u64, &mut [u8]) -> std::io::Result<()>| -> Result<u64> {
+        let mut window = [0u8; 64];
+        for k in 0..5u64 {
+            let from = at + 64 * k;
+            let n = file_len.saturating_sub(from).min(64) as usize;
+            read_at(from, &mut window[..n]).map_err(|_| in_header())?;
+            if let Some(i) = window[..n].iter().position(|&b| b == 0) {
+                return Ok(from + i as u64);
+            }
+            if n < 64 {
+                break;
+            }
+        }
+        Err(in_header())
+    };
+    // Walk the headers to where the offset tables start: attributes are `name\0 type\0 size value`, an empty name
+    // ends a header, and one more empty name ends the list of a multi-part file.
+    let multipart = word(4, &mut read_at)? & 0x1000 != 0;
+    let mut at = 8u64;
+    for _ in 0..meta.headers.len() {
+        loop {
+            let name_end = string_end(at, &mut read_at)?;
+            if name_end == at {
+                at += 1;
+                break;
+            }
+            let type_end = string_end(name_end + 1, &mut read_at)?;
+            at = type_end + 1 + 4 + u64::from(word(type_end + 1, &mut read_at)?);
+        }
+    }
+    if multipart {
+        at += 1;
+    }
+    // The offset tables: one u64 per chunk, part by part.
+    let tables_end = at + 8 * meta.headers.iter().map(|h| h.chunk_count as u64).sum::<u64>();
+    if tables_end > file_len {
+        return Err(damaged(format!("its chunk offset tables end at byte {tables_end}, past the file's {file_len}")));
+    }
+    let mut chunks: Vec<(u64, usize)> = Vec::with_capacity(((tables_end - at) / 8) as usize);
+    let mut eight = [0u8; 8];
+    for (part, h) in meta.headers.iter().enumerate() {
+        for _ in 0..h.chunk_count {
+            read_at(at, &mut eight).map_err(|e| Error::io(path, e))?;
+            chunks.push((u64::from_le_bytes(eight), part));
+            at += 8;
+        }
+    }
+    chunks.sort_unstable();
+    let mut stored = vec![0u64; meta.headers.len()];
+    let mut previous_end = tables_end;
+    for &(offset, part) in &chunks {
+        let h = &meta.headers[part];
+        let fields: u64 = match h.blocks {
+            BlockDescription::ScanLines => 2,
+            BlockDescription::Tiles(_) => 5,
+        } + u64::from(multipart);
+        if offset < previous_end || offset.saturating_add(4 * fields) > file_len {
+            return Err(damaged(format!(
+                "a chunk of part {part} is listed at byte {offset}, {} (the file is {file_len} bytes)",
+                if offset < tables_end {
+                    "inside the headers and offset tables".to_string()
+                } else if offset < previous_end {
+                    format!("inside the chunk before it, which ends at byte {previous_end}")
+                } else {
+                    "past the end of the file".to_string()
+                }
+            )));
+        }
+        if multipart {
+            let named = word(offset, &mut read_at)?;
+            if named as usize != part {
+                return Err(damaged(format!(
+                    "the chunk at byte {offset} belongs to part {named}, but part {part}'s offset table lists it"
+                )));
+            }
+        }
+        let size = word(offset + 4 * (fields - 1), &mut read_at)?;
+        let end = offset + 4 * fields + u64::from(size);
+        if size > i32::MAX as u32 || end > file_len {
+            return Err(damaged(format!(
+                "the chunk at byte {offset} declares {} bytes, past the end of the {file_len}-byte file",
+                size as i32
+            )));
+        }
+        stored[part] += u64::from(size);
+        previous_end = end;
+    }
+    for (part, h) in meta.headers.iter().enumerate() {
+        let (declared, factor) = (part_bytes(h), max_expansion(h.compression));
+        if let Some(f) = factor.filter(|&f| declared > u128::from(stored[part]) * u128::from(f)) {
+            return Err(damaged(format!(
+                "part {part} declares {declared} bytes of samples, but its chunks hold {} bytes, which {} \
+                 compression expands at most {f}×",
+                stored[part],
+                compression_name(h.compression)
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Runs `f`, turning a panic inside the exr crate into an error (a last line of defence: the header checks above
@@ -280,6 +460,7 @@ fn guarded<T>(path: &Path, f: impl FnOnce() -> ::exr::error::Result<T>) -> Resul
 
 fn read_raw_from<R: std::io::Read + std::io::Seek>(
     mut reader: R,
+    read_at: impl FnMut(u64, &mut [u8]) -> std::io::Result<()>,
     file_len: u64,
     path: &Path,
     limits: &ReadLimits,
@@ -287,6 +468,7 @@ fn read_raw_from<R: std::io::Read + std::io::Seek>(
     use ::exr::prelude::{read, FlatSamples, ReadChannels, ReadLayers};
     let meta = guarded(path, || ::exr::meta::MetaData::read_from_buffered(&mut reader, false))?;
     let plan = check_headers(&meta, file_len, path, limits)?;
+    check_chunks(&meta, read_at, file_len, path)?;
     drop(meta);
     reader.seek(std::io::SeekFrom::Start(0)).map_err(|e| Error::io(path, e))?;
     let image = guarded(path, || {

@@ -197,6 +197,28 @@ impl Header {
                 ));
             }
         }
+        // The arrays may not alias: a file must hold every array it declares (else a small file with every
+        // offset at 0 would decode to a G-buffer many times its size).
+        let mut spans: Vec<(u64, u64, usize)> = ARRAYS
+            .iter()
+            .enumerate()
+            .map(|(k, &(_, elem, per_pixel))| {
+                let o = self.offsets[k] as u64;
+                (o, o + elem * if per_pixel { pixels } else { self.num_lights as u64 }, k)
+            })
+            .filter(|&(start, end, _)| end > start)
+            .collect();
+        spans.sort_unstable();
+        for pair in spans.windows(2) {
+            let ((_, a_end, a), (b_start, _, b)) = (pair[0], pair[1]);
+            if b_start < a_end {
+                return Err(format!(
+                    "array {} (offsets[{b}] = {b_start}) starts inside array {} (offsets[{a}], which ends at byte \
+                     {a_end}): arrays may not overlap",
+                    ARRAYS[b].0, ARRAYS[a].0
+                ));
+            }
+        }
         Ok(())
     }
 
@@ -275,6 +297,7 @@ fn check_header(head: &[u8], file_len: u64, path: &Path, opts: &LoadOptions) -> 
             path: path.into(),
             bytes: need.max(h.chunk_size as u64),
             limit: opts.limits.max_bytes,
+            why: opts.limits.describe(),
         });
     }
     if HEADER_BYTES as u64 + h.chunk_size as u64 > file_len {

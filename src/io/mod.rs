@@ -143,7 +143,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     // EXR first: it has a magic number; the `.bin` check is loose (see `ispc::matches_file`).
     let loaded = if head.starts_with(&EXR_MAGIC) {
         let raw = exr::read_raw(path, &opts.limits)?;
-        read_exr(&raw, path, side.as_ref().map(|s| &s.0), opts)?
+        read_exr(raw, path, side.as_ref().map(|s| &s.0), opts)?
     } else if ispc::matches_file(&head, len) {
         ispc::read(path, side.as_ref().map(|s| &s.0), opts)?
     } else {
@@ -158,7 +158,7 @@ pub fn load_bytes(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<Loade
     let side = resolve_sidecar(path, opts)?;
     let loaded = if bytes.starts_with(&EXR_MAGIC) {
         let raw = exr::read_raw_bytes(bytes, path, &opts.limits)?;
-        read_exr(&raw, path, side.as_ref().map(|s| &s.0), opts)?
+        read_exr(raw, path, side.as_ref().map(|s| &s.0), opts)?
     } else if ispc::matches_file(bytes, bytes.len() as u64) {
         ispc::read_bytes(bytes, path, side.as_ref().map(|s| &s.0), opts)?
     } else {
@@ -247,9 +247,15 @@ fn dir_sidecar(dir: &Path) -> Result<Option<PathBuf>> {
 /// Picks the EXR reader: canonical; the `--map` reader when the map names depth or position; Blender; Mitsuba;
 /// else the `--map` reader (which explains what is missing). Other `--map` entries override scalar and ID
 /// attributes of the format-specific readers.
-fn read_exr(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadOptions) -> Result<Loaded> {
+fn read_exr(mut raw: RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadOptions) -> Result<Loaded> {
+    let raw = &mut raw;
     if canonical::matches(raw) {
-        let gbuffer = canonical::from_raw(raw, path)?;
+        // `--map` entries read channels after the conversion: keep the samples for them.
+        let gbuffer = if opts.map.is_empty() {
+            canonical::from_raw_releasing(raw, path)?
+        } else {
+            canonical::from_raw(raw, path)?
+        };
         let sources = canonical::sources(raw, &gbuffer);
         let camera_source = if gbuffer.camera.is_some() { CameraSource::File } else { CameraSource::Unknown };
         let mut loaded = Loaded {

@@ -135,9 +135,29 @@ impl SidecarCamera {
     }
 }
 
+/// Most lights a sidecar may hold: 64× the 1024 of the ISPC example and of Lauritzen's demo; the resolve's light
+/// table and the f64 reference stay within a few hundred MB at this count.
+pub const MAX_LIGHTS: usize = 1 << 16;
+
+/// Largest sidecar file read: room for [`MAX_LIGHTS`] lights (about 200 bytes of JSON each) and a material
+/// catalogue, so that parsing stays within a few hundred MB.
+pub const MAX_SIDECAR_BYTES: u64 = 64 << 20;
+
 impl Sidecar {
     /// Reads and parses a sidecar file.
     pub fn load(path: &Path) -> Result<Sidecar> {
+        let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
+        if len > MAX_SIDECAR_BYTES {
+            return Err(Error::Parse {
+                path: path.into(),
+                what: format!(
+                    "sidecar of {len} bytes, over the {} MiB a sidecar may have ({MAX_LIGHTS} lights take about \
+                     {} MiB of JSON)",
+                    MAX_SIDECAR_BYTES >> 20,
+                    (MAX_LIGHTS as u64 * 200) >> 20
+                ),
+            });
+        }
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         Sidecar::parse(&text, path)
     }
@@ -161,6 +181,12 @@ impl Sidecar {
             if !(1..=8).contains(&k) {
                 return Err(Error::Parse { path: path.into(), what: format!("supersample {k} outside 1..=8") });
             }
+        }
+        if s.lights.len() > MAX_LIGHTS {
+            return Err(Error::Parse {
+                path: path.into(),
+                what: format!("{} lights, more than the {MAX_LIGHTS} a sidecar may hold", s.lights.len()),
+            });
         }
         MaterialParams::validate_all(&s.materials).map_err(|what| Error::Parse { path: path.into(), what })?;
         match s.lights_space.as_deref() {
