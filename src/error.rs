@@ -91,6 +91,12 @@ pub enum Error {
         /// The parser's message.
         what: String,
     },
+    /// An output would replace a file this run read as input.
+    #[error("{path}: is an input of this run; refusing to overwrite it (choose another output path)")]
+    WouldOverwriteInput {
+        /// The input file.
+        path: PathBuf,
+    },
     /// A parameter given by the caller is out of range or inconsistent (no file involved).
     #[error("invalid argument: {0}")]
     Argument(String),

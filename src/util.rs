@@ -13,9 +13,38 @@ pub fn f64_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result
     Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
+/// The files this process has read as input ([`protect_input`]), by canonical path: no output replaces them.
+static INPUTS: std::sync::Mutex<Vec<std::path::PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// Records `path` as an input of this run: [`write_atomic`] then refuses to replace it, whatever output path names it
+/// (`-o`, `--png`, a report folder holding it). The loaders call this for every file they read (dumps, file-set
+/// images, sidecars, layout files, merged reports). A path that does not exist is ignored.
+pub fn protect_input(path: &Path) {
+    if let Ok(p) = std::fs::canonicalize(path) {
+        let mut inputs = INPUTS.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        if !inputs.contains(&p) {
+            inputs.push(p);
+        }
+    }
+}
+
+/// Refuses `path` as an output when it is a file this run read as input ([`protect_input`]); for callers that
+/// write several files and must refuse before the first (a report folder).
+pub fn check_not_input(path: &Path) -> Result<()> {
+    let is_input = std::fs::canonicalize(path)
+        .is_ok_and(|p| INPUTS.lock().unwrap_or_else(std::sync::PoisonError::into_inner).contains(&p));
+    if is_input {
+        return Err(Error::WouldOverwriteInput { path: path.into() });
+    }
+    Ok(())
+}
+
 /// Writes a file atomically: the bytes go to a temporary file in the same directory, which is then renamed over
-/// `path`. A failure leaves whatever was at `path` untouched.
+/// `path`. A failure leaves whatever was at `path` untouched, and so does a kill at any point (the temporary file
+/// is left at worst, under a `.gbuf-tmp-` name). A file this run read as input is never replaced
+/// ([`protect_input`]).
 pub fn write_atomic(path: &Path, write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>) -> Result<()> {
+    check_not_input(path)?;
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),

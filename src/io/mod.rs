@@ -126,6 +126,7 @@ pub struct Loaded {
 /// folds (`opts.fold`, else the sidecar's `supersample`), attaches the sidecar's camera and lights, replaces NaN/±Inf
 /// by finite values (counted in [`Loaded::sanitized`]) and validates the result.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
+    crate::util::protect_input(path);
     let side = resolve_sidecar(path, opts)?;
     if path.is_dir() || !opts.files.is_empty() {
         let camera = side.as_ref().and_then(|(s, _)| s.camera.as_ref());
@@ -155,6 +156,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
 /// Loads a dump (EXR or ISPC `.bin`) held in memory, exactly as [`load`] would from a file (`path` names it in
 /// errors and locates the default sidecar beside it).
 pub fn load_bytes(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<Loaded> {
+    crate::util::protect_input(path);
     let side = resolve_sidecar(path, opts)?;
     let loaded = if bytes.starts_with(&EXR_MAGIC) {
         let raw = exr::read_raw_bytes(bytes, path, &opts.limits)?;

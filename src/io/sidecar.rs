@@ -146,6 +146,7 @@ pub const MAX_SIDECAR_BYTES: u64 = 64 << 20;
 impl Sidecar {
     /// Reads and parses a sidecar file.
     pub fn load(path: &Path) -> Result<Sidecar> {
+        crate::util::protect_input(path);
         let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
         if len > MAX_SIDECAR_BYTES {
             return Err(Error::Parse {

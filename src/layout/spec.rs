@@ -168,6 +168,7 @@ impl LayoutSpec {
 
     /// Reads and parses a layout file (no validation beyond syntax).
     pub fn read(path: &Path) -> Result<LayoutSpec> {
+        crate::util::protect_input(path);
         let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
         if meta.len() > MAX_SPEC_FILE_BYTES {
             return Err(Error::invalid(

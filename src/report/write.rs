@@ -26,9 +26,16 @@ fn json_err(e: serde_json::Error) -> Error {
     Error::Argument(format!("cannot serialize the report: {e}"))
 }
 
+/// The files every report folder has besides its attachments.
+const FOLDER_FILES: [&str; 4] = ["report.csv", "aggregate.csv", "report.json", "report.md"];
+
 /// Writes the report folder `dir` and returns the paths written.
 pub fn write_folder(dir: &Path, rep: &Report, attachments: &[Attachment]) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    // Refuse before writing anything when a file of the folder is an input (`gbuf merge r/report.json -o r`).
+    for name in attachments.iter().map(|a| a.name.as_str()).chain(FOLDER_FILES) {
+        crate::util::check_not_input(&dir.join(name))?;
+    }
     let mut written = Vec::new();
     let mut put = |name: &str, bytes: &[u8]| -> Result<()> {
         if name.contains(['/', '\\']) || name.is_empty() || name.starts_with('.') {
@@ -42,10 +49,11 @@ pub fn write_folder(dir: &Path, rep: &Report, attachments: &[Attachment]) -> Res
     for a in attachments {
         put(&a.name, &a.bytes)?;
     }
-    put("report.csv", csv::to_csv(&rep.rows).as_bytes())?;
-    put("aggregate.csv", csv::aggregate_csv(&rep.aggregate).as_bytes())?;
-    put("report.json", to_json(rep)?.as_bytes())?;
-    put("report.md", markdown::to_markdown(rep).as_bytes())?;
+    let [rows, aggregate, json, md] = FOLDER_FILES;
+    put(rows, csv::to_csv(&rep.rows).as_bytes())?;
+    put(aggregate, csv::aggregate_csv(&rep.aggregate).as_bytes())?;
+    put(json, to_json(rep)?.as_bytes())?;
+    put(md, markdown::to_markdown(rep).as_bytes())?;
     Ok(written)
 }
 
