@@ -99,6 +99,11 @@ impl Detector {
 pub fn detect(gb: &GBuffer, detector: Detector, cfg: &DetectorConfig) -> Result<EdgeMask> {
     cfg.validate()?;
     gb.validate()?;
+    // One sample per pixel: there is nothing to shade per sample, and every detector's mask is `none`'s (a
+    // pass over the G-buffer saved on every 1-sample frame, e.g. every ISPC `.bin`).
+    if gb.samples == 1 {
+        return Ok(baselines::none(gb));
+    }
     match detector {
         Detector::Lauritzen => lauritzen::detect(gb, cfg, false),
         Detector::Combined => lauritzen::detect(gb, cfg, true),

@@ -14,7 +14,7 @@ use super::falloff::MIN_DISTANCE;
 use super::fastmath::POW_MIN_BASE;
 use super::lights::{LightRec, LightTable, LUMA};
 #[cfg(target_arch = "x86_64")]
-use super::simd::Avx512;
+use super::simd::{Avx2, Avx512};
 pub use super::simd::BLOCK;
 use super::simd::{Lanes, Portable, Two};
 use super::worklist::{Items, QuadSoa};
@@ -110,7 +110,7 @@ fn run_avx2<const B: u8, const F: u8, const Q: bool, const P: bool>(
     lights: &LightTable,
     quad: &QuadSoa,
 ) {
-    run::<Portable<true>, B, F, Q, P>(it, range, lights, quad);
+    run::<Avx2, B, F, Q, P>(it, range, lights, quad);
 }
 
 #[inline(always)]
@@ -755,19 +755,11 @@ mod speed {
             type Path<'a> = (&'a str, Box<dyn Fn(&mut Items) + 'a>);
             let mut paths: Vec<Path> = Vec::new();
             paths.push((instruction_set(), Box::new(|it: &mut Items| shade(Isa::detect(), it, 0..n, &table, &q, v))));
-            #[cfg(target_arch = "x86_64")]
             if Isa::detect() == Isa::Avx512 {
-                // SAFETY: the CPU has AVX-512F, hence AVX2 and FMA.
-                paths.push((
-                    "avx2",
-                    Box::new(|it: &mut Items| unsafe { run_avx2::<1, 1, false, false>(it, 0..n, &table, &q) }),
-                ));
+                paths.push(("avx2", Box::new(|it: &mut Items| shade(Isa::Avx2, it, 0..n, &table, &q, v))));
             }
             paths.push(("portable", Box::new(|it: &mut Items| shade_portable(it, 0..n, &table, &q, v))));
             for (isa, f) in &paths {
-                if *isa == "avx2" && brdf != Brdf::BlinnPhong {
-                    continue;
-                }
                 let t = std::time::Instant::now();
                 for _ in 0..reps {
                     f(&mut it);

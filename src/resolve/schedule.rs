@@ -12,7 +12,7 @@ use super::culling::{quad_rects, Bounds};
 use super::kernel::{finish_prepass, shade, Variant, BLOCK};
 use super::lights::LightTable;
 #[cfg(target_arch = "x86_64")]
-use super::simd::Avx512;
+use super::simd::{Avx2, Avx512};
 use super::simd::Portable;
 use super::surface::{Reads, SanitizedCounts, SurfaceReader, MIN_VIEW_DEPTH};
 use super::worklist::{Items, QuadSoa, PAD_PIXEL};
@@ -593,7 +593,7 @@ fn touching_avx512(b: &Bounds, s: &LightTable, out: &mut Vec<u32>) {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 fn touching_avx2(b: &Bounds, s: &LightTable, out: &mut Vec<u32>) {
-    b.touching::<Portable<true>>(&s.x, &s.y, &s.z, &s.r, out);
+    b.touching::<Avx2>(&s.x, &s.y, &s.z, &s.r, out);
 }
 
 /// Culls lights (all, or only those in `subset`) against `b` and gathers the survivors' constants into

@@ -3,9 +3,11 @@
 //!
 //! - [`Avx512`]: one `__m512`; `rsqrt` is `vrsqrt14ps` plus a Newton step, `log2` uses `vgetexpps`/`vgetmantps`,
 //!   `exp2` uses `vscalefps` — no divider, no square root unit in the light loop;
-//! - [`Portable`]`<true>`: sixteen `f32`s in an array, lane loops the compiler turns into AVX2 + FMA code (the
-//!   kernel copy compiled with those features);
-//! - [`Portable`]`<false>`: the same without FMA, for any other CPU.
+//! - [`Avx2`]: two `__m256`; `rsqrt` and `recip` are `vrsqrtps`/`vrcpps` plus a Newton step, `log2` divides by a
+//!   refined reciprocal, `exp2` builds `2^i` in the exponent bits — no divider, no square root unit either;
+//! - [`Portable`]`<false>`: sixteen `f32`s in an array, lane loops the compiler vectorises for whatever the target
+//!   has (every CPU that is not x86-64 with AVX2, e.g. aarch64); `Portable<true>` is the same with fused
+//!   multiply-adds.
 //!
 //! Accuracy (tests below, against f64): `rsqrt` within [`RSQRT_MAX_REL_ERROR`]; `log2` and `exp2` within the
 //! bounds of `fastmath.rs` on every path. Results differ between paths by rounding only (fused vs separate
@@ -463,9 +465,10 @@ mod avx512 {
     ];
     /// `log2(1 + r)/r ≈ q0 + q1 r + q2 r²` on |r| ≤ 1/64 (the Taylor terms: absolute error of `log2` ≤ 2.2e-8).
     pub(super) const LOG2_Q: [f32; 3] = [std::f32::consts::LOG2_E, -0.721_347_5, 0.480_898_35];
-    /// `2^f ≈ Σ cₖ fᵏ` on |f| ≤ ½ (minimax, relative error 7.5e-8 in exact arithmetic).
-    pub(super) const EXP2_P: [f32; 6] =
-        [1.000_000_1, 0.693_146_97, 0.240_221_2, 0.055_507_13, 0.009_675_542, 0.001_327_647_2];
+    /// `2^f ≈ Σ cₖ fᵏ` on |f| ≤ ½ (minimax, relative error 7.5e-8 in exact arithmetic, with its constant term
+    /// 1.0000001 rounded to 1 so that `2^0 = 1` exactly: 1.8e-7 — `exp2_nonpositive` must never exceed 1, and
+    /// `exp2` of the −126 clamp must not exceed 2⁻¹²⁶).
+    pub(super) const EXP2_P: [f32; 6] = [1.0, 0.693_146_97, 0.240_221_2, 0.055_507_13, 0.009_675_542, 0.001_327_647_2];
 
     /// Sixteen lanes in one AVX-512 register.
     #[derive(Clone, Copy, Debug)]
@@ -647,6 +650,263 @@ mod avx512 {
     }
 }
 
+#[cfg(target_arch = "x86_64")]
+pub use avx2::Avx2;
+
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    //! AVX2 + FMA lanes: sixteen lanes as two `__m256`. Every method is `#[inline(always)]` and only ever inlined
+    //! into functions compiled with `avx2,fma` (the dispatch checks the CPU first). What the portable lanes compute
+    //! with a divider and a square root unit (exact `1/√x`, `log2`'s `(m − 1)/(m + 1)`) is done here with the
+    //! hardware estimates (`vrsqrtps`, `vrcpps`, 2⁻¹² relative) and one Newton step, and `exp2` applies `2^i` by
+    //! adding to the exponent bits, so the light loop never waits on the divider.
+    use super::{Lanes, LANES};
+    use std::arch::x86_64::*;
+    use std::ops::{Add, Mul, Sub};
+
+    /// Sixteen lanes in two AVX registers (lanes 0–7, 8–15).
+    #[derive(Clone, Copy, Debug)]
+    pub struct Avx2(__m256, __m256);
+
+    // SAFETY (all `unsafe` blocks in this module): the intrinsics need AVX2 and FMA, and `Avx2` values are only
+    // created inside functions the dispatch enters after `Isa::detect()` found them. Loads and stores check the
+    // slice length first.
+
+    /// The expression on both halves, written out twice: not a closure, whose body would be compiled without the
+    /// caller's `avx2` feature and call every intrinsic out of line (Blinn-Phong measured 30 ns per pair so).
+    macro_rules! both {
+        ($a:expr, |$x:ident| $e:expr) => {{
+            let a = $a;
+            #[allow(unused_unsafe)]
+            let lo = {
+                let $x = a.0;
+                unsafe { $e }
+            };
+            #[allow(unused_unsafe)]
+            let hi = {
+                let $x = a.1;
+                unsafe { $e }
+            };
+            Avx2(lo, hi)
+        }};
+        ($a:expr, $b:expr, |$x:ident, $y:ident| $e:expr) => {{
+            let (a, b) = ($a, $b);
+            #[allow(unused_unsafe)]
+            let lo = {
+                let ($x, $y) = (a.0, b.0);
+                unsafe { $e }
+            };
+            #[allow(unused_unsafe)]
+            let hi = {
+                let ($x, $y) = (a.1, b.1);
+                unsafe { $e }
+            };
+            Avx2(lo, hi)
+        }};
+    }
+
+    impl Add for Avx2 {
+        type Output = Self;
+        #[inline(always)]
+        fn add(self, o: Self) -> Self {
+            both!(self, o, |x, y| _mm256_add_ps(x, y))
+        }
+    }
+    impl Sub for Avx2 {
+        type Output = Self;
+        #[inline(always)]
+        fn sub(self, o: Self) -> Self {
+            both!(self, o, |x, y| _mm256_sub_ps(x, y))
+        }
+    }
+    impl Mul for Avx2 {
+        type Output = Self;
+        #[inline(always)]
+        fn mul(self, o: Self) -> Self {
+            both!(self, o, |x, y| _mm256_mul_ps(x, y))
+        }
+    }
+
+    impl Avx2 {
+        /// The lanes' bits as integers, each half.
+        #[inline(always)]
+        fn int(x: __m256) -> __m256i {
+            unsafe { _mm256_castps_si256(x) }
+        }
+        /// `2^x` for `x` clamped to [−126, `hi`]: `x = i + f`, `i` the nearest integer, `|f| ≤ ½`, `2^f` by the
+        /// minimax polynomial of the AVX-512 path, `2^i` built in the exponent bits (normal for every clamped `i`).
+        #[inline(always)]
+        fn exp2_below(self, hi: f32) -> Self {
+            let [c0, c1, c2, c3, c4, c5] = super::avx512::EXP2_P;
+            both!(self, |x| {
+                let x = _mm256_min_ps(_mm256_max_ps(x, _mm256_set1_ps(-126.0)), _mm256_set1_ps(hi));
+                let i = _mm256_round_ps::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(x);
+                let f = _mm256_sub_ps(x, i);
+                let c = _mm256_set1_ps;
+                let mut p = _mm256_fmadd_ps(f, c(c5), c(c4));
+                p = _mm256_fmadd_ps(p, f, c(c3));
+                p = _mm256_fmadd_ps(p, f, c(c2));
+                p = _mm256_fmadd_ps(p, f, c(c1));
+                p = _mm256_fmadd_ps(p, f, c(c0));
+                let scale = _mm256_slli_epi32::<23>(_mm256_add_epi32(_mm256_cvtps_epi32(i), _mm256_set1_epi32(127)));
+                _mm256_mul_ps(p, _mm256_castsi256_ps(scale))
+            })
+        }
+    }
+
+    impl Lanes for Avx2 {
+        const N: usize = LANES;
+        const INTERLEAVE: usize = 4;
+        type Mask = (__m256, __m256);
+        #[inline(always)]
+        fn splat(x: f32) -> Self {
+            unsafe { Avx2(_mm256_set1_ps(x), _mm256_set1_ps(x)) }
+        }
+        #[inline(always)]
+        fn load(a: &[f32]) -> Self {
+            let a = &a[..LANES];
+            unsafe { Avx2(_mm256_loadu_ps(a.as_ptr()), _mm256_loadu_ps(a.as_ptr().add(8))) }
+        }
+        #[inline(always)]
+        fn store(self, a: &mut [f32]) {
+            let a = &mut a[..LANES];
+            unsafe {
+                _mm256_storeu_ps(a.as_mut_ptr(), self.0);
+                _mm256_storeu_ps(a.as_mut_ptr().add(8), self.1);
+            }
+        }
+        #[inline(always)]
+        fn mul_add(self, b: Self, c: Self) -> Self {
+            unsafe { Avx2(_mm256_fmadd_ps(self.0, b.0, c.0), _mm256_fmadd_ps(self.1, b.1, c.1)) }
+        }
+        #[inline(always)]
+        fn nmul_add(self, b: Self, c: Self) -> Self {
+            unsafe { Avx2(_mm256_fnmadd_ps(self.0, b.0, c.0), _mm256_fnmadd_ps(self.1, b.1, c.1)) }
+        }
+        #[inline(always)]
+        fn max(self, o: Self) -> Self {
+            both!(self, o, |x, y| _mm256_max_ps(x, y))
+        }
+        #[inline(always)]
+        fn min(self, o: Self) -> Self {
+            both!(self, o, |x, y| _mm256_min_ps(x, y))
+        }
+        #[inline(always)]
+        fn rsqrt(self) -> Self {
+            // y ≈ 1/√x to 1.5·2⁻¹²; one Newton step y·(1.5 − ½x·y²) brings it to about 2⁻²².
+            both!(self, |x| {
+                let y = _mm256_rsqrt_ps(x);
+                let hx = _mm256_mul_ps(x, _mm256_set1_ps(0.5));
+                let t = _mm256_fnmadd_ps(hx, _mm256_mul_ps(y, y), _mm256_set1_ps(1.5));
+                _mm256_mul_ps(y, t)
+            })
+        }
+        #[inline(always)]
+        fn rsqrt_approx(self) -> Self {
+            // The bare estimate is 2⁻¹², looser than the 2⁻¹⁴ this promises: refine it.
+            self.rsqrt()
+        }
+        #[inline(always)]
+        fn recip(self) -> Self {
+            // y ≈ 1/x to 1.5·2⁻¹²; Newton y + y·(1 − x·y).
+            both!(self, |x| {
+                let y = _mm256_rcp_ps(x);
+                let e = _mm256_fnmadd_ps(x, y, _mm256_set1_ps(1.0));
+                _mm256_fmadd_ps(y, e, y)
+            })
+        }
+        #[inline(always)]
+        fn log2(self) -> Self {
+            // fastmath::log2 with its division by a refined reciprocal: x = m·2^e, m in [√½, √2),
+            // s = (m − 1)/(m + 1), ln m = 2s·(1 + s²/3 + s⁴/5 + s⁶/7 + s⁸/9) (|s| ≤ 0.172).
+            both!(self, |x| {
+                let bits = Avx2::int(x);
+                let e = _mm256_sub_epi32(
+                    _mm256_and_si256(_mm256_srli_epi32::<23>(bits), _mm256_set1_epi32(0xff)),
+                    _mm256_set1_epi32(127),
+                );
+                let m = _mm256_castsi256_ps(_mm256_or_si256(
+                    _mm256_and_si256(bits, _mm256_set1_epi32(0x007f_ffff)),
+                    _mm256_set1_epi32(0x3f80_0000),
+                ));
+                let big = _mm256_cmp_ps::<_CMP_GT_OQ>(m, _mm256_set1_ps(std::f32::consts::SQRT_2));
+                let m = _mm256_blendv_ps(m, _mm256_mul_ps(m, _mm256_set1_ps(0.5)), big);
+                let e = _mm256_add_ps(
+                    _mm256_cvtepi32_ps(e),
+                    _mm256_and_ps(big, _mm256_set1_ps(1.0)),
+                );
+                let one = _mm256_set1_ps(1.0);
+                let d = _mm256_add_ps(m, one);
+                let y = _mm256_rcp_ps(d);
+                let y = _mm256_fmadd_ps(y, _mm256_fnmadd_ps(d, y, one), y);
+                let s = _mm256_mul_ps(_mm256_sub_ps(m, one), y);
+                let s2 = _mm256_mul_ps(s, s);
+                let c = _mm256_set1_ps;
+                let mut p = _mm256_fmadd_ps(s2, c(1.0 / 9.0), c(1.0 / 7.0));
+                p = _mm256_fmadd_ps(p, s2, c(1.0 / 5.0));
+                p = _mm256_fmadd_ps(p, s2, c(1.0 / 3.0));
+                p = _mm256_fmadd_ps(p, s2, one);
+                // log2 m = ln m · log2(e) = s · p · 2·log2(e).
+                let k = _mm256_mul_ps(s, c(2.0 * std::f32::consts::LOG2_E));
+                _mm256_fmadd_ps(k, p, e)
+            })
+        }
+        #[inline(always)]
+        fn exp2(self) -> Self {
+            self.exp2_below(126.0)
+        }
+        #[inline(always)]
+        fn exp2_nonpositive(self) -> Self {
+            self.exp2_below(0.0)
+        }
+        #[inline(always)]
+        fn gt(self, o: Self) -> Self::Mask {
+            unsafe { (_mm256_cmp_ps::<_CMP_GT_OQ>(self.0, o.0), _mm256_cmp_ps::<_CMP_GT_OQ>(self.1, o.1)) }
+        }
+        #[inline(always)]
+        fn ge(self, o: Self) -> Self::Mask {
+            unsafe { (_mm256_cmp_ps::<_CMP_GE_OQ>(self.0, o.0), _mm256_cmp_ps::<_CMP_GE_OQ>(self.1, o.1)) }
+        }
+        #[inline(always)]
+        fn le(self, o: Self) -> Self::Mask {
+            unsafe { (_mm256_cmp_ps::<_CMP_LE_OQ>(self.0, o.0), _mm256_cmp_ps::<_CMP_LE_OQ>(self.1, o.1)) }
+        }
+        #[inline(always)]
+        fn and(a: Self::Mask, b: Self::Mask) -> Self::Mask {
+            unsafe { (_mm256_and_ps(a.0, b.0), _mm256_and_ps(a.1, b.1)) }
+        }
+        #[inline(always)]
+        fn keep(self, m: Self::Mask) -> Self {
+            unsafe { Avx2(_mm256_and_ps(self.0, m.0), _mm256_and_ps(self.1, m.1)) }
+        }
+        #[inline(always)]
+        fn count(self, m: Self::Mask) -> Self {
+            let one = Self::splat(1.0);
+            self + one.keep(m)
+        }
+        #[inline(always)]
+        fn any(m: Self::Mask) -> bool {
+            unsafe { _mm256_movemask_ps(_mm256_or_ps(m.0, m.1)) != 0 }
+        }
+        #[inline(always)]
+        fn bits(m: Self::Mask) -> u64 {
+            unsafe { (_mm256_movemask_ps(m.0) as u64) | ((_mm256_movemask_ps(m.1) as u64) << 8) }
+        }
+        #[inline(always)]
+        fn hmin(self) -> f32 {
+            let mut a = [0.0f32; LANES];
+            self.min(Avx2(self.1, self.0)).store(&mut a);
+            a[..8].iter().fold(f32::INFINITY, |m, &x| m.min(x))
+        }
+        #[inline(always)]
+        fn hmax(self) -> f32 {
+            let mut a = [0.0f32; LANES];
+            self.max(Avx2(self.1, self.0)).store(&mut a);
+            a[..8].iter().fold(f32::NEG_INFINITY, |m, &x| m.max(x))
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -766,6 +1026,22 @@ mod tests {
         check::<Portable<false>>();
         // `Two` applies every operation to both halves; `load` fills both, `store` writes the first.
         check::<Two<Portable<false>>>();
+    }
+
+    #[test]
+    fn avx2_lanes_are_accurate_where_supported() {
+        #[cfg(target_arch = "x86_64")]
+        if crate::base::isa::Isa::detect() >= crate::base::isa::Isa::Avx2 {
+            #[target_feature(enable = "avx2,fma")]
+            fn run() {
+                check::<Avx2>();
+                check::<Two<Avx2>>();
+            }
+            // SAFETY: the CPU has AVX2 and FMA (checked above).
+            unsafe {
+                run();
+            }
+        }
     }
 
     #[test]
