@@ -9,7 +9,8 @@
 //! "Fast Equal-Area Mapping of the (Hemi)Sphere using SIMD", JGT 13(3), 2008. Cigolle et al., "A Survey of
 //! Efficient Representations for Independent Unit Vectors", JCGT 3(2), 2014, evaluate a full-sphere "Lambert
 //! equal-area" representation; we did not find their construction, and this one's worst case at 16 bits
-//! (0.966°, every code cell enumerated) is 4% below the 1.007° quoted for it (docs/CODECS.md).
+//! (0.965°, every code cell enumerated by `codec::eval::cell_sweep`) is 4% below the 1.007° quoted for it
+//! (docs/CODECS.md).
 //!
 //! Encode (n unit): `t = |n.xy| / √(1 + |n.z|)` (equal to √(1 − |n.z|), written without the cancellation near
 //! the poles: the cap 1 − |z| ≤ t² is the fraction t² of its hemisphere, as the diamond of radius t is of the
