@@ -269,7 +269,10 @@ mod tests {
         };
         // Identity-like decoders are cheaper than any projection that has to rebuild a unit vector.
         let identities = [ops("depth", "f32"), ops("scalar", "f32"), ops("colour", "f32")];
-        for n in ["oct-16", "oct-precise-16", "spheremap-cry-16", "spheremap-ispc-16", "lambert-16", "stereo-16"] {
+        for n in ["oct-16", "oct-precise-16", "spheremap-cry-16", "spheremap-ispc-16", "lambert-16", "stereo-16"]
+            .into_iter()
+            .chain(["lambert-sphere-16", "stereo-sphere-16"])
+        {
             for id in identities {
                 assert!(id < ops("", n), "identity {id} vs {n} {}", ops("", n));
             }
@@ -283,7 +286,11 @@ mod tests {
         assert!(ops("colour", "f16") > ops("colour", "unorm8"));
         assert!(ops("", "xyz-f16-48") > ops("", "xyz-snorm-48"));
         // The table in docs/CODECS.md ("Decode cost").
+        assert!(ops("", "lambert-sphere-16") > ops("", "stereo-sphere-16"), "the equal-area map needs two sines");
         for (name, want) in [("oct-16", 45), ("spheremap-cry-16", 64), ("spherical-16", 115), ("xyz-unorm-30", 32)] {
+            assert_eq!(ops("", name), want, "{name}: docs/CODECS.md says {want}");
+        }
+        for (name, want) in [("lambert-sphere-16", 102), ("stereo-sphere-24", 60)] {
             assert_eq!(ops("", name), want, "{name}: docs/CODECS.md says {want}");
         }
         for (name, want) in [("scalar unorm-8", 6), ("colour r11g11b10f", 106), ("depth unorm24", 9)] {

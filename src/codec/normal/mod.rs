@@ -1,7 +1,7 @@
 //! Unit-normal codecs: every scheme a G-buffer designer weighs, at any sensible bit count.
 //!
-//! Most schemes are a *projection* of the sphere onto a square (octahedral, spheremap, Lambert, stereographic,
-//! spherical angles, xy-with-reconstructed-z) followed by a *quantizer* of the two plane coordinates
+//! Most schemes are a *projection* of the sphere onto a square (octahedral, spheremap, Lambert, stereographic and
+//! their full-sphere folded forms, spherical angles, xy-with-reconstructed-z) followed by a *quantizer* of the two plane coordinates
 //! ([`Quant`]: snorm or unorm with k bits each, or IEEE half floats). [`Planar`] glues the two; each projection
 //! lives in its own file with its source, its error bound and its domain. `xyz` stores all three components.
 //!
@@ -19,18 +19,22 @@ use glam::{DVec3, Vec2, Vec3};
 
 mod hemi;
 mod lambert;
+mod lambert_sphere;
 mod oct;
 mod spheremap;
 mod spherical;
 mod stereo;
+mod stereo_sphere;
 mod xyz;
 
 pub use hemi::XyHemi;
 pub use lambert::Lambert;
+pub use lambert_sphere::{LambertSphere, LAMBERT_SPHERE_MAX_STRETCH};
 pub use oct::{Oct, OctPrecise};
 pub use spheremap::{ispc_spheremap_decode, ispc_spheremap_encode, SpheremapCry, SpheremapIspc};
 pub use spherical::Spherical;
 pub use stereo::Stereo;
+pub use stereo_sphere::{StereoSphere, STEREO_SPHERE_MAX_STRETCH};
 pub use xyz::{Xyz, XyzStorage};
 
 /// Slack added to every analytic error bound for f32 rounding in the projection, the normalisation and the
@@ -66,6 +70,12 @@ pub enum NormalScheme {
     Stereo,
     /// Stereographic projection in half floats, unscaled and unclamped (32 bits).
     StereoF16,
+    /// Full-sphere Lambert equal-area: each hemisphere's azimuthal equal-area disc on the octahedral diamond
+    /// (concentric map), the lower hemisphere folded into the corners; snorm.
+    LambertSphere,
+    /// Full-sphere stereographic: each hemisphere's stereographic disc stretched radially onto the octahedral
+    /// diamond, the lower hemisphere folded into the corners; snorm.
+    StereoSphere,
     /// Octahedral (Meyer et al. 2010, Cigolle et al. 2014), snorm, rounding to the nearest code.
     Oct,
     /// Precise octahedral: the best of the four neighbouring codes (Cigolle et al. 2014, "octP").
@@ -88,6 +98,8 @@ crate::named!(NormalScheme: "normal scheme" {
     LambertF16 => "lambert-f16",
     Stereo => "stereo",
     StereoF16 => "stereo-f16",
+    LambertSphere => "lambert-sphere",
+    StereoSphere => "stereo-sphere",
     Oct => "oct",
     OctPrecise => "oct-precise",
     OctF16 => "oct-f16",
@@ -161,6 +173,8 @@ impl NormalScheme {
             NormalScheme::Lambert | NormalScheme::LambertF16 => Box::new(Planar::new(Lambert, q)),
             NormalScheme::Stereo => Box::new(Planar::new(Stereo::SCALED, q)),
             NormalScheme::StereoF16 => Box::new(Planar::new(Stereo::UNSCALED, q)),
+            NormalScheme::LambertSphere => Box::new(Planar::new(LambertSphere, q)),
+            NormalScheme::StereoSphere => Box::new(Planar::new(StereoSphere, q)),
             NormalScheme::Oct | NormalScheme::OctF16 => Box::new(Planar::new(Oct, q)),
             NormalScheme::OctPrecise => Box::new(OctPrecise::new(k)),
         })
@@ -556,6 +570,18 @@ impl<P: Projection> Planar<P> {
         Planar { proj, quant }
     }
 
+    /// The projection.
+    #[must_use]
+    pub fn projection(&self) -> P {
+        self.proj
+    }
+
+    /// The storage of the plane coordinates.
+    #[must_use]
+    pub fn quant(&self) -> Quant {
+        self.quant
+    }
+
     /// The two stored plane coordinates of a code.
     #[inline(always)]
     #[must_use]
@@ -725,10 +751,16 @@ mod tests {
         for name in ["oct-16", "oct-precise-24", "spheremap-cry-16", "lambert-20", "spherical-16", "stereo-16"] {
             assert!(normal_codec(name).is_some(), "{name}");
         }
+        for name in ["lambert-sphere-16", "lambert-sphere-32", "stereo-sphere-20", "stereo-sphere-24"] {
+            assert!(normal_codec(name).is_some(), "{name}");
+        }
         for name in ["xyz-snorm-30", "xy-hemi-16", "xyz-f16-48", "oct-f16-32", "spheremap-ispc-32"] {
             assert!(normal_codec(name).is_some(), "{name}");
         }
         for name in ["oct-15", "oct-f16-16", "oct", "xyz-snorm-32", "nope-16", "oct-0", "oct-99999999999"] {
+            assert!(normal_codec(name).is_none(), "{name}");
+        }
+        for name in ["lambert-sphere-f16-32", "stereo-sphere-15", "lambert-sphere"] {
             assert!(normal_codec(name).is_none(), "{name}");
         }
     }

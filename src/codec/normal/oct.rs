@@ -78,6 +78,54 @@ impl Projection for Oct {
     }
 }
 
+/// The octahedral fold, shared with the full-sphere azimuthal maps ([`super::LambertSphere`],
+/// [`super::StereoSphere`]): a point of the square [−1, 1]² is a hemisphere (z ≥ 0 inside the diamond
+/// |x| + |y| ≤ 1, z < 0 in the four corners), the signs of x and y, and magnitudes `(a, b)` in the quadrant of
+/// the diamond, a + b ≤ 1. The lower hemisphere is reflected over the diamond's edge (`(a, b)` ↦
+/// `(1 − b, 1 − a)`), an isometry of the plane, so a map that is Lipschitz on the diamond is Lipschitz on the
+/// square with the same constant, and the two halves meet continuously on the edge (the equator).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Diamond {
+    /// |x| of the point in the upper diamond.
+    pub a: f32,
+    /// |y| of the point in the upper diamond.
+    pub b: f32,
+    /// Sign of x (`signNotZero`: −0.0 counts as +).
+    pub sx: f32,
+    /// Sign of y.
+    pub sy: f32,
+    /// In the lower hemisphere (the square's corners)?
+    pub lower: bool,
+}
+
+impl Diamond {
+    /// [`Codec::decode_ops`] of [`Self::of_square`]: clamp ×2, abs ×2, |x| + |y| > 1 (add, compare),
+    /// 1 − |y|, 1 − |x| (2), select a, b (2), signNotZero ×2 (compare + select each: 4).
+    pub(crate) const OF_SQUARE_OPS: u32 = 14;
+
+    /// Splits a square point (clamped to [−1, 1]² first).
+    #[inline(always)]
+    #[must_use]
+    pub(crate) fn of_square(p: Vec2) -> Diamond {
+        let p = p.clamp(Vec2::NEG_ONE, Vec2::ONE);
+        let (ax, ay) = (p.x.abs(), p.y.abs());
+        let lower = ax + ay > 1.0;
+        let (a, b) = if lower { (1.0 - ay, 1.0 - ax) } else { (ax, ay) };
+        Diamond { a, b, sx: sign_not_zero(p.x), sy: sign_not_zero(p.y), lower }
+    }
+
+    /// The square point: `(sx·a, sy·b)`, or its fold into the corner for the lower hemisphere.
+    #[inline(always)]
+    #[must_use]
+    pub(crate) fn to_square(self) -> Vec2 {
+        if self.lower {
+            Vec2::new(self.sx * (1.0 - self.b), self.sy * (1.0 - self.a))
+        } else {
+            Vec2::new(self.sx * self.a, self.sy * self.b)
+        }
+    }
+}
+
 /// Precise octahedral encoding (Cigolle et al. 2014, "octP"): of the four codes around the projected point, keep
 /// the one whose decoded normal is closest to the input. Same decoder, same code layout as [`Oct`] with snorm.
 #[derive(Clone, Copy, Debug)]
