@@ -63,6 +63,16 @@ fn benches(c: &mut Criterion) {
     g.bench_function("none/1x/1280x720", |b| {
         b.iter(|| resolve(black_box(&gb1), black_box(&lights), &mask1, &none).unwrap())
     });
+    // The same frame on every instruction set this CPU has, each BRDF: the ratios between paths measured in one run
+    // (issue 14: AVX2 + FMA within 2.2× of AVX-512; the portable path is what non-x86 CPUs run).
+    for isa in gbuf::base::isa::Isa::available() {
+        for brdf in [gbuf::resolve::Brdf::Lambert, gbuf::resolve::Brdf::BlinnPhong, gbuf::resolve::Brdf::Ggx] {
+            let cfg = ResolveConfig { brdf, ..tiled };
+            g.bench_function(format!("isa/{}/{brdf}/1x/1280x720", isa.name()), |b| {
+                b.iter(|| gbuf::resolve::resolve_isa(isa, black_box(&gb1), black_box(&lights), &mask1, &cfg).unwrap())
+            });
+        }
+    }
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
         g.bench_function(format!("tiled/1x/1280x720/threads-{threads}"), |b| {

@@ -13,9 +13,9 @@ use super::config::{Brdf, Falloff};
 use super::falloff::MIN_DISTANCE;
 use super::fastmath::POW_MIN_BASE;
 use super::lights::{LightRec, LightTable, LUMA};
+pub use super::simd::BLOCK;
 #[cfg(target_arch = "x86_64")]
 use super::simd::{Avx2, Avx512};
-pub use super::simd::BLOCK;
 use super::simd::{Lanes, Portable, Two};
 use super::worklist::{Items, QuadSoa};
 use crate::base::isa::Isa;

@@ -11,9 +11,9 @@ use super::config::{Culling, ResolveConfig, Schedule};
 use super::culling::{quad_rects, Bounds};
 use super::kernel::{finish_prepass, shade, Variant, BLOCK};
 use super::lights::LightTable;
+use super::simd::Portable;
 #[cfg(target_arch = "x86_64")]
 use super::simd::{Avx2, Avx512};
-use super::simd::Portable;
 use super::surface::{Reads, SanitizedCounts, SurfaceReader, MIN_VIEW_DEPTH};
 use super::worklist::{Items, QuadSoa, PAD_PIXEL};
 #[cfg(target_arch = "x86_64")]

@@ -664,6 +664,16 @@ mod avx2 {
     use std::arch::x86_64::*;
     use std::ops::{Add, Mul, Sub};
 
+    /// `1/c` (rounded to f32) for the 8 sub-intervals `[1 + i/8, 1 + (i+1)/8)` of [1, 2) that [`Avx2::log2`]
+    /// indexes by bits 22..20 of the mantissa; `c` is each sub-interval's centre. Checked against f64 by a test.
+    pub(super) const LOG2_INV_C8: [f32; 8] =
+        [0.941_176_5, 0.842_105_27, 0.761_904_8, 0.695_652_2, 0.64, 0.592_592_6, 0.551_724_14, 0.516_129];
+    /// `−log2` of each [`LOG2_INV_C8`] entry, rounded to f32.
+    pub(super) const LOG2_T8: [f32; 8] =
+        [0.087_462_835, 0.247_927_5, 0.392_317_38, 0.523_561_95, 0.643_856_2, 0.754_887_46, 0.857_981, 0.954_196_33];
+    /// `log2(1 + r)/r ≈ q0 + q1 r + q2 r² + q3 r³` on |r| ≤ 1/17 (Taylor terms).
+    pub(super) const LOG2_Q8: [f32; 4] = [std::f32::consts::LOG2_E, -0.721_347_5, 0.480_898_35, -0.360_673_76];
+
     /// Sixteen lanes in two AVX registers (lanes 0–7, 8–15).
     #[derive(Clone, Copy, Debug)]
     pub struct Avx2(__m256, __m256);
@@ -817,38 +827,28 @@ mod avx2 {
         }
         #[inline(always)]
         fn log2(self) -> Self {
-            // fastmath::log2 with its division by a refined reciprocal: x = m·2^e, m in [√½, √2),
-            // s = (m − 1)/(m + 1), ln m = 2s·(1 + s²/3 + s⁴/5 + s⁶/7 + s⁸/9) (|s| ≤ 0.172).
+            // x = m·2^e, m in [1, 2) from the bits; m's top three mantissa bits pick one of 8 sub-intervals of
+            // width 1/8 and its centre c (tables [`LOG2_INV_C8`], [`LOG2_T8`], one `vpermps` each):
+            // log2 m = −log2(1/c) + log2(1 + r), r = m·(1/c) − 1, |r| ≤ 1/17, log2(1 + r) = r·q(r), q the Taylor
+            // terms to r³ (truncation ≤ 2.0e-7 absolute) — the AVX-512 path's scheme with an 8-entry table.
+            let [q0, q1, q2, q3] = LOG2_Q8;
             both!(self, |x| {
                 let bits = Avx2::int(x);
-                let e = _mm256_sub_epi32(
-                    _mm256_and_si256(_mm256_srli_epi32::<23>(bits), _mm256_set1_epi32(0xff)),
-                    _mm256_set1_epi32(127),
-                );
+                let e = _mm256_cvtepi32_ps(_mm256_sub_epi32(_mm256_srli_epi32::<23>(bits), _mm256_set1_epi32(127)));
                 let m = _mm256_castsi256_ps(_mm256_or_si256(
                     _mm256_and_si256(bits, _mm256_set1_epi32(0x007f_ffff)),
                     _mm256_set1_epi32(0x3f80_0000),
                 ));
-                let big = _mm256_cmp_ps::<_CMP_GT_OQ>(m, _mm256_set1_ps(std::f32::consts::SQRT_2));
-                let m = _mm256_blendv_ps(m, _mm256_mul_ps(m, _mm256_set1_ps(0.5)), big);
-                let e = _mm256_add_ps(
-                    _mm256_cvtepi32_ps(e),
-                    _mm256_and_ps(big, _mm256_set1_ps(1.0)),
-                );
-                let one = _mm256_set1_ps(1.0);
-                let d = _mm256_add_ps(m, one);
-                let y = _mm256_rcp_ps(d);
-                let y = _mm256_fmadd_ps(y, _mm256_fnmadd_ps(d, y, one), y);
-                let s = _mm256_mul_ps(_mm256_sub_ps(m, one), y);
-                let s2 = _mm256_mul_ps(s, s);
+                // vpermps reads the low three bits of each index: bits 22..20 of m.
+                let idx = _mm256_srli_epi32::<20>(bits);
+                let inv_c = _mm256_permutevar8x32_ps(_mm256_loadu_ps(LOG2_INV_C8.as_ptr()), idx);
+                let t = _mm256_permutevar8x32_ps(_mm256_loadu_ps(LOG2_T8.as_ptr()), idx);
+                let r = _mm256_fmsub_ps(m, inv_c, _mm256_set1_ps(1.0));
                 let c = _mm256_set1_ps;
-                let mut p = _mm256_fmadd_ps(s2, c(1.0 / 9.0), c(1.0 / 7.0));
-                p = _mm256_fmadd_ps(p, s2, c(1.0 / 5.0));
-                p = _mm256_fmadd_ps(p, s2, c(1.0 / 3.0));
-                p = _mm256_fmadd_ps(p, s2, one);
-                // log2 m = ln m · log2(e) = s · p · 2·log2(e).
-                let k = _mm256_mul_ps(s, c(2.0 * std::f32::consts::LOG2_E));
-                _mm256_fmadd_ps(k, p, e)
+                let mut q = _mm256_fmadd_ps(r, c(q3), c(q2));
+                q = _mm256_fmadd_ps(q, r, c(q1));
+                q = _mm256_fmadd_ps(q, r, c(q0));
+                _mm256_add_ps(_mm256_fmadd_ps(r, q, t), e)
             })
         }
         #[inline(always)]
@@ -1006,6 +1006,23 @@ mod tests {
     }
 
     #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx2_log2_tables_are_the_subinterval_centres() {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use super::avx2::{LOG2_INV_C8, LOG2_T8};
+            for i in 0..8 {
+                let (lo, w) = (1.0 + i as f64 / 8.0, 1.0 / 8.0);
+                let inv = (1.0 / (lo + w / 2.0)) as f32;
+                assert_eq!(LOG2_INV_C8[i], inv, "1/c[{i}]");
+                assert_eq!(LOG2_T8[i], (-f64::from(inv).log2()) as f32, "T[{i}]");
+                for m in [lo, lo + w * 0.999_99] {
+                    assert_eq!(((m as f32).to_bits() >> 20) & 7, i as u32, "m = {m}");
+                }
+            }
+        }
+    }
+
     #[test]
     fn log2_tables_are_the_subinterval_centres() {
         use super::avx512::{LOG2_INV_C, LOG2_T};
