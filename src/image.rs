@@ -122,11 +122,20 @@ impl HdrImage {
     /// not rounding, exactly as its `Float32ToUnorm8`). NaN becomes 0.
     #[must_use]
     pub fn to_ldr_gamma22(&self) -> Vec<u8> {
+        use rayon::prelude::*;
         let enc = |x: f32| {
             let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
             (x.powf(1.0 / 2.2) * 255.0) as u8
         };
-        self.rgb.iter().flat_map(|c| [enc(c.x), enc(c.y), enc(c.z)]).collect()
+        // Rows in parallel: a fixed cost of every `gbuf resolve --png`.
+        let mut out = vec![0u8; 3 * self.rgb.len()];
+        let row = self.width.max(1) as usize;
+        out.par_chunks_mut(3 * row).zip(self.rgb.par_chunks(row)).for_each(|(o, px)| {
+            for (o, c) in o.chunks_exact_mut(3).zip(px) {
+                o.copy_from_slice(&[enc(c.x), enc(c.y), enc(c.z)]);
+            }
+        });
+        out
     }
 
     /// Writes a tone-mapped sRGB PNG.

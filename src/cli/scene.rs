@@ -19,7 +19,8 @@ pub struct Args {
     /// The scene: room or stress.
     #[arg(value_parser = parse_scene)]
     pub name: SceneName,
-    /// Output EXR (canonical format); the sidecar goes next to it as `<stem>.json`.
+    /// Output EXR (canonical format; the sidecar goes next to it as `<stem>.json`), or `.bin` for the ISPC
+    /// `deferred` sample's input (`--msaa 1`, point lights).
     #[arg(short, long, value_name = "OUT.exr")]
     pub out: PathBuf,
     /// Image width in pixels.
@@ -59,7 +60,8 @@ fn parse_scene(s: &str) -> Result<SceneName, String> {
 struct Summary {
     scene: &'static str,
     exr: PathBuf,
-    sidecar: PathBuf,
+    /// `None` for a `.bin`, whose lights are in the file.
+    sidecar: Option<PathBuf>,
     width: u32,
     height: u32,
     samples: u32,
@@ -118,17 +120,24 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => (scene::default_lights(args.name, &gb), "default"),
     };
     let t1 = Instant::now();
-    gbuf::io::canonical::write(&args.out, &gb).with_context(|| format!("writing {}", args.out.display()))?;
-    let doc = scene::scene_sidecar(&gb, &lights);
-    let mut text = serde_json::to_vec_pretty(&doc).context("serialising the sidecar")?;
-    text.push(b'\n');
-    gbuf::util::write_bytes_atomic(&sidecar, &text).with_context(|| format!("writing {}", sidecar.display()))?;
+    // `.bin`: the ISPC `deferred` sample's input (1 sample per pixel, point lights inside the file, no sidecar), so
+    // the same frame can be run through that sample's C++ and through gbuf (docs/RESOLVE.md).
+    let ispc = args.out.extension().is_some_and(|e| e.eq_ignore_ascii_case("bin"));
+    if ispc {
+        gbuf::io::ispc::write(&args.out, &gb, &lights).with_context(|| format!("writing {}", args.out.display()))?;
+    } else {
+        gbuf::io::canonical::write(&args.out, &gb).with_context(|| format!("writing {}", args.out.display()))?;
+        let doc = scene::scene_sidecar(&gb, &lights);
+        let mut text = serde_json::to_vec_pretty(&doc).context("serialising the sidecar")?;
+        text.push(b'\n');
+        gbuf::util::write_bytes_atomic(&sidecar, &text).with_context(|| format!("writing {}", sidecar.display()))?;
+    }
     let write_seconds = t1.elapsed().as_secs_f64();
 
     let summary = Summary {
         scene: args.name.name(),
         exr: args.out.clone(),
-        sidecar,
+        sidecar: (!ispc).then_some(sidecar),
         width: gb.width,
         height: gb.height,
         samples: gb.samples,
@@ -145,7 +154,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let mut out = std::io::stdout().lock();
     writeln!(out, "scene     {}", summary.scene)?;
-    writeln!(out, "wrote     {} and {}", summary.exr.display(), summary.sidecar.display())?;
+    match &summary.sidecar {
+        Some(s) => writeln!(out, "wrote     {} and {}", summary.exr.display(), s.display())?,
+        None => writeln!(out, "wrote     {} (lights in the file)", summary.exr.display())?,
+    }
     writeln!(out, "size      {}×{}, {} samples per pixel", summary.width, summary.height, summary.samples)?;
     writeln!(out, "covered   {:.1} % of samples", 100.0 * summary.covered_fraction)?;
     writeln!(out, "visible   {} objects, {} materials", summary.objects, summary.materials)?;

@@ -311,21 +311,30 @@ fn check_header(head: &[u8], file_len: u64, path: &Path, opts: &LoadOptions) -> 
     Ok(h)
 }
 
-fn decode(h: &Header, chunk: &[u8], path: &Path) -> Result<Loaded> {
-    let (w, ht) = (h.width as u32, h.height as u32);
-    let camera = h.camera();
-    let mut gb = GBuffer::new(w, ht, 1)?;
-    gb.camera = Some(camera);
-    let n = gb.len();
-    let off = |k: usize| h.offsets[k] as usize;
-    let p = &h.proj;
-    let (mut depth, mut position, mut normal) = (vec![0.0; n], vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
-    let (mut albedo, mut spec, mut power) = (vec![Vec3::ZERO; n], vec![0.0; n], vec![0.0; n]);
-    let mut out_of_range = 0u64;
-    for y in 0..ht as usize {
-        let sy = -(((y as f32 + 0.5) * 2.0 / ht as f32) - 1.0);
-        for x in 0..w as usize {
-            let i = y * w as usize + x;
+/// Rows converted per parallel task.
+const BAND_ROWS: usize = 16;
+
+/// One band of rows of the G-buffer's planes, converted from the file's arrays by one task.
+struct Band<'a> {
+    y0: usize,
+    coverage: &'a mut [bool],
+    depth: &'a mut [f32],
+    position: &'a mut [Vec3],
+    normal: &'a mut [Vec3],
+    albedo: &'a mut [Vec3],
+    spec: &'a mut [f32],
+    power: &'a mut [f32],
+}
+
+impl Band<'_> {
+    /// Converts the band's pixels; returns how many have a depth with no surface in front of the camera.
+    fn convert(self, h: &Header, chunk: &[u8], w: usize, ht: usize) -> u64 {
+        let off = |k: usize| h.offsets[k] as usize;
+        let p = &h.proj;
+        let mut out_of_range = 0u64;
+        for j in 0..self.coverage.len() {
+            let (y, x) = (self.y0 + j / w, j % w);
+            let i = y * w + x;
             let z = f32_at(chunk, off(0) + 4 * i);
             // z = 1 is the cleared depth buffer (sky); anything outside [0, 1) has no surface in front of the camera.
             if !(0.0..1.0).contains(&z) {
@@ -339,19 +348,58 @@ fn decode(h: &Header, chunk: &[u8], path: &Path) -> Result<Loaded> {
                 out_of_range += 1;
                 continue;
             }
-            gb.coverage[i] = true;
-            depth[i] = view_z;
+            self.coverage[j] = true;
+            self.depth[j] = view_z;
             let sx = (x as f32 + 0.5) * 2.0 / w as f32 - 1.0;
-            position[i] = Vec3::new(sx * view_z / p[0][0], sy * view_z / p[1][1], -view_z);
+            let sy = -(((y as f32 + 0.5) * 2.0 / ht as f32) - 1.0);
+            self.position[j] = Vec3::new(sx * view_z / p[0][0], sy * view_z / p[1][1], -view_z);
             let (ex, ey) = (f16_at(chunk, off(1) + 2 * i), f16_at(chunk, off(2) + 2 * i));
-            normal[i] = decode_spheremap(ex, ey);
-            spec[i] = f16_at(chunk, off(3) + 2 * i);
-            power[i] = f16_at(chunk, off(4) + 2 * i);
-            albedo[i] =
+            self.normal[j] = decode_spheremap(ex, ey);
+            self.spec[j] = f16_at(chunk, off(3) + 2 * i);
+            self.power[j] = f16_at(chunk, off(4) + 2 * i);
+            self.albedo[j] =
                 Vec3::new(f32::from(chunk[off(5) + i]), f32::from(chunk[off(6) + i]), f32::from(chunk[off(7) + i]))
                     / 255.0;
         }
+        out_of_range
     }
+}
+
+fn decode(h: &Header, chunk: &[u8], path: &Path) -> Result<Loaded> {
+    let (w, ht) = (h.width as u32, h.height as u32);
+    let camera = h.camera();
+    let mut gb = GBuffer::new(w, ht, 1)?;
+    gb.camera = Some(camera);
+    let n = gb.len();
+    let off = |k: usize| h.offsets[k] as usize;
+    let (mut depth, mut position, mut normal) = (vec![0.0; n], vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+    let (mut albedo, mut spec, mut power) = (vec![Vec3::ZERO; n], vec![0.0; n], vec![0.0; n]);
+    // Bands of rows converted in parallel: the conversion is a fixed cost of every run on a `.bin`.
+    let width = w as usize;
+    let band = width * BAND_ROWS;
+    let bands: Vec<Band> = gb
+        .coverage
+        .chunks_mut(band)
+        .zip(depth.chunks_mut(band))
+        .zip(position.chunks_mut(band))
+        .zip(normal.chunks_mut(band))
+        .zip(albedo.chunks_mut(band))
+        .zip(spec.chunks_mut(band))
+        .zip(power.chunks_mut(band))
+        .enumerate()
+        .map(|(k, ((((((coverage, depth), position), normal), albedo), spec), power))| Band {
+            y0: k * BAND_ROWS,
+            coverage,
+            depth,
+            position,
+            normal,
+            albedo,
+            spec,
+            power,
+        })
+        .collect();
+    use rayon::prelude::*;
+    let out_of_range: u64 = bands.into_par_iter().map(|b| b.convert(h, chunk, width, ht as usize)).sum();
     gb.depth = Some(depth);
     gb.position = Some(position);
     gb.normal = Some(normal);
