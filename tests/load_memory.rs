@@ -232,7 +232,7 @@ fn a_sidecar_with_too_many_lights_is_refused_with_the_limit() {
     let text = format!("{{\"lights\":[{}]}}", vec![light; n].join(","));
     let e = gbuf::io::Sidecar::parse(&text, Path::new("many.json")).unwrap_err().to_string();
     assert!(e.contains("many.json") && e.contains(&n.to_string()) && e.contains("65536"), "{e}");
-    let ok = format!("{{\"lights\":[{}]}}", vec![light; 3].join(","));
+    let ok = format!("{{\"lights\":[{}]}}", [light; 3].join(","));
     assert_eq!(gbuf::io::Sidecar::parse(&ok, Path::new("few.json")).unwrap().lights.len(), 3);
     // A sidecar file over the size limit is refused before it is read.
     let dir = tempfile::tempdir().unwrap();
