@@ -6,11 +6,12 @@ export CARGO_TERM_COLOR=${CARGO_TERM_COLOR:-never}
 
 # Nightly through rustup (installed when missing); if nightly cannot be had, the stable toolchain with
 # RUSTC_BOOTSTRAP=1 (cargo-fuzz's flags are stable without a sanitizer; a sanitizer needs -Z flags).
+# GBUF_FUZZ_TOOLCHAIN=stable forces the fallback.
 pick_toolchain() {
-  if ! rustup run nightly rustc -V >/dev/null 2>&1; then
+  if [ "${GBUF_FUZZ_TOOLCHAIN:-}" != stable ] && ! rustup run nightly rustc -V >/dev/null 2>&1; then
     rustup toolchain install nightly --profile minimal >&2 || true
   fi
-  if rustup run nightly rustc -V >/dev/null 2>&1; then
+  if [ "${GBUF_FUZZ_TOOLCHAIN:-}" != stable ] && rustup run nightly rustc -V >/dev/null 2>&1; then
     CARGO=(cargo +nightly)
     FUZZ_RUSTC=$(rustup run nightly rustc -V)
   else
@@ -20,7 +21,7 @@ pick_toolchain() {
     FUZZ_RUSTC="$(rustc -V) with RUSTC_BOOTSTRAP=1"
   fi
   TRIPLE=$(rustc -vV | sed -n 's/^host: //p')
-  BIN_DIR="$FUZZ_DIR/target/$TRIPLE/release"
+  BIN_DIR="${CARGO_TARGET_DIR:-$FUZZ_DIR/target}/$TRIPLE/release"
 }
 
 ensure_cargo_fuzz() {

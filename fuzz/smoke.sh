@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # CI smoke run of every fuzz target: installs cargo-fuzz and a nightly toolchain if needed, builds every target,
-# writes the seeds, and runs each target (seeds and fuzz/regressions/<target>/ first) for GBUF_FUZZ_SMOKE_SECONDS (default 15) from its seeds and dictionary.
+# writes the seeds, and runs each target for GBUF_FUZZ_SMOKE_SECONDS (default 15) from its seeds, its
+# regressions (fuzz/regressions/<target>/) and its dictionary.
 # Fails if a target does not build or run, or finds a crash, panic, timeout or out-of-memory; what it found is
 # kept in fuzz/artifacts/<target>/. About 7 minutes on 2 idle cores from a clean checkout (docs/FUZZING.md).
 set -euo pipefail
