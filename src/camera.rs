@@ -118,6 +118,7 @@ impl Camera {
             && self.aspect.is_finite()
             && self.znear > 0.0
             && self.zfar > self.znear
+            && self.zfar.is_finite()
             && self.principal.is_finite()
     }
 }
@@ -147,5 +148,14 @@ mod tests {
         let d = 37.0;
         let z = cam.post_projection_depth(d);
         assert!((cam.view_depth_from_post_projection(z) - d).abs() < 1e-3);
+    }
+
+    #[test]
+    fn an_infinite_far_plane_is_not_usable() {
+        // Its post-projection depth is NaN, and a canonical EXR stores it as JSON null, which no reader takes
+        // (found by fuzz/fuzz_targets/canonical_struct.rs; input in fuzz/regressions/canonical_struct/).
+        let cam = Camera::identity(0.8, 1.0, 0.1, f32::INFINITY);
+        assert!(cam.post_projection_depth(1.0).is_nan());
+        assert!(!cam.is_valid());
     }
 }
