@@ -64,7 +64,7 @@ pub enum Error {
         bytes: u64,
         /// The limit in force.
         limit: u64,
-        /// Where the limit comes from ([`crate::io::ReadLimits::describe`]).
+        /// Where the limit comes from (`ReadLimits::describe` of the io stage).
         why: String,
     },
     /// The file is structurally valid but holds something we do not support (deep data, subsampling, ...).
