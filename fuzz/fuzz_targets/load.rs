@@ -1,5 +1,5 @@
 //! Any bytes through `gbuf::io::load_bytes` with gbuf's default options (declared size capped, see
-//! `MAX_DECLARED_BYTES`): format detection, the EXR and `.bin` readers, sanitizing, validation, plausibility checks,
+//! `max_declared_bytes`): format detection, the EXR and `.bin` readers, sanitizing, validation, plausibility checks,
 //! then `gbuf info`'s statistics of what loaded.
 #![no_main]
 

@@ -654,9 +654,9 @@ impl LoadIn {
     pub fn options(&self, width: u32, height: u32) -> LoadOptions {
         let mut o = crate::default_options();
         o.fold = self.fold.map(|k| u32::from(k % 10));
-        o.limits.allow_dwa = self.allow_dwa;
+        o.limits.allow_dwa = self.allow_dwa && crate::dwa_enabled();
         if let Some(m) = self.max_mib {
-            o.limits.max_bytes = (u64::from(m) << 14).min(crate::MAX_DECLARED_BYTES);
+            o.limits.max_bytes = (u64::from(m) << 14).min(crate::max_declared_bytes());
         }
         o.sidecar = self.sidecar.as_ref().map(|s| crate::sidecar_file(s.json(width, height).as_bytes()));
         o

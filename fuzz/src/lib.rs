@@ -11,19 +11,45 @@ use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, OnceLock};
 
-/// The most decoded bytes a fuzzed file may declare (`--max-memory 64`). gbuf's default is 4 GiB; with it a few
-/// kilobytes of PIZ or DWA can make the exr crate allocate gigabytes before a chunk is read (issue 16, part 2),
-/// which libFuzzer reports as out-of-memory on every such input. At 64 MiB every path of the readers is still
-/// reachable and a run stays within `-rss_limit_mb=2048`.
-pub const MAX_DECLARED_BYTES: u64 = 64 << 20;
+/// The most decoded bytes a fuzzed file may declare (`--max-memory 16`). gbuf's default is 4 GiB, and for
+/// compressions without an expansion bound (PIZ, DWA) the exr crate allocates before reading: the image buffer (a
+/// few kilobytes of PIZ declaring gigabytes, issue 16 part 2) and each chunk's buffer, as large as the chunk says up
+/// to a whole block (32 lines for PIZ, 256 for DWAB, whatever the image height) before checking the file holds it.
+/// libFuzzer would report out-of-memory on every such input instead of looking further. At 16 MiB a PIZ chunk
+/// stays under 512 MiB, every path of the readers is still reachable, and a run stays within `-rss_limit_mb=2048`
+/// — except with DWA, see [`dwa_enabled`].
+/// `GBUF_FUZZ_MAX_MIB` overrides it (see [`max_declared_bytes`]).
+pub const MAX_DECLARED_BYTES: u64 = 16 << 20;
 
-/// Header limits for fuzzing: [`MAX_DECLARED_BYTES`], DWA as asked.
-#[must_use]
-pub fn limits(allow_dwa: bool) -> ReadLimits {
-    ReadLimits { max_bytes: MAX_DECLARED_BYTES, allow_dwa }
+/// The cap in use: [`MAX_DECLARED_BYTES`], or `GBUF_FUZZ_MAX_MIB` MiB (to reproduce what a finding does under a
+/// larger `--max-memory`).
+pub fn max_declared_bytes() -> u64 {
+    static MAX: OnceLock<u64> = OnceLock::new();
+    *MAX.get_or_init(|| {
+        std::env::var("GBUF_FUZZ_MAX_MIB")
+            .ok()
+            .and_then(|v| v.parse::<u64>().ok())
+            .map_or(MAX_DECLARED_BYTES, |m| m << 20)
+    })
 }
 
-/// gbuf's default load options, with [`MAX_DECLARED_BYTES`].
+/// Header limits for fuzzing: [`max_declared_bytes`], DWA as asked (and as [`dwa_enabled`] allows).
+#[must_use]
+pub fn limits(allow_dwa: bool) -> ReadLimits {
+    ReadLimits { max_bytes: max_declared_bytes(), allow_dwa: allow_dwa && dwa_enabled() }
+}
+
+/// May targets decode DWA (`--allow-dwa`)? Yes unless `GBUF_FUZZ_DWA=0`. A DWAB chunk may claim 256 lines × the
+/// width × the pixel size, which the exr crate allocates and zeroes before finding the file shorter: a 504-byte
+/// file declaring 589810×9 pixels takes 1.6 GB (fuzz/regressions/exr_raw/). Runs that decode DWA can therefore end
+/// in an out-of-memory report at random; `fuzz/smoke.sh` sets `GBUF_FUZZ_DWA=0` until gbuf checks chunk sizes
+/// against the file before decoding (issue 16, part 2).
+pub fn dwa_enabled() -> bool {
+    static ON: OnceLock<bool> = OnceLock::new();
+    *ON.get_or_init(|| std::env::var("GBUF_FUZZ_DWA").map_or(true, |v| v != "0"))
+}
+
+/// gbuf's default load options, with [`max_declared_bytes`].
 #[must_use]
 pub fn default_options() -> LoadOptions {
     LoadOptions { limits: limits(false), ..LoadOptions::default() }
@@ -179,7 +205,7 @@ pub fn parse_map(spec: &str) -> Vec<(Attribute, Vec<String>)> {
 }
 
 /// Load options from a line of space-separated tokens: `fold=K`, `dwa`, `max=MIB` (at most
-/// [`MAX_DECLARED_BYTES`]), `map=SPEC`, `space=…`, `depth=…`, `reversed`, `znear=F`, `zfar=F`, `ids=…`,
+/// [`max_declared_bytes`]), `map=SPEC`, `space=…`, `depth=…`, `reversed`, `znear=F`, `zfar=F`, `ids=…`,
 /// `background=…`, `normals=…`. Unknown or malformed tokens are ignored.
 #[must_use]
 pub fn parse_options(line: &str, sidecar: Option<PathBuf>) -> LoadOptions {
@@ -190,10 +216,10 @@ pub fn parse_options(line: &str, sidecar: Option<PathBuf>) -> LoadOptions {
         let (k, v) = tok.split_once('=').unwrap_or((tok, ""));
         match k {
             "fold" => o.fold = v.parse().ok(),
-            "dwa" => o.limits.allow_dwa = true,
+            "dwa" => o.limits.allow_dwa = dwa_enabled(),
             "max" => {
                 if let Ok(m) = v.parse::<u64>() {
-                    o.limits.max_bytes = m.saturating_mul(1 << 20).min(MAX_DECLARED_BYTES);
+                    o.limits.max_bytes = m.saturating_mul(1 << 20).min(max_declared_bytes());
                 }
             }
             "map" => o.map.extend(parse_map(v)),
