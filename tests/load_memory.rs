@@ -8,61 +8,15 @@ mod support;
 
 use gbuf::gbuffer::{GBuffer, PlaneRef};
 use gbuf::io::{load_bytes, LoadOptions, ReadLimits};
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::Path;
-use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
 use std::sync::Mutex;
-
-struct Counting;
-static CURRENT: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
-        let p = unsafe { System.alloc(l) };
-        if !p.is_null() {
-            PEAK.fetch_max(CURRENT.fetch_add(l.size(), Relaxed) + l.size(), Relaxed);
-        }
-        p
-    }
-    unsafe fn alloc_zeroed(&self, l: Layout) -> *mut u8 {
-        let p = unsafe { System.alloc_zeroed(l) };
-        if !p.is_null() {
-            PEAK.fetch_max(CURRENT.fetch_add(l.size(), Relaxed) + l.size(), Relaxed);
-        }
-        p
-    }
-    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
-        unsafe { System.dealloc(p, l) };
-        CURRENT.fetch_sub(l.size(), Relaxed);
-    }
-    unsafe fn realloc(&self, p: *mut u8, l: Layout, new: usize) -> *mut u8 {
-        let q = unsafe { System.realloc(p, l, new) };
-        if !q.is_null() {
-            if new >= l.size() {
-                let grow = new - l.size();
-                PEAK.fetch_max(CURRENT.fetch_add(grow, Relaxed) + grow, Relaxed);
-            } else {
-                CURRENT.fetch_sub(l.size() - new, Relaxed);
-            }
-        }
-        q
-    }
-}
+use support::alloc::peak_of;
 
 #[global_allocator]
-static ALLOC: Counting = Counting;
+static ALLOC: support::alloc::Counting = support::alloc::Counting;
 
 /// One test at a time: the counters are global.
 static SERIAL: Mutex<()> = Mutex::new(());
-
-/// Runs `f` and returns its result with the peak bytes allocated above what was live when it started.
-fn peak_of<T>(f: impl FnOnce() -> T) -> (T, usize) {
-    let base = CURRENT.load(Relaxed);
-    PEAK.store(base, Relaxed);
-    let out = f();
-    (out, PEAK.load(Relaxed).saturating_sub(base))
-}
 
 /// What a refusal of a small hostile file may allocate: headers, offset tables, a thread pool's stacks' worth.
 const REFUSAL_PEAK: usize = 64 << 20;

@@ -4,6 +4,7 @@
 //! binary, and the check that a Python cross-check can run.
 #![allow(dead_code, unused_imports)] // each test binary uses a subset
 
+pub mod alloc;
 pub mod detect;
 pub mod io;
 pub mod scene;
