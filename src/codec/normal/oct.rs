@@ -190,6 +190,25 @@ impl NormalCodec for OctPrecise {
     }
 }
 
+/// The octahedral layout's fixed points, shared by every codec built on [`Diamond`]: +Z at the centre, −Z at the
+/// four corners, the equator on the diamond's edge with the axes at its vertices and the 45° meridian mid-edge,
+/// and −0.0 folding like +0.0.
+#[cfg(test)]
+pub(crate) fn assert_octahedral_layout(project: fn(Vec3) -> Vec2, unproject: fn(Vec2) -> Vec3) {
+    assert_eq!(project(Vec3::Z), Vec2::ZERO);
+    assert_eq!(project(Vec3::NEG_Z), Vec2::ONE);
+    assert_eq!(finish(unproject(Vec2::ZERO)), Vec3::Z);
+    for corner in [Vec2::ONE, Vec2::NEG_ONE, Vec2::new(1.0, -1.0), Vec2::new(-1.0, 1.0)] {
+        assert_eq!(finish(unproject(corner)), Vec3::NEG_Z, "{corner}");
+    }
+    assert_eq!(project(Vec3::X), Vec2::X);
+    assert_eq!(finish(unproject(Vec2::NEG_Y)), Vec3::NEG_Y);
+    let e = project(Vec3::new(1.0, 1.0, 0.0).normalize());
+    assert!((e - Vec2::splat(0.5)).length() < 1e-6, "{e}");
+    let (a, b) = (Vec3::new(-0.0, 0.6, -0.8), Vec3::new(0.0, 0.6, -0.8));
+    assert_eq!(project(a), project(b));
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -100,19 +100,7 @@ mod tests {
 
     #[test]
     fn poles_equator_and_folds() {
-        assert_eq!(StereoSphere::project(Vec3::Z), Vec2::ZERO);
-        assert_eq!(StereoSphere::project(Vec3::NEG_Z), Vec2::ONE);
-        assert_eq!(finish(StereoSphere::unproject(Vec2::ZERO)), Vec3::Z);
-        for corner in [Vec2::ONE, Vec2::NEG_ONE, Vec2::new(1.0, -1.0), Vec2::new(-1.0, 1.0)] {
-            assert_eq!(finish(StereoSphere::unproject(corner)), Vec3::NEG_Z, "{corner}");
-        }
-        assert_eq!(StereoSphere::project(Vec3::X), Vec2::X);
-        assert_eq!(finish(StereoSphere::unproject(Vec2::NEG_Y)), Vec3::NEG_Y);
-        // The 45° meridian keeps its direction: the equator point lands mid-edge.
-        let e = StereoSphere::project(Vec3::new(1.0, 1.0, 0.0).normalize());
-        assert!((e - Vec2::splat(0.5)).length() < 1e-6, "{e}");
-        let (a, b) = (Vec3::new(-0.0, 0.6, -0.8), Vec3::new(0.0, 0.6, -0.8));
-        assert_eq!(StereoSphere::project(a), StereoSphere::project(b));
+        super::super::oct::assert_octahedral_layout(StereoSphere::project, StereoSphere::unproject);
         // Stereographic: 60° from the pole is at radius tan(30°).
         let n = Vec3::new(60f32.to_radians().sin(), 0.0, 60f32.to_radians().cos());
         assert!((StereoSphere::project(n).x - 30f32.to_radians().tan()).abs() < 1e-6);
