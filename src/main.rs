@@ -35,6 +35,8 @@ enum Command {
     Report(cli::report::Args),
     /// Find the best layout under a byte budget.
     Budget(cli::budget::Args),
+    /// Forward, forward MSAA, forward+, deferred, light pre-pass and visibility buffer measured on one frame.
+    Pipelines(cli::pipelines::Args),
     /// Merge the report.json of several `gbuf report` runs (one per frame) into one report.
     Merge(cli::merge::Args),
 }
@@ -53,6 +55,7 @@ fn main() -> ExitCode {
         Command::Report(a) => cli::report::run(a),
         Command::Budget(a) => cli::budget::run(a),
         Command::Merge(a) => cli::merge::run(a),
+        Command::Pipelines(a) => cli::pipelines::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

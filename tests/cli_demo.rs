@@ -70,6 +70,27 @@ fn demo_writes_the_report_folder() {
     assert_eq!(csv.lines().count(), 10, "header + 9 rows");
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(md.contains("![") && md.contains("| fat-20 |"));
+    // The pipelines table: every pipeline has a row (the room is rendered with primitive IDs).
+    assert!(md.contains("## Forward or deferred: the pipelines on this frame"), "{md}");
+    for p in [
+        "forward",
+        "forward-msaa",
+        "forward-plus",
+        "deferred-quad",
+        "tiled-deferred",
+        "light-prepass",
+        "visibility-buffer",
+    ] {
+        assert!(
+            md.lines().any(|l| l.starts_with(&format!("| {p} ")) || l.starts_with(&format!("| {p} (est.)"))),
+            "no row for {p}"
+        );
+    }
+    let fwd = &json["frames"][0]["pipelines"]["forward_msaa"];
+    assert!(
+        fwd["lanes"].as_u64().unwrap() >= fwd["covered_lanes"].as_u64().unwrap() && fwd["quads"].as_u64().unwrap() > 0
+    );
+    assert!(out.join("shading_per_pixel_forward_msaa.png").is_file());
     // Every image the markdown links exists.
     for line in md.lines().filter(|l| l.starts_with("![")) {
         let file = line.split("](").nth(1).unwrap().trim_end_matches(')');

@@ -7,8 +7,10 @@
 
 pub mod aggregate;
 pub mod budget;
+pub mod forward;
 pub mod needs;
 pub mod pareto;
+pub mod pipelines;
 pub mod prune;
 pub mod row;
 pub mod sweep;

@@ -242,6 +242,12 @@ pub struct Frame {
     pub needs: Needs,
     /// Each detector on the exact G-buffer: its anti-aliasing error and the shading it costs.
     pub detectors: Vec<DetectorResult>,
+    /// Forward, deferred and visibility-buffer pipelines measured on this frame.
+    #[serde(default)]
+    pub pipelines: Option<crate::analysis::pipelines::Pipelines>,
+    /// Why the pipelines could not be measured on this frame.
+    #[serde(default)]
+    pub pipelines_error: Option<String>,
 }
 
 /// Everything a report folder holds: the frames, one row per frame × layout × detector (× culling), and the rows
@@ -288,6 +294,8 @@ pub(crate) fn test_report(input: &str, width: u32, height: u32, rows: Vec<Row>, 
             sweep_seconds: 0.5,
             needs: crate::analysis::needs::analyze(&gb),
             detectors: vec![],
+            pipelines: None,
+            pipelines_error: None,
         }],
         runs: 3,
         viewing: Viewing::default(),

@@ -267,3 +267,33 @@ pub fn figures(
     }
     Ok((files, figs))
 }
+/// The "shading computations per pixel" pair of a frame: forward MSAA's fragment-shader lanes (helpers included)
+/// and the deferred mask's shading evaluations, on one colour scale so the two compare.
+pub fn shading_figures(
+    gb: &GBuffer,
+    forward: &crate::analysis::forward::QuadShading,
+    (detector, mask): (&str, &EdgeMask),
+    prefix: &str,
+) -> Result<(Vec<Attachment>, Vec<Figure>)> {
+    let fwd: Vec<Option<f32>> = forward.lanes_per_pixel.iter().map(|&n| Some(n as f32)).collect();
+    let def: Vec<Option<f32>> = mask.shade_count.iter().map(|&n| Some(f32::from(n))).collect();
+    let max = fwd.iter().chain(&def).flatten().fold(1.0f32, |a, &b| a.max(b));
+    let mut files = Vec::new();
+    let mut figs = Vec::new();
+    for (stem, what, values) in [
+        ("forward_msaa", "forward MSAA: fragment-shader lanes", &fwd),
+        ("deferred", "deferred: shading evaluations", &def),
+    ] {
+        let name = format!("{prefix}shading_per_pixel_{stem}.png");
+        let img = heat_plot(format!("{what} per pixel"), values, gb, max, "per pixel".into())?;
+        files.push(Attachment { name: name.clone(), bytes: crate::base::picture::png_bytes(&img)? });
+        figs.push(Figure {
+            file: name,
+            caption: format!(
+                "Shading computations per pixel, {what}{} (same scale, top = {max})",
+                if stem == "deferred" { format!(" with `{detector}`") } else { String::new() }
+            ),
+        });
+    }
+    Ok((files, figs))
+}

@@ -361,6 +361,18 @@ pub fn to_markdown(rep: &Report) -> String {
         s.push_str(&rows_table(&rows));
         s.push_str(if multi { "\n### Pareto fronts\n\n" } else { "\n## Pareto fronts\n\n" });
         fronts(&mut s, &rows);
+        s.push_str(if multi {
+            "\n### Forward or deferred: the pipelines on this frame\n\n"
+        } else {
+            "\n## Forward or deferred: the pipelines on this frame\n\n"
+        });
+        match (&f.pipelines, &f.pipelines_error) {
+            (Some(p), _) => s.push_str(&crate::report::pipelines::pipelines_markdown(p, if multi { 4 } else { 3 })),
+            (None, Some(e)) => {
+                let _ = writeln!(s, "Not measured: {e}");
+            }
+            (None, None) => s.push_str("Not measured.\n"),
+        }
     }
     if !rep.figures.is_empty() {
         s.push_str("\n## Figures\n\n");

@@ -4,6 +4,7 @@
 pub mod csv;
 pub mod figures;
 pub mod markdown;
+pub mod pipelines;
 pub mod plot;
 pub mod write;
 
@@ -48,7 +49,7 @@ pub fn run_frame(
     for d in &mut out.detectors {
         d.frame.clone_from(&input.name);
     }
-    let (mut files, figures) = figures::figures(gb, &out, with_plots, prefix)?;
+    let (mut files, mut figures) = figures::figures(gb, &out, with_plots, prefix)?;
     if let Some((p, layout)) = pruned_layout(input, &needs, cfg, &out) {
         if !p.changes.is_empty() {
             if let Ok(text) = layout.spec().to_text(crate::layout::SpecSyntax::Toml) {
@@ -56,6 +57,18 @@ pub fn run_frame(
             }
         }
         needs.pruned_layout = Some(p);
+    }
+    let (pipelines, pipelines_error) =
+        match crate::analysis::pipelines::pipelines(gb, input.lights, &pipelines_config(cfg), Some(&out.reference)) {
+            Ok(p) => (Some(p), None),
+            Err(e) => (None, Some(e.to_string())),
+        };
+    if let (Some(p), Some((det, mask))) = (&pipelines, out.masks.first()) {
+        if let Some(fwd) = &p.forward_msaa {
+            let (f, g) = figures::shading_figures(gb, fwd, (det, mask), prefix)?;
+            files.extend(f);
+            figures.extend(g);
+        }
     }
     let covered = gb.len() - gb.background_samples();
     let frame = Frame {
@@ -70,8 +83,26 @@ pub fn run_frame(
         sweep_seconds: out.seconds,
         needs,
         detectors: out.detectors,
+        pipelines,
+        pipelines_error,
     };
     Ok(FrameResult { frame, rows: out.rows, files, figures })
+}
+
+/// The pipelines comparison's settings from a sweep's: its first detector, its first layout other than the lossless
+/// baseline, its resolve settings, warps of 8 to 64 lanes, FLIP when the sweep computes it.
+#[must_use]
+pub fn pipelines_config(cfg: &SweepConfig) -> crate::analysis::pipelines::PipelinesConfig {
+    let layout = cfg.layouts.iter().find(|l| l.name() != crate::analysis::LOSSLESS_BASELINE).or(cfg.layouts.first());
+    crate::analysis::pipelines::PipelinesConfig {
+        detector: cfg.detectors.first().copied().unwrap_or(crate::detect::Detector::Lauritzen),
+        detector_config: cfg.detector_config,
+        resolve: cfg.resolve,
+        gbuffer_bytes: layout.map_or(20, |l| l.bytes_per_sample() as u32),
+        layout: layout.map_or_else(|| "fat-20".to_string(), |l| l.name().to_string()),
+        warps: vec![8, 16, 32, 64],
+        viewing: (cfg.flip != FlipRows::None).then_some(cfg.viewing),
+    }
 }
 
 /// How per-frame results are put together: the settings they were measured with and how to aggregate them.

@@ -1,0 +1,390 @@
+//! "Forward or deferred? Depends on context": one table per frame with a row per rendering pipeline, each measured
+//! on the frame's own samples — footprint, modelled traffic, shading work, light-pair tests, SIMD utilisation,
+//! CPU time where gbuf runs the pipeline, and the image error against the every-sample reference.
+//!
+//! Input: a G-buffer, its lights, a [`PipelinesConfig`]. Output: [`Pipelines`]. The counts come from
+//! [`crate::analysis::forward`] (quads, fragment lists, utilisation) and from the resolve (light pairs, light
+//! lists); the traffic formulas are [`Pipeline::bandwidth_formula`] (also in docs/GUIDE.md).
+//!
+//! Which image each pipeline makes: forward without MSAA shades one sample per pixel (the `none` detector's image,
+//! the no-AA image); forward MSAA, forward+ and the visibility buffer shade once per (triangle, pixel) (the
+//! `forward-msaa` detector's image); the deferred rows shade what the chosen detector asks. Forward rows need
+//! primitive IDs: without them they are listed with the reason and no numbers.
+
+use crate::analysis::forward::{self, ForwardSamples, FragmentLists, MsaaSchedule, QuadShading, Utilisation};
+use crate::analysis::sweep::bandwidth;
+use crate::base::mask::EdgeMask;
+use crate::detect::{self, Detector, DetectorConfig};
+use crate::error::{Error, Result};
+use crate::gbuffer::GBuffer;
+use crate::image::HdrImage;
+use crate::light::Light;
+use crate::measure::image::{error_set, ErrorSet, Viewing};
+use crate::resolve::{self, Culling, ResolveConfig, Schedule};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+crate::named_enum! {
+    /// A rendering pipeline of the comparison.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub enum Pipeline: "pipeline" {
+        /// Forward shading, no MSAA: one sample per pixel, every light per fragment.
+        Forward => "forward",
+        /// Forward shading with MSAA: one shade per (triangle, pixel), in quads; every light per fragment.
+        ForwardMsaa => "forward-msaa",
+        /// Forward+ (tiled forward): a depth pre-pass, per-tile light lists stored in memory, then forward MSAA
+        /// shading against the tile's list.
+        ForwardPlus => "forward-plus",
+        /// Deferred, each light a screen quad: the G-buffer read once per light-fragment pair.
+        DeferredQuad => "deferred-quad",
+        /// Tiled deferred (Andersson 2009, Lauritzen 2010): lights culled per tile in on-chip memory, the G-buffer
+        /// read once; what `gbuf resolve` runs.
+        TiledDeferred => "tiled-deferred",
+        /// Deferred lighting (light pre-pass): a thin G-buffer, a light buffer, a second geometry pass.
+        LightPrepass => "light-prepass",
+        /// Visibility buffer: triangle ID + depth per sample, per-tile lists of (triangle, quad) fragments,
+        /// attributes re-fetched from the meshes when shading.
+        VisibilityBuffer => "visibility-buffer",
+    }
+}
+
+impl Pipeline {
+    /// The traffic model of this pipeline, per frame (C covered samples, P pixels, B G-buffer bytes per sample,
+    /// L light-fragment pairs, T light-list bytes, F fragment-list entries).
+    #[must_use]
+    pub fn bandwidth_formula(self) -> &'static str {
+        match self {
+            Pipeline::Forward => "4·C₁ depth + 8·P colour (C₁ covered pixels)",
+            Pipeline::ForwardMsaa => "4·C depth + 8·C colour + 8·C resolve read + 8·P resolve write",
+            Pipeline::ForwardPlus => "forward-msaa + 4·C depth read by the culling + 2·T light lists",
+            Pipeline::DeferredQuad => "B·C write + L·(B + 16) reads and RGBA16F read-modify-writes",
+            Pipeline::TiledDeferred => "B·C write + B·C read + 8·P output",
+            Pipeline::LightPrepass => "8·C thin G-buffer write + 8·C read + 8·C light buffer write + 8·C read + 8·P",
+            Pipeline::VisibilityBuffer => "8·C write + 8·C read + 2·8·F lists + 96·F vertex fetch + 8·P output",
+        }
+    }
+}
+
+/// What [`pipelines`] measures with.
+#[derive(Clone, Debug)]
+pub struct PipelinesConfig {
+    /// The deferred rows' edge detector.
+    pub detector: Detector,
+    /// Its thresholds.
+    pub detector_config: DetectorConfig,
+    /// The resolve's BRDF, falloff and tile size (culling and schedule are set per row).
+    pub resolve: ResolveConfig,
+    /// G-buffer bytes per sample of the deferred rows (a layout's size).
+    pub gbuffer_bytes: u32,
+    /// The layout those bytes come from (for the table).
+    pub layout: String,
+    /// Warp widths of the utilisation table.
+    pub warps: Vec<u32>,
+    /// FLIP's viewing conditions; `None`: no FLIP.
+    pub viewing: Option<Viewing>,
+}
+
+/// One pipeline's row.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PipelineRow {
+    /// The pipeline.
+    pub pipeline: Pipeline,
+    /// Render-target memory in MB (G-buffer or MSAA colour + depth, light or fragment lists, output).
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    pub footprint_mb: f64,
+    /// Modelled traffic in MB per frame ([`Pipeline::bandwidth_formula`]).
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    pub bandwidth_mb: f64,
+    /// Shading work: fragment-shader lanes (forward, visibility buffer: helpers included) or shading evaluations
+    /// (deferred).
+    pub shading: u64,
+    /// `lanes` or `evaluations`.
+    pub shading_unit: String,
+    /// Light-fragment pairs evaluated.
+    pub light_pairs: u64,
+    /// Useful lanes over issued lanes (forward: covered over all quad lanes; deferred: the packed schedule at the
+    /// first warp width).
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    pub utilisation: f64,
+    /// CPU time of gbuf's resolve running this pipeline, ms (deferred rows only).
+    pub cpu_ms: Option<f64>,
+    /// Image error against the every-sample reference.
+    pub error: Option<ErrorSet>,
+    /// Estimated rather than counted (forward without MSAA from an MSAA dump).
+    pub estimated: bool,
+    /// What this row stands on, or why it has no numbers.
+    pub note: String,
+}
+
+/// The comparison on one frame.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Pipelines {
+    /// Width, height, samples.
+    pub size: (u32, u32, u32),
+    /// Lights.
+    pub lights: usize,
+    /// The deferred rows' detector.
+    pub detector: Detector,
+    /// The deferred rows' layout and its bytes per sample.
+    pub layout: String,
+    /// Bytes per sample of that layout.
+    pub gbuffer_bytes: u32,
+    /// One row per pipeline that could be measured.
+    pub rows: Vec<PipelineRow>,
+    /// Pipelines left out, with the reason.
+    pub skipped: Vec<(Pipeline, String)>,
+    /// Forward MSAA at quad granularity (needs primitive IDs).
+    pub forward_msaa: Option<QuadShading>,
+    /// Forward without MSAA.
+    pub forward: Option<QuadShading>,
+    /// The visibility buffer's fragment lists.
+    pub fragment_lists: Option<FragmentLists>,
+    /// Light-list bytes of forward+ (per tile: a 4-byte index per light, 8 bytes of offset and count).
+    pub light_list_bytes: u64,
+    /// Utilisation of each MSAA schedule at each warp width, on the deferred detector's mask.
+    pub utilisation: Vec<Utilisation>,
+}
+
+/// `bytes` as B, kB or MB.
+fn fmt_bytes(bytes: u64) -> String {
+    match bytes {
+        b if b < 10_000 => format!("{b} B"),
+        b if b < 10_000_000 => format!("{:.1} kB", b as f64 / 1e3),
+        b => format!("{:.1} MB", b as f64 / 1e6),
+    }
+}
+
+/// Lights surviving each tile's culling, row-major over tiles: from a tiled resolve shading one sample per pixel,
+/// where each pixel's light tests are its tile's list length.
+fn tile_light_counts(heat: &[u32], width: u32, height: u32, ts: u32) -> Vec<u32> {
+    let tx = width.div_ceil(ts);
+    let mut counts = vec![0u32; (tx * height.div_ceil(ts)) as usize];
+    for (p, &h) in heat.iter().enumerate() {
+        let (x, y) = (p as u32 % width, p as u32 / width);
+        let t = &mut counts[((y / ts) * tx + x / ts) as usize];
+        *t = (*t).max(h);
+    }
+    counts
+}
+
+/// Measures every pipeline on `gb` lit by `lights`; `reference` is the every-sample reference image when the caller
+/// has it (else it is computed).
+pub fn pipelines(
+    gb: &GBuffer,
+    lights: &[Light],
+    cfg: &PipelinesConfig,
+    reference: Option<&HdrImage>,
+) -> Result<Pipelines> {
+    let (w, h, s) = (gb.width, gb.height, gb.samples);
+    let pixels = f64::from(w) * f64::from(h);
+    let covered = (gb.len() - gb.background_samples()) as f64;
+    let covered_px = detect::covered_per_pixel(gb).iter().filter(|&&c| c > 0).count() as f64;
+    let n_lights = lights.len() as u64;
+    let mb = |bytes: f64| bytes / 1e6;
+    let computed;
+    let reference = match reference {
+        Some(r) => r,
+        None => {
+            computed = resolve::reference(gb, lights, &cfg.resolve)?;
+            &computed
+        }
+    };
+    let err = |img: &HdrImage| error_set(reference, img, cfg.viewing.as_ref());
+    let run = |mask: &EdgeMask, culling: Culling, schedule: Schedule| -> Result<(resolve::Resolved, f64)> {
+        let rc = ResolveConfig { culling, schedule, ..cfg.resolve };
+        let t = Instant::now();
+        let r = resolve::resolve(gb, lights, mask, &rc)?;
+        Ok((r, t.elapsed().as_secs_f64() * 1e3))
+    };
+
+    // One sample per pixel through the tiled resolve: the no-AA image, and each tile's light-list length.
+    let none = detect::detect(gb, Detector::None, &cfg.detector_config)?;
+    let (no_aa, _) = run(&none, Culling::Tiled, Schedule::Deferred)?;
+    let ts = cfg.resolve.tile_size;
+    let tile_lights = tile_light_counts(&no_aa.lights_per_pixel, w, h, ts);
+    let list_entries: u64 = tile_lights.iter().map(|&c| u64::from(c)).sum();
+    let light_list_bytes = 4 * list_entries + 8 * tile_lights.len() as u64;
+    let tile_of = |p: usize| {
+        let (x, y) = (p as u32 % w, p as u32 / w);
+        ((y / ts) * w.div_ceil(ts) + x / ts) as usize
+    };
+    // Light pairs of forward+ and the visibility buffer: each lane tests its tile's list.
+    let tiled_pairs = |q: &QuadShading| -> u64 {
+        q.lanes_per_pixel.iter().enumerate().map(|(p, &n)| u64::from(n) * u64::from(tile_lights[tile_of(p)])).sum()
+    };
+
+    let mut rows = Vec::new();
+    let mut skipped = Vec::new();
+    let fwd_msaa = forward::forward_quads(gb, ForwardSamples::Msaa);
+    let fwd_one = forward::forward_quads(gb, ForwardSamples::Single { sample: 0 });
+    let lists = forward::fragment_lists(gb, ts);
+    match (&fwd_msaa, &fwd_one, &lists) {
+        (Ok(fm), Ok(f1), Ok(fl)) => {
+            let fm_mask = detect::detect(gb, Detector::ForwardMsaa, &cfg.detector_config)?;
+            let (msaa_img, _) = run(&fm_mask, Culling::Tiled, Schedule::Deferred)?;
+            let msaa_err = err(&msaa_img.image);
+            let util = |q: &QuadShading| if q.lanes > 0 { q.covered_lanes as f64 / q.lanes as f64 } else { 1.0 };
+            let msaa_colour = 4.0 * covered + 8.0 * covered + 8.0 * covered + 8.0 * pixels;
+            let row =
+                |pipeline, footprint: f64, traffic: f64, q: &QuadShading, pairs, error, note: String| PipelineRow {
+                    pipeline,
+                    footprint_mb: mb(footprint),
+                    bandwidth_mb: mb(traffic),
+                    shading: q.lanes,
+                    shading_unit: "lanes".into(),
+                    light_pairs: pairs,
+                    utilisation: util(q),
+                    cpu_ms: None,
+                    error: Some(error),
+                    estimated: q.estimated,
+                    note,
+                };
+            rows.push(row(
+                Pipeline::Forward,
+                12.0 * pixels,
+                4.0 * covered_px + 8.0 * pixels,
+                f1,
+                f1.lanes * n_lights,
+                err(&no_aa.image),
+                if f1.estimated {
+                    "one sample per pixel: sample 0 stands for the pixel centre (estimate)".into()
+                } else {
+                    "quads of the single-sample dump".into()
+                },
+            ));
+            let msaa_fp = 12.0 * f64::from(s) * pixels + 8.0 * pixels;
+            rows.push(row(
+                Pipeline::ForwardMsaa,
+                msaa_fp,
+                msaa_colour,
+                fm,
+                fm.lanes * n_lights,
+                msaa_err,
+                format!(
+                    "{} quads of {} triangles, {:.0}% helper lanes",
+                    fm.quads,
+                    fm.triangles,
+                    100.0 * fm.helper_fraction
+                ),
+            ));
+            rows.push(row(
+                Pipeline::ForwardPlus,
+                msaa_fp + light_list_bytes as f64,
+                msaa_colour + 4.0 * covered + 2.0 * light_list_bytes as f64,
+                fm,
+                tiled_pairs(fm),
+                msaa_err,
+                format!(
+                    "light lists {} ({list_entries} entries in {} tiles)",
+                    fmt_bytes(light_list_bytes),
+                    tile_lights.len()
+                ),
+            ));
+            let vis_fp = 8.0 * f64::from(s) * pixels + fl.bytes as f64 + 8.0 * pixels;
+            let vis_traffic = 16.0 * covered + 16.0 * fl.entries as f64 + 96.0 * fl.entries as f64 + 8.0 * pixels;
+            let mut vis = row(
+                Pipeline::VisibilityBuffer,
+                vis_fp,
+                vis_traffic,
+                fm,
+                tiled_pairs(fm),
+                msaa_err,
+                format!(
+                    "R32UI triangle + D32F depth; fragment lists {} entries, longest {} ({})",
+                    fl.entries,
+                    fl.max_entries,
+                    fmt_bytes(fl.bytes)
+                ),
+            );
+            vis.shading = 4 * fl.entries;
+            rows.push(vis);
+        }
+        _ => {
+            let why = fwd_msaa.as_ref().err().map_or_else(String::new, ToString::to_string);
+            for p in [Pipeline::Forward, Pipeline::ForwardMsaa, Pipeline::ForwardPlus, Pipeline::VisibilityBuffer] {
+                skipped.push((p, why.clone()));
+            }
+        }
+    }
+
+    // The deferred rows: the chosen detector's mask, run through the resolve.
+    let mask = detect::detect(gb, cfg.detector, &cfg.detector_config)?;
+    let b = cfg.gbuffer_bytes;
+    let packed = forward::utilisation(&mask, MsaaSchedule::Packed, cfg.warps.first().copied().unwrap_or(16), ts);
+    let deferred_fp = f64::from(b) * f64::from(s) * pixels + 8.0 * pixels;
+    for (pipeline, culling, schedule) in [
+        (Pipeline::DeferredQuad, Culling::Quad, Schedule::Deferred),
+        (Pipeline::TiledDeferred, Culling::Tiled, Schedule::Deferred),
+        (Pipeline::LightPrepass, Culling::Tiled, Schedule::LightPrepass),
+    ] {
+        let (r, ms) = run(&mask, culling, schedule)?;
+        let st = &r.stats;
+        let (footprint, traffic, note) = match pipeline {
+            Pipeline::DeferredQuad => (
+                deferred_fp,
+                bandwidth(gb, b, Some(st.light_pairs_tested)).quad.unwrap_or(f64::NAN) * 1e6,
+                format!("{} G-buffer, {} B/sample; lights as screen quads", cfg.layout, b),
+            ),
+            Pipeline::TiledDeferred => (
+                deferred_fp,
+                bandwidth(gb, b, None).tiled * 1e6,
+                format!("{} G-buffer, {} B/sample; light lists stay on chip", cfg.layout, b),
+            ),
+            _ => (
+                16.0 * f64::from(s) * pixels + 8.0 * pixels,
+                32.0 * covered + 8.0 * pixels,
+                "depth + normal/power 8 B and light buffer RGBA16F 8 B per sample".into(),
+            ),
+        };
+        rows.push(PipelineRow {
+            pipeline,
+            footprint_mb: mb(footprint),
+            bandwidth_mb: mb(traffic),
+            shading: st.shading_evaluations,
+            shading_unit: "evaluations".into(),
+            light_pairs: st.light_pairs_tested,
+            utilisation: packed.ratio,
+            cpu_ms: Some(ms),
+            error: Some(err(&r.image)),
+            estimated: false,
+            note,
+        });
+    }
+    if rows.is_empty() {
+        return Err(Error::Argument("no pipeline could be measured".into()));
+    }
+    let mut utilisation = Vec::new();
+    for &warp in &cfg.warps {
+        for sched in MsaaSchedule::ALL {
+            utilisation.push(forward::utilisation(&mask, sched, warp, ts));
+        }
+    }
+    rows.sort_by_key(|r| Pipeline::ALL.iter().position(|&p| p == r.pipeline));
+    Ok(Pipelines {
+        size: (w, h, s),
+        lights: lights.len(),
+        detector: cfg.detector,
+        layout: cfg.layout.clone(),
+        gbuffer_bytes: b,
+        rows,
+        skipped,
+        forward_msaa: fwd_msaa.ok(),
+        forward: fwd_one.ok(),
+        fragment_lists: lists.ok(),
+        light_list_bytes,
+        utilisation,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tile_light_counts_take_each_tiles_list_length() {
+        // 4×2 pixels, tiles of 2: tile 0 has lists of 3, tile 1 of 5 (one blank pixel reading 0).
+        let heat = [3, 3, 5, 0, 3, 3, 5, 5];
+        assert_eq!(tile_light_counts(&heat, 4, 2, 2), vec![3, 5]);
+    }
+}

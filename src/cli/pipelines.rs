@@ -1,0 +1,98 @@
+//! `gbuf pipelines FILE [--detector D] [--layout L] [--warps 8,16,32,64] [--heatmap OUT.png] [--flip] [--json]`:
+//! forward, forward MSAA, forward+, deferred (quad-culled, tiled), light pre-pass and visibility buffer on one
+//! frame, in one table.
+
+use crate::cli::common::{print_json, InputArgs, ThresholdArgs};
+use crate::cli::report::frame_lights;
+use anyhow::Context;
+use gbuf::analysis::pipelines::{pipelines, PipelinesConfig};
+use gbuf::detect::{self, Detector};
+use gbuf::layout::Layout;
+use gbuf::measure::image::Viewing;
+use gbuf::resolve::{Brdf, Falloff, ResolveConfig};
+use std::io::Write;
+use std::path::PathBuf;
+
+/// Flags of `gbuf pipelines`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The dump to read.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Edge detector of the deferred rows.
+    #[arg(long, value_name = "D", default_value = "lauritzen")]
+    pub detector: Detector,
+    /// Detector thresholds.
+    #[command(flatten)]
+    pub thresholds: ThresholdArgs,
+    /// G-buffer layout of the deferred rows (built-in name or TOML/JSON file): its bytes per sample set their
+    /// footprint and traffic.
+    #[arg(long, value_name = "L", default_value = "fat-20")]
+    pub layout: String,
+    /// Warp widths of the MSAA schedules' utilisation table.
+    #[arg(long, value_name = "LIST", value_delimiter = ',', default_value = "8,16,32,64")]
+    pub warps: Vec<u32>,
+    /// BRDF of the resolve and the reference.
+    #[arg(long, value_name = "B", default_value = "blinn-phong")]
+    pub brdf: Brdf,
+    /// Distance falloff.
+    #[arg(long, value_name = "F", default_value = "linear")]
+    pub falloff: Falloff,
+    /// Lights to scatter when the dump and its sidecar have none.
+    #[arg(long, default_value_t = 64)]
+    pub lights: u32,
+    /// Seed of the scattered lights.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Also compute LDR-FLIP and HDR-FLIP of every pipeline's image (Reinhard tone map, exposure 1).
+    #[arg(long)]
+    pub flip: bool,
+    /// Write forward MSAA's lanes per pixel beside the deferred evaluations per pixel as a heatmap PNG (same scale;
+    /// needs primitive IDs).
+    #[arg(long, value_name = "OUT.png")]
+    pub heatmap: Option<PathBuf>,
+    /// Machine-readable output on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `gbuf pipelines`.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    if args.warps.is_empty() || args.warps.iter().any(|&w| w == 0 || w > 1024) {
+        crate::usage!("--warps: widths between 1 and 1024 lanes, got {:?}", args.warps);
+    }
+    let layout = Layout::by_name_or_path(&args.layout).with_context(|| format!("--layout {}", args.layout))?;
+    let file = args.input.file.display().to_string();
+    let loaded = args.input.load().with_context(|| format!("loading {file}"))?;
+    let (lights, lights_source) = frame_lights(&loaded, args.lights, args.seed);
+    let gb = loaded.gbuffer;
+    let cfg = PipelinesConfig {
+        detector: args.detector,
+        detector_config: args.thresholds.config()?,
+        resolve: ResolveConfig { brdf: args.brdf, falloff: args.falloff, ..ResolveConfig::default() },
+        gbuffer_bytes: layout.bytes_per_sample() as u32,
+        layout: layout.name().to_string(),
+        warps: args.warps.clone(),
+        viewing: args.flip.then(Viewing::default),
+    };
+    let p = pipelines(&gb, &lights, &cfg, None).with_context(|| format!("{file}: pipelines"))?;
+    if let Some(path) = &args.heatmap {
+        let fwd = p.forward_msaa.as_ref().with_context(|| {
+            format!("--heatmap: {file} has no primitive IDs, so forward shading's quads cannot be counted")
+        })?;
+        let mask = detect::detect(&gb, args.detector, &cfg.detector_config)?;
+        let max = gbuf::report::pipelines::write_shading_heatmaps(path, fwd, &mask)
+            .with_context(|| format!("writing {}", path.display()))?;
+        eprintln!(
+            "wrote {}: forward MSAA lanes (left) and deferred evaluations (right) per pixel, scale 0..{max}",
+            path.display()
+        );
+    }
+    if args.json {
+        return print_json(&p);
+    }
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{file}: lights {lights_source}")?;
+    write!(out, "{}", gbuf::report::pipelines::pipelines_markdown(&p, 2))?;
+    Ok(())
+}

@@ -1,0 +1,121 @@
+//! The pipelines comparison for a person: the markdown table of [`Pipelines`] (what `gbuf pipelines` prints and
+//! `report.md` holds) and the side-by-side "shading computations per pixel" heatmap of forward MSAA and deferred.
+
+use crate::analysis::forward::QuadShading;
+use crate::analysis::pipelines::{Pipeline, Pipelines};
+use crate::base::mask::EdgeMask;
+use crate::base::picture::write_heatmap_png;
+use crate::error::{Error, Result};
+use crate::report::markdown::fmt_opt;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The pipelines table, the schedules' utilisation table and the traffic formulas, as markdown. `level` is the
+/// heading level of the sub-headings (`###` in a report, `##` alone).
+#[must_use]
+pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
+    let h = "#".repeat(level);
+    let mut s = String::new();
+    let (w, ht, n) = p.size;
+    let _ = writeln!(
+        s,
+        "{w}×{ht} × {n} samples, {} lights; deferred rows: detector `{}`, layout `{}` ({} B/sample).\n",
+        p.lights, p.detector, p.layout, p.gbuffer_bytes
+    );
+    s.push_str(
+        "| pipeline | footprint MB | traffic MB/frame | shading | light pairs | SIMD util. | CPU ms | RMSE | \
+         LDR-FLIP | note |\n|---|--:|--:|--:|--:|--:|--:|--:|--:|---|\n",
+    );
+    for r in &p.rows {
+        let e = r.error.as_ref();
+        let _ = writeln!(
+            s,
+            "| {}{} | {:.2} | {:.1} | {} {} | {} | {:.0}% | {} | {} | {} | {} |",
+            r.pipeline,
+            if r.estimated { " (est.)" } else { "" },
+            r.footprint_mb,
+            r.bandwidth_mb,
+            r.shading,
+            r.shading_unit,
+            r.light_pairs,
+            100.0 * r.utilisation,
+            fmt_opt(r.cpu_ms, 1),
+            fmt_opt(e.map(|e| e.rmse), 5),
+            fmt_opt(e.and_then(|e| e.flip_ldr), 4),
+            r.note.replace('|', "/"),
+        );
+    }
+    // One line per reason (the forward rows share theirs).
+    let mut reasons: Vec<&str> = p.skipped.iter().map(|(_, why)| why.as_str()).collect();
+    reasons.dedup();
+    for why in reasons {
+        let names: Vec<&str> = p.skipped.iter().filter(|(_, w)| w == why).map(|(p, _)| p.name()).collect();
+        let _ = writeln!(s, "\nNot measured: {}: {why}", names.join(", "));
+    }
+    if let Some(q) = &p.forward_msaa {
+        let _ = writeln!(
+            s,
+            "\nForward MSAA launches {} quads for {} triangles: {} lanes, of which {} cover their pixel and {} ({:.1}%) \
+             are helper lanes; the deferred rows shade {} samples.",
+            q.quads,
+            q.triangles,
+            q.lanes,
+            q.covered_lanes,
+            q.helper_lanes,
+            100.0 * q.helper_fraction,
+            p.rows.iter().find(|r| r.pipeline == Pipeline::TiledDeferred).map_or(0, |r| r.shading)
+        );
+    }
+    if !p.utilisation.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n{h} MSAA schedules: SIMD lane utilisation (useful / issued lane-steps, detector `{}`)\n",
+            p.detector
+        );
+        let mut warps: Vec<u32> = p.utilisation.iter().map(|u| u.warp).collect();
+        warps.dedup();
+        s.push_str("| schedule |");
+        for w in &warps {
+            let _ = write!(s, " W={w} |");
+        }
+        s.push_str("\n|---|");
+        s.push_str(&"--:|".repeat(warps.len()));
+        s.push('\n');
+        for sched in crate::analysis::forward::MsaaSchedule::ALL {
+            let _ = write!(s, "| {sched} |");
+            for w in &warps {
+                let u = p.utilisation.iter().find(|u| u.warp == *w && u.schedule == Some(sched));
+                let _ = write!(s, " {} |", u.map_or("—".into(), |u| format!("{:.1}%", 100.0 * u.ratio)));
+            }
+            s.push('\n');
+        }
+    }
+    let _ = writeln!(s, "\n{h} Traffic model (C covered samples, P pixels, B bytes per sample)\n");
+    for r in &p.rows {
+        let _ = writeln!(s, "- {}: {}", r.pipeline, r.pipeline.bandwidth_formula());
+    }
+    s
+}
+
+/// Writes forward MSAA's lanes per pixel (left) beside the deferred mask's evaluations per pixel (right), on one
+/// colour scale, as a heatmap PNG (a 2-pixel black gap between). Returns the scale's maximum.
+pub fn write_shading_heatmaps(path: &Path, forward: &QuadShading, deferred: &EdgeMask) -> Result<u32> {
+    let (w, h) = (deferred.width as usize, deferred.height as usize);
+    if forward.lanes_per_pixel.len() != w * h {
+        return Err(Error::Argument(format!(
+            "{}: forward counts for {} pixels, mask of {w}×{h}",
+            path.display(),
+            forward.lanes_per_pixel.len()
+        )));
+    }
+    const GAP: usize = 2;
+    let width = 2 * w + GAP;
+    let mut counts = vec![0u32; width * h];
+    for y in 0..h {
+        counts[y * width..y * width + w].copy_from_slice(&forward.lanes_per_pixel[y * w..(y + 1) * w]);
+        for x in 0..w {
+            counts[y * width + w + GAP + x] = u32::from(deferred.shade_count[y * w + x]);
+        }
+    }
+    write_heatmap_png(path, width as u32, h as u32, &counts)
+}

@@ -1,0 +1,108 @@
+//! The pipelines comparison against a real rasterizer's own counts (fixtures/raster_4x: Mesa's llvmpipe, 4× MSAA,
+//! per-sample primitive IDs; fixtures/raster_4x.counts.json computed independently by
+//! fixtures/scripts/raster_msaa.py), and `gbuf pipelines` on every fixture.
+mod support;
+
+use gbuf::analysis::forward::{forward_quads, fragment_lists, utilisation, ForwardSamples, MsaaSchedule};
+use gbuf::io::LoadOptions;
+use std::path::PathBuf;
+use support::gbuf_command as gbuf;
+
+fn fixture(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures").join(name)
+}
+
+#[test]
+fn forward_msaa_quads_equal_the_rasterizers_count() {
+    let gb = gbuf::io::load(&fixture("raster_4x.exr"), &LoadOptions::default()).unwrap().gbuffer;
+    let counts: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fixture("raster_4x.counts.json")).unwrap()).unwrap();
+    let want = &counts["msaa4"];
+    let q = forward_quads(&gb, ForwardSamples::Msaa).unwrap();
+    assert_eq!(q.quads, want["quads"].as_u64().unwrap(), "(triangle, quad) pairs");
+    assert_eq!(q.lanes, want["lanes"].as_u64().unwrap(), "lanes");
+    assert_eq!(q.triangles, want["triangles_visible"].as_u64().unwrap(), "visible triangles");
+    assert_eq!(q.covered_lanes, want["pixel_primitive_pairs"].as_u64().unwrap(), "(triangle, pixel) pairs");
+    assert_eq!(q.lanes_per_pixel.iter().map(|&n| u64::from(n)).sum::<u64>(), q.lanes, "the heatmap sums to the lanes");
+    // The visibility buffer's per-tile lists hold the same (triangle, quad) pairs: tiles are even, quads never
+    // straddle them.
+    for ts in [2, 16, 64] {
+        assert_eq!(fragment_lists(&gb, ts).unwrap().entries, q.quads, "tiles of {ts}");
+    }
+    // Forward without MSAA from sample 0 is flagged an estimate, and cannot launch more quads than with MSAA.
+    let one = forward_quads(&gb, ForwardSamples::Single { sample: 0 }).unwrap();
+    assert!(one.estimated && one.quads <= q.quads);
+}
+
+#[test]
+fn schedules_utilisation_is_ordered_on_the_rasterizer_frame() {
+    let gb = gbuf::io::load(&fixture("raster_4x.exr"), &LoadOptions::default()).unwrap().gbuffer;
+    let mask = gbuf::detect::detect(&gb, gbuf::detect::Detector::ForwardMsaa, &Default::default()).unwrap();
+    for warp in [8, 16, 32, 64] {
+        let [packed, per_pixel, two_pass] = [MsaaSchedule::Packed, MsaaSchedule::PerPixel, MsaaSchedule::TwoPass]
+            .map(|s| utilisation(&mask, s, warp, 16));
+        assert_eq!(packed.useful, mask.shaded_samples());
+        assert!(packed.useful == per_pixel.useful && per_pixel.useful == two_pass.useful);
+        // Packing wastes at most one partial warp per tile; per-pixel branching waits for the slowest pixel.
+        assert!(packed.ratio >= two_pass.ratio && packed.ratio >= per_pixel.ratio, "warp {warp}");
+        let tiles = u64::from(gb.width.div_ceil(16) * gb.height.div_ceil(16));
+        assert!(packed.issued - packed.useful < u64::from(warp) * tiles, "warp {warp}: {packed:?}");
+        assert!(per_pixel.ratio < 1.0, "warp {warp}: {per_pixel:?}");
+    }
+    let w8 = utilisation(&mask, MsaaSchedule::PerPixel, 8, 16).ratio;
+    let w64 = utilisation(&mask, MsaaSchedule::PerPixel, 64, 16).ratio;
+    assert!(w64 < w8, "wider warps diverge more: {w8} → {w64}");
+}
+
+#[test]
+fn pipelines_runs_on_every_fixture() {
+    let dir = tempfile::tempdir().unwrap();
+    for (f, has_prim) in [
+        ("raster_4x.exr", true),
+        ("room_4x.exr", true),
+        ("blender_gbuffer.exr", false),
+        ("mitsuba_gbuffer.exr", true),
+        ("ispc_deferred.bin", false),
+        ("luxcore", false),
+    ] {
+        let heat = dir.path().join(format!("{f}.png"));
+        let mut cmd = gbuf();
+        cmd.arg("pipelines").arg(fixture(f)).arg("--json");
+        if has_prim {
+            cmd.arg("--heatmap").arg(&heat);
+        }
+        let o = cmd.output().unwrap();
+        assert!(o.status.success(), "{f}: {}", String::from_utf8_lossy(&o.stderr));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let rows = j["rows"].as_array().unwrap();
+        let names: Vec<&str> = rows.iter().map(|r| r["pipeline"].as_str().unwrap()).collect();
+        for p in ["deferred-quad", "tiled-deferred", "light-prepass"] {
+            assert!(names.contains(&p), "{f}: {names:?}");
+        }
+        assert_eq!(names.contains(&"visibility-buffer"), has_prim, "{f}: {names:?}");
+        if has_prim {
+            assert_eq!(rows.len(), 7, "{f}");
+            assert!(heat.is_file(), "{f}: heatmap");
+        } else {
+            let skipped = j["skipped"].as_array().unwrap();
+            assert_eq!(skipped.len(), 4, "{f}");
+            assert!(skipped[0][1].as_str().unwrap().contains("primitive IDs"), "{f}: {skipped:?}");
+        }
+        for r in rows {
+            let rmse = r["error"]["rmse"].as_f64().unwrap();
+            assert!(rmse.is_finite() && rmse >= 0.0, "{f}: {r}");
+            assert!(r["footprint_mb"].as_f64().unwrap() > 0.0 && r["shading"].as_u64().unwrap() > 0, "{f}: {r}");
+        }
+    }
+    // A heatmap asked of a dump without primitive IDs is an error naming the file.
+    let o = gbuf()
+        .arg("pipelines")
+        .arg(fixture("blender_gbuffer.exr"))
+        .arg("--heatmap")
+        .arg(dir.path().join("x.png"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("blender_gbuffer.exr") && e.contains("primitive IDs"), "{e}");
+}
