@@ -17,6 +17,7 @@ use crate::base::mask::EdgeMask;
 use crate::detect::{self, Detector, DetectorConfig};
 use crate::error::{Error, Result};
 use crate::gbuffer::GBuffer;
+use crate::image::mlaa::{mlaa, MlaaConfig, MlaaStats};
 use crate::image::HdrImage;
 use crate::light::Light;
 use crate::measure::image::{error_set, ErrorSet, Viewing};
@@ -83,6 +84,27 @@ pub struct PipelinesConfig {
     pub warps: Vec<u32>,
     /// FLIP's viewing conditions; `None`: no FLIP.
     pub viewing: Option<Viewing>,
+    /// Detectors of the anti-aliasing comparison's adaptive MSAA rows.
+    pub aa_detectors: Vec<Detector>,
+    /// MLAA's settings.
+    pub mlaa: MlaaConfig,
+}
+
+/// One way to anti-alias the frame, against the every-sample reference.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AaRow {
+    /// `no-aa`, `mlaa`, `msaa:<detector>` or `ssaa`.
+    pub method: String,
+    /// Shading evaluations.
+    pub evaluations: u64,
+    /// G-buffer (and post-process buffers) in MB at the deferred rows' bytes per sample.
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    pub footprint_mb: f64,
+    /// CPU time: the resolve, plus MLAA's pass for `mlaa`, ms.
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    pub ms: f64,
+    /// Error against the reference.
+    pub error: ErrorSet,
 }
 
 /// One pipeline's row.
@@ -144,6 +166,13 @@ pub struct Pipelines {
     pub light_list_bytes: u64,
     /// Utilisation of each MSAA schedule at each warp width, on the deferred detector's mask.
     pub utilisation: Vec<Utilisation>,
+    /// The anti-aliasing comparison: no AA, MLAA on the no-AA image, adaptive MSAA per detector, SSAA.
+    pub aa: Vec<AaRow>,
+    /// What MLAA found on the no-AA image.
+    pub mlaa: MlaaStats,
+    /// The images of [`Pipelines::aa`] (same order), for pictures; not serialised.
+    #[serde(skip)]
+    pub aa_images: Vec<HdrImage>,
 }
 
 /// `bytes` as B, kB or MB.
@@ -200,7 +229,7 @@ pub fn pipelines(
 
     // One sample per pixel through the tiled resolve: the no-AA image, and each tile's light-list length.
     let none = detect::detect(gb, Detector::None, &cfg.detector_config)?;
-    let (no_aa, _) = run(&none, Culling::Tiled, Schedule::Deferred)?;
+    let (no_aa, no_aa_ms) = run(&none, Culling::Tiled, Schedule::Deferred)?;
     let ts = cfg.resolve.tile_size;
     let tile_lights = tile_light_counts(&no_aa.lights_per_pixel, w, h, ts);
     let list_entries: u64 = tile_lights.iter().map(|&c| u64::from(c)).sum();
@@ -361,6 +390,47 @@ pub fn pipelines(
         }
     }
     rows.sort_by_key(|r| Pipeline::ALL.iter().position(|&p| p == r.pipeline));
+
+    // Anti-aliasing: the no-AA image, MLAA on it, adaptive MSAA with each detector, SSAA.
+    let gbuf_mb = |samples: u32| mb(f64::from(b) * f64::from(samples) * pixels);
+    let mut aa = Vec::new();
+    let mut aa_images = Vec::new();
+    let t = Instant::now();
+    let (smoothed, mlaa_stats) = mlaa(&no_aa.image.rgb, w, h, &cfg.mlaa);
+    let mlaa_ms = t.elapsed().as_secs_f64() * 1e3;
+    let smoothed = HdrImage { width: w, height: h, rgb: smoothed };
+    let evals = no_aa.stats.shading_evaluations;
+    aa.push(AaRow {
+        method: "no-aa".into(),
+        evaluations: evals,
+        footprint_mb: gbuf_mb(1),
+        ms: no_aa_ms,
+        error: err(&no_aa.image),
+    });
+    // MLAA's buffers on a GPU: an RG8 edge texture and an RGBA8 blend-weight texture.
+    aa.push(AaRow {
+        method: "mlaa".into(),
+        evaluations: evals,
+        footprint_mb: gbuf_mb(1) + mb(6.0 * pixels),
+        ms: no_aa_ms + mlaa_ms,
+        error: err(&smoothed),
+    });
+    aa_images.push(no_aa.image);
+    aa_images.push(smoothed);
+    let mut methods: Vec<(String, Detector)> = cfg.aa_detectors.iter().map(|&d| (format!("msaa:{d}"), d)).collect();
+    methods.push(("ssaa".into(), Detector::Ssaa));
+    for (method, d) in methods {
+        let Ok(m) = detect::detect(gb, d, &cfg.detector_config) else { continue };
+        let (r, ms) = run(&m, Culling::Tiled, Schedule::Deferred)?;
+        aa.push(AaRow {
+            method,
+            evaluations: r.stats.shading_evaluations,
+            footprint_mb: gbuf_mb(s),
+            ms,
+            error: err(&r.image),
+        });
+        aa_images.push(r.image);
+    }
     Ok(Pipelines {
         size: (w, h, s),
         lights: lights.len(),
@@ -374,6 +444,9 @@ pub fn pipelines(
         fragment_lists: lists.ok(),
         light_list_bytes,
         utilisation,
+        aa,
+        mlaa: mlaa_stats,
+        aa_images,
     })
 }
 

@@ -7,6 +7,7 @@ use crate::cli::report::frame_lights;
 use anyhow::Context;
 use gbuf::analysis::pipelines::{pipelines, PipelinesConfig};
 use gbuf::detect::{self, Detector};
+use gbuf::image::mlaa::MlaaConfig;
 use gbuf::layout::Layout;
 use gbuf::measure::image::Viewing;
 use gbuf::resolve::{Brdf, Falloff, ResolveConfig};
@@ -74,6 +75,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         layout: layout.name().to_string(),
         warps: args.warps.clone(),
         viewing: args.flip.then(Viewing::default),
+        aa_detectors: vec![Detector::Lauritzen, Detector::Depth, Detector::Normal, Detector::Id],
+        mlaa: MlaaConfig::default(),
     };
     let p = pipelines(&gb, &lights, &cfg, None).with_context(|| format!("{file}: pipelines"))?;
     if let Some(path) = &args.heatmap {

@@ -102,6 +102,8 @@ pub fn pipelines_config(cfg: &SweepConfig) -> crate::analysis::pipelines::Pipeli
         layout: layout.map_or_else(|| "fat-20".to_string(), |l| l.name().to_string()),
         warps: vec![8, 16, 32, 64],
         viewing: (cfg.flip != FlipRows::None).then_some(cfg.viewing),
+        aa_detectors: cfg.detectors.iter().copied().filter(|d| !d.is_baseline()).collect(),
+        mlaa: crate::image::mlaa::MlaaConfig::default(),
     }
 }
 

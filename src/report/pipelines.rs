@@ -90,6 +90,28 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
             s.push('\n');
         }
     }
+    if !p.aa.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n{h} Anti-aliasing: no AA, MLAA (Reshetov 2009, on the no-AA image), adaptive MSAA, SSAA\n\n\
+             MLAA found {} horizontal and {} vertical edges, {} L, {} Z and {} U shapes, and blended {} pixels.\n",
+            p.mlaa.edges_h, p.mlaa.edges_v, p.mlaa.shapes_l, p.mlaa.shapes_z, p.mlaa.shapes_u, p.mlaa.blended_pixels
+        );
+        s.push_str("| method | evaluations | G-buffer MB | CPU ms | RMSE | LDR-FLIP | HDR-FLIP |\n|---|--:|--:|--:|--:|--:|--:|\n");
+        for r in &p.aa {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {:.2} | {:.1} | {} | {} | {} |",
+                r.method,
+                r.evaluations,
+                r.footprint_mb,
+                r.ms,
+                fmt_opt(Some(r.error.rmse), 5),
+                fmt_opt(r.error.flip_ldr, 4),
+                fmt_opt(r.error.flip_hdr, 4)
+            );
+        }
+    }
     let _ = writeln!(s, "\n{h} Traffic model (C covered samples, P pixels, B bytes per sample)\n");
     for r in &p.rows {
         let _ = writeln!(s, "- {}: {}", r.pipeline, r.pipeline.bandwidth_formula());

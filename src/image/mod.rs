@@ -8,6 +8,10 @@
 //! Pixels become PNG files through [`crate::base::picture`] (one sRGB, one PNG writer for the whole crate).
 //!
 //! Every writer is atomic (temporary file + rename).
+//!
+//! [`mlaa`]: morphological antialiasing (Reshetov 2009), the post-process alternative to MSAA.
+
+pub mod mlaa;
 
 use crate::base::picture::{srgb_encode, write_rgb8_png};
 use crate::error::{Error, Result};
