@@ -465,7 +465,8 @@ mod tests {
                 assert_eq!(out, img, "{w}×{h}: a 1-wide image has no shape ends");
             }
         }
-        let (out, _) = mlaa(&[Vec3::ONE; 4], 2, 2, &MlaaConfig { threshold: -1.0, max_search: 0 });
+        let (out, _) =
+            mlaa(&[Vec3::ONE; 4], 2, 2, &MlaaConfig { threshold: -1.0, max_search: 0, display_blend: false });
         assert_eq!(out, vec![Vec3::ONE; 4]);
     }
 
@@ -517,5 +518,26 @@ mod tests {
             }
             println!("mlaa 1280×720 {name}: best of 10 {:.2} ms; {stats:?}", best * 1e3);
         }
+    }
+
+    #[test]
+    fn display_blend_stays_in_range_and_pulls_less_toward_bright_pixels() {
+        // A shallow staircase of radiance 100 over 0.1.
+        let (w, h) = (32u32, 16u32);
+        let img: Vec<Vec3> = (0..w * h)
+            .map(|i| if (i / w) as f32 > 4.0 + 0.25 * (i % w) as f32 { Vec3::splat(100.0) } else { Vec3::splat(0.1) })
+            .collect();
+        let lin = mlaa(&img, w, h, &MlaaConfig::default()).0;
+        let disp = mlaa(&img, w, h, &MlaaConfig { display_blend: true, ..MlaaConfig::default() }).0;
+        let mut changed = 0;
+        for ((&l, &d), &c) in lin.iter().zip(&disp).zip(&img) {
+            assert!(d.is_finite() && d.min_element() >= 0.1 - 1e-6 && d.max_element() <= 100.0 + 1e-3, "{d}");
+            if c.x < 1.0 && l.x > c.x {
+                // A dark pixel blended toward the bright side moves less in display space.
+                assert!(d.x <= l.x + 1e-4, "display {d} linear {l}");
+                changed += 1;
+            }
+        }
+        assert!(changed > 0, "the staircase was blended");
     }
 }
