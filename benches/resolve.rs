@@ -57,6 +57,21 @@ fn benches(c: &mut Criterion) {
     g.bench_function("tiled/4x-adaptive/1280x720/split", |b| {
         b.iter(|| resolve(black_box(&split4), black_box(&lights), &mask4, &tiled).unwrap())
     });
+    // The MSAA schedules on the same 4× adaptive frame (same image; the baseline is `packed`).
+    for msaa in gbuf::resolve::MsaaSchedule::ALL {
+        let cfg = ResolveConfig { msaa, ..tiled };
+        let r = resolve(&gb4, &lights, &mask4, &cfg).unwrap();
+        eprintln!(
+            "msaa schedule {msaa}: {} evaluations in {} lane steps ({:.1}% utilisation), {} pairs",
+            r.stats.shading_evaluations,
+            r.stats.lane_steps,
+            100.0 * r.stats.shading_evaluations as f64 / r.stats.lane_steps.max(1) as f64,
+            r.stats.light_pairs_tested
+        );
+        g.bench_function(format!("msaa/{msaa}/4x-adaptive/1280x720"), |b| {
+            b.iter(|| resolve(black_box(&gb4), black_box(&lights), &mask4, &cfg).unwrap())
+        });
+    }
     g.bench_function("tiled/4x-ssaa/1280x720", |b| {
         b.iter(|| resolve(black_box(&gb4), black_box(&lights), &ssaa4, &tiled).unwrap())
     });

@@ -24,6 +24,7 @@
 use crate::base::mask::EdgeMask;
 use crate::error::{Error, Result};
 use crate::gbuffer::GBuffer;
+pub use crate::resolve::MsaaSchedule;
 use serde::{Deserialize, Serialize};
 
 /// Which samples a forward pass would rasterise.
@@ -204,26 +205,6 @@ pub fn fragment_lists(gb: &GBuffer, tile_size: u32) -> Result<FragmentLists> {
     })
 }
 
-crate::named_enum! {
-    /// How an MSAA deferred pass spreads its shading over SIMD lanes.
-    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-    #[serde(rename_all = "kebab-case")]
-    pub enum MsaaSchedule: "MSAA schedule" {
-        /// Lauritzen 2010: per tile, one packed list of the samples to shade (every pixel once, then the edge
-        /// pixels' other samples), cut into warps: only the list's last warp has idle lanes.
-        Packed => "packed",
-        /// Per-pixel branching: a warp is a block of W pixels and each lane loops over the samples its pixel
-        /// needs, so the warp runs as long as its slowest pixel (idle lanes: background pixels and pixels that
-        /// finished early).
-        PerPixel => "per-pixel",
-        /// Two passes split by a stencil mask (Lauritzen 2010): pass 1 shades every covered pixel once, pass 2 runs
-        /// at sample frequency on the edge pixels and shades their samples 1... The stencil test passes whole 2×2
-        /// quads, which fill the warps per tile: idle lanes are a quad's background pixels (pass 1) and its
-        /// non-edge pixels (pass 2).
-        TwoPass => "two-pass",
-    }
-}
-
 /// Useful and issued lane-steps of one schedule at one warp width.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Utilisation {
@@ -253,8 +234,12 @@ pub fn warp_block(warp: u32) -> (u32, u32) {
     }
 }
 
-/// The lane utilisation of `schedule` on `mask` with warps of `warp` lanes. The packed schedule packs per tile of
-/// `tile_size` pixels; the others ignore it.
+/// The lane utilisation of `schedule` on `mask` with GPU warps of `warp` lanes, modelled from the mask alone:
+/// `packed` fills warps from each tile's list (`tile_size` pixels square), idle lanes only in a tile's last warp;
+/// `per-pixel` runs a warp over a block of pixels ([`warp_block`]) for as many steps as its pixel with the most
+/// evaluations; `two-pass` launches the 2×2 quads that pass each pass's stencil test (pass 1: any covered pixel;
+/// pass 2: any edge pixel, at sample frequency, samples 1..), packed into warps per tile. The resolve runs the same
+/// three schedules on the CPU ([`crate::resolve::MsaaSchedule`]) and counts its own lane steps.
 #[must_use]
 pub fn utilisation(mask: &EdgeMask, schedule: MsaaSchedule, warp: u32, tile_size: u32) -> Utilisation {
     let warp = warp.max(1);

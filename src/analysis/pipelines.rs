@@ -11,7 +11,7 @@
 //! `forward-msaa` detector's image); the deferred rows shade what the chosen detector asks. Forward rows need
 //! primitive IDs: without them they are listed with the reason and no numbers.
 
-use crate::analysis::forward::{self, ForwardSamples, FragmentLists, MsaaSchedule, QuadShading, Utilisation};
+use crate::analysis::forward::{self, ForwardSamples, FragmentLists, QuadShading, Utilisation};
 use crate::analysis::sweep::bandwidth;
 use crate::base::mask::EdgeMask;
 use crate::detect::{self, Detector, DetectorConfig};
@@ -21,7 +21,7 @@ use crate::image::mlaa::{mlaa, MlaaConfig, MlaaStats};
 use crate::image::HdrImage;
 use crate::light::Light;
 use crate::measure::image::{error_set, ErrorSet, Viewing};
-use crate::resolve::{self, Culling, ResolveConfig, Schedule};
+use crate::resolve::{self, Culling, MsaaSchedule, ResolveConfig, Schedule};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -88,6 +88,26 @@ pub struct PipelinesConfig {
     pub aa_detectors: Vec<Detector>,
     /// MLAA's settings.
     pub mlaa: MlaaConfig,
+}
+
+/// One MSAA schedule run by the resolve on the CPU (tiled culling, the deferred rows' mask).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ScheduleRun {
+    /// The schedule.
+    pub schedule: MsaaSchedule,
+    /// Wall time of the resolve, ms.
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    pub ms: f64,
+    /// Shading evaluations.
+    pub evaluations: u64,
+    /// Lane steps run through the kernel, idle lanes included.
+    pub lane_steps: u64,
+    /// Light-sample pairs tested.
+    pub light_pairs: u64,
+    /// Bytes of G-buffer samples read (evaluations × the layout's bytes per sample).
+    pub bytes_read: u64,
+    /// Is the image bit-identical to the packed schedule's?
+    pub same_image: bool,
 }
 
 /// One way to anti-alias the frame, against the every-sample reference.
@@ -166,6 +186,8 @@ pub struct Pipelines {
     pub light_list_bytes: u64,
     /// Utilisation of each MSAA schedule at each warp width, on the deferred detector's mask.
     pub utilisation: Vec<Utilisation>,
+    /// The MSAA schedules timed on the CPU.
+    pub schedules: Vec<ScheduleRun>,
     /// The anti-aliasing comparison: no AA, MLAA on the no-AA image, adaptive MSAA per detector, SSAA.
     pub aa: Vec<AaRow>,
     /// What MLAA found on the no-AA image.
@@ -383,6 +405,27 @@ pub fn pipelines(
     if rows.is_empty() {
         return Err(Error::Argument("no pipeline could be measured".into()));
     }
+    let mut schedules: Vec<ScheduleRun> = Vec::new();
+    let mut packed_image = None;
+    for sched in MsaaSchedule::ALL {
+        let rc = ResolveConfig { culling: Culling::Tiled, schedule: Schedule::Deferred, msaa: sched, ..cfg.resolve };
+        let t = Instant::now();
+        let r = resolve::resolve(gb, lights, &mask, &rc)?;
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        let same_image = packed_image.as_ref().is_none_or(|p: &HdrImage| p.rgb == r.image.rgb);
+        schedules.push(ScheduleRun {
+            schedule: sched,
+            ms,
+            evaluations: r.stats.shading_evaluations,
+            lane_steps: r.stats.lane_steps,
+            light_pairs: r.stats.light_pairs_tested,
+            bytes_read: r.stats.shading_evaluations * u64::from(b),
+            same_image,
+        });
+        if packed_image.is_none() {
+            packed_image = Some(r.image);
+        }
+    }
     let mut utilisation = Vec::new();
     for &warp in &cfg.warps {
         for sched in MsaaSchedule::ALL {
@@ -444,6 +487,7 @@ pub fn pipelines(
         fragment_lists: lists.ok(),
         light_list_bytes,
         utilisation,
+        schedules,
         aa,
         mlaa: mlaa_stats,
         aa_images,

@@ -57,6 +57,11 @@ pub struct Args {
     /// Depth slices per tile (clustered culling).
     #[arg(long, value_name = "N", default_value_t = resolve::DEFAULT_DEPTH_SLICES)]
     pub depth_slices: u32,
+    /// How MSAA work is laid out over SIMD lanes: packed (Lauritzen 2010's per-tile lists), per-pixel (a lane per
+    /// pixel, looping over its samples), two-pass (every pixel once, then the edge samples, culling twice). The
+    /// image is the same; the time and the lane utilisation differ.
+    #[arg(long, value_name = "S", default_value = "packed")]
+    pub msaa_schedule: gbuf::resolve::MsaaSchedule,
     /// Write the lit image as a float EXR (channels R, G, B).
     #[arg(short = 'o', long = "output", value_name = "OUT.exr")]
     pub output: Option<PathBuf>,
@@ -151,6 +156,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         schedule: args.schedule,
         tile_size: args.tile_size,
         depth_slices: args.depth_slices,
+        msaa: args.msaa_schedule,
     };
     cfg.validate().context("resolve configuration")?;
     if args.ldr.is_some() && args.png.is_none() {

@@ -90,6 +90,29 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
             s.push('\n');
         }
     }
+    if !p.schedules.is_empty() {
+        let _ = writeln!(
+            s,
+            "\nThe same three schedules run by gbuf's resolve on this CPU ({}-lane vectors, tiled culling):\n\n\
+             | schedule | CPU ms | evaluations | lane steps | utilisation | light pairs | G-buffer bytes read | same image |\n\
+             |---|--:|--:|--:|--:|--:|--:|---|",
+            crate::resolve::kernel_lanes()
+        );
+        for r in &p.schedules {
+            let _ = writeln!(
+                s,
+                "| {} | {:.1} | {} | {} | {:.1}% | {} | {} | {} |",
+                r.schedule,
+                r.ms,
+                r.evaluations,
+                r.lane_steps,
+                100.0 * r.evaluations as f64 / r.lane_steps.max(1) as f64,
+                r.light_pairs,
+                r.bytes_read,
+                if r.same_image { "yes" } else { "**no**" }
+            );
+        }
+    }
     if !p.aa.is_empty() {
         let _ = writeln!(
             s,

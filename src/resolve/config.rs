@@ -65,6 +65,26 @@ crate::named_enum! {
     }
 }
 
+crate::named_enum! {
+    /// How an MSAA tile's shading work is laid out over SIMD lanes. Every schedule gives the same image, bit for
+    /// bit (each sample is shaded by the same arithmetic and the box filter adds in the same order); they differ in
+    /// the idle lanes they run and, for `two-pass`, in the culling.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub enum MsaaSchedule: "MSAA schedule" {
+        /// Lauritzen 2010: one packed list per tile — every pixel once, then the edge pixels' other samples — cut
+        /// into vectors: only the list's last vector has idle lanes.
+        #[default]
+        Packed => "packed",
+        /// Per-pixel branching: a vector holds one pixel per lane and steps through the samples its pixel needs,
+        /// so each group of pixels runs as long as its slowest pixel (idle lanes: pixels that finished early).
+        PerPixel => "per-pixel",
+        /// Two passes, as with a stencil mask: every pixel once, then the edge pixels' other samples, each pass with
+        /// its own light culling against its own samples' bounds (culling twice).
+        TwoPass => "two-pass",
+    }
+}
+
 /// Default tile edge in pixels (the 2010 demo and the ISPC sample use 16×16 tiles).
 pub const DEFAULT_TILE_SIZE: u32 = 16;
 /// Default number of depth slices per tile for clustered culling.
@@ -89,6 +109,9 @@ pub struct ResolveConfig {
     pub tile_size: u32,
     /// Depth slices per tile for [`Culling::Clustered`] (1..=[`MAX_DEPTH_SLICES`]).
     pub depth_slices: u32,
+    /// How MSAA work is laid out over SIMD lanes (the image does not depend on it).
+    #[serde(default)]
+    pub msaa: MsaaSchedule,
 }
 
 impl Default for ResolveConfig {
@@ -101,6 +124,7 @@ impl Default for ResolveConfig {
             schedule: Schedule::Deferred,
             tile_size: DEFAULT_TILE_SIZE,
             depth_slices: DEFAULT_DEPTH_SLICES,
+            msaa: MsaaSchedule::Packed,
         }
     }
 }
@@ -115,6 +139,12 @@ impl ResolveConfig {
             return Err(crate::Error::Argument(format!(
                 "depth slices {} outside 1..={MAX_DEPTH_SLICES}",
                 self.depth_slices
+            )));
+        }
+        if self.msaa != MsaaSchedule::Packed && self.culling == Culling::Clustered {
+            return Err(crate::Error::Argument(format!(
+                "the {} MSAA schedule runs with none, tiled or quad culling, not clustered",
+                self.msaa
             )));
         }
         Ok(())

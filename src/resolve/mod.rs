@@ -27,10 +27,17 @@ mod surface;
 mod worklist;
 
 pub use config::{
-    Brdf, Culling, Falloff, ResolveConfig, Schedule, DEFAULT_DEPTH_SLICES, DEFAULT_TILE_SIZE, MAX_DEPTH_SLICES,
-    MAX_TILE_SIZE,
+    Brdf, Culling, Falloff, MsaaSchedule, ResolveConfig, Schedule, DEFAULT_DEPTH_SLICES, DEFAULT_TILE_SIZE,
+    MAX_DEPTH_SLICES, MAX_TILE_SIZE,
 };
 pub use kernel::instruction_set;
+
+/// Work-list entries per kernel vector: the "warp" of gbuf's CPU schedules (every instruction set pads lists to
+/// this many).
+#[must_use]
+pub fn kernel_lanes() -> usize {
+    simd::BLOCK
+}
 pub use reference::{check_meaningful, reference, reference_per_sample};
 pub use split::{ResolveInput, SplitSamples};
 pub use surface::SanitizedCounts;
@@ -57,6 +64,9 @@ pub struct ResolveStats {
     pub light_pairs_lit: u64,
     /// Samples shaded.
     pub shading_evaluations: u64,
+    /// Work-list entries run through the kernel, idle (padding) lanes included: `shading_evaluations /
+    /// lane_steps` is the measured SIMD utilisation of the MSAA schedule.
+    pub lane_steps: u64,
     /// `shading_evaluations / (pixels × samples)`.
     pub shading_fraction: f64,
     /// Pixels shaded per sample / pixels.
@@ -166,6 +176,7 @@ fn resolve_into_isa(
     stats.light_pairs_tested = t.tested;
     stats.light_pairs_lit = t.lit;
     stats.shading_evaluations = t.evaluations;
+    stats.lane_steps = t.lane_steps;
     let edge_pixels = t.edge_pixels;
     let (tg, tc, tsh) = (t.t_gather, t.t_cull, t.t_shade);
     let total_samples = gb.len() as f64;

@@ -7,7 +7,7 @@
 //! many and rayon balances them. Background samples contribute 0 (black sky) to the box filter; a non-edge pixel
 //! takes its one shaded sample's value for the whole pixel (that sample stands for the pixel, as in the demo).
 
-use super::config::{Culling, ResolveConfig, Schedule};
+use super::config::{Culling, MsaaSchedule, ResolveConfig, Schedule};
 use super::culling::{quad_rects, Bounds};
 use super::kernel::{finish_prepass, shade, Variant, BLOCK};
 use super::lights::LightTable;
@@ -69,6 +69,8 @@ pub struct TileStats {
     pub lit: u64,
     /// Samples shaded.
     pub evaluations: u64,
+    /// Work-list entries run through the kernel, idle (padding) lanes included.
+    pub lane_steps: u64,
     /// Pixels shaded per sample.
     pub edge_pixels: u64,
     /// Values sanitised while reading.
@@ -89,6 +91,7 @@ impl TileStats {
         self.tested += o.tested;
         self.lit += o.lit;
         self.evaluations += o.evaluations;
+        self.lane_steps += o.lane_steps;
         self.edge_pixels += o.edge_pixels;
         self.sanitized.add(&o.sanitized);
         self.t_gather += o.t_gather;
@@ -330,41 +333,68 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats)
     };
     let mut t_cull = lap();
     let mut t_shade = Duration::ZERO;
-    let items = match frame.cfg.culling {
-        Culling::None => {
-            shade(frame.isa, &mut sc.items, 0..n, &frame.table, &frame.quads, variant);
-            t_shade += lap();
-            &mut sc.items
-        }
-        Culling::Tiled | Culling::Quad => {
+    let spread_out =
+        frame.cfg.msaa != MsaaSchedule::Packed && n_real > n_first && frame.cfg.culling != Culling::Clustered;
+    let items = if spread_out {
+        let ranges = spread(frame.cfg.msaa, n_first, n_real, sc);
+        let culled = frame.cfg.culling != Culling::None;
+        let per_range = frame.cfg.msaa == MsaaSchedule::TwoPass;
+        if culled && !per_range {
             let bounds = tile_bounds(frame.isa, &sc.items, 0..n).expect("nonempty");
             cull_into(frame, &bounds, None, sc);
-            t_cull += lap();
-            shade(frame.isa, &mut sc.items, 0..n, &sc.lights, &sc.quads, variant);
-            t_shade += lap();
-            &mut sc.items
         }
-        Culling::Clustered => {
-            let bounds = tile_bounds(frame.isa, &sc.items, 0..n).expect("nonempty");
-            cull_tile_list(frame, &bounds, sc);
-            let ranges = sort_by_slice(&bounds, frame.cfg.depth_slices, n_real, sc);
-            t_cull += lap();
-            for range in ranges {
-                let b = tile_bounds(frame.isa, &sc.sorted, range.clone()).expect("nonempty slice");
-                let list = std::mem::take(&mut sc.tile_lights);
-                cull_into(frame, &b, Some(&list), sc);
-                sc.tile_lights = list;
+        t_cull += lap();
+        for range in ranges {
+            if culled && per_range {
+                let b = tile_bounds(frame.isa, &sc.sorted, range.clone()).expect("nonempty pass");
+                cull_into(frame, &b, None, sc);
                 t_cull += lap();
+            }
+            st.lane_steps += range.len() as u64;
+            if culled {
                 shade(frame.isa, &mut sc.sorted, range, &sc.lights, &sc.quads, variant);
+            } else {
+                shade(frame.isa, &mut sc.sorted, range, &frame.table, &frame.quads, variant);
+            }
+            t_shade += lap();
+        }
+        copy_back(n_real, sc);
+        &mut sc.items
+    } else {
+        match frame.cfg.culling {
+            Culling::None => {
+                st.lane_steps += n as u64;
+                shade(frame.isa, &mut sc.items, 0..n, &frame.table, &frame.quads, variant);
                 t_shade += lap();
+                &mut sc.items
             }
-            // Back to tile order, so the box filter adds samples in the same order whatever the culling.
-            let (it, so) = (&mut sc.items, &sc.sorted);
-            for (j, &k) in sc.order.iter().enumerate() {
-                (it.or[j], it.og[j], it.ob[j], it.ls[j]) = (so.or[k], so.og[k], so.ob[k], so.ls[k]);
-                (it.tested[j], it.lit[j]) = (so.tested[k], so.lit[k]);
+            Culling::Tiled | Culling::Quad => {
+                let bounds = tile_bounds(frame.isa, &sc.items, 0..n).expect("nonempty");
+                cull_into(frame, &bounds, None, sc);
+                t_cull += lap();
+                st.lane_steps += n as u64;
+                shade(frame.isa, &mut sc.items, 0..n, &sc.lights, &sc.quads, variant);
+                t_shade += lap();
+                &mut sc.items
             }
-            &mut sc.items
+            Culling::Clustered => {
+                let bounds = tile_bounds(frame.isa, &sc.items, 0..n).expect("nonempty");
+                cull_tile_list(frame, &bounds, sc);
+                let ranges = sort_by_slice(&bounds, frame.cfg.depth_slices, n_real, sc);
+                t_cull += lap();
+                for range in ranges {
+                    let b = tile_bounds(frame.isa, &sc.sorted, range.clone()).expect("nonempty slice");
+                    let list = std::mem::take(&mut sc.tile_lights);
+                    cull_into(frame, &b, Some(&list), sc);
+                    sc.tile_lights = list;
+                    t_cull += lap();
+                    st.lane_steps += range.len() as u64;
+                    shade(frame.isa, &mut sc.sorted, range, &sc.lights, &sc.quads, variant);
+                    t_shade += lap();
+                }
+                copy_back(n_real, sc);
+                &mut sc.items
+            }
         }
     };
     if variant.prepass {
@@ -394,6 +424,93 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats)
     t_shade += lap();
     st.t_cull += t_cull;
     st.t_shade += t_shade;
+}
+
+/// Copies the shading results of `sc.sorted` back to tile order (`sc.order[j]`: where item `j` went), so the box
+/// filter adds samples in the same order whatever the culling or the MSAA schedule.
+#[inline(always)]
+fn copy_back(n_real: usize, sc: &mut Scratch) {
+    let (it, so) = (&mut sc.items, &sc.sorted);
+    for (j, &k) in sc.order[..n_real].iter().enumerate() {
+        (it.or[j], it.og[j], it.ob[j], it.ls[j]) = (so.or[k], so.og[k], so.ob[k], so.ls[k]);
+        (it.tested[j], it.lit[j]) = (so.tested[k], so.lit[k]);
+    }
+}
+
+/// Lays the tile's items out in `sc.sorted` for a non-packed MSAA schedule (`sc.order[j]`: where item `j` went) and
+/// returns the ranges to shade, each a whole number of vectors.
+///
+/// - `two-pass`: the pixels' first samples (`0..n_first`), then the edge pixels' other samples, each padded.
+/// - `per-pixel`: a pixel per lane, [`BLOCK`] pixels per group in list order; step `k` of a group holds each
+///   pixel's `k`-th item, or an idle lane (a copy that goes nowhere) when the pixel has fewer: the group runs as
+///   many steps as its pixel with the most samples.
+fn spread(msaa: MsaaSchedule, n_first: usize, n_real: usize, sc: &mut Scratch) -> Vec<std::ops::Range<usize>> {
+    sc.sorted.clear();
+    sc.order.clear();
+    sc.order.resize(n_real, 0);
+    if msaa != MsaaSchedule::PerPixel {
+        let mut ranges = Vec::with_capacity(2);
+        for r in [0..n_first, n_first..n_real] {
+            if r.is_empty() {
+                continue;
+            }
+            let start = sc.sorted.len();
+            for j in r {
+                sc.order[j] = sc.sorted.len();
+                sc.sorted.push_from(&sc.items, j);
+            }
+            sc.sorted.pad_to_lanes(sc.sorted.len() - 1);
+            ranges.push(start..sc.sorted.len());
+        }
+        return ranges;
+    }
+    // Each pixel's items: its first sample, then its other samples (contiguous after `n_first`); a pixel whose
+    // sample 0 could not be used has only the latter.
+    let mut others: std::collections::HashMap<u32, (usize, usize)> = std::collections::HashMap::new();
+    let mut j = n_first;
+    while j < n_real {
+        let p = sc.items.pixel[j];
+        let start = j;
+        while j < n_real && sc.items.pixel[j] == p {
+            j += 1;
+        }
+        others.insert(p, (start, j));
+    }
+    let mut streams: Vec<(Option<usize>, (usize, usize))> = Vec::with_capacity(n_first + others.len());
+    for j in 0..n_first {
+        streams.push((Some(j), others.remove(&sc.items.pixel[j]).unwrap_or((0, 0))));
+    }
+    let mut rest: Vec<(usize, usize)> = others.into_values().collect();
+    rest.sort_unstable();
+    streams.extend(rest.into_iter().map(|r| (None, r)));
+    let len = |s: &(Option<usize>, (usize, usize))| usize::from(s.0.is_some()) + (s.1 .1 - s.1 .0);
+    let item = |s: &(Option<usize>, (usize, usize)), k: usize| match s.0 {
+        Some(f) if k == 0 => f,
+        Some(_) => s.1 .0 + k - 1,
+        None => s.1 .0 + k,
+    };
+    for group in streams.chunks(BLOCK) {
+        let steps = group.iter().map(len).max().unwrap_or(0);
+        let template = item(&group[0], 0);
+        for k in 0..steps {
+            for lane in 0..BLOCK {
+                match group.get(lane).filter(|s| k < len(s)) {
+                    Some(s) => {
+                        let j = item(s, k);
+                        sc.order[j] = sc.sorted.len();
+                        sc.sorted.push_from(&sc.items, j);
+                    }
+                    None => {
+                        sc.sorted.push_from(&sc.items, template);
+                        let last = sc.sorted.len() - 1;
+                        sc.sorted.pixel[last] = PAD_PIXEL;
+                        sc.sorted.weight[last] = 0.0;
+                    }
+                }
+            }
+        }
+    }
+    vec![0..sc.sorted.len()]
 }
 
 /// Builds the tile's work list: first one sample per pixel, in one pass over the tile that also lists the edge
