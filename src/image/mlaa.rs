@@ -113,7 +113,7 @@ pub fn mlaa(rgb: &[Vec3], width: u32, height: u32, cfg: &MlaaConfig) -> (Vec<Vec
             continue;
         }
         stats.blended_pixels += 1;
-        let (enc, dec): (fn(Vec3) -> Vec3, fn(Vec3) -> Vec3) = if cfg.display_blend {
+        let (enc, dec): (Map, Map) = if cfg.display_blend {
             (
                 |x| {
                     let x = x.max(Vec3::ZERO);
@@ -145,6 +145,9 @@ pub fn mlaa(rgb: &[Vec3], width: u32, height: u32, cfg: &MlaaConfig) -> (Vec<Vec
     }
     (out, stats)
 }
+
+/// A per-pixel colour map (the blend's encode and decode).
+type Map = fn(Vec3) -> Vec3;
 
 /// Non-finite channels become 0.
 fn sanitize(c: Vec3) -> Vec3 {

@@ -510,7 +510,7 @@ fn spread(msaa: MsaaSchedule, n_first: usize, n_real: usize, sc: &mut Scratch) -
             }
         }
     }
-    vec![0..sc.sorted.len()]
+    std::iter::once(0..sc.sorted.len()).collect()
 }
 
 /// Builds the tile's work list: first one sample per pixel, in one pass over the tile that also lists the edge
