@@ -272,7 +272,18 @@ pub fn pipelines(
     let lists = forward::fragment_lists(gb, ts);
     match (&fwd_msaa, &fwd_one, &lists) {
         (Ok(fm), Ok(f1), Ok(fl)) => {
-            let fm_mask = detect::detect(gb, Detector::ForwardMsaa, &cfg.detector_config)?;
+            // Forward MSAA's image: one shade per (triangle, pixel), resolved by coverage. The resolve gives a pixel
+            // shaded once its one sample's value whole, which would drop the background from silhouette pixels; those
+            // (partly covered) are shaded per sample instead, so the box filter weighs them by coverage as the MSAA
+            // resolve does. Their shading then varies per sample where forward MSAA replicates one value: a small
+            // advantage to the forward rows' error on silhouettes, none to their lane counts (those come from quads).
+            let mut fm_mask = detect::detect(gb, Detector::ForwardMsaa, &cfg.detector_config)?;
+            let all = s.min(u32::from(u8::MAX)) as u8;
+            for (c, &n) in fm_mask.shade_count.iter_mut().zip(&detect::covered_per_pixel(gb)) {
+                if n > 0 && u32::from(n) < s {
+                    *c = all;
+                }
+            }
             let (msaa_img, _) = run(&fm_mask, Culling::Tiled, Schedule::Deferred)?;
             let msaa_err = err(&msaa_img.image);
             let util = |q: &QuadShading| if q.lanes > 0 { q.covered_lanes as f64 / q.lanes as f64 } else { 1.0 };
