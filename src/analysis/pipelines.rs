@@ -375,12 +375,17 @@ pub fn pipelines(
     let b = cfg.gbuffer_bytes;
     let packed = forward::utilisation(&mask, MsaaSchedule::Packed, cfg.warps.first().copied().unwrap_or(16), ts);
     let deferred_fp = f64::from(b) * f64::from(s) * pixels + 8.0 * pixels;
+    let mut tiled: Option<(resolve::Resolved, f64)> = None;
     for (pipeline, culling, schedule) in [
         (Pipeline::DeferredQuad, Culling::Quad, Schedule::Deferred),
         (Pipeline::TiledDeferred, Culling::Tiled, Schedule::Deferred),
         (Pipeline::LightPrepass, Culling::Tiled, Schedule::LightPrepass),
     ] {
         let (r, ms) = run(&mask, culling, schedule)?;
+        if pipeline == Pipeline::TiledDeferred && cfg.resolve.msaa == MsaaSchedule::Packed {
+            // The packed schedule's run and the detector's anti-aliasing row below are this resolve.
+            tiled = Some((r.clone(), ms));
+        }
         let st = &r.stats;
         let (footprint, traffic, note) = match pipeline {
             Pipeline::DeferredQuad => (
@@ -419,10 +424,16 @@ pub fn pipelines(
     let mut schedules: Vec<ScheduleRun> = Vec::new();
     let mut packed_image = None;
     for sched in MsaaSchedule::ALL {
-        let rc = ResolveConfig { culling: Culling::Tiled, schedule: Schedule::Deferred, msaa: sched, ..cfg.resolve };
-        let t = Instant::now();
-        let r = resolve::resolve(gb, lights, &mask, &rc)?;
-        let ms = t.elapsed().as_secs_f64() * 1e3;
+        let (r, ms) = match (&tiled, sched) {
+            (Some((r, ms)), MsaaSchedule::Packed) => (r.clone(), *ms),
+            _ => {
+                let rc =
+                    ResolveConfig { culling: Culling::Tiled, schedule: Schedule::Deferred, msaa: sched, ..cfg.resolve };
+                let t = Instant::now();
+                let r = resolve::resolve(gb, lights, &mask, &rc)?;
+                (r, t.elapsed().as_secs_f64() * 1e3)
+            }
+        };
         let same_image = packed_image.as_ref().is_none_or(|p: &HdrImage| p.rgb == r.image.rgb);
         schedules.push(ScheduleRun {
             schedule: sched,
@@ -474,8 +485,13 @@ pub fn pipelines(
     let mut methods: Vec<(String, Detector)> = cfg.aa_detectors.iter().map(|&d| (format!("msaa:{d}"), d)).collect();
     methods.push(("ssaa".into(), Detector::Ssaa));
     for (method, d) in methods {
-        let Ok(m) = detect::detect(gb, d, &cfg.detector_config) else { continue };
-        let (r, ms) = run(&m, Culling::Tiled, Schedule::Deferred)?;
+        let (r, ms) = match &tiled {
+            Some((r, ms)) if d == cfg.detector => (r.clone(), *ms),
+            _ => {
+                let Ok(m) = detect::detect(gb, d, &cfg.detector_config) else { continue };
+                run(&m, Culling::Tiled, Schedule::Deferred)?
+            }
+        };
         aa.push(AaRow {
             method,
             evaluations: r.stats.shading_evaluations,
