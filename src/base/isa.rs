@@ -20,6 +20,9 @@ pub const AVX2_FEATURES: &str = "avx2,fma";
 /// The features of [`Isa::Avx512`], as written in `#[target_feature(enable = …)]`.
 pub const AVX512_FEATURES: &str = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma";
 
+/// The environment variable that caps [`Isa::detect`] (see there).
+pub const ISA_ENV: &str = "GBUF_ISA";
+
 /// An instruction-set level the SIMD paths are compiled for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Isa {
@@ -34,11 +37,29 @@ pub enum Isa {
 crate::named!(Isa: "instruction set" { Baseline => "baseline", Avx2 => "avx2", Avx512 => "avx512" });
 
 impl Isa {
-    /// The widest level this CPU supports (detected once).
+    /// The widest level this CPU supports (detected once), capped by the environment variable [`ISA_ENV`] when it
+    /// names a level (`baseline`, `avx2`, `avx512`): that is how an AVX-512 machine measures the AVX2 or portable
+    /// paths end to end (`GBUF_ISA=avx2 gbuf resolve …`). A cap above the CPU's level changes nothing; an unknown
+    /// name is reported on stderr once and ignored.
     #[must_use]
     pub fn detect() -> Isa {
         static DETECTED: OnceLock<Isa> = OnceLock::new();
-        *DETECTED.get_or_init(detect_uncached)
+        *DETECTED.get_or_init(|| {
+            let hw = detect_uncached();
+            match std::env::var(ISA_ENV) {
+                Ok(v) if !v.is_empty() => match v.parse::<Isa>() {
+                    Ok(cap) => hw.min(cap),
+                    Err(_) => {
+                        eprintln!(
+                            "warning: {ISA_ENV}={v:?} is not an instruction set (baseline, avx2, avx512); using {}",
+                            hw.name()
+                        );
+                        hw
+                    }
+                },
+                _ => hw,
+            }
+        })
     }
 
     /// Every level this CPU can run, narrowest first (what the bit-identity tests iterate over).

@@ -118,6 +118,8 @@ struct Report {
     lights_source: &'static str,
     layout: Option<String>,
     detector: &'static str,
+    /// The instruction set the light loop ran with (`GBUF_ISA` caps it).
+    isa: &'static str,
     config: ResolveConfig,
     shading_fraction: f64,
     edge_fraction: f64,
@@ -256,6 +258,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         lights_source,
         layout: args.layout.clone(),
         detector: args.detector.name(),
+        isa: gbuf::resolve::instruction_set(),
         config: cfg,
         shading_fraction: s.shading_fraction,
         edge_fraction: s.edge_fraction,
@@ -324,8 +327,8 @@ fn print_human(r: &Report) -> anyhow::Result<()> {
     )?;
     writeln!(
         out,
-        "config: culling {}, brdf {}, falloff {}, schedule {}, tiles {}px, detector {}",
-        r.config.culling, r.config.brdf, r.config.falloff, r.config.schedule, r.config.tile_size, r.detector
+        "config: culling {}, brdf {}, falloff {}, schedule {}, tiles {}px, detector {}, isa {}",
+        r.config.culling, r.config.brdf, r.config.falloff, r.config.schedule, r.config.tile_size, r.detector, r.isa
     )?;
     writeln!(
         out,
