@@ -91,6 +91,11 @@ fn demo_writes_the_report_folder() {
         fwd["lanes"].as_u64().unwrap() >= fwd["covered_lanes"].as_u64().unwrap() && fwd["quads"].as_u64().unwrap() > 0
     );
     assert!(out.join("shading_per_pixel_forward_msaa.png").is_file());
+    // The demo renders the 1-sample room too: MLAA works on the pixel-centre image, forward's quads are exact, and
+    // the anti-aliasing picture is linked.
+    assert!(md.contains("The no-AA image is the 1-sample render at pixel centres"), "{md}");
+    assert!(md.lines().any(|l| l.starts_with("| forward |")), "forward is not an estimate in the demo");
+    assert!(md.contains("aa_crops.png") && out.join("aa_crops.png").is_file());
     // Every image the markdown links exists.
     for line in md.lines().filter(|l| l.starts_with("![")) {
         let file = line.split("](").nth(1).unwrap().trim_end_matches(')');

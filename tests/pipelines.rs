@@ -32,6 +32,69 @@ fn forward_msaa_quads_equal_the_rasterizers_count() {
     // Forward without MSAA from sample 0 is flagged an estimate, and cannot launch more quads than with MSAA.
     let one = forward_quads(&gb, ForwardSamples::Single { sample: 0 }).unwrap();
     assert!(one.estimated && one.quads <= q.quads);
+    // On the rasterizer's own 1-sample render (raster_1x.exr) the count is exact and equals the script's.
+    let gb1 = gbuf::io::load(&fixture("raster_1x.exr"), &LoadOptions::default()).unwrap().gbuffer;
+    let want1 = &counts["msaa1"];
+    let q1 = forward_quads(&gb1, ForwardSamples::Single { sample: 0 }).unwrap();
+    assert!(!q1.estimated);
+    assert_eq!(q1.quads, want1["quads"].as_u64().unwrap(), "1-sample (triangle, quad) pairs");
+    assert_eq!(q1.lanes, want1["lanes"].as_u64().unwrap(), "1-sample lanes");
+    assert_eq!(q1.triangles, want1["triangles_visible"].as_u64().unwrap(), "1-sample visible triangles");
+}
+
+/// The done-when: MLAA on the 1-sample render (pixel centres) beats that render without AA, against the
+/// every-sample reference, in RMSE and in both FLIPs, on both fixtures that have a 1-sample companion.
+#[test]
+fn mlaa_beats_no_aa_on_the_fixtures_rendered_at_pixel_centres() {
+    for (msaa, single) in [("raster_4x.exr", "raster_1x.exr"), ("room_4x.exr", "room_1x.exr")] {
+        let o = gbuf()
+            .args(["pipelines", "--flip", "--json", "--single"])
+            .arg(fixture(single))
+            .arg(fixture(msaa))
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{msaa}: {}", String::from_utf8_lossy(&o.stderr));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let aa = j["aa"].as_array().unwrap();
+        let row = |m: &str| aa.iter().find(|r| r["method"] == m).unwrap_or_else(|| panic!("{msaa}: no {m} row"));
+        let (none, smooth) = (row("no-aa"), row("mlaa"));
+        assert!(none["note"].as_str().unwrap().contains("1-sample render"), "{msaa}: {none}");
+        for metric in ["rmse", "flip_ldr", "flip_hdr"] {
+            let (a, b) = (none["error"][metric].as_f64().unwrap(), smooth["error"][metric].as_f64().unwrap());
+            println!("{msaa}: {metric} no-aa {a:.5} → mlaa {b:.5}");
+            assert!(b < a, "{msaa}: MLAA's {metric} {b} is not below no-AA's {a}");
+        }
+        // The forward row stands on the 1-sample render too: exact, not an estimate.
+        let fwd = j["rows"].as_array().unwrap().iter().find(|r| r["pipeline"] == "forward").unwrap();
+        assert_eq!(fwd["estimated"], false, "{msaa}: {fwd}");
+    }
+}
+
+/// A 1-sample companion that cannot be the same frame is refused with the file named and the reason.
+#[test]
+fn a_single_sample_companion_of_another_frame_is_refused() {
+    let run = |msaa: &str, single: &str| {
+        let o = gbuf().args(["pipelines", "--single"]).arg(fixture(single)).arg(fixture(msaa)).output().unwrap();
+        assert!(!o.status.success(), "{msaa} with --single {single} was accepted");
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let e = run("raster_4x.exr", "room_1x.exr");
+    assert!(e.contains("room_1x.exr") && e.contains("160×90 × 1") && e.contains("320×180 × 1"), "{e}");
+    let e = run("room_4x.exr", "room_4x.exr");
+    assert!(e.contains("× 4 samples"), "{e}");
+    // Same size, one sample, but other content: the coverage test catches it.
+    let gb = gbuf::io::load(&fixture("room_4x.exr"), &LoadOptions::default()).unwrap().gbuffer;
+    let mut one = gbuf::io::load(&fixture("room_1x.exr"), &LoadOptions::default()).unwrap().gbuffer;
+    gbuf::analysis::pipelines::check_single(&gb, &one).unwrap();
+    one.camera = None;
+    let w = one.width as usize;
+    for (p, c) in one.coverage.iter_mut().enumerate() {
+        if p % w < w / 4 {
+            *c = !*c;
+        }
+    }
+    let e = gbuf::analysis::pipelines::check_single(&gb, &one).unwrap_err().to_string();
+    assert!(e.contains("does not look like the same frame"), "{e}");
 }
 
 #[test]
@@ -59,7 +122,9 @@ fn pipelines_runs_on_every_fixture() {
     let dir = tempfile::tempdir().unwrap();
     for (f, has_prim) in [
         ("raster_4x.exr", true),
+        ("raster_1x.exr", true),
         ("room_4x.exr", true),
+        ("room_1x.exr", true),
         ("blender_gbuffer.exr", false),
         ("mitsuba_gbuffer.exr", true),
         ("ispc_deferred.bin", false),

@@ -34,6 +34,9 @@ pub struct ReportInput<'a> {
     pub lights: &'a [Light],
     /// Where the lights came from.
     pub lights_source: String,
+    /// The same frame rendered with 1 sample at pixel centres, when there is one: the pipelines' no-AA image and
+    /// MLAA's input (else sample 0 stands in).
+    pub single: Option<&'a GBuffer>,
 }
 
 /// The layout error of `layout` on `gb` lit by `lights`: the image of its roundtrip (first detector of `cfg`,

@@ -125,6 +125,10 @@ pub struct AaRow {
     pub ms: f64,
     /// Error against the reference.
     pub error: ErrorSet,
+    /// What the image stands on (for `no-aa` and `mlaa`: a 1-sample render at pixel centres, or sample 0 of the
+    /// MSAA dump, off the centre).
+    #[serde(default)]
+    pub note: String,
 }
 
 /// One pipeline's row.
@@ -219,15 +223,55 @@ fn tile_light_counts(heat: &[u32], width: u32, height: u32, ts: u32) -> Vec<u32>
     counts
 }
 
+/// Pixels whose coverage may differ between an MSAA frame and its 1-sample render before they are taken for two
+/// different frames: a centre sample can miss a triangle all MSAA samples see only on sub-pixel features.
+pub const SINGLE_COVERAGE_MISMATCH_MAX: f64 = 0.02;
+
+/// Checks that `one` can stand for `gb`'s frame rendered with 1 sample at pixel centres: same size, one sample, the
+/// same camera when both have one, and coverage agreeing on all but [`SINGLE_COVERAGE_MISMATCH_MAX`] of the pixels
+/// (covered at the centre but by no MSAA sample, or the other way round).
+pub fn check_single(gb: &GBuffer, one: &GBuffer) -> Result<()> {
+    if (one.width, one.height) != (gb.width, gb.height) || one.samples != 1 {
+        return Err(Error::Argument(format!(
+            "the 1-sample render is {}×{} × {} samples; it must be {}×{} × 1 (the same frame at pixel centres)",
+            one.width, one.height, one.samples, gb.width, gb.height
+        )));
+    }
+    if let (Some(a), Some(b)) = (&gb.camera, &one.camera) {
+        if a != b {
+            return Err(Error::Argument("the 1-sample render has another camera than the MSAA frame".into()));
+        }
+    }
+    let covered = detect::covered_per_pixel(gb);
+    let mismatched = (0..one.len()).filter(|&p| (covered[p] > 0) != one.coverage[p]).count();
+    let fraction = mismatched as f64 / one.len().max(1) as f64;
+    if fraction > SINGLE_COVERAGE_MISMATCH_MAX {
+        return Err(Error::Argument(format!(
+            "the 1-sample render does not look like the same frame: {mismatched} of {} pixels ({:.1}%) are covered in \
+             one and empty in the other (at most {:.0}% allowed)",
+            one.len(),
+            100.0 * fraction,
+            100.0 * SINGLE_COVERAGE_MISMATCH_MAX
+        )));
+    }
+    Ok(())
+}
+
 /// Measures every pipeline on `gb` lit by `lights`; `reference` is the every-sample reference image when the caller
-/// has it (else it is computed).
+/// has it (else it is computed). `single`, the same frame rendered with 1 sample at pixel centres, is the no-AA
+/// image MLAA works on and gives the forward row's exact quads; without it sample 0 stands in (an estimate, flagged
+/// in the notes).
 pub fn pipelines(
     gb: &GBuffer,
     lights: &[Light],
     cfg: &PipelinesConfig,
     reference: Option<&HdrImage>,
+    single: Option<&GBuffer>,
 ) -> Result<Pipelines> {
     let (w, h, s) = (gb.width, gb.height, gb.samples);
+    if let Some(one) = single {
+        check_single(gb, one)?;
+    }
     let pixels = f64::from(w) * f64::from(h);
     let covered = (gb.len() - gb.background_samples()) as f64;
     let covered_px = detect::covered_per_pixel(gb).iter().filter(|&&c| c > 0).count() as f64;
@@ -250,8 +294,26 @@ pub fn pipelines(
     };
 
     // One sample per pixel through the tiled resolve: the no-AA image, and each tile's light-list length.
-    let none = detect::detect(gb, Detector::None, &cfg.detector_config)?;
-    let (no_aa, no_aa_ms) = run(&none, Culling::Tiled, Schedule::Deferred)?;
+    let (no_aa, no_aa_ms) = match single {
+        Some(one) => {
+            let none = detect::detect(one, Detector::None, &cfg.detector_config)?;
+            let rc = ResolveConfig { culling: Culling::Tiled, schedule: Schedule::Deferred, ..cfg.resolve };
+            let t = Instant::now();
+            let r = resolve::resolve(one, lights, &none, &rc)?;
+            (r, t.elapsed().as_secs_f64() * 1e3)
+        }
+        None => {
+            let none = detect::detect(gb, Detector::None, &cfg.detector_config)?;
+            run(&none, Culling::Tiled, Schedule::Deferred)?
+        }
+    };
+    let no_aa_note = if single.is_some() {
+        "the 1-sample render at pixel centres"
+    } else if s > 1 {
+        "sample 0 of the MSAA dump, off the pixel centre (estimate: MLAA's reconstruction assumes centred samples)"
+    } else {
+        "the 1-sample dump"
+    };
     let ts = cfg.resolve.tile_size;
     let tile_lights = tile_light_counts(&no_aa.lights_per_pixel, w, h, ts);
     let list_entries: u64 = tile_lights.iter().map(|&c| u64::from(c)).sum();
@@ -268,7 +330,7 @@ pub fn pipelines(
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
     let fwd_msaa = forward::forward_quads(gb, ForwardSamples::Msaa);
-    let fwd_one = forward::forward_quads(gb, ForwardSamples::Single { sample: 0 });
+    let fwd_one = forward::forward_quads(single.unwrap_or(gb), ForwardSamples::Single { sample: 0 });
     let lists = forward::fragment_lists(gb, ts);
     match (&fwd_msaa, &fwd_one, &lists) {
         (Ok(fm), Ok(f1), Ok(fl)) => {
@@ -311,6 +373,8 @@ pub fn pipelines(
                 err(&no_aa.image),
                 if f1.estimated {
                     "one sample per pixel: sample 0 stands for the pixel centre (estimate)".into()
+                } else if single.is_some() {
+                    "quads of the 1-sample render".into()
                 } else {
                     "quads of the single-sample dump".into()
                 },
@@ -471,6 +535,7 @@ pub fn pipelines(
         footprint_mb: gbuf_mb(1),
         ms: no_aa_ms,
         error: err(&no_aa.image),
+        note: no_aa_note.into(),
     });
     // MLAA's buffers on a GPU: an RG8 edge texture and an RGBA8 blend-weight texture.
     aa.push(AaRow {
@@ -479,6 +544,7 @@ pub fn pipelines(
         footprint_mb: gbuf_mb(1) + mb(6.0 * pixels),
         ms: no_aa_ms + mlaa_ms,
         error: err(&smoothed),
+        note: format!("on {no_aa_note}"),
     });
     aa_images.push(no_aa.image);
     aa_images.push(smoothed);
@@ -498,6 +564,7 @@ pub fn pipelines(
             footprint_mb: gbuf_mb(s),
             ms,
             error: err(&r.image),
+            note: String::new(),
         });
         aa_images.push(r.image);
     }

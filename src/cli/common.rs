@@ -146,6 +146,13 @@ impl InputArgs {
         print_warnings(&self.file, &loaded);
         Ok(loaded)
     }
+
+    /// Reads another file (a companion of the dump) with the same flags.
+    pub fn load_path(&self, path: &std::path::Path) -> anyhow::Result<Loaded> {
+        let loaded = gbuf::io::load(path, &self.options()?)?;
+        print_warnings(path, &loaded);
+        Ok(loaded)
+    }
 }
 
 /// Prints a loaded dump's plausibility warnings on stderr (`warning: FILE: …`).

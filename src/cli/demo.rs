@@ -1,7 +1,7 @@
 //! `gbuf demo [--out DIR] [--width W --height H --msaa S] [--json]`: renders the `room` scene in memory with its
 //! default lights and runs the whole report on it. Needs no file.
 
-use crate::cli::report::{run_and_write, SweepArgs};
+use crate::cli::report::{run_and_write, FrameInput, SweepArgs};
 use anyhow::Context;
 use gbuf::scene::{self, SceneName};
 use std::path::PathBuf;
@@ -35,7 +35,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let gb = scene::render(SceneName::Room, args.width, args.height, args.msaa)
         .with_context(|| format!("rendering the room scene at {}×{} × {}", args.width, args.height, args.msaa))?;
     let lights = scene::default_lights(SceneName::Room, &gb);
-    let source = format!("the room's {} default lights", lights.len());
-    run_and_write("room (rendered in memory)", gb, lights, &source, &cfg, &args.out, args.json)?;
+    // The 1-sample render at pixel centres: the no-AA image of the pipelines section (what MLAA smooths).
+    let single = if args.msaa > 1 {
+        Some(scene::render(SceneName::Room, args.width, args.height, 1).context("rendering the 1-sample room")?)
+    } else {
+        None
+    };
+    let frame = FrameInput {
+        name: "room (rendered in memory)".into(),
+        gbuffer: gb,
+        lights_source: format!("the room's {} default lights", lights.len()),
+        lights,
+        single,
+    };
+    run_and_write(frame, &cfg, &args.out, args.json)?;
     Ok(())
 }

@@ -52,6 +52,14 @@ pub struct Args {
     /// needs primitive IDs).
     #[arg(long, value_name = "OUT.png")]
     pub heatmap: Option<PathBuf>,
+    /// Write the anti-aliasing picture: the crop where no AA errs most, under the reference and each method.
+    #[arg(long, value_name = "OUT.png")]
+    pub aa_crops: Option<PathBuf>,
+    /// The same frame rendered with 1 sample per pixel at pixel centres (same size, read with the same options):
+    /// the no-AA image that MLAA smooths, and forward shading's exact quads. Without it sample 0 of an MSAA dump
+    /// stands in, off the pixel centre, and those rows are marked as estimates.
+    #[arg(long, value_name = "FILE")]
+    pub single: Option<PathBuf>,
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
@@ -78,7 +86,24 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         aa_detectors: vec![Detector::Lauritzen, Detector::Depth, Detector::Normal, Detector::Id],
         mlaa: MlaaConfig::default(),
     };
-    let p = pipelines(&gb, &lights, &cfg, None).with_context(|| format!("{file}: pipelines"))?;
+    let single = match &args.single {
+        Some(path) => {
+            let one = args.input.load_path(path).with_context(|| format!("loading --single {}", path.display()))?;
+            gbuf::analysis::pipelines::check_single(&gb, &one.gbuffer)
+                .with_context(|| format!("--single {} against {file}", path.display()))?;
+            Some(one.gbuffer)
+        }
+        None => None,
+    };
+    let reference =
+        gbuf::resolve::reference(&gb, &lights, &cfg.resolve).with_context(|| format!("{file}: reference"))?;
+    let p = pipelines(&gb, &lights, &cfg, Some(&reference), single.as_ref())
+        .with_context(|| format!("{file}: pipelines"))?;
+    if let Some(path) = &args.aa_crops {
+        let (pic, (x, y, w, h)) = gbuf::report::pipelines::aa_crop_picture(&p, &reference)?;
+        gbuf::base::picture::write_png(path, &pic).with_context(|| format!("writing {}", path.display()))?;
+        eprintln!("wrote {}: the {w}×{h} crop at ({x}, {y}) under each anti-aliasing method", path.display());
+    }
     if let Some(path) = &args.heatmap {
         let fwd = p.forward_msaa.as_ref().with_context(|| {
             format!("--heatmap: {file} has no primitive IDs, so forward shading's quads cannot be counted")

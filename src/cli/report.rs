@@ -247,6 +247,8 @@ pub struct FrameInput {
     pub lights: Vec<gbuf::Light>,
     /// Where the lights came from.
     pub lights_source: String,
+    /// The same frame with 1 sample at pixel centres (`--single`, or rendered by the demo).
+    pub single: Option<gbuf::GBuffer>,
 }
 
 /// Sweeps the frames one after another (`next` yields them, so only one is in memory at a time), writes the
@@ -276,6 +278,7 @@ pub fn run_frames(
             gbuffer: &f.gbuffer,
             lights: &f.lights,
             lights_source: f.lights_source.clone(),
+            single: f.single.as_ref(),
         };
         let prefix =
             if count > 1 { format!("frame{:0w$}_", i + 1, w = count.to_string().len()) } else { String::new() };
@@ -311,17 +314,8 @@ pub fn write_and_print(
 }
 
 /// Sweeps one in-memory frame (what `gbuf demo` runs).
-pub fn run_and_write(
-    name: &str,
-    gb: gbuf::GBuffer,
-    lights: Vec<gbuf::Light>,
-    lights_source: &str,
-    cfg: &SweepConfig,
-    out: &Path,
-    json: bool,
-) -> anyhow::Result<Report> {
-    let mut frame =
-        Some(FrameInput { name: name.to_string(), gbuffer: gb, lights, lights_source: lights_source.to_string() });
+pub fn run_and_write(frame: FrameInput, cfg: &SweepConfig, out: &Path, json: bool) -> anyhow::Result<Report> {
+    let mut frame = Some(frame);
     run_frames(1, |_| frame.take().context("one frame"), cfg, &Assembly::of(cfg, Over::default(), None), out, json)
 }
 
@@ -340,6 +334,11 @@ pub struct Args {
     /// Also pick the layout of at most N bytes per sample with the least layout error over the frames.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub max_bytes: Option<u32>,
+    /// The same frame rendered with 1 sample per pixel at pixel centres (one input only): the no-AA image that MLAA
+    /// smooths in the pipelines section, and forward shading's exact quads. Without it sample 0 of the MSAA dump
+    /// stands in, off the pixel centre.
+    #[arg(long, value_name = "FILE")]
+    pub single: Option<PathBuf>,
     /// Output folder (created if missing; other files in it are left alone).
     #[arg(short = 'o', long = "out", default_value = "gbuf-report")]
     pub out: PathBuf,
@@ -360,11 +359,23 @@ pub fn frame_lights(loaded: &gbuf::io::Loaded, n: u32, seed: u64) -> (Vec<gbuf::
 pub fn run(args: Args) -> anyhow::Result<()> {
     let cfg = args.sweep.config()?;
     let paths = args.input.paths()?;
+    if args.single.is_some() && paths.len() != 1 {
+        crate::usage!("--single goes with one input frame; got {}", paths.len());
+    }
     let next = |i: usize| -> anyhow::Result<FrameInput> {
         let p = &paths[i];
         let loaded = args.input.load(p)?;
         let (lights, lights_source) = frame_lights(&loaded, args.sweep.lights, args.sweep.seed);
-        Ok(FrameInput { name: p.display().to_string(), gbuffer: loaded.gbuffer, lights, lights_source })
+        let single = match &args.single {
+            Some(s) => {
+                let one = args.input.load(s)?.gbuffer;
+                gbuf::analysis::pipelines::check_single(&loaded.gbuffer, &one)
+                    .with_context(|| format!("--single {} against {}", s.display(), p.display()))?;
+                Some(one)
+            }
+            None => None,
+        };
+        Ok(FrameInput { name: p.display().to_string(), gbuffer: loaded.gbuffer, lights, lights_source, single })
     };
     run_frames(paths.len(), next, &cfg, &Assembly::of(&cfg, args.over, args.max_bytes), &args.out, args.json)?;
     Ok(())

@@ -58,11 +58,30 @@ pub fn run_frame(
         }
         needs.pruned_layout = Some(p);
     }
-    let (pipelines, pipelines_error) =
-        match crate::analysis::pipelines::pipelines(gb, input.lights, &pipelines_config(cfg), Some(&out.reference)) {
-            Ok(p) => (Some(p), None),
-            Err(e) => (None, Some(e.to_string())),
-        };
+    let (pipelines, pipelines_error) = match crate::analysis::pipelines::pipelines(
+        gb,
+        input.lights,
+        &pipelines_config(cfg),
+        Some(&out.reference),
+        input.single,
+    ) {
+        Ok(p) => (Some(p), None),
+        Err(e) => (None, Some(e.to_string())),
+    };
+    if let Some(p) = &pipelines {
+        // One crop under every anti-aliasing method (a failure to draw it loses the picture, not the report).
+        if let Ok((pic, (x, y, w, h))) = crate::report::pipelines::aa_crop_picture(p, &out.reference) {
+            let name = format!("{prefix}aa_crops.png");
+            files.push(Attachment { name: name.clone(), bytes: crate::base::picture::png_bytes(&pic)? });
+            figures.push(Figure {
+                file: name,
+                caption: format!(
+                    "Anti-aliasing: the {w}×{h} crop at ({x}, {y}) where no AA errs most, under the reference, no AA, \
+                     MLAA, adaptive MSAA per detector and SSAA"
+                ),
+            });
+        }
+    }
     if let (Some(p), Some((det, mask))) = (&pipelines, out.masks.first()) {
         if let Some(fwd) = &p.forward_msaa {
             let (f, g) = figures::shading_figures(gb, fwd, (det, mask), prefix)?;

@@ -1,12 +1,16 @@
 //! The pipelines comparison for a person: the markdown table of [`Pipelines`] (what `gbuf pipelines` prints and
-//! `report.md` holds) and the side-by-side "shading computations per pixel" heatmap of forward MSAA and deferred.
+//! `report.md` holds), the side-by-side "shading computations per pixel" heatmap of forward MSAA and deferred, and
+//! the anti-aliasing picture (one crop under every method).
 
 use crate::analysis::forward::QuadShading;
 use crate::analysis::pipelines::{Pipeline, Pipelines};
 use crate::base::mask::EdgeMask;
 use crate::base::picture::write_heatmap_png;
 use crate::error::{Error, Result};
+use crate::image::{HdrImage, ToneMap};
 use crate::report::markdown::fmt_opt;
+use crate::report::plot::Panels;
+use image::RgbImage;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -120,6 +124,9 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
              MLAA found {} horizontal and {} vertical edges, {} L, {} Z and {} U shapes, and blended {} pixels.\n",
             p.mlaa.edges_h, p.mlaa.edges_v, p.mlaa.shapes_l, p.mlaa.shapes_z, p.mlaa.shapes_u, p.mlaa.blended_pixels
         );
+        if let Some(no_aa) = p.aa.first().filter(|r| !r.note.is_empty()) {
+            let _ = writeln!(s, "The no-AA image is {}.\n", no_aa.note);
+        }
         s.push_str("| method | evaluations | G-buffer MB | CPU ms | RMSE | LDR-FLIP | HDR-FLIP |\n|---|--:|--:|--:|--:|--:|--:|\n");
         for r in &p.aa {
             let _ = writeln!(
@@ -163,4 +170,104 @@ pub fn write_shading_heatmaps(path: &Path, forward: &QuadShading, deferred: &Edg
         }
     }
     write_heatmap_png(path, width as u32, h as u32, &counts)
+}
+
+/// Size of the anti-aliasing crop in image pixels (smaller images are shown whole) and its magnification.
+pub const AA_CROP: (u32, u32) = (64, 40);
+/// Each crop pixel is drawn as a square of this many picture pixels (nearest neighbour, so aliasing stays visible).
+pub const AA_CROP_ZOOM: u32 = 4;
+
+/// Display-encoded luma (Reinhard per channel, Rec. 709 weights) of a linear colour, 0 for non-finite.
+fn display_luma(c: glam::Vec3) -> f32 {
+    let x = c.max(glam::Vec3::ZERO);
+    let v = glam::Vec3::new(0.2126, 0.7152, 0.0722).dot(x / (glam::Vec3::ONE + x));
+    if v.is_finite() {
+        v
+    } else {
+        0.0
+    }
+}
+
+/// The crop `(x, y, width, height)` of at most [`AA_CROP`] pixels where `image` differs most from `reference` (sum of
+/// the display-encoded luma differences; the first such window in reading order). Images of another size than the
+/// reference give the top-left corner.
+#[must_use]
+pub fn aa_crop(image: &HdrImage, reference: &HdrImage) -> (u32, u32, u32, u32) {
+    let (w, h) = (reference.width, reference.height);
+    let (cw, ch) = (AA_CROP.0.min(w), AA_CROP.1.min(h));
+    if (image.width, image.height) != (w, h) || image.rgb.len() != reference.rgb.len() {
+        return (0, 0, cw, ch);
+    }
+    // Summed-area table of the differences, (w + 1) × (h + 1).
+    let (w1, h1) = (w as usize + 1, h as usize + 1);
+    let mut sat = vec![0.0f64; w1 * h1];
+    for y in 0..h as usize {
+        let mut row = 0.0;
+        for x in 0..w as usize {
+            let p = y * w as usize + x;
+            row += f64::from((display_luma(image.rgb[p]) - display_luma(reference.rgb[p])).abs());
+            sat[(y + 1) * w1 + x + 1] = sat[y * w1 + x + 1] + row;
+        }
+    }
+    let (cw_, ch_) = (cw as usize, ch as usize);
+    let mut best = (0, 0, -1.0);
+    for y in 0..=(h - ch) as usize {
+        for x in 0..=(w - cw) as usize {
+            let v = sat[(y + ch_) * w1 + x + cw_] - sat[y * w1 + x + cw_] - sat[(y + ch_) * w1 + x] + sat[y * w1 + x];
+            if v > best.2 {
+                best = (x as u32, y as u32, v);
+            }
+        }
+    }
+    (best.0, best.1, cw, ch)
+}
+
+/// The crop `(x, y, w, h)` of `img`, tone-mapped (Reinhard, sRGB) and magnified `zoom` times (nearest neighbour).
+fn crop_picture(img: &HdrImage, (x0, y0, cw, ch): (u32, u32, u32, u32), zoom: u32) -> RgbImage {
+    let mut crop = HdrImage::new(cw, ch);
+    for y in 0..ch {
+        for x in 0..cw {
+            crop.rgb[(y * cw + x) as usize] = img.rgb[((y0 + y) * img.width + x0 + x) as usize];
+        }
+    }
+    let bytes = crop.to_srgb8(ToneMap::default());
+    RgbImage::from_fn(cw * zoom, ch * zoom, |x, y| {
+        let i = 3 * ((y / zoom) * cw + x / zoom) as usize;
+        image::Rgb([bytes[i], bytes[i + 1], bytes[i + 2]])
+    })
+}
+
+/// The anti-aliasing picture: the same crop ([`aa_crop`] of the no-AA image) of the every-sample reference and of
+/// each method's image in [`Pipelines::aa`], magnified [`AA_CROP_ZOOM`]×, each captioned with its method and error
+/// (LDR-FLIP when measured, else RMSE). Returns the picture and the crop.
+pub fn aa_crop_picture(p: &Pipelines, reference: &HdrImage) -> Result<(RgbImage, (u32, u32, u32, u32))> {
+    let Some(no_aa) = p.aa_images.first() else {
+        return Err(Error::Argument("no anti-aliasing images to show".into()));
+    };
+    if p.aa_images.len() != p.aa.len()
+        || p.aa_images.iter().any(|i| (i.width, i.height) != (reference.width, reference.height))
+    {
+        return Err(Error::Argument(format!(
+            "anti-aliasing images ({}) do not match the rows ({}) or the reference's size {}×{}",
+            p.aa_images.len(),
+            p.aa.len(),
+            reference.width,
+            reference.height
+        )));
+    }
+    let crop = aa_crop(no_aa, reference);
+    let mut panels = vec![("reference (every sample)".to_string(), crop_picture(reference, crop, AA_CROP_ZOOM))];
+    for (row, img) in p.aa.iter().zip(&p.aa_images) {
+        let err = match row.error.flip_ldr {
+            Some(f) => format!("LDR-FLIP {f:.4}"),
+            None => format!("RMSE {:.4}", row.error.rmse),
+        };
+        panels.push((format!("{} · {err}", row.method), crop_picture(img, crop, AA_CROP_ZOOM)));
+    }
+    let title = format!(
+        "The same {}×{} crop at ({}, {}) under each method, {}× (crop of largest no-AA error)",
+        crop.2, crop.3, crop.0, crop.1, AA_CROP_ZOOM
+    );
+    let pic = Panels { title, panels, columns: 4 }.to_png_image()?;
+    Ok((pic, crop))
 }

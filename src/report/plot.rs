@@ -454,6 +454,65 @@ impl Draw for Heatmap<'_> {
     }
 }
 
+/// Pictures in a grid, each under its caption, with a title above (a crop of several images at one place, say).
+/// The pictures are copied pixel for pixel (no scaling); cells are as large as the largest picture.
+#[derive(Clone, Debug)]
+pub struct Panels {
+    /// Title above the grid.
+    pub title: String,
+    /// Captions and pictures, in reading order.
+    pub panels: Vec<(String, RgbImage)>,
+    /// Pictures per row (at least 1).
+    pub columns: usize,
+}
+
+/// Space between and around [`Panels`] cells, and the heights of the title and caption lines, in pixels.
+const PANEL_GAP: u32 = 10;
+const PANEL_TITLE: u32 = 30;
+const PANEL_CAPTION: u32 = 20;
+
+impl Panels {
+    /// The cell size and the grid's columns and rows.
+    fn grid(&self) -> ((u32, u32), u32, u32) {
+        let cell = self.panels.iter().fold((1, 1), |(w, h), (_, p)| (p.width().max(w), p.height().max(h)));
+        let cols = self.columns.clamp(1, self.panels.len().max(1)) as u32;
+        let rows = (self.panels.len() as u32).div_ceil(cols).max(1);
+        (cell, cols, rows)
+    }
+
+    /// Where cell `i`'s caption starts (its picture sits [`PANEL_CAPTION`] below).
+    fn origin(&self, i: usize) -> (u32, u32) {
+        let ((cw, ch), cols, _) = self.grid();
+        let (c, r) = (i as u32 % cols, i as u32 / cols);
+        (PANEL_GAP + c * (cw + PANEL_GAP), PANEL_TITLE + r * (ch + PANEL_CAPTION + PANEL_GAP))
+    }
+
+    /// Renders the grid as an RGB image.
+    pub fn to_png_image(&self) -> Result<RgbImage> {
+        let ((cw, ch), cols, rows) = self.grid();
+        let w = (PANEL_GAP + cols * (cw + PANEL_GAP)).max(MIN_SIZE.0);
+        let h = (PANEL_TITLE + rows * (ch + PANEL_CAPTION + PANEL_GAP)).max(MIN_SIZE.1);
+        let mut img = render_png(self, w, h)?;
+        for (i, (_, p)) in self.panels.iter().enumerate() {
+            let (x, y) = self.origin(i);
+            image::imageops::replace(&mut img, p, i64::from(x), i64::from(y + PANEL_CAPTION));
+        }
+        Ok(img)
+    }
+}
+
+impl Draw for Panels {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
+        root.fill(&WHITE).map_err(draw_err)?;
+        root.draw(&Text::new(self.title.as_str(), (PANEL_GAP as i32, 6), font(17.0))).map_err(draw_err)?;
+        for (i, (caption, _)) in self.panels.iter().enumerate() {
+            let (x, y) = self.origin(i);
+            root.draw(&Text::new(caption.as_str(), (x as i32, y as i32 + 2), font(13.0))).map_err(draw_err)?;
+        }
+        Ok(())
+    }
+}
+
 fn to_rgb(c: [u8; 3]) -> RGBColor {
     RGBColor(c[0], c[1], c[2])
 }
@@ -482,6 +541,28 @@ mod tests {
     /// Pixels of colour `c` with x in `xs` and y in `ys`.
     fn count(img: &RgbImage, c: RGBColor, xs: std::ops::Range<u32>, ys: std::ops::Range<u32>) -> usize {
         img.enumerate_pixels().filter(|(x, y, p)| xs.contains(x) && ys.contains(y) && p.0 == [c.0, c.1, c.2]).count()
+    }
+
+    #[test]
+    fn panels_copy_each_picture_under_its_caption() {
+        let pic = |c: u8| RgbImage::from_pixel(40, 30, image::Rgb([c, 0, 255 - c]));
+        let p = Panels {
+            title: "crops".into(),
+            panels: (0..5).map(|i| (format!("panel {i}"), pic(40 * i as u8))).collect(),
+            columns: 3,
+        };
+        let img = p.to_png_image().unwrap();
+        let ((cw, ch), cols, rows) = p.grid();
+        assert_eq!((cw, ch, cols, rows), (40, 30, 3, 2));
+        assert_eq!(img.width(), (PANEL_GAP + 3 * (40 + PANEL_GAP)).max(MIN_SIZE.0));
+        for i in 0..5 {
+            let (x, y) = p.origin(i);
+            let want = image::Rgb([40 * i as u8, 0, 255 - 40 * i as u8]);
+            // Every pixel of the picture is where it belongs, and the caption line above it has ink.
+            assert!((0..40).all(|dx| (0..30).all(|dy| *img.get_pixel(x + dx, y + PANEL_CAPTION + dy) == want)), "{i}");
+            let ink = (x..x + 40).flat_map(|xx| (y..y + PANEL_CAPTION).map(move |yy| (xx, yy)));
+            assert!(ink.filter(|&(xx, yy)| img.get_pixel(xx, yy).0 != [255, 255, 255]).count() > 10, "caption {i}");
+        }
     }
 
     #[test]
