@@ -71,13 +71,13 @@ impl Camera {
     /// Continuous pixel coordinate of view-space point `p`; `None` when `p` is not in front of the camera.
     #[must_use]
     pub fn project(&self, p: Vec3, width: u32, height: u32) -> Option<Vec2> {
-        if p.z >= 0.0 || !p.is_finite() {
-            return None;
-        }
-        let t = self.tan_half_fov();
-        let ndc_x = p.x / (-p.z * t * self.aspect) + self.principal.x;
-        let ndc_y = p.y / (-p.z * t) + self.principal.y;
-        Some(Vec2::new((ndc_x + 1.0) * 0.5 * width as f32, (1.0 - ndc_y) * 0.5 * height as f32))
+        self.projector(width, height).project(p)
+    }
+
+    /// [`Camera::project`] for many points of one image: the field of view's tangent computed once.
+    #[must_use]
+    pub fn projector(&self, width: u32, height: u32) -> Projector {
+        Projector { t: self.tan_half_fov(), aspect: self.aspect, principal: self.principal, width, height }
     }
 
     /// World-space point → view space.
@@ -120,6 +120,31 @@ impl Camera {
             && self.zfar > self.znear
             && self.zfar.is_finite()
             && self.principal.is_finite()
+    }
+}
+
+/// [`Camera::project`] with its per-camera constants precomputed ([`Camera::projector`]); the same arithmetic, so the
+/// same results bit for bit.
+#[derive(Clone, Copy, Debug)]
+pub struct Projector {
+    t: f32,
+    aspect: f32,
+    principal: Vec2,
+    width: u32,
+    height: u32,
+}
+
+impl Projector {
+    /// Continuous pixel coordinate of view-space point `p`; `None` when `p` is not in front of the camera.
+    #[must_use]
+    pub fn project(&self, p: Vec3) -> Option<Vec2> {
+        if p.z >= 0.0 || !p.is_finite() {
+            return None;
+        }
+        let t = self.t;
+        let ndc_x = p.x / (-p.z * t * self.aspect) + self.principal.x;
+        let ndc_y = p.y / (-p.z * t) + self.principal.y;
+        Some(Vec2::new((ndc_x + 1.0) * 0.5 * self.width as f32, (1.0 - ndc_y) * 0.5 * self.height as f32))
     }
 }
 

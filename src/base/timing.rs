@@ -18,7 +18,9 @@ pub fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
 }
 
 /// Milliseconds spent in each stage of a resolve run (the CLI fills `decode` and `detect`; the resolve fills
-/// the rest). Summable: [`StageMs::add`].
+/// the rest). Summable: [`StageMs::add`]. Wall-clock times; `decode`, `detect` and `total` are measured, while
+/// `gather`, `cull` and `shade` are estimates: the parallel part's wall time split by the shares the stages took on
+/// the tiles whose stages were timed (1 in 8), plus the serial light preparation in `cull`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct StageMs {
     /// Loading and unpacking the G-buffer.

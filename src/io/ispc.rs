@@ -265,8 +265,16 @@ pub fn read(path: &Path, sidecar: Option<&Sidecar>, opts: &LoadOptions) -> Resul
     (&mut reader).take(HEADER_BYTES as u64).read_to_end(&mut head).map_err(|e| Error::io(path, e))?;
     let h = check_header(&head, file_len, path, opts)?;
     let mut bytes = head;
-    bytes.resize(HEADER_BYTES + h.chunk_size as usize, 0);
-    reader.read_exact(&mut bytes[HEADER_BYTES..]).map_err(|e| Error::io(path, e))?;
+    let want = HEADER_BYTES + h.chunk_size as usize;
+    bytes.reserve_exact(want - bytes.len());
+    // Read into the reserved capacity (no zero fill first); the header check bounded the size by the file's length.
+    (&mut reader).take(h.chunk_size as u64).read_to_end(&mut bytes).map_err(|e| Error::io(path, e))?;
+    if bytes.len() != want {
+        return Err(Error::invalid(
+            path,
+            format!("ISPC deferred .bin: the chunk declares {} bytes, the file holds {}", h.chunk_size, bytes.len()),
+        ));
+    }
     read_bytes(&bytes, path, sidecar, opts)
 }
 
@@ -372,8 +380,10 @@ fn decode(h: &Header, chunk: &[u8], path: &Path) -> Result<Loaded> {
     gb.camera = Some(camera);
     let n = gb.len();
     let off = |k: usize| h.offsets[k] as usize;
-    let (mut depth, mut position, mut normal) = (vec![0.0; n], vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
-    let (mut albedo, mut spec, mut power) = (vec![Vec3::ZERO; n], vec![0.0; n], vec![0.0; n]);
+    // Zeroed allocations (the OS zeroes pages as the parallel conversion first writes them).
+    let zeroed = crate::util::zeroed_vec3;
+    let (mut depth, mut position, mut normal) = (vec![0.0; n], zeroed(n), zeroed(n));
+    let (mut albedo, mut spec, mut power) = (zeroed(n), vec![0.0; n], vec![0.0; n]);
     // Bands of rows converted in parallel: the conversion is a fixed cost of every run on a `.bin`.
     let width = w as usize;
     let band = width * BAND_ROWS;

@@ -5,6 +5,7 @@
 use crate::error::{Error, Result};
 use crate::gbuffer::GBuffer;
 use glam::Vec2;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::path::Path;
 
@@ -44,7 +45,8 @@ pub fn normal_is_valid(n: glam::Vec3) -> bool {
 /// `positions_assumed` that the sample positions were not in the file.
 pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Path) -> Result<Vec<Warning>> {
     let mut out = Vec::new();
-    let covered: Vec<usize> = (0..gb.len()).filter(|&i| gb.coverage[i]).collect();
+    // Every count below is over the covered samples, in parallel (counts do not depend on the order).
+    let covered: Vec<usize> = (0..gb.len()).into_par_iter().filter(|&i| gb.coverage[i]).collect();
     let nc = covered.len() as u64;
     let pct = |k: u64| 100.0 * k as f64 / nc.max(1) as f64;
     if nc == 0 {
@@ -58,8 +60,10 @@ pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Pat
         return Ok(out);
     }
     if let Some(n) = &gb.normal {
-        let zero = covered.iter().filter(|&&i| n[i].length() < ZERO_NORMAL).count() as u64;
-        let bad = covered.iter().filter(|&&i| !normal_is_valid(n[i])).count() as u64;
+        let (zero, bad) = covered
+            .par_iter()
+            .map(|&i| (u64::from(n[i].length() < ZERO_NORMAL), u64::from(!normal_is_valid(n[i]))))
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
         if bad > 0 {
             out.push(Warning {
                 code: "invalid-normals",
@@ -80,7 +84,7 @@ pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Pat
         }
         // Facing: against the view direction when positions are known, else +z.
         let away = covered
-            .iter()
+            .par_iter()
             .filter(|&&i| normal_is_valid(n[i]))
             .filter(|&&i| match &gb.position {
                 Some(p) => n[i].dot(-p[i]) < 0.0,
@@ -101,7 +105,7 @@ pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Pat
         }
     }
     if let Some(p) = &gb.position {
-        let behind = covered.iter().filter(|&&i| p[i].z >= 0.0).count() as u64;
+        let behind = covered.par_iter().filter(|&&i| p[i].z >= 0.0).count() as u64;
         if behind > 0 {
             let msg = format!(
                 "{behind} of {nc} covered positions ({:.1}%) are behind the camera (z ≥ 0 in view space): \
@@ -115,7 +119,7 @@ pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Pat
         }
         if let (Some(d), true) = (&gb.depth, depth_read) {
             let off: Vec<usize> = covered
-                .iter()
+                .par_iter()
                 .copied()
                 .filter(|&i| (-p[i].z - d[i]).abs() > POSITION_DEPTH_REL * d[i].abs().max(1e-3))
                 .collect();
@@ -158,7 +162,7 @@ pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Pat
         }
     }
     if let (Some(d), Some(cam)) = (&gb.depth, &gb.camera) {
-        let below = covered.iter().filter(|&&i| d[i] < cam.znear * 0.999).count() as u64;
+        let below = covered.par_iter().filter(|&&i| d[i] < cam.znear * 0.999).count() as u64;
         if below * 2 > nc {
             out.push(Warning {
                 code: "depth-convention",
@@ -194,19 +198,24 @@ pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Pat
 pub fn reprojection(gb: &GBuffer) -> Option<(f32, f32, u64)> {
     let (p, cam) = (gb.position.as_ref()?, gb.camera.as_ref()?);
     let spp = gb.samples as usize;
+    let proj = cam.projector(gb.width, gb.height);
     let mut errs: Vec<f32> = (0..gb.len())
+        .into_par_iter()
         .filter(|&i| gb.coverage[i] && p[i].z < 0.0)
         .filter_map(|i| {
             let pix = i / spp;
             let at = Vec2::new((pix as u32 % gb.width) as f32 + 0.5, (pix as u32 / gb.width) as f32 + 0.5)
                 + gb.sample_positions[i % spp];
-            cam.project(p[i], gb.width, gb.height).map(|q| (q - at).length())
+            proj.project(p[i]).map(|q| (q - at).length())
         })
         .collect();
     if errs.is_empty() {
         return None;
     }
-    let far = errs.iter().filter(|e| **e > REPROJECTION_PX).count() as u64;
-    errs.sort_by(f32::total_cmp);
-    Some((errs[errs.len() / 2], errs[errs.len() - 1], far))
+    let far = errs.par_iter().filter(|e| **e > REPROJECTION_PX).count() as u64;
+    let max = errs.par_iter().copied().reduce(|| f32::NEG_INFINITY, f32::max);
+    // The median by selection, not a full sort (the same element a sort would put in the middle).
+    let mid = errs.len() / 2;
+    let (_, median, _) = errs.select_nth_unstable_by(mid, f32::total_cmp);
+    Some((*median, max, far))
 }

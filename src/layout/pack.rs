@@ -356,11 +356,11 @@ impl Layout {
                 (Slot::Whole(a), _) if !packed.present.contains(&a) => {}
                 (Slot::Component(a, _), _) if !packed.present.contains(&a) => {}
                 (Slot::Whole(Attribute::Normal), Coder::Normal(c)) => {
-                    let plane = out.normal.get_or_insert_with(|| vec![Vec3::ZERO; n]);
+                    let plane = out.normal.get_or_insert_with(|| crate::util::zeroed_vec3(n));
                     src.fill(plane, |cs, o| c.decode_slice(cs, o), whole);
                 }
                 (Slot::Whole(Attribute::Albedo), Coder::Color(c)) => {
-                    let plane = out.albedo.get_or_insert_with(|| vec![Vec3::ZERO; n]);
+                    let plane = out.albedo.get_or_insert_with(|| crate::util::zeroed_vec3(n));
                     src.fill(plane, |cs, o| c.decode_slice(cs, o), whole);
                 }
                 (Slot::Whole(Attribute::Depth), Coder::Depth(c)) => {
@@ -384,7 +384,7 @@ impl Layout {
                             Attribute::Albedo => &mut out.albedo,
                             _ => &mut out.position,
                         };
-                        let plane = plane.get_or_insert_with(|| vec![Vec3::ZERO; n]);
+                        let plane = plane.get_or_insert_with(|| crate::util::zeroed_vec3(n));
                         src.fill(plane, |cs, o| c.decode_slice(cs, o), |d: &mut Vec3, v| d[k] = v);
                     }
                 },
