@@ -19,6 +19,18 @@ pub enum LightKind {
         /// Angle from the axis where the light reaches zero.
         outer_cone_angle: f32,
     },
+    /// Hemisphere environment (the third light kind of the deferred-shading lectures beside point and spot): a sky
+    /// of radiance `color × intensity` above the plane normal to `up` and a ground of radiance `ground ×
+    /// intensity` below it, lighting every surface from every direction (no position, no range). Shaded for its
+    /// diffuse part only, in closed form: a Lambertian surface with normal n receives irradiance
+    /// `π·(sky·(1 + n·up)/2 + ground·(1 − n·up)/2)`. glTF has no such light; sidecars write it as
+    /// `{"type": "hemisphere", "direction": up, "color": sky, "ground": [r, g, b], "intensity": k}`.
+    Hemisphere {
+        /// Unit "up" direction (view space).
+        up: Vec3,
+        /// Linear RGB colour of the ground half (scaled by the light's intensity, as `color` is).
+        ground: Vec3,
+    },
     /// Directional light: `direction` is the unit direction the light travels (view space).
     Directional {
         /// Unit direction of travel.
@@ -55,5 +67,11 @@ impl Light {
     #[must_use]
     pub fn is_directional(&self) -> bool {
         matches!(self.kind, LightKind::Directional { .. })
+    }
+
+    /// Is it a hemisphere environment ([`LightKind::Hemisphere`])?
+    #[must_use]
+    pub fn is_environment(&self) -> bool {
+        matches!(self.kind, LightKind::Hemisphere { .. })
     }
 }

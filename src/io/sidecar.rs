@@ -35,7 +35,8 @@ pub struct SidecarCamera {
 /// A light as written in a sidecar (KHR_lights_punctual fields, plus `begin` for the linear falloff).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SidecarLight {
-    /// "point", "spot" or "directional".
+    /// "point", "spot", "directional" or "hemisphere" (an environment: `direction` is its up, `color` the sky,
+    /// `ground` the lower half; gbuf's extension, glTF has no such light).
     #[serde(rename = "type")]
     pub kind: String,
     /// Position (point and spot).
@@ -62,6 +63,9 @@ pub struct SidecarLight {
     /// Spot outer cone angle, radians (default π/4).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub outer_cone_angle: Option<f32>,
+    /// Ground colour of a hemisphere light (default black).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ground: Option<[f32; 3]>,
 }
 
 fn white() -> [f32; 3] {
@@ -225,9 +229,21 @@ impl Sidecar {
                     outer_cone_angle: l.outer_cone_angle.unwrap_or(std::f32::consts::FRAC_PI_4),
                 },
                 "directional" => LightKind::Directional { direction: dir },
+                "hemisphere" => {
+                    let ground = Vec3::from(l.ground.unwrap_or([0.0; 3]));
+                    if !ground.is_finite() || ground.min_element() < 0.0 {
+                        return Err(bad("hemisphere ground colour must be finite and ≥ 0"));
+                    }
+                    if l.direction.is_none() {
+                        return Err(bad("a hemisphere light needs \"direction\": its up vector"));
+                    }
+                    LightKind::Hemisphere { up: dir, ground }
+                }
                 other => return Err(bad(&format!("unknown type {other:?}"))),
             };
-            if matches!(kind, LightKind::Spot { .. } | LightKind::Directional { .. }) && dir == Vec3::ZERO {
+            let directed =
+                matches!(kind, LightKind::Spot { .. } | LightKind::Directional { .. } | LightKind::Hemisphere { .. });
+            if directed && dir == Vec3::ZERO {
                 return Err(bad("direction is zero or not finite"));
             }
             let light = Light {

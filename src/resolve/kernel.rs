@@ -630,6 +630,35 @@ pub fn finish_prepass(it: &mut Items, brdf: Brdf) {
     }
 }
 
+/// Adds the hemisphere environments to items `0..n` after the light loop (and after [`finish_prepass`]): per item
+/// [`super::brdf::environment`] in f32, the environments in input order. Per item and independent of the culling
+/// and the schedule, so images stay bit-identical across them.
+pub fn add_environment(it: &mut Items, n: usize, env: &[super::lights::Hemisphere], brdf: Brdf) {
+    if env.is_empty() {
+        return;
+    }
+    for j in 0..n {
+        let nrm = Vec3::new(it.nx[j], it.ny[j], it.nz[j]);
+        let albedo = Vec3::new(it.ar[j], it.ag[j], it.ab[j]);
+        let k = match brdf {
+            Brdf::Lambert => albedo,
+            Brdf::BlinnPhong => albedo * std::f32::consts::PI,
+            Brdf::Ggx => {
+                let metal = it.metal[j];
+                let f0 = Vec3::splat(DIELECTRIC_F0).lerp(albedo, metal);
+                albedo * (1.0 - metal) * (Vec3::ONE - f0)
+            }
+        };
+        let mut add = Vec3::ZERO;
+        for e in env {
+            let c = nrm.dot(e.up).clamp(-1.0, 1.0);
+            add += e.sky * (0.5 + 0.5 * c) + e.ground * (0.5 - 0.5 * c);
+        }
+        let c = k * add;
+        (it.or[j], it.og[j], it.ob[j]) = (it.or[j] + c.x, it.og[j] + c.y, it.ob[j] + c.z);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

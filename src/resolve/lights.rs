@@ -12,11 +12,26 @@ use super::falloff::{cone_constants, MIN_RAMP_FRACTION};
 use crate::light::{Light, LightKind};
 use glam::Vec3;
 
+/// A sanitised hemisphere environment ([`LightKind::Hemisphere`]): unit `up`, sky and ground radiance with the
+/// intensity folded in. Shaded per sample after the light loop (`kernel::add_environment` in f32,
+/// `reference::environment` in f64), never culled: it reaches every sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hemisphere {
+    /// Unit up direction, view space.
+    pub up: Vec3,
+    /// Sky radiance (colour × intensity).
+    pub sky: Vec3,
+    /// Ground radiance (ground colour × intensity).
+    pub ground: Vec3,
+}
+
 /// Lights made safe for shading, plus how many were dropped.
 #[derive(Clone, Debug, Default)]
 pub struct CleanLights {
-    /// The usable lights (directions normalised, cones and begin radius clamped).
+    /// The usable punctual lights (directions normalised, cones and begin radius clamped): the light loop's.
     pub lights: Vec<Light>,
+    /// The usable hemisphere environments, in input order.
+    pub environment: Vec<Hemisphere>,
     /// Lights dropped because a field was NaN/Inf/negative, a range was ≤ 0, or a direction was zero.
     pub dropped: u64,
 }
@@ -25,9 +40,12 @@ pub struct CleanLights {
 /// clamps `begin` into `[0, range]` and spot cones into `0 ≤ inner ≤ outer ≤ π/2`.
 #[must_use]
 pub fn sanitize(lights: &[Light]) -> CleanLights {
-    let mut out = CleanLights { lights: Vec::with_capacity(lights.len()), dropped: 0 };
+    let mut out = CleanLights { lights: Vec::with_capacity(lights.len()), ..Default::default() };
     for l in lights {
         match sanitize_one(l) {
+            Some(Light { kind: LightKind::Hemisphere { up, ground }, color, intensity, .. }) => {
+                out.environment.push(Hemisphere { up, sky: color * intensity, ground: ground * intensity });
+            }
             Some(l) => out.lights.push(l),
             None => out.dropped += 1,
         }
@@ -41,7 +59,7 @@ fn sanitize_one(l: &Light) -> Option<Light> {
     if !colour_ok || !l.intensity.is_finite() || l.intensity < 0.0 || l.range.is_nan() || l.range <= 0.0 {
         return None;
     }
-    if !l.is_directional() && !l.position.is_finite() {
+    if !l.is_directional() && !l.is_environment() && !l.position.is_finite() {
         return None;
     }
     l.begin = if l.begin.is_finite() { l.begin.clamp(0.0, l.range) } else { 0.0 };
@@ -56,6 +74,14 @@ fn sanitize_one(l: &Light) -> Option<Light> {
         }
         LightKind::Directional { direction } => {
             *direction = direction.try_normalize()?;
+            l.range = f32::INFINITY;
+            l.position = Vec3::ZERO;
+        }
+        LightKind::Hemisphere { up, ground } => {
+            *up = up.try_normalize()?;
+            if !ground.is_finite() || ground.min_element() < 0.0 {
+                return None;
+            }
             l.range = f32::INFINITY;
             l.position = Vec3::ZERO;
         }

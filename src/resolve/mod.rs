@@ -156,7 +156,7 @@ fn resolve_into_isa(
     }
     let reader = surface::SurfaceReader::with_order(gb, order)?;
     let clean = lights::sanitize(lights);
-    let frame = schedule::Frame::new(reader, mask, &clean.lights, *cfg, isa);
+    let frame = schedule::Frame::new(reader, mask, &clean.lights, &clean.environment, *cfg, isa);
     let t_prep = t_start.elapsed();
 
     let t_par = Instant::now();

@@ -4,15 +4,46 @@
 //! are ignored. (A light whose distance is at or beyond its range is skipped; both falloffs are exactly 0 there.)
 
 use super::brdf;
+use super::brdf::DIELECTRIC_F0;
+use super::config::Brdf;
 use super::config::ResolveConfig;
-use super::lights::sanitize;
+use super::lights::{sanitize, Hemisphere};
 use super::surface::{SanitizedCounts, SurfaceReader};
+use super::worklist::Surface;
 use crate::error::{Error, Result};
 use crate::gbuffer::GBuffer;
 use crate::image::HdrImage;
 use crate::light::Light;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
+use std::f64::consts::PI;
+
+/// Diffuse factor of `brdf` for a hemisphere environment: what multiplies the environment's mean radiance over the
+/// normal's hemisphere (`sky·(1 + n·up)/2 + ground·(1 − n·up)/2`, that is irradiance / π). Lambert: `albedo`
+/// (albedo/π × π); Blinn-Phong, whose diffuse lobe is `albedo` per unit irradiance (the ISPC convention, no 1/π):
+/// `π·albedo`; GGX: `albedo·(1 − metallic)·(1 − F0)`, its diffuse lobe with the Fresnel factor at normal incidence
+/// (the light pre-pass's approximation too). The specular response to an environment needs prefiltered maps and
+/// is left out.
+#[must_use]
+pub fn environment_factor(albedo: DVec3, metallic: f64, brdf: Brdf) -> DVec3 {
+    match brdf {
+        Brdf::Lambert => albedo,
+        Brdf::BlinnPhong => albedo * PI,
+        Brdf::Ggx => {
+            let f0 = DVec3::splat(f64::from(DIELECTRIC_F0)).lerp(albedo, metallic);
+            albedo * (1.0 - metallic) * (DVec3::ONE - f0)
+        }
+    }
+}
+
+/// The radiance a hemisphere environment adds to surface `s` (f64): [`environment_factor`] × the environment's
+/// mean radiance over the normal's hemisphere.
+#[must_use]
+pub fn environment(s: &Surface, env: &Hemisphere, brdf: Brdf) -> DVec3 {
+    let c = s.n.as_dvec3().dot(env.up.as_dvec3()).clamp(-1.0, 1.0);
+    let mean = env.sky.as_dvec3() * (0.5 + 0.5 * c) + env.ground.as_dvec3() * (0.5 - 0.5 * c);
+    environment_factor(s.albedo.as_dvec3(), f64::from(s.metallic), brdf) * mean
+}
 
 /// Radiance of every sample in f64, plane-indexed like the G-buffer (`(y·width + x)·samples + s`); background
 /// samples are 0.
@@ -33,6 +64,9 @@ fn per_sample_f64(gb: &GBuffer, lights: &[Light], cfg: &ResolveConfig) -> Result
                     let mut sum = DVec3::ZERO;
                     for l in &clean.lights {
                         sum += brdf::shade(&surf, l, cfg.brdf, cfg.falloff);
+                    }
+                    for e in &clean.environment {
+                        sum += environment(&surf, e, cfg.brdf);
                     }
                     row[x * s + k] = if sum.is_finite() { sum } else { DVec3::ZERO };
                 }

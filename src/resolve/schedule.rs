@@ -30,8 +30,10 @@ pub struct Frame<'a> {
     pub reader: SurfaceReader<'a>,
     /// Which pixels are shaded per sample.
     pub mask: &'a EdgeMask,
-    /// Sanitised lights.
+    /// Sanitised lights (the light loop's).
     pub lights: &'a [Light],
+    /// Hemisphere environments, added per sample after the light loop.
+    pub environment: &'a [super::lights::Hemisphere],
     /// Their kernel constants and culling spheres.
     pub table: LightTable,
     /// Quad rectangles (quad culling only).
@@ -49,12 +51,13 @@ impl<'a> Frame<'a> {
         reader: SurfaceReader<'a>,
         mask: &'a EdgeMask,
         lights: &'a [Light],
+        environment: &'a [super::lights::Hemisphere],
         cfg: ResolveConfig,
         isa: Isa,
     ) -> Self {
         let table = LightTable::new(lights, cfg.falloff);
         let quads = if cfg.culling == Culling::Quad { quad_rects(lights) } else { QuadSoa::default() };
-        Frame { reader, mask, lights, table, quads, cfg, isa: isa.min(Isa::detect()) }
+        Frame { reader, mask, lights, environment, table, quads, cfg, isa: isa.min(Isa::detect()) }
     }
 }
 
@@ -400,6 +403,7 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats)
     if variant.prepass {
         finish_prepass(items, frame.cfg.brdf);
     }
+    super::kernel::add_environment(items, n_real, frame.environment, frame.cfg.brdf);
     // The box filter into the band's buffers (`pixel` indexes them). Items `0..n_first` are the first sample of
     // their pixel: stored (times the weight, 1 for a pixel shaded once: exact). The rest are edge pixels' other
     // samples, added (edge pixels were zeroed above, for those whose sample 0 is unusable).

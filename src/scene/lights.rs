@@ -172,6 +172,11 @@ pub fn sidecar_light(l: &Light) -> SidecarLight {
             ("spot", Some(l.position), Some(direction), Some((inner_cone_angle, outer_cone_angle)))
         }
         LightKind::Directional { direction } => ("directional", None, Some(direction), None),
+        LightKind::Hemisphere { up, .. } => ("hemisphere", None, Some(up), None),
+    };
+    let ground = match l.kind {
+        LightKind::Hemisphere { ground, .. } => Some(ground.to_array()),
+        _ => None,
     };
     SidecarLight {
         kind: kind.into(),
@@ -183,6 +188,7 @@ pub fn sidecar_light(l: &Light) -> SidecarLight {
         begin: (l.begin > 0.0).then_some(l.begin),
         inner_cone_angle: cones.map(|c| c.0),
         outer_cone_angle: cones.map(|c| c.1),
+        ground,
     }
 }
 

@@ -20,7 +20,7 @@ pub mod raycast;
 pub mod room;
 pub mod stress;
 
-pub use self::lights::{default_lights, scatter_lights, scene_sidecar};
+pub use self::lights::{default_lights, scatter_lights, scene_sidecar, sidecar_light};
 pub use self::material::Material;
 
 use crate::error::{Error, Result};
