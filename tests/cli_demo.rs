@@ -96,6 +96,8 @@ fn demo_writes_the_report_folder() {
     assert!(md.contains("The no-AA image is the 1-sample render at pixel centres"), "{md}");
     assert!(md.lines().any(|l| l.starts_with("| forward |")), "forward is not an estimate in the demo");
     assert!(md.contains("aa_crops.png") && out.join("aa_crops.png").is_file());
+    // The demo knows its geometry: the visibility buffer is re-materialised from the room's triangles, exactly.
+    assert!(md.contains("re-materialised from the `room` scene's triangles") && md.contains("bit-identical"), "{md}");
     // Every image the markdown links exists.
     for line in md.lines().filter(|l| l.starts_with("![")) {
         let file = line.split("](").nth(1).unwrap().trim_end_matches(')');

@@ -209,3 +209,22 @@ fn the_three_msaa_schedules_give_bit_identical_images() {
     let bad = ResolveConfig { culling: Culling::Clustered, msaa: MsaaSchedule::TwoPass, ..ResolveConfig::default() };
     assert!(bad.validate().unwrap_err().to_string().contains("clustered"));
 }
+
+/// Re-materialisation (issue 15, part 2): the room fixture's attributes rebuilt from the room's triangles equal the
+/// G-buffer bit for bit; a dump of another frame named as the room is an error, not a table.
+#[test]
+fn the_visibility_buffer_rematerialises_the_room_exactly_and_refuses_another_frame() {
+    let o = gbuf().args(["pipelines", "--json", "--geometry", "room"]).arg(fixture("room_4x.exr")).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let r = &j["rematerialised"];
+    let samples = r["samples"].as_u64().unwrap();
+    assert!(samples > 0 && r["failed"] == 0, "{r}");
+    for a in r["attributes"].as_array().unwrap() {
+        assert_eq!((a["max_abs"].as_f64().unwrap(), a["bit_exact"].as_u64().unwrap()), (0.0, samples), "{a}");
+    }
+    let o = gbuf().args(["pipelines", "--geometry", "room"]).arg(fixture("raster_4x.exr")).output().unwrap();
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("raster_4x.exr") && e.contains("does not look like the room scene"), "{e}");
+}

@@ -37,6 +37,9 @@ pub struct ReportInput<'a> {
     /// The same frame rendered with 1 sample at pixel centres, when there is one: the pipelines' no-AA image and
     /// MLAA's input (else sample 0 stands in).
     pub single: Option<&'a GBuffer>,
+    /// The analytic scene the frame was rendered from, when it is one of gbuf's (the demo): the visibility buffer
+    /// is then re-materialised from its triangles.
+    pub geometry: Option<crate::scene::SceneName>,
 }
 
 /// The layout error of `layout` on `gb` lit by `lights`: the image of its roundtrip (first detector of `cfg`,

@@ -22,6 +22,8 @@ use crate::image::HdrImage;
 use crate::light::Light;
 use crate::measure::image::{error_set, ErrorSet, Viewing};
 use crate::resolve::{self, Culling, MsaaSchedule, ResolveConfig, Schedule};
+use crate::scene::rematerialise::{rematerialise, Rematerialised};
+use crate::scene::SceneName;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -88,6 +90,9 @@ pub struct PipelinesConfig {
     pub aa_detectors: Vec<Detector>,
     /// MLAA's settings.
     pub mlaa: MlaaConfig,
+    /// The analytic scene the dump was rendered from, when known (`gbuf scene`, the demo): the visibility buffer's
+    /// attributes are then re-materialised from its triangles and compared with the G-buffer.
+    pub geometry: Option<SceneName>,
 }
 
 /// One MSAA schedule run by the resolve on the CPU (tiled culling, the deferred rows' mask).
@@ -196,6 +201,12 @@ pub struct Pipelines {
     pub aa: Vec<AaRow>,
     /// What MLAA found on the no-AA image.
     pub mlaa: MlaaStats,
+    /// The visibility buffer's re-materialisation from the scene's triangles ([`PipelinesConfig::geometry`]).
+    #[serde(default)]
+    pub rematerialised: Option<Rematerialised>,
+    /// Why it was not done, when geometry was given but re-materialisation failed.
+    #[serde(default)]
+    pub rematerialise_error: Option<String>,
     /// The images of [`Pipelines::aa`] (same order), for pictures; not serialised.
     #[serde(skip)]
     pub aa_images: Vec<HdrImage>,
@@ -568,6 +579,13 @@ pub fn pipelines(
         });
         aa_images.push(r.image);
     }
+    let (rematerialised, rematerialise_error) = match cfg.geometry {
+        Some(name) => match rematerialise(name, gb) {
+            Ok(r) => (Some(r), None),
+            Err(e) => (None, Some(e.to_string())),
+        },
+        None => (None, None),
+    };
     Ok(Pipelines {
         size: (w, h, s),
         lights: lights.len(),
@@ -584,6 +602,8 @@ pub fn pipelines(
         schedules,
         aa,
         mlaa: mlaa_stats,
+        rematerialised,
+        rematerialise_error,
         aa_images,
     })
 }

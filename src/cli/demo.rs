@@ -47,6 +47,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         lights_source: format!("the room's {} default lights", lights.len()),
         lights,
         single,
+        geometry: Some(SceneName::Room),
     };
     run_and_write(frame, &cfg, &args.out, args.json)?;
     Ok(())

@@ -52,6 +52,10 @@ pub struct Args {
     /// needs primitive IDs).
     #[arg(long, value_name = "OUT.png")]
     pub heatmap: Option<PathBuf>,
+    /// The dump is gbuf's analytic scene NAME (`gbuf scene NAME`, same size): re-materialise the visibility
+    /// buffer's attributes from its triangles and compare them with the G-buffer.
+    #[arg(long, value_name = "NAME")]
+    pub geometry: Option<gbuf::scene::SceneName>,
     /// Write the anti-aliasing picture: the crop where no AA errs most, under the reference and each method.
     #[arg(long, value_name = "OUT.png")]
     pub aa_crops: Option<PathBuf>,
@@ -85,6 +89,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         viewing: args.flip.then(Viewing::default),
         aa_detectors: vec![Detector::Lauritzen, Detector::Depth, Detector::Normal, Detector::Id],
         mlaa: MlaaConfig::default(),
+        geometry: args.geometry,
     };
     let single = match &args.single {
         Some(path) => {
@@ -99,6 +104,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         gbuf::resolve::reference(&gb, &lights, &cfg.resolve).with_context(|| format!("{file}: reference"))?;
     let p = pipelines(&gb, &lights, &cfg, Some(&reference), single.as_ref())
         .with_context(|| format!("{file}: pipelines"))?;
+    if let (Some(name), Some(e)) = (args.geometry, &p.rematerialise_error) {
+        anyhow::bail!("{file}: --geometry {name}: {e}");
+    }
     if let Some(path) = &args.aa_crops {
         let (pic, (x, y, w, h)) = gbuf::report::pipelines::aa_crop_picture(&p, &reference)?;
         gbuf::base::picture::write_png(path, &pic).with_context(|| format!("writing {}", path.display()))?;

@@ -249,6 +249,8 @@ pub struct FrameInput {
     pub lights_source: String,
     /// The same frame with 1 sample at pixel centres (`--single`, or rendered by the demo).
     pub single: Option<gbuf::GBuffer>,
+    /// The analytic scene it was rendered from (the demo).
+    pub geometry: Option<gbuf::scene::SceneName>,
 }
 
 /// Sweeps the frames one after another (`next` yields them, so only one is in memory at a time), writes the
@@ -279,6 +281,7 @@ pub fn run_frames(
             lights: &f.lights,
             lights_source: f.lights_source.clone(),
             single: f.single.as_ref(),
+            geometry: f.geometry,
         };
         let prefix =
             if count > 1 { format!("frame{:0w$}_", i + 1, w = count.to_string().len()) } else { String::new() };
@@ -375,7 +378,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             }
             None => None,
         };
-        Ok(FrameInput { name: p.display().to_string(), gbuffer: loaded.gbuffer, lights, lights_source, single })
+        Ok(FrameInput {
+            name: p.display().to_string(),
+            gbuffer: loaded.gbuffer,
+            lights,
+            lights_source,
+            single,
+            geometry: None,
+        })
     };
     run_frames(paths.len(), next, &cfg, &Assembly::of(&cfg, args.over, args.max_bytes), &args.out, args.json)?;
     Ok(())

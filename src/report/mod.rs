@@ -61,7 +61,7 @@ pub fn run_frame(
     let (pipelines, pipelines_error) = match crate::analysis::pipelines::pipelines(
         gb,
         input.lights,
-        &pipelines_config(cfg),
+        &crate::analysis::pipelines::PipelinesConfig { geometry: input.geometry, ..pipelines_config(cfg) },
         Some(&out.reference),
         input.single,
     ) {
@@ -123,6 +123,7 @@ pub fn pipelines_config(cfg: &SweepConfig) -> crate::analysis::pipelines::Pipeli
         viewing: (cfg.flip != FlipRows::None).then_some(cfg.viewing),
         aa_detectors: cfg.detectors.iter().copied().filter(|d| !d.is_baseline()).collect(),
         mlaa: crate::image::mlaa::MlaaConfig::default(),
+        geometry: None,
     }
 }
 

@@ -56,6 +56,40 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
         let names: Vec<&str> = p.skipped.iter().filter(|(_, w)| w == why).map(|(p, _)| p.name()).collect();
         let _ = writeln!(s, "\nNot measured: {}: {why}", names.join(", "));
     }
+    match (&p.rematerialised, &p.rematerialise_error) {
+        (Some(r), _) => {
+            let worst = r.attributes.iter().map(|a| a.max_abs).fold(0.0f64, f64::max);
+            let exact = r.attributes.iter().all(|a| a.bit_exact + r.failed == r.samples);
+            let _ = writeln!(
+                s,
+                "\nVisibility buffer, re-materialised from the `{}` scene's triangles: {} covered samples, {} failed; \
+                 {} attributes ({}), largest difference from the G-buffer {:e}{}; {} arithmetic operations and {} bytes \
+                 of triangle and material fetched per sample, against {} B of G-buffer read.",
+                r.scene,
+                r.samples,
+                r.failed,
+                r.attributes.len(),
+                r.attributes.iter().map(|a| a.attribute.as_str()).collect::<Vec<_>>().join(", "),
+                worst,
+                if exact { " (every value bit-identical)" } else { "" },
+                r.ops_per_sample,
+                r.bytes_fetched_per_sample,
+                p.gbuffer_bytes
+            );
+        }
+        (None, Some(e)) => {
+            let _ = writeln!(s, "\nVisibility buffer re-materialisation failed: {e}");
+        }
+        (None, None) if p.rows.iter().any(|r| r.pipeline == Pipeline::VisibilityBuffer) => {
+            let _ = writeln!(
+                s,
+                "\nVisibility buffer: re-materialising the attributes needs the frame's triangles (vertex positions \
+                 and normals per (object, primitive) ID) and its material table; gbuf has them for its own scenes \
+                 (`--geometry room|stress`), not for an engine's dump."
+            );
+        }
+        _ => {}
+    }
     if let Some(q) = &p.forward_msaa {
         let _ = writeln!(
             s,

@@ -251,6 +251,13 @@ fn slab(b: &Aabb, o: Vec3, inv: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
     (enter <= exit).then_some(enter)
 }
 
+/// The ray `o + t·d` against one triangle, exactly as the traversal tests it: `(t, u, v)` with `t` in
+/// `(t_min, t_max)` (re-materialisation re-intersects a sample's own triangle with it and gets the renderer's hit).
+#[must_use]
+pub fn intersect_triangle(t: &Triangle, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Option<(f32, f32, f32)> {
+    intersect_tri(&TriGeom { v0: t.v[0], e1: t.v[1] - t.v[0], e2: t.v[2] - t.v[0] }, o, d, t_min, t_max)
+}
+
 /// Möller–Trumbore, two-sided, with [`EDGE_SLACK`] on the barycentric bounds.
 #[inline]
 fn intersect_tri(tri: &TriGeom, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Option<(f32, f32, f32)> {

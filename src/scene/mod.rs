@@ -17,6 +17,7 @@ pub mod geometry;
 pub mod lights;
 pub mod material;
 pub mod raycast;
+pub mod rematerialise;
 pub mod room;
 pub mod stress;
 
@@ -57,7 +58,9 @@ pub struct ObjectInfo {
     pub triangles: u32,
 }
 
-fn build(name: SceneName, width: u32, height: u32) -> ViewScene {
+/// Scene `name` in view space for an image of `width × height` (camera and triangles).
+#[must_use]
+pub fn build(name: SceneName, width: u32, height: u32) -> ViewScene {
     match name {
         SceneName::Room => room::build(width, height),
         SceneName::Stress => stress::build(width, height),

@@ -14,7 +14,7 @@ use rayon::prelude::*;
 
 /// Relative slack on the near clip: geometry placed exactly on the near plane must not be lost to the rounding
 /// of `t` (it comes back within a few ulps of `znear`).
-const NEAR_SLACK: f32 = 1e-4;
+pub(crate) const NEAR_SLACK: f32 = 1e-4;
 /// Smallest cosine between an interpolated normal and the direction to the eye. At silhouettes of tessellated
 /// surfaces the interpolated normal can face slightly away; it is bent just enough to face the camera, since a
 /// visible sample with a back-facing normal is not something a G-buffer holds.
@@ -136,7 +136,7 @@ pub fn render_into(scene: &ViewScene, gb: &mut GBuffer) {
 /// The view-space shading normal at a hit: the stored normal of a flat triangle (exactly, or negated when the
 /// ray sees its back), or the renormalised interpolated vertex normal of a smooth one, bent to face the eye if
 /// needed (see [`MIN_FACING`]).
-fn shading_normal(t: &Triangle, h: &Hit, dir: Vec3) -> Vec3 {
+pub(crate) fn shading_normal(t: &Triangle, h: &Hit, dir: Vec3) -> Vec3 {
     if !t.smooth {
         return if t.n[0].dot(dir) > 0.0 { -t.n[0] } else { t.n[0] };
     }
