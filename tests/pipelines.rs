@@ -127,6 +127,7 @@ fn pipelines_runs_on_every_fixture() {
         ("room_1x.exr", true),
         ("blender_gbuffer.exr", false),
         ("mitsuba_gbuffer.exr", true),
+        ("mitsuba_1x.exr", true),
         ("ispc_deferred.bin", false),
         ("luxcore", false),
     ] {
