@@ -542,6 +542,8 @@ pub struct LightIn {
     range: Option<Val>,
     begin: Option<Val>,
     cones: Option<(Val, Val)>,
+    /// A hemisphere light's ground colour.
+    ground: Option<[Val; 3]>,
 }
 
 /// A sidecar: camera, supersampling, lights, their space, materials.
@@ -563,7 +565,7 @@ impl SidecarIn {
         if let Some(r) = &self.raw {
             return r.clone();
         }
-        let kinds = ["point", "spot", "directional", "area"];
+        let kinds = ["point", "spot", "directional", "hemisphere", "area"];
         let s = Sidecar {
             camera: self.camera.as_ref().map(|c| c.build(width, height)),
             supersample: self.supersample.map(|k| u32::from(k % 10)),
@@ -581,6 +583,7 @@ impl SidecarIn {
                     begin: l.begin.map(Val::f32),
                     inner_cone_angle: l.cones.map(|c| c.0.f32()),
                     outer_cone_angle: l.cones.map(|c| c.1.f32()),
+                    ground: l.ground.map(|g| g.map(Val::f32)),
                 })
                 .collect(),
             lights_space: self.lights_space.map(|k| ["world", "view", "screen"][k as usize % 3].to_string()),
