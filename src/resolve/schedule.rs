@@ -16,7 +16,6 @@ use super::simd::Portable;
 use super::simd::{Avx2, Avx512};
 use super::surface::{Reads, SanitizedCounts, SurfaceReader, MIN_VIEW_DEPTH};
 use super::worklist::{Items, QuadSoa, PAD_PIXEL};
-#[cfg(target_arch = "x86_64")]
 use crate::base::isa::Isa;
 use crate::base::mask::EdgeMask;
 use crate::light::Light;

@@ -1023,6 +1023,7 @@ mod tests {
         }
     }
 
+    #[cfg(target_arch = "x86_64")]
     #[test]
     fn log2_tables_are_the_subinterval_centres() {
         use super::avx512::{LOG2_INV_C, LOG2_T};

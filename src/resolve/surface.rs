@@ -14,7 +14,6 @@
 use super::config::Brdf;
 use super::simd::LANES;
 use super::worklist::{Items, Surface};
-#[cfg(target_arch = "x86_64")]
 use crate::base::isa::Isa;
 use crate::camera::Camera;
 use crate::error::{Error, Result};
@@ -178,6 +177,7 @@ impl SampleIndex {
     /// Whether a pixel's samples 1.. lie apart from its sample 0 (the split order, with more than one sample).
     #[inline(always)]
     #[must_use]
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))] // read by the tile prefetch, x86-64 only
     pub fn split(&self) -> bool {
         self.split
     }
