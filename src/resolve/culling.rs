@@ -75,6 +75,7 @@ impl Bounds {
     /// [`Lanes::recip`] (within an ulp or two of the division: far inside [`CULL_MARGIN`]).
     #[inline(always)]
     #[must_use]
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))] // the AVX-512 tile bounds and the tests
     pub fn of_items_in<V: Lanes>(it: &Items, range: std::ops::Range<usize>) -> Option<Bounds> {
         if range.is_empty() || !range.len().is_multiple_of(V::N) {
             return Bounds::of_items(it, range);

@@ -1,7 +1,7 @@
 //! The batched shading kernel: a packed work list of samples (structure of arrays, 16-item vectors) against a list
 //! of lights (one cache-line record each). The outer loop walks vectors, the next loop lights; the lanes of a vector
 //! are one [`Lanes`] value, so the kernel is written once and compiled for AVX-512, for AVX2+FMA and for any other
-//! CPU, picked at run time ([`instruction_set`]).
+//! x86-64 CPU, picked at run time, and for NEON on aarch64, where it is part of the baseline ([`instruction_set`]).
 //!
 //! The formulas are those of `brdf.rs` / `falloff.rs` in f32, with per-light and per-sample constants hoisted.
 //! Every light's contribution to a sample is added in light-index order whatever the culling, and a light that
@@ -13,6 +13,8 @@ use super::config::{Brdf, Falloff};
 use super::falloff::MIN_DISTANCE;
 use super::fastmath::POW_MIN_BASE;
 use super::lights::{LightRec, LightTable, LUMA};
+#[cfg(target_arch = "aarch64")]
+use super::simd::Neon;
 pub use super::simd::BLOCK;
 #[cfg(target_arch = "x86_64")]
 use super::simd::{Avx2, Avx512};
@@ -36,8 +38,26 @@ pub struct Variant {
 
 /// Shades items `range` of `it` (a whole number of vectors) against every light of `lights` (and, for quad
 /// culling, `quad`), overwriting the items' outputs, with the kernel compiled for `isa` (or the widest level
-/// below it that this CPU has).
+/// below it that this CPU has; on aarch64 every level is the NEON kernel).
 pub fn shade(isa: Isa, it: &mut Items, range: std::ops::Range<usize>, lights: &LightTable, quad: &QuadSoa, v: Variant) {
+    shade_with(Some(isa), it, range, lights, quad, v);
+}
+
+/// [`shade`] on the portable path whatever the CPU (to compare the vector paths against it).
+#[cfg_attr(not(test), allow(dead_code))] // the bound / scalar path the tests check against
+pub fn shade_portable(it: &mut Items, range: std::ops::Range<usize>, lights: &LightTable, quad: &QuadSoa, v: Variant) {
+    shade_with(None, it, range, lights, quad, v);
+}
+
+/// [`shade`] with the lanes of `isa`, or the portable lanes for `None`.
+fn shade_with(
+    isa: Option<Isa>,
+    it: &mut Items,
+    range: std::ops::Range<usize>,
+    lights: &LightTable,
+    quad: &QuadSoa,
+    v: Variant,
+) {
     macro_rules! pick {
         ($b:literal, $f:literal) => {
             match (v.quad, v.prepass) {
@@ -58,37 +78,48 @@ pub fn shade(isa: Isa, it: &mut Items, range: std::ops::Range<usize>, lights: &L
     }
 }
 
-/// [`shade`] on the portable path whatever the CPU (to compare the vector paths against it).
-#[cfg_attr(not(test), allow(dead_code))] // the bound / scalar path the tests check against
-pub fn shade_portable(it: &mut Items, range: std::ops::Range<usize>, lights: &LightTable, quad: &QuadSoa, v: Variant) {
-    shade(Isa::Baseline, it, range, lights, quad, v);
-}
-
 /// The instruction set the kernel runs with on this CPU ([`Isa::detect`], shared with the codecs' slice paths):
-/// `avx512`, `avx2` (with FMA) or `baseline` (the portable kernel).
+/// `avx512`, `avx2` (with FMA) or `baseline` (the portable kernel) on x86-64; `neon` on aarch64, whose baseline
+/// has it (there `Isa::detect` is `baseline`, and the codecs run their portable code).
 #[must_use]
 pub fn instruction_set() -> &'static str {
-    Isa::detect().name()
+    if cfg!(target_arch = "aarch64") {
+        "neon"
+    } else {
+        Isa::detect().name()
+    }
 }
 
+/// Runs the kernel with the lanes of `isa` (capped at [`Isa::detect`]), or the portable lanes for `None`.
 fn dispatch<const B: u8, const F: u8, const Q: bool, const P: bool>(
-    isa: Isa,
+    isa: Option<Isa>,
     it: &mut Items,
     range: std::ops::Range<usize>,
     lights: &LightTable,
     quad: &QuadSoa,
 ) {
+    let Some(isa) = isa else {
+        return run::<Portable<false>, B, F, Q, P>(it, range, lights, quad);
+    };
     #[cfg(target_arch = "x86_64")]
     match isa.min(Isa::detect()) {
         // SAFETY: `Isa::detect` found the features the function was compiled for on this CPU.
-        Isa::Avx512 => return unsafe { run_avx512::<B, F, Q, P>(it, range, lights, quad) },
+        Isa::Avx512 => unsafe { run_avx512::<B, F, Q, P>(it, range, lights, quad) },
         // SAFETY: as above.
-        Isa::Avx2 => return unsafe { run_avx2::<B, F, Q, P>(it, range, lights, quad) },
-        Isa::Baseline => {}
+        Isa::Avx2 => unsafe { run_avx2::<B, F, Q, P>(it, range, lights, quad) },
+        Isa::Baseline => run::<Portable<false>, B, F, Q, P>(it, range, lights, quad),
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = isa;
-    run::<Portable<false>, B, F, Q, P>(it, range, lights, quad);
+    // NEON is part of every aarch64 target: the only level there, no detection and no wrapper.
+    #[cfg(target_arch = "aarch64")]
+    {
+        let _ = isa;
+        run::<Neon, B, F, Q, P>(it, range, lights, quad);
+    }
+    #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+    {
+        let _ = isa;
+        run::<Portable<false>, B, F, Q, P>(it, range, lights, quad);
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -489,9 +520,9 @@ fn run_chunk<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
     let live = &live[..n];
     let mut acc = Acc { rgb: [zero; 3], s: zero, tested: zero, lit: zero };
     let mut rest: &[u32] = live;
-    if V::INTERLEAVE >= 4 {
-        // A constant condition: the four-light code is only generated for lane types that use it.
-        rest = quads_of_lights::<V, B, F, Q, P>(&k, live, lights, quad, &mut acc);
+    if V::INTERLEAVE >= 2 {
+        // A constant condition: the two- and four-light code is only generated for lane types that use it.
+        rest = groups_of_lights::<V, B, F, Q, P>(&k, live, lights, quad, &mut acc);
     }
     let spot = lights.any_spot;
     for &a in rest {
@@ -517,9 +548,10 @@ fn run_chunk<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
     acc.lit.store(&mut it.lit[c..]);
 }
 
-/// Shades `live` four lights at a time, then a pair; returns the lights left (at most one).
+/// Shades `live` four lights at a time (when [`Lanes::INTERLEAVE`] is 4 or more), then two at a time; returns the
+/// lights left (at most one).
 #[inline(always)]
-fn quads_of_lights<'a, V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
+fn groups_of_lights<'a, V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
     k: &Chunk<V>,
     live: &'a [u32],
     lights: &LightTable,
@@ -529,8 +561,10 @@ fn quads_of_lights<'a, V: Lanes, const B: u8, const F: u8, const Q: bool, const 
     let k2 = both(k);
     let k4 = both(&k2);
     let spot = lights.any_spot;
-    let mut quads = live.chunks_exact(4);
-    for q in &mut quads {
+    // A constant condition: with two lights per step, the pairs below take every light.
+    let in_quads = if V::INTERLEAVE >= 4 { live.len() / 4 * 4 } else { 0 };
+    let (quads, rest) = live.split_at(in_quads);
+    for q in quads.chunks_exact(4) {
         let (i0, i1, i2, i3) = (q[0] as usize, q[1] as usize, q[2] as usize, q[3] as usize);
         let l0 = light_k::<V, Q>(&lights.rec[i0], quad, i0, spot);
         let l1 = light_k::<V, Q>(&lights.rec[i1], quad, i1, spot);
@@ -547,7 +581,7 @@ fn quads_of_lights<'a, V: Lanes, const B: u8, const F: u8, const Q: bool, const 
         accumulate::<V, B, Q, P>(acc, &s2, &c2, u2);
         accumulate::<V, B, Q, P>(acc, &s3, &c3, u3);
     }
-    let mut pairs = quads.remainder().chunks_exact(2);
+    let mut pairs = rest.chunks_exact(2);
     for pair in &mut pairs {
         let (a, b) = (pair[0] as usize, pair[1] as usize);
         let (la, lb) = (light_k::<V, Q>(&lights.rec[a], quad, a, spot), light_k::<V, Q>(&lights.rec[b], quad, b, spot));

@@ -1,12 +1,14 @@
 //! Sixteen-lane f32 vectors for the shading kernel, one type per instruction set, so the kernel is written once
-//! (generic over [`Lanes`]) and compiled three times:
+//! (generic over [`Lanes`]) and compiled for each (three times on x86-64, twice on aarch64):
 //!
 //! - [`Avx512`]: one `__m512`; `rsqrt` is `vrsqrt14ps` plus a Newton step, `log2` uses `vgetexpps`/`vgetmantps`,
 //!   `exp2` uses `vscalefps` — no divider, no square root unit in the light loop;
 //! - [`Avx2`]: two `__m256`; `rsqrt` and `recip` are `vrsqrtps`/`vrcpps` plus a Newton step, `log2` divides by a
 //!   refined reciprocal, `exp2` builds `2^i` in the exponent bits — no divider, no square root unit either;
+//! - `Neon` (aarch64 only, `simd/neon.rs`): four `float32x4_t`, the AVX2 scheme with NEON's estimates (`frsqrte`,
+//!   `frecpe` and Newton steps) and a `tbl` lookup for `log2`'s table;
 //! - [`Portable`]`<false>`: sixteen `f32`s in an array, lane loops the compiler vectorises for whatever the target
-//!   has (every CPU that is not x86-64 with AVX2, e.g. aarch64); `Portable<true>` is the same with fused
+//!   has (x86-64 without AVX2, and every other architecture); `Portable<true>` is the same with fused
 //!   multiply-adds.
 //!
 //! Accuracy (tests below, against f64): `rsqrt` within [`RSQRT_MAX_REL_ERROR`]; `log2` and `exp2` within the
@@ -29,6 +31,21 @@ pub const RSQRT_MAX_REL_ERROR: f32 = 4e-7;
 /// Relative error bound of [`Lanes::rsqrt_approx`] (`vrsqrt14ps`: 2⁻¹⁴).
 #[cfg_attr(not(test), allow(dead_code))] // the bound / scalar path the tests check against
 pub const RSQRT_APPROX_REL_ERROR: f32 = 1.0 / 16384.0;
+
+/// `2^f ≈ Σ cₖ fᵏ` on |f| ≤ ½ (minimax, relative error 7.5e-8 in exact arithmetic, with its constant term
+/// 1.0000001 rounded to 1 so that `2^0 = 1` exactly: 1.8e-7 — `exp2_nonpositive` must never exceed 1, and
+/// `exp2` of the −126 clamp must not exceed 2⁻¹²⁶).
+const EXP2_P: [f32; 6] = [1.0, 0.693_146_97, 0.240_221_2, 0.055_507_13, 0.009_675_542, 0.001_327_647_2];
+
+/// `1/c` (rounded to f32) for the 8 sub-intervals `[1 + i/8, 1 + (i+1)/8)` of [1, 2) that the AVX2 and NEON
+/// `log2` index by bits 22..20 of the mantissa; `c` is each sub-interval's centre. Checked against f64 by a test.
+const LOG2_INV_C8: [f32; 8] =
+    [0.941_176_5, 0.842_105_27, 0.761_904_8, 0.695_652_2, 0.64, 0.592_592_6, 0.551_724_14, 0.516_129];
+/// `−log2` of each [`LOG2_INV_C8`] entry, rounded to f32.
+const LOG2_T8: [f32; 8] =
+    [0.087_462_835, 0.247_927_5, 0.392_317_38, 0.523_561_95, 0.643_856_2, 0.754_887_46, 0.857_981, 0.954_196_33];
+/// `log2(1 + r)/r ≈ q0 + q1 r + q2 r² + q3 r³` on |r| ≤ 1/17 (Taylor terms).
+const LOG2_Q8: [f32; 4] = [std::f32::consts::LOG2_E, -0.721_347_5, 0.480_898_35, -0.360_673_76];
 
 /// A vector of [`LANES`] f32 lanes with the operations the shading kernel needs.
 pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> {
@@ -437,6 +454,11 @@ impl<V: Lanes> Lanes for Two<V> {
     }
 }
 
+#[cfg(target_arch = "aarch64")]
+mod neon;
+#[cfg(target_arch = "aarch64")]
+pub use neon::Neon;
+
 #[cfg(target_arch = "x86_64")]
 pub use avx512::Avx512;
 
@@ -444,7 +466,7 @@ pub use avx512::Avx512;
 mod avx512 {
     //! AVX-512F lanes. Every method is `#[inline(always)]` and only ever inlined into functions compiled with
     //! `avx512f` (the kernel's dispatch checks the CPU first), so the intrinsics inline into vector code.
-    use super::{Lanes, LANES};
+    use super::{Lanes, EXP2_P, LANES};
     use std::arch::x86_64::*;
     use std::ops::{Add, Mul, Sub};
 
@@ -465,10 +487,6 @@ mod avx512 {
     ];
     /// `log2(1 + r)/r ≈ q0 + q1 r + q2 r²` on |r| ≤ 1/64 (the Taylor terms: absolute error of `log2` ≤ 2.2e-8).
     pub(super) const LOG2_Q: [f32; 3] = [std::f32::consts::LOG2_E, -0.721_347_5, 0.480_898_35];
-    /// `2^f ≈ Σ cₖ fᵏ` on |f| ≤ ½ (minimax, relative error 7.5e-8 in exact arithmetic, with its constant term
-    /// 1.0000001 rounded to 1 so that `2^0 = 1` exactly: 1.8e-7 — `exp2_nonpositive` must never exceed 1, and
-    /// `exp2` of the −126 clamp must not exceed 2⁻¹²⁶).
-    pub(super) const EXP2_P: [f32; 6] = [1.0, 0.693_146_97, 0.240_221_2, 0.055_507_13, 0.009_675_542, 0.001_327_647_2];
 
     /// Sixteen lanes in one AVX-512 register.
     #[derive(Clone, Copy, Debug)]
@@ -660,19 +678,9 @@ mod avx2 {
     //! with a divider and a square root unit (exact `1/√x`, `log2`'s `(m − 1)/(m + 1)`) is done here with the
     //! hardware estimates (`vrsqrtps`, `vrcpps`, 2⁻¹² relative) and one Newton step, and `exp2` applies `2^i` by
     //! adding to the exponent bits, so the light loop never waits on the divider.
-    use super::{Lanes, LANES};
+    use super::{Lanes, EXP2_P, LANES, LOG2_INV_C8, LOG2_Q8, LOG2_T8};
     use std::arch::x86_64::*;
     use std::ops::{Add, Mul, Sub};
-
-    /// `1/c` (rounded to f32) for the 8 sub-intervals `[1 + i/8, 1 + (i+1)/8)` of [1, 2) that [`Avx2::log2`]
-    /// indexes by bits 22..20 of the mantissa; `c` is each sub-interval's centre. Checked against f64 by a test.
-    pub(super) const LOG2_INV_C8: [f32; 8] =
-        [0.941_176_5, 0.842_105_27, 0.761_904_8, 0.695_652_2, 0.64, 0.592_592_6, 0.551_724_14, 0.516_129];
-    /// `−log2` of each [`LOG2_INV_C8`] entry, rounded to f32.
-    pub(super) const LOG2_T8: [f32; 8] =
-        [0.087_462_835, 0.247_927_5, 0.392_317_38, 0.523_561_95, 0.643_856_2, 0.754_887_46, 0.857_981, 0.954_196_33];
-    /// `log2(1 + r)/r ≈ q0 + q1 r + q2 r² + q3 r³` on |r| ≤ 1/17 (Taylor terms).
-    pub(super) const LOG2_Q8: [f32; 4] = [std::f32::consts::LOG2_E, -0.721_347_5, 0.480_898_35, -0.360_673_76];
 
     /// Sixteen lanes in two AVX registers (lanes 0–7, 8–15).
     #[derive(Clone, Copy, Debug)]
@@ -747,7 +755,7 @@ mod avx2 {
         /// minimax polynomial of the AVX-512 path, `2^i` built in the exponent bits (normal for every clamped `i`).
         #[inline(always)]
         fn exp2_below(self, hi: f32) -> Self {
-            let [c0, c1, c2, c3, c4, c5] = super::avx512::EXP2_P;
+            let [c0, c1, c2, c3, c4, c5] = EXP2_P;
             both!(self, |x| {
                 let x = _mm256_min_ps(_mm256_max_ps(x, _mm256_set1_ps(-126.0)), _mm256_set1_ps(hi));
                 let i = _mm256_round_ps::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(x);
@@ -1005,20 +1013,16 @@ mod tests {
         assert!(out.iter().all(|&x| x == 0.0));
     }
 
-    #[cfg(target_arch = "x86_64")]
     #[test]
-    fn avx2_log2_tables_are_the_subinterval_centres() {
-        #[cfg(target_arch = "x86_64")]
-        {
-            use super::avx2::{LOG2_INV_C8, LOG2_T8};
-            for i in 0..8 {
-                let (lo, w) = (1.0 + i as f64 / 8.0, 1.0 / 8.0);
-                let inv = (1.0 / (lo + w / 2.0)) as f32;
-                assert_eq!(LOG2_INV_C8[i], inv, "1/c[{i}]");
-                assert_eq!(LOG2_T8[i], (-f64::from(inv).log2()) as f32, "T[{i}]");
-                for m in [lo, lo + w * 0.999_99] {
-                    assert_eq!(((m as f32).to_bits() >> 20) & 7, i as u32, "m = {m}");
-                }
+    fn log2_tables8_are_the_subinterval_centres() {
+        for i in 0..8 {
+            let (lo, w) = (1.0 + i as f64 / 8.0, 1.0 / 8.0);
+            let inv = (1.0 / (lo + w / 2.0)) as f32;
+            assert_eq!(LOG2_INV_C8[i], inv, "1/c[{i}]");
+            assert_eq!(LOG2_T8[i], (-f64::from(inv).log2()) as f32, "T[{i}]");
+            // The index the AVX2 and NEON paths compute (bits 22..20 of m) selects this sub-interval at both ends.
+            for m in [lo, lo + w * 0.999_99] {
+                assert_eq!(((m as f32).to_bits() >> 20) & 7, i as u32, "m = {m}");
             }
         }
     }
@@ -1060,6 +1064,13 @@ mod tests {
                 run();
             }
         }
+    }
+
+    #[cfg(target_arch = "aarch64")]
+    #[test]
+    fn neon_lanes_are_accurate() {
+        check::<Neon>();
+        check::<Two<Neon>>();
     }
 
     #[test]
