@@ -51,9 +51,10 @@ const LOG2_Q8: [f32; 4] = [std::f32::consts::LOG2_E, -0.721_347_5, 0.480_898_35,
 pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> {
     /// Number of lanes.
     const N: usize;
-    /// Lights the kernel shades per step: 4 for [`Avx512`] (their dependency chains interleave, see [`Two`]); 1 for
-    /// [`Portable`], whose four-light code is sixteen-lane arrays four times over and takes the compiler tens of
-    /// minutes at `opt-level = 1` (the AVX2 path measured 2.2 ns per pair with 4, 2.7 with 1).
+    /// Lights the kernel shades per step (1, 2 or 4): 4 for [`Avx512`] (their dependency chains interleave, see
+    /// [`Two`]); 1 for [`Portable`], whose four-light code is sixteen-lane arrays four times over and takes the
+    /// compiler tens of minutes at `opt-level = 1` (the AVX2 path measured 2.2 ns per pair with 4, 2.7 with 1), and
+    /// for `Neon`, whose four quarters already interleave (more lights spill more registers).
     const INTERLEAVE: usize = 1;
     /// Lane mask (the result of a comparison).
     type Mask: Copy;

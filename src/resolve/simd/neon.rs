@@ -10,8 +10,8 @@ use std::arch::aarch64::*;
 use std::ops::{Add, Mul, Sub};
 
 // SAFETY (every `unsafe` block in this module): the intrinsics need NEON, which every aarch64 target has (Rust
-// still counts a call as unsafe outside a `#[target_feature(enable = "neon")]` function). Loads and stores check
-// the slice length first.
+// still counts a call as unsafe outside a function that enables the feature by attribute). Loads and stores
+// check the slice length first.
 
 /// Sixteen lanes in four NEON registers (lanes 0–3, 4–7, 8–11, 12–15).
 #[derive(Clone, Copy, Debug)]
@@ -94,7 +94,10 @@ impl Mul for Neon {
 
 impl Lanes for Neon {
     const N: usize = LANES;
-    const INTERLEAVE: usize = 4;
+    /// One light per step: the four quarters are already four independent dependency chains, and the sixteen
+    /// lanes of every per-sample constant take four of the 32 registers, so two or four lights per step spill more
+    /// than they gain (docs/RESOLVE.md: instruction counts and llvm-mca estimates of the light loop).
+    const INTERLEAVE: usize = 1;
     type Mask = [uint32x4_t; 4];
     #[inline(always)]
     fn splat(x: f32) -> Self {
