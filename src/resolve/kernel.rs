@@ -500,12 +500,11 @@ fn lobe<V: Lanes>(f0: V, cd: V, m5: V, dv: V) -> V {
 /// Shades one vector of `V::N` items against every light. First the lights that can reach the vector at all
 /// are listed (16 lights at a time against the vector's bounding box; a light whose sphere misses it adds exactly
 /// 0 to every lane, and its pair still counts as tested: tile culling passed it — quad culling counts its own
-/// tests, so it keeps every light); then the listed lights are shaded [`Lanes::INTERLEAVE`] at a time — four for
-/// the x86 vectors (`Two<Two<V>>`: four independent dependency chains interleaved — one light's chain of rsqrt,
-/// log2, exp2 is far longer than its throughput cost, so one light at a time left the vector units mostly idle),
-/// the rest two or one at a time —, with
-/// per-sample constants and accumulators in registers. Each light's contribution is added in light order, so
-/// the sums do not depend on which lights were listed.
+/// tests, so it keeps every light); then the listed lights are shaded [`Lanes::INTERLEAVE`] at a time (four for
+/// the x86 vectors, `Two<Two<V>>`: four independent dependency chains interleaved — one light's chain of rsqrt,
+/// log2, exp2 is far longer than its throughput cost, so one light at a time left the vector units mostly idle;
+/// the rest two or one at a time), with per-sample constants and accumulators in registers. Each light's
+/// contribution is added in light order, so the sums do not depend on which lights were listed.
 #[inline(always)]
 fn run_chunk<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
     it: &mut Items,
