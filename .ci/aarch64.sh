@@ -4,9 +4,9 @@
 # threads, on an x86-64 machine. Installs what it needs on a fresh Debian machine (the rustup target, Debian's
 # qemu-user and gcc-aarch64-linux-gnu); fails, never skips, when it cannot build or run them.
 #
-#   ci/aarch64.sh            the CI subset of the tests (see TESTS below)
-#   ci/aarch64.sh --clippy   clippy for aarch64 first
-#   ci/aarch64.sh --all      every test target (slower; tests that spawn the aarch64 `gbuf` binary need
+#   .ci/aarch64.sh            the CI subset of the tests (see TESTS below)
+#   .ci/aarch64.sh --clippy   clippy for aarch64 first
+#   .ci/aarch64.sh --all      every test target (slower; tests that spawn the aarch64 `gbuf` binary need
 #                            binfmt_misc to run it, which a container may not have)
 #
 # The linker and the runner are set here through cargo's environment variables rather than in .cargo/config.toml:
@@ -40,7 +40,7 @@ export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L $SYSROOT"
 
 # Warnings are errors in the aarch64 build: code behind cfg(target_arch) gates is only seen when built for it (an
 # unused import there passes the x86 clippy). RUSTFLAGS for the target only: the host's build scripts and proc
-# macros stay shared with the x86 build. `ci/aarch64.sh --clippy` adds clippy for aarch64 (4–5 more minutes cold).
+# macros stay shared with the x86 build. `.ci/aarch64.sh --clippy` adds clippy for aarch64 (4–5 more minutes cold).
 export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUSTFLAGS="-D warnings"
 if [ "${1:-}" = "--clippy" ]; then
   cargo clippy --target "$TARGET" --all-targets -- -D warnings
