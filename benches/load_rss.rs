@@ -15,25 +15,11 @@
 //! `GBUF_BENCH_SIZE=960x540x4 cargo bench --bench load_rss`. Linux and macOS only (getrusage); elsewhere it says so.
 //! The process exits non-zero when the ratio is over the target, so a regression is seen, not read past.
 
-use gbuf::gbuffer::{GBuffer, PlaneRef};
 use gbuf::scene::{render, SceneName};
 use std::process::{Command, Stdio};
 
 /// The target: peak load memory at most this many times the G-buffer, beyond the baseline process.
 const TARGET_RATIO: f64 = 1.5;
-
-fn gbuffer_bytes(gb: &GBuffer) -> usize {
-    gb.attributes()
-        .into_iter()
-        .map(|a| match gb.plane(a).expect("listed attribute") {
-            PlaneRef::F32(v) => 4 * v.len(),
-            PlaneRef::U32(v) => 4 * v.len(),
-            PlaneRef::Vec2(v) => 8 * v.len(),
-            PlaneRef::Vec3(v) => 12 * v.len(),
-        })
-        .sum::<usize>()
-        + gb.coverage.len()
-}
 
 /// Runs `gbuf ARGS…` as a child (output discarded) and returns its own peak RSS in bytes; panics if it fails.
 #[cfg(unix)]
@@ -75,7 +61,7 @@ fn main() {
     let (small, large) = (dir.path().join("small.exr"), dir.path().join("large.exr"));
     let tiny = render(SceneName::Room, 16, 16, 1).expect("render");
     gbuf::io::canonical::write(&small, &tiny).expect("write small");
-    let per_sample = gbuffer_bytes(&tiny) / tiny.len();
+    let per_sample = tiny.plane_bytes() / tiny.len();
     let bytes = per_sample * (w as usize * h as usize * s as usize);
     drop(tiny);
     let os = |v: &str| std::ffi::OsString::from(v);

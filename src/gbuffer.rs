@@ -318,6 +318,24 @@ impl GBuffer {
         self.sample_px(x as u32, y as u32, (i % s) as u32)
     }
 
+    /// Bytes of the sample data held: every attribute plane (4 bytes per f32 or ID component) plus one byte of
+    /// coverage per sample (what loading a dump must hold at the end, the yardstick of its peak memory).
+    #[must_use]
+    pub fn plane_bytes(&self) -> usize {
+        let planes: usize = self
+            .attributes()
+            .into_iter()
+            .filter_map(|a| self.plane(a))
+            .map(|p| match p {
+                PlaneRef::F32(v) => 4 * v.len(),
+                PlaneRef::U32(v) => 4 * v.len(),
+                PlaneRef::Vec2(v) => 8 * v.len(),
+                PlaneRef::Vec3(v) => 12 * v.len(),
+            })
+            .sum();
+        planes + self.coverage.len()
+    }
+
     /// Number of background (uncovered) samples.
     #[must_use]
     pub fn background_samples(&self) -> usize {

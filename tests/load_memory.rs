@@ -6,7 +6,6 @@
 
 mod support;
 
-use gbuf::gbuffer::{GBuffer, PlaneRef};
 use gbuf::io::{load_bytes, LoadOptions, ReadLimits};
 use std::path::Path;
 use std::sync::Mutex;
@@ -126,20 +125,6 @@ fn a_part_declaring_more_than_its_chunks_can_decode_to_is_refused() {
     assert_eq!((raw.width, raw.height), (64, 64));
 }
 
-/// Bytes of every plane of a G-buffer (what loading it must end up holding).
-fn gbuffer_bytes(gb: &GBuffer) -> usize {
-    gb.attributes()
-        .into_iter()
-        .map(|a| match gb.plane(a).unwrap() {
-            PlaneRef::F32(v) => 4 * v.len(),
-            PlaneRef::U32(v) => 4 * v.len(),
-            PlaneRef::Vec2(v) => 8 * v.len(),
-            PlaneRef::Vec3(v) => 12 * v.len(),
-        })
-        .sum::<usize>()
-        + gb.coverage.len()
-}
-
 /// Loading may hold this much beyond the G-buffer's 1.5×: thread pools, the header, per-chunk buffers.
 const LOAD_CONSTANT: usize = 16 << 20;
 
@@ -152,7 +137,7 @@ fn loading_a_valid_dump_peaks_under_one_and_a_half_times_its_gbuffer() {
     let bytes = support::canonical_bytes(&gb);
     drop(gb);
     let (loaded, peak) = peak_of(|| load_bytes(&bytes, Path::new("big4x.exr"), &LoadOptions::default()).unwrap());
-    let size = gbuffer_bytes(&loaded.gbuffer);
+    let size = loaded.gbuffer.plane_bytes();
     let bound = size * 3 / 2 + LOAD_CONSTANT;
     eprintln!("G-buffer {size} bytes, load peak {peak} bytes ({:.2}×)", peak as f64 / size as f64);
     assert!(size > 30 << 20, "{size}");

@@ -45,9 +45,10 @@ pub fn normal_is_valid(n: glam::Vec3) -> bool {
 /// `positions_assumed` that the sample positions were not in the file.
 pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Path) -> Result<Vec<Warning>> {
     let mut out = Vec::new();
-    // Every count below is over the covered samples, in parallel (counts do not depend on the order).
-    let covered: Vec<usize> = (0..gb.len()).into_par_iter().filter(|&i| gb.coverage[i]).collect();
-    let nc = covered.len() as u64;
+    // Every count below is over the covered samples, in parallel (counts do not depend on the order), without a
+    // list of their indices (8 bytes per sample: 66 MB on a 1080p × 4 dump, on top of the G-buffer).
+    let covered = || (0..gb.len()).into_par_iter().filter(|&i| gb.coverage[i]);
+    let nc = covered().count() as u64;
     let pct = |k: u64| 100.0 * k as f64 / nc.max(1) as f64;
     if nc == 0 {
         out.push(Warning {
@@ -60,9 +61,8 @@ pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Pat
         return Ok(out);
     }
     if let Some(n) = &gb.normal {
-        let (zero, bad) = covered
-            .par_iter()
-            .map(|&i| (u64::from(n[i].length() < ZERO_NORMAL), u64::from(!normal_is_valid(n[i]))))
+        let (zero, bad) = covered()
+            .map(|i| (u64::from(n[i].length() < ZERO_NORMAL), u64::from(!normal_is_valid(n[i]))))
             .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
         if bad > 0 {
             out.push(Warning {
@@ -83,10 +83,9 @@ pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Pat
             });
         }
         // Facing: against the view direction when positions are known, else +z.
-        let away = covered
-            .par_iter()
-            .filter(|&&i| normal_is_valid(n[i]))
-            .filter(|&&i| match &gb.position {
+        let away = covered()
+            .filter(|&i| normal_is_valid(n[i]))
+            .filter(|&i| match &gb.position {
                 Some(p) => n[i].dot(-p[i]) < 0.0,
                 None => n[i].z < 0.0,
             })
@@ -105,7 +104,7 @@ pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Pat
         }
     }
     if let Some(p) = &gb.position {
-        let behind = covered.par_iter().filter(|&&i| p[i].z >= 0.0).count() as u64;
+        let behind = covered().filter(|&i| p[i].z >= 0.0).count() as u64;
         if behind > 0 {
             let msg = format!(
                 "{behind} of {nc} covered positions ({:.1}%) are behind the camera (z ≥ 0 in view space): \
@@ -118,11 +117,8 @@ pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Pat
             out.push(Warning { code: "behind-camera", count: behind, of: nc, message: msg });
         }
         if let (Some(d), true) = (&gb.depth, depth_read) {
-            let off: Vec<usize> = covered
-                .par_iter()
-                .copied()
-                .filter(|&i| (-p[i].z - d[i]).abs() > POSITION_DEPTH_REL * d[i].abs().max(1e-3))
-                .collect();
+            let off: Vec<usize> =
+                covered().filter(|&i| (-p[i].z - d[i]).abs() > POSITION_DEPTH_REL * d[i].abs().max(1e-3)).collect();
             if !off.is_empty() {
                 let mut ratios: Vec<f32> = off.iter().map(|&i| d[i] / -p[i].z).filter(|r| r.is_finite()).collect();
                 ratios.sort_by(f32::total_cmp);
@@ -162,7 +158,7 @@ pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Pat
         }
     }
     if let (Some(d), Some(cam)) = (&gb.depth, &gb.camera) {
-        let below = covered.par_iter().filter(|&&i| d[i] < cam.znear * 0.999).count() as u64;
+        let below = covered().filter(|&i| d[i] < cam.znear * 0.999).count() as u64;
         if below * 2 > nc {
             out.push(Warning {
                 code: "depth-convention",
