@@ -155,8 +155,10 @@ fn sanitize(c: Vec3) -> Vec3 {
     Vec3::new(f(c.x), f(c.y), f(c.z))
 }
 
-/// Display-encoded luma in [0, 1): Rec. 709 luma of the per-channel Reinhard `x / (1 + x)`, then `sqrt`.
-fn display_luma(c: Vec3) -> f32 {
+/// Display-encoded luma in [0, 1): Rec. 709 luma of the per-channel Reinhard `x / (1 + x)`, then `sqrt` (what
+/// MLAA's edge test compares; also where the report's anti-aliasing crop looks for the largest error).
+#[must_use]
+pub fn display_luma(c: Vec3) -> f32 {
     let x = c.max(Vec3::ZERO);
     let r = x / (Vec3::ONE + x);
     Vec3::new(0.2126, 0.7152, 0.0722).dot(r).sqrt()

@@ -7,7 +7,9 @@ use crate::analysis::pipelines::{Pipeline, Pipelines};
 use crate::base::mask::EdgeMask;
 use crate::base::picture::write_heatmap_png;
 use crate::error::{Error, Result};
-use crate::image::{HdrImage, ToneMap};
+use crate::image::mlaa::display_luma;
+use crate::image::HdrImage;
+use crate::report::figures::image_picture;
 use crate::report::markdown::fmt_opt;
 use crate::report::plot::Panels;
 use image::RgbImage;
@@ -211,19 +213,9 @@ pub const AA_CROP: (u32, u32) = (64, 40);
 /// Each crop pixel is drawn as a square of this many picture pixels (nearest neighbour, so aliasing stays visible).
 pub const AA_CROP_ZOOM: u32 = 4;
 
-/// Display-encoded luma (Reinhard per channel, Rec. 709 weights) of a linear colour, 0 for non-finite.
-fn display_luma(c: glam::Vec3) -> f32 {
-    let x = c.max(glam::Vec3::ZERO);
-    let v = glam::Vec3::new(0.2126, 0.7152, 0.0722).dot(x / (glam::Vec3::ONE + x));
-    if v.is_finite() {
-        v
-    } else {
-        0.0
-    }
-}
-
 /// The crop `(x, y, width, height)` of at most [`AA_CROP`] pixels where `image` differs most from `reference` (sum of
-/// the display-encoded luma differences; the first such window in reading order). Images of another size than the
+/// the differences of MLAA's display-encoded luma, [`display_luma`], non-finite as 0; the first such window in
+/// reading order). Images of another size than the
 /// reference give the top-left corner.
 #[must_use]
 pub fn aa_crop(image: &HdrImage, reference: &HdrImage) -> (u32, u32, u32, u32) {
@@ -239,7 +231,8 @@ pub fn aa_crop(image: &HdrImage, reference: &HdrImage) -> (u32, u32, u32, u32) {
         let mut row = 0.0;
         for x in 0..w as usize {
             let p = y * w as usize + x;
-            row += f64::from((display_luma(image.rgb[p]) - display_luma(reference.rgb[p])).abs());
+            let d = (display_luma(image.rgb[p]) - display_luma(reference.rgb[p])).abs();
+            row += if d.is_finite() { f64::from(d) } else { 0.0 };
             sat[(y + 1) * w1 + x + 1] = sat[y * w1 + x + 1] + row;
         }
     }
@@ -256,19 +249,15 @@ pub fn aa_crop(image: &HdrImage, reference: &HdrImage) -> (u32, u32, u32, u32) {
     (best.0, best.1, cw, ch)
 }
 
-/// The crop `(x, y, w, h)` of `img`, tone-mapped (Reinhard, sRGB) and magnified `zoom` times (nearest neighbour).
+/// The crop `(x, y, w, h)` of `img`, as the report shows images ([`image_picture`]: Reinhard, sRGB) and magnified
+/// `zoom` times (nearest neighbour).
 fn crop_picture(img: &HdrImage, (x0, y0, cw, ch): (u32, u32, u32, u32), zoom: u32) -> RgbImage {
     let mut crop = HdrImage::new(cw, ch);
     for y in 0..ch {
-        for x in 0..cw {
-            crop.rgb[(y * cw + x) as usize] = img.rgb[((y0 + y) * img.width + x0 + x) as usize];
-        }
+        let row = ((y0 + y) * img.width + x0) as usize;
+        crop.rgb[(y * cw) as usize..((y + 1) * cw) as usize].copy_from_slice(&img.rgb[row..row + cw as usize]);
     }
-    let bytes = crop.to_srgb8(ToneMap::default());
-    RgbImage::from_fn(cw * zoom, ch * zoom, |x, y| {
-        let i = 3 * ((y / zoom) * cw + x / zoom) as usize;
-        image::Rgb([bytes[i], bytes[i + 1], bytes[i + 2]])
-    })
+    image::imageops::resize(&image_picture(&crop), cw * zoom, ch * zoom, image::imageops::FilterType::Nearest)
 }
 
 /// The anti-aliasing picture: the same crop ([`aa_crop`] of the no-AA image) of the every-sample reference and of
