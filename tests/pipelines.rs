@@ -43,10 +43,18 @@ fn forward_msaa_quads_equal_the_rasterizers_count() {
 }
 
 /// The done-when: MLAA on the 1-sample render (pixel centres) beats that render without AA, against the
-/// every-sample reference, in RMSE and in both FLIPs, on both fixtures that have a 1-sample companion.
+/// every-sample reference, in RMSE and in both FLIPs, on every fixture that has a 1-sample companion: the
+/// rasterizer's and the room's 4× MSAA (rotated grid), Blender's 2×2 and Mitsuba's 4×4 ordered grids. (Mitsuba's
+/// 2×2 fold is left out on purpose: a 2×2 ordered grid is itself aliased on 45° edges, and judged against it no AA
+/// wins in FLIP while it loses against the 4×4 reference of the same scene; docs/GUIDE.md.)
 #[test]
 fn mlaa_beats_no_aa_on_the_fixtures_rendered_at_pixel_centres() {
-    for (msaa, single) in [("raster_4x.exr", "raster_1x.exr"), ("room_4x.exr", "room_1x.exr")] {
+    for (msaa, single) in [
+        ("raster_4x.exr", "raster_1x.exr"),
+        ("room_4x.exr", "room_1x.exr"),
+        ("blender_gbuffer.exr", "blender_1x.exr"),
+        ("mitsuba_16x.exr", "mitsuba_1x.exr"),
+    ] {
         let o = gbuf()
             .args(["pipelines", "--flip", "--json", "--single"])
             .arg(fixture(single))
@@ -65,8 +73,12 @@ fn mlaa_beats_no_aa_on_the_fixtures_rendered_at_pixel_centres() {
             assert!(b < a, "{msaa}: MLAA's {metric} {b} is not below no-AA's {a}");
         }
         // The forward row stands on the 1-sample render too: exact, not an estimate.
-        let fwd = j["rows"].as_array().unwrap().iter().find(|r| r["pipeline"] == "forward").unwrap();
-        assert_eq!(fwd["estimated"], false, "{msaa}: {fwd}");
+        // (Blender's dump has no primitive IDs: no forward row.)
+        if let Some(fwd) = j["rows"].as_array().unwrap().iter().find(|r| r["pipeline"] == "forward") {
+            assert_eq!(fwd["estimated"], false, "{msaa}: {fwd}");
+        } else {
+            assert!(msaa.starts_with("blender"), "{msaa}: no forward row");
+        }
     }
 }
 
@@ -126,7 +138,9 @@ fn pipelines_runs_on_every_fixture() {
         ("room_4x.exr", true),
         ("room_1x.exr", true),
         ("blender_gbuffer.exr", false),
+        ("blender_1x.exr", false),
         ("mitsuba_gbuffer.exr", true),
+        ("mitsuba_16x.exr", true),
         ("mitsuba_1x.exr", true),
         ("ispc_deferred.bin", false),
         ("luxcore", false),

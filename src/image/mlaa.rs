@@ -19,7 +19,11 @@
 //!    from the midpoint of its crossing edge (half a pixel off the separation line) to the separation line at the
 //!    run's middle, capped at [`MlaaConfig::max_search`] pixels from the end. For each pixel under that line the area
 //!    of the trapezoid between the line and the separation line is its blend weight toward the neighbour across the
-//!    line; only pixels on the crossing edge's side are blended. Each weight is below 1/2.
+//!    line; only pixels on the crossing edge's side are blended. Each weight is below 1/2. A shape end whose crossing
+//!    edge goes on past the pixel beside the separation line is an object's corner, not the step of an aliased line
+//!    (whose crossing edges are one pixel long); its areas are scaled by [`MlaaConfig::corner_rounding`], as SMAA
+//!    does (Jimenez et al., "SMAA: Enhanced Subpixel Morphological Antialiasing", 2012), so a box's silhouette is not
+//!    rounded off along half its edge.
 //! 6. **Blend**, in linear RGB: both passes compute weights from the original image; every pixel then gets
 //!    `Σ_k (a_k / Σa) · ((1 − a_k)·c + a_k·n_k)` over its four neighbours `n_k` with weights `a_k` (Jimenez et al.'s
 //!    weighted average of the per-edge blends). Unlike a plain sum this does not count twice the corner where a
@@ -53,11 +57,18 @@ pub struct MlaaConfig {
     /// at pixel centres (320×180, against its 16-sample reference) linear blending lowers mean LDR-FLIP from 0.0348
     /// to 0.0313, display blending raises it to 0.0359.
     pub display_blend: bool,
+    /// Share of the blend kept at a shape end whose crossing edge goes on beyond the pixel next to the separation
+    /// line (SMAA's corner rounding, Jimenez et al. 2012).
+    ///
+    /// On an aliased line every step's crossing edge is one pixel long; one that continues is the corner of an
+    /// object (a box's silhouette meeting the floor), which MLAA would otherwise round off with a ramp reaching up
+    /// to `max_search` pixels along the edge. 1 is Reshetov's MLAA, 0 keeps corners sharp. Default 0.25, SMAA's.
+    pub corner_rounding: f32,
 }
 
 impl Default for MlaaConfig {
     fn default() -> Self {
-        Self { threshold: 0.1, max_search: 32, display_blend: false }
+        Self { threshold: 0.1, max_search: 32, display_blend: false, corner_rounding: 0.25 }
     }
 }
 
@@ -198,16 +209,24 @@ fn scan(luma: &[f32], weights: &mut [[f32; 4]], ax: &Axis, cfg: &MlaaConfig) -> 
     for k in 0..ax.lines.saturating_sub(1) {
         let near = k * ax.line_stride;
         let far = near + ax.line_stride;
-        // The crossing edge between positions i - 1 and i, if it is on exactly one side.
-        let crossing = |i: usize| -> Option<Side> {
+        // The crossing edge between positions i - 1 and i, if it is on exactly one side, and the share of the blend
+        // its end keeps: `corner_rounding` when the crossing edge continues one line further from the separation
+        // line (a corner), else 1 (a step of an aliased line).
+        let crossing = |i: usize| -> Option<(Side, f32)> {
             if i == 0 || i == ax.len {
                 return None;
             }
-            match (edge(px(near, i - 1), px(near, i)), edge(px(far, i - 1), px(far, i))) {
-                (true, false) => Some(Side::Near),
-                (false, true) => Some(Side::Far),
-                _ => None,
-            }
+            let side = match (edge(px(near, i - 1), px(near, i)), edge(px(far, i - 1), px(far, i))) {
+                (true, false) => Side::Near,
+                (false, true) => Side::Far,
+                _ => return None,
+            };
+            let beyond = match side {
+                Side::Near => k.checked_sub(1).map(|b| b * ax.line_stride),
+                Side::Far => (k + 2 < ax.lines).then(|| far + ax.line_stride),
+            };
+            let corner = beyond.is_some_and(|b| edge(px(b, i - 1), px(b, i)));
+            Some((side, if corner { cfg.corner_rounding } else { 1.0 }))
         };
         let mut start = None;
         for i in 0..=ax.len {
@@ -222,7 +241,7 @@ fn scan(luma: &[f32], weights: &mut [[f32; 4]], ax: &Axis, cfg: &MlaaConfig) -> 
                     match (left, right) {
                         (None, None) => continue,
                         (Some(_), None) | (None, Some(_)) => counts.l += 1,
-                        (Some(s), Some(t)) if s == t => counts.u += 1,
+                        (Some((s, _)), Some((t, _))) if s == t => counts.u += 1,
                         (Some(_), Some(_)) => counts.z += 1,
                     }
                     let half = (run as f32 * 0.5).min(cfg.max_search as f32);
@@ -242,12 +261,15 @@ fn add_end(
     weights: &mut [[f32; 4]],
     ax: &Axis,
     lines: [usize; 2],
-    side: Option<Side>,
+    end: Option<(Side, f32)>,
     first: usize,
     forward: bool,
     half: f32,
 ) {
-    let Some(side) = side else { return };
+    let Some((side, keep)) = end else { return };
+    if keep <= 0.0 {
+        return;
+    }
     let (line0, slot) = match side {
         Side::Near => (lines[0], ax.slots[0]),
         Side::Far => (lines[1], ax.slots[1]),
@@ -256,7 +278,7 @@ fn add_end(
         let t0 = j as f32;
         let t1 = (t0 + 1.0).min(half);
         // ∫ 0.5·(1 − t/half) dt over [t0, t1].
-        let area = 0.5 * (t1 - t0) * (1.0 - (t0 + t1) / (2.0 * half));
+        let area = keep * 0.5 * (t1 - t0) * (1.0 - (t0 + t1) / (2.0 * half));
         let pos = if forward { first + j } else { first - j };
         weights[line0 + pos * ax.pos_stride][slot] += area;
     }
@@ -362,6 +384,29 @@ mod tests {
             assert_eq!((edges, other), (u64::from(if vertical { h } else { w }), 0));
             assert_eq!(stats.shapes_l + stats.shapes_z + stats.shapes_u + stats.blended_pixels, 0, "{stats:?}");
         }
+    }
+
+    /// An axis-aligned rectangle's edges are exact: every blend at its corners is error. Corner rounding scales
+    /// them (0 leaves the image as it is), while an aliased line's steps keep their full blend.
+    #[test]
+    fn corners_are_kept_sharp_by_corner_rounding() {
+        let (w, h) = (24, 20);
+        let img: Vec<Vec3> = (0..w * h)
+            .map(|p| if (5..17).contains(&(p % w)) && (4..13).contains(&(p / w)) { Vec3::ONE } else { Vec3::ZERO })
+            .collect();
+        let with = |r: f32| mlaa(&img, w as u32, h as u32, &MlaaConfig { corner_rounding: r, ..MlaaConfig::default() });
+        let (sharp, stats) = with(0.0);
+        assert_eq!(sharp, img, "corner rounding 0 keeps the rectangle");
+        assert!(stats.shapes_u >= 4, "{stats:?}");
+        let err = |r: f32| rmse(&with(r).0, &img);
+        let (mlaa_err, smaa_err) = (err(1.0), err(MlaaConfig::default().corner_rounding));
+        assert!(mlaa_err > 0.0 && smaa_err > 0.0 && smaa_err < 0.3 * mlaa_err, "{smaa_err} vs {mlaa_err}");
+        // A shallow line's steps are not corners: they keep their blend with corners kept fully sharp.
+        let planes = [[-0.2, 1.0, 9.3]];
+        let (exact, line) = (coverage(64, 24, &planes), aliased(64, 24, &planes));
+        let sharp = mlaa(&line, 64, 24, &MlaaConfig { corner_rounding: 0.0, ..MlaaConfig::default() }).0;
+        let r = rmse(&sharp, &exact) / rmse(&line, &exact);
+        assert!(r < 0.6, "shallow line with corner rounding 0: rmse ratio {r:.3}");
     }
 
     #[test]
@@ -471,7 +516,7 @@ mod tests {
             }
         }
         let (out, _) =
-            mlaa(&[Vec3::ONE; 4], 2, 2, &MlaaConfig { threshold: -1.0, max_search: 0, display_blend: false });
+            mlaa(&[Vec3::ONE; 4], 2, 2, &MlaaConfig { threshold: -1.0, max_search: 0, ..MlaaConfig::default() });
         assert_eq!(out, vec![Vec3::ONE; 4]);
     }
 
