@@ -129,7 +129,61 @@ fn bench(c: &mut Criterion, gb: &GBuffer) {
     group.finish();
 }
 
+/// The material table on a 640×360×4 dump (issue 14's target: ≤ 100 ms whatever the tuple count), beside a
+/// memcpy of its parameter planes: keyed by the engine's 40 material IDs, and as a palette when every covered
+/// sample's (specular, power, roughness, metallic) tuple is distinct and there are no IDs (the worst case: clustered
+/// into 256 entries).
+fn material_table() {
+    use gbuf::gbuffer::Attribute;
+    use gbuf::layout::material::MaterialTable;
+    let (w, h, s) = (640, 360, 4);
+    let mut rng = SplitMix64::new(7);
+    let mut gb = GBuffer::new(w, h, s).unwrap();
+    let n = gb.len();
+    gb.coverage = (0..n).map(|_| rng.next_f32() > 0.05).collect();
+    let mats: Vec<u32> = (0..n).map(|_| (rng.next_u64() % 40) as u32).collect();
+    let wanted = [Attribute::Specular, Attribute::SpecularPower, Attribute::Roughness, Attribute::Metallic];
+    let bytes = 4 * wanted.len() * n;
+    let src = vec![0x5au8; bytes];
+    let mut dst = vec![0u8; bytes];
+    let copy = best_time(REPS, || par_copy(&mut dst, black_box(&src)));
+    println!("\nmaterial table, {w}×{h}×{s}, 256 entries; ms (ratio to a memcpy of the 4 parameter planes, {:.2} ms)", copy * 1e3);
+    for distinct in [false, true] {
+        if distinct {
+            gb.specular = Some((0..n).map(|_| rng.next_f32() * 0.2).collect());
+            gb.specular_power = Some((0..n).map(|_| rng.range_f32(1.0, 512.0)).collect());
+            gb.roughness = Some((0..n).map(|_| rng.next_f32()).collect());
+            gb.metallic = Some((0..n).map(|_| rng.next_f32()).collect());
+            gb.material_id = None;
+        } else {
+            gb.specular = Some(mats.iter().map(|m| 0.02 * (*m % 10) as f32).collect());
+            gb.specular_power = Some(mats.iter().map(|m| 4.0 * (1 + m) as f32).collect());
+            gb.roughness = Some(mats.iter().map(|m| (*m % 20) as f32 / 19.0).collect());
+            gb.metallic = Some(mats.iter().map(|m| (*m % 2) as f32).collect());
+            gb.material_id = Some(mats.clone());
+        }
+        let key = gbuf::layout::spec::MaterialKey::MaterialId;
+        let mut table = None;
+        let t = best_time(3, || table = Some(MaterialTable::build_keyed(black_box(&gb), &wanted, 8, key)));
+        let table = table.expect("built").0;
+        println!(
+            "  {:<40} {:>8.1} ms ({:>5.1}×)  {} distinct tuples, key {}, mean |error| {:?}  target ≤ 100 ms: {}",
+            if distinct { "palette, every tuple distinct, no IDs" } else { "40 material IDs" },
+            t * 1e3,
+            t / copy,
+            table.distinct_tuples,
+            table.key,
+            table.mean_abs_error,
+            if t <= 0.1 { "met" } else { "NOT met" }
+        );
+    }
+}
+
 fn main() {
+    material_table();
+    if std::env::var_os("GBUF_BENCH_MATERIAL_ONLY").is_some() {
+        return;
+    }
     let gb = gbuffer();
     ratio_table(&gb);
     let mut c = Criterion::default().configure_from_args();
