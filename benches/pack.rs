@@ -147,7 +147,10 @@ fn material_table() {
     let src = vec![0x5au8; bytes];
     let mut dst = vec![0u8; bytes];
     let copy = best_time(REPS, || par_copy(&mut dst, black_box(&src)));
-    println!("\nmaterial table, {w}×{h}×{s}, 256 entries; ms (ratio to a memcpy of the 4 parameter planes, {:.2} ms)", copy * 1e3);
+    println!(
+        "\nmaterial table, {w}×{h}×{s}, 256 entries; ms (ratio to a memcpy of the 4 parameter planes, {:.2} ms)",
+        copy * 1e3
+    );
     for distinct in [false, true] {
         if distinct {
             gb.specular = Some((0..n).map(|_| rng.next_f32() * 0.2).collect());

@@ -243,3 +243,44 @@ fn the_visibility_buffer_rematerialises_the_room_exactly_and_refuses_another_fra
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(e.contains("raster_4x.exr") && e.contains("does not look like the room scene"), "{e}");
 }
+
+/// The visibility buffer is a layout like any other (`visibility-8`: D32F + R32UI with a 24-bit triangle and an
+/// 8-bit instance ID): packed on the rasterizer's frame it keeps every ID and depth exactly, its bytes set the row's
+/// footprint, and a triangle ID beyond 24 bits or a layout without IDs is reported, not hidden.
+#[test]
+fn the_visibility_layout_packs_the_ids_and_sets_the_rows_bytes() {
+    use gbuf::analysis::pipelines::visibility_packing;
+    use gbuf::layout::Layout;
+    let mut gb = gbuf::io::load(&fixture("raster_4x.exr"), &LoadOptions::default()).unwrap().gbuffer;
+    let vis = Layout::by_name("visibility-8").unwrap();
+    assert_eq!(vis.bytes_per_sample(), 8);
+    assert!(!Layout::builtins().iter().any(|l| l.name() == "visibility-8"), "not among the lit layouts");
+    let v = visibility_packing(&gb, &vis).unwrap();
+    assert_eq!((v.primitive_id_mismatches, v.object_id_mismatches, v.depth_max_rel_error), (0, 0, 0.0), "{v:?}");
+    assert!(v.missing.is_empty());
+    let first = (0..gb.len()).find(|&i| gb.coverage[i]).unwrap();
+    gb.primitive_id.as_mut().unwrap()[first] = 1 << 24;
+    assert_eq!(visibility_packing(&gb, &vis).unwrap().primitive_id_mismatches, 1);
+    let fat = visibility_packing(&gb, &Layout::by_name("fat-20").unwrap()).unwrap();
+    assert_eq!(fat.missing, ["primitive_id", "object_id"]);
+
+    let run = |layout: &str| -> serde_json::Value {
+        let o = gbuf()
+            .args(["pipelines", "--json", "--visibility-layout", layout])
+            .arg(fixture("raster_4x.exr"))
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let footprint = |j: &serde_json::Value| {
+        j["rows"].as_array().unwrap().iter().find(|r| r["pipeline"] == "visibility-buffer").unwrap()["footprint_mb"]
+            .as_f64()
+            .unwrap()
+    };
+    let (a, b) = (run("visibility-8"), run("reference-f32"));
+    assert_eq!(a["visibility_packing"]["primitive_id_mismatches"], 0);
+    // 76 more bytes per sample over 320×180×4 samples.
+    let grown = footprint(&b) - footprint(&a);
+    assert!((grown - 76.0 * 320.0 * 180.0 * 4.0 / 1e6).abs() < 0.01, "{grown}");
+}

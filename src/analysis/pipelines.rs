@@ -19,6 +19,7 @@ use crate::error::{Error, Result};
 use crate::gbuffer::GBuffer;
 use crate::image::mlaa::{mlaa, MlaaConfig, MlaaStats};
 use crate::image::HdrImage;
+use crate::layout::Layout;
 use crate::light::Light;
 use crate::measure::image::{error_set, ErrorSet, Viewing};
 use crate::resolve::{self, Culling, MsaaSchedule, ResolveConfig, Schedule};
@@ -64,7 +65,7 @@ impl Pipeline {
             Pipeline::DeferredQuad => "B·C write + L·(B + 16) reads and RGBA16F read-modify-writes",
             Pipeline::TiledDeferred => "B·C write + B·C read + 8·P output",
             Pipeline::LightPrepass => "8·C thin G-buffer write + 8·C read + 8·C light buffer write + 8·C read + 8·P",
-            Pipeline::VisibilityBuffer => "8·C write + 8·C read + 2·8·F lists + 96·F vertex fetch + 8·P output",
+            Pipeline::VisibilityBuffer => "V·C write + V·C read + 2·8·F lists + 96·F vertex fetch + 8·P output",
         }
     }
 }
@@ -93,6 +94,26 @@ pub struct PipelinesConfig {
     /// The analytic scene the dump was rendered from, when known (`gbuf scene`, the demo): the visibility buffer's
     /// attributes are then re-materialised from its triangles and compared with the G-buffer.
     pub geometry: Option<SceneName>,
+    /// The visibility buffer's layout (IDs + depth, e.g. the built-in `visibility-8`): its bytes per sample set the
+    /// row's footprint and traffic, and the frame is packed and unpacked with it to check its IDs and depth survive.
+    pub visibility_layout: Layout,
+}
+
+/// The visibility buffer's layout packed and unpacked on the frame: does it keep what re-materialisation needs?
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VisibilityPacking {
+    /// The layout's name.
+    pub layout: String,
+    /// Its bytes per sample.
+    pub bytes: u32,
+    /// Covered samples whose triangle ID changed (saturated: more triangles than the field holds).
+    pub primitive_id_mismatches: u64,
+    /// Covered samples whose instance (object) ID changed.
+    pub object_id_mismatches: u64,
+    /// Largest relative depth error over covered samples.
+    pub depth_max_rel_error: f64,
+    /// Attributes the layout must hold for re-materialisation that the dump has but the layout does not store.
+    pub missing: Vec<String>,
 }
 
 /// One MSAA schedule run by the resolve on the CPU (tiled culling, the deferred rows' mask).
@@ -207,6 +228,9 @@ pub struct Pipelines {
     /// Why it was not done, when geometry was given but re-materialisation failed.
     #[serde(default)]
     pub rematerialise_error: Option<String>,
+    /// The visibility buffer's layout packed and unpacked on this frame (needs primitive IDs).
+    #[serde(default)]
+    pub visibility_packing: Option<VisibilityPacking>,
     /// The images of [`Pipelines::aa`] (same order), for pictures; not serialised.
     #[serde(skip)]
     pub aa_images: Vec<HdrImage>,
@@ -418,8 +442,9 @@ pub fn pipelines(
                     tile_lights.len()
                 ),
             ));
-            let vis_fp = 8.0 * f64::from(s) * pixels + fl.bytes as f64 + 8.0 * pixels;
-            let vis_traffic = 16.0 * covered + 16.0 * fl.entries as f64 + 96.0 * fl.entries as f64 + 8.0 * pixels;
+            let vb = cfg.visibility_layout.bytes_per_sample() as f64;
+            let vis_fp = vb * f64::from(s) * pixels + fl.bytes as f64 + 8.0 * pixels;
+            let vis_traffic = 2.0 * vb * covered + 16.0 * fl.entries as f64 + 96.0 * fl.entries as f64 + 8.0 * pixels;
             let mut vis = row(
                 Pipeline::VisibilityBuffer,
                 vis_fp,
@@ -428,7 +453,9 @@ pub fn pipelines(
                 tiled_pairs(fm),
                 msaa_err,
                 format!(
-                    "R32UI triangle + D32F depth; fragment lists {} entries, longest {} ({})",
+                    "{} ({} B); fragment lists {} entries, longest {} ({})",
+                    cfg.visibility_layout.name(),
+                    cfg.visibility_layout.bytes_per_sample(),
                     fl.entries,
                     fl.max_entries,
                     fmt_bytes(fl.bytes)
@@ -586,6 +613,10 @@ pub fn pipelines(
         },
         None => (None, None),
     };
+    let visibility_packing = match gb.primitive_id {
+        Some(_) => Some(visibility_packing(gb, &cfg.visibility_layout)?),
+        None => None,
+    };
     Ok(Pipelines {
         size: (w, h, s),
         lights: lights.len(),
@@ -604,7 +635,52 @@ pub fn pipelines(
         mlaa: mlaa_stats,
         rematerialised,
         rematerialise_error,
+        visibility_packing,
         aa_images,
+    })
+}
+
+/// Packs and unpacks `gb` with the visibility buffer's `layout` and counts what changed in what re-materialisation
+/// reads: triangle and instance IDs (exact or not) and depth.
+pub fn visibility_packing(gb: &GBuffer, layout: &Layout) -> Result<VisibilityPacking> {
+    let back = layout.unpack(&layout.pack(gb)?, gb)?;
+    let covered = || (0..gb.len()).filter(|&i| gb.coverage[i]);
+    let mismatches = |a: Option<&Vec<u32>>, b: Option<&Vec<u32>>| match (a, b) {
+        (Some(a), Some(b)) => covered().filter(|&i| a[i] != b[i]).count() as u64,
+        (Some(_), None) => covered().count() as u64,
+        _ => 0,
+    };
+    let depth_max_rel_error = match (&gb.depth, &back.depth) {
+        (Some(a), Some(b)) => covered()
+            .map(|i| {
+                let (x, y) = (f64::from(a[i]), f64::from(b[i]));
+                if x == y {
+                    0.0
+                } else {
+                    (x - y).abs() / x.abs().max(f64::from(f32::MIN_POSITIVE))
+                }
+            })
+            .fold(0.0, f64::max),
+        (Some(_), None) => f64::INFINITY,
+        _ => 0.0,
+    };
+    let mut missing = Vec::new();
+    for (name, had, kept) in [
+        ("depth", gb.depth.is_some(), back.depth.is_some()),
+        ("primitive_id", gb.primitive_id.is_some(), back.primitive_id.is_some()),
+        ("object_id", gb.object_id.is_some(), back.object_id.is_some()),
+    ] {
+        if had && !kept {
+            missing.push(name.to_string());
+        }
+    }
+    Ok(VisibilityPacking {
+        layout: layout.name().to_string(),
+        bytes: layout.bytes_per_sample() as u32,
+        primitive_id_mismatches: mismatches(gb.primitive_id.as_ref(), back.primitive_id.as_ref()),
+        object_id_mismatches: mismatches(gb.object_id.as_ref(), back.object_id.as_ref()),
+        depth_max_rel_error,
+        missing,
     })
 }
 

@@ -29,8 +29,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .map(|n| Layout::by_name_or_path(n).with_context(|| format!("layout {n:?}")))
             .collect::<anyhow::Result<_>>()?
     } else {
-        Layout::builtins()
+        Layout::builtins().into_iter().chain(Layout::visibility_builtins()).collect()
     };
+    let visibility: Vec<String> = Layout::visibility_builtins().iter().map(|l| l.name().to_string()).collect();
     let (w, h) = (args.resolution.width, args.resolution.height);
     let rows: Vec<LayoutSummary> = layouts.iter().map(|l| LayoutSummary::new(l, w, h, args.msaa)).collect();
     if args.json {
@@ -40,7 +41,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut out = std::io::stdout().lock();
     writeln!(out, "Footprints at {w}×{h}, {}× MSAA:", args.msaa)?;
     writeln!(out, "{:<16} {:>7} {:>9} {:>15} {:>10}  targets", "layout", "B/smp", "used bits", "bytes", "MiB")?;
-    for r in &rows {
+    for (i, r) in rows.iter().enumerate() {
+        if !detailed && visibility.contains(&r.name) && (i == 0 || !visibility.contains(&rows[i - 1].name)) {
+            writeln!(out, "visibility buffer (IDs + depth; every surface attribute re-materialised, none stored):")?;
+        }
         let targets: Vec<String> = r.targets.iter().map(|t| t.format.to_string()).collect();
         writeln!(
             out,

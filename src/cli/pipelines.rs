@@ -30,6 +30,10 @@ pub struct Args {
     /// footprint and traffic.
     #[arg(long, value_name = "L", default_value = "fat-20")]
     pub layout: String,
+    /// Layout of the visibility-buffer row (built-in name or layout file; IDs + depth): its bytes per sample set the
+    /// row's footprint and traffic, and the frame is packed with it to check the IDs survive.
+    #[arg(long, value_name = "L", default_value = "visibility-8")]
+    pub visibility_layout: String,
     /// Warp widths of the MSAA schedules' utilisation table.
     #[arg(long, value_name = "LIST", value_delimiter = ',', default_value = "8,16,32,64")]
     pub warps: Vec<u32>,
@@ -90,6 +94,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         aa_detectors: vec![Detector::Lauritzen, Detector::Depth, Detector::Normal, Detector::Id],
         mlaa: MlaaConfig::default(),
         geometry: args.geometry,
+        visibility_layout: Layout::by_name_or_path(&args.visibility_layout)
+            .with_context(|| format!("--visibility-layout {}", args.visibility_layout))?,
     };
     let single = match &args.single {
         Some(path) => {

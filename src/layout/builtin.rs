@@ -22,19 +22,31 @@ const FILES: [(&str, &str); 8] = [
     ("reference-f32.toml", include_str!("builtin/reference-f32.toml")),
 ];
 
-/// The specs of every built-in layout (parsed once).
+/// Built-in layouts that are not G-buffers to light: the visibility buffer's (triangle and instance IDs + depth),
+/// whose surface attributes are re-materialised from the scene. `Layout::by_name` finds them; the lists of lit
+/// layouts (reports, budgets, `gbuf layouts`' main table) leave them out.
+const VISIBILITY_FILES: [(&str, &str); 1] = [("visibility-8.toml", include_str!("builtin/visibility-8.toml"))];
+
+fn parse(files: &[(&str, &str)]) -> Vec<LayoutSpec> {
+    let path = |file: &str| Path::new("src/layout/builtin").join(file);
+    files
+        .iter()
+        .map(|(file, text)| LayoutSpec::parse(&path(file), text).expect("built-in layout files parse"))
+        .collect()
+}
+
+/// The specs of every built-in G-buffer layout (parsed once).
 #[must_use]
 pub fn specs() -> Vec<LayoutSpec> {
     static SPECS: OnceLock<Vec<LayoutSpec>> = OnceLock::new();
-    SPECS
-        .get_or_init(|| {
-            let path = |file: &str| Path::new("src/layout/builtin").join(file);
-            FILES
-                .iter()
-                .map(|(file, text)| LayoutSpec::parse(&path(file), text).expect("built-in layout files parse"))
-                .collect()
-        })
-        .clone()
+    SPECS.get_or_init(|| parse(&FILES)).clone()
+}
+
+/// The specs of the built-in visibility-buffer layouts (parsed once).
+#[must_use]
+pub fn visibility_specs() -> Vec<LayoutSpec> {
+    static SPECS: OnceLock<Vec<LayoutSpec>> = OnceLock::new();
+    SPECS.get_or_init(|| parse(&VISIBILITY_FILES)).clone()
 }
 
 #[cfg(test)]
@@ -43,7 +55,9 @@ mod tests {
 
     #[test]
     fn every_file_is_named_after_its_layout_and_validates() {
-        for ((file, _), spec) in FILES.iter().zip(specs()) {
+        for ((file, _), spec) in
+            FILES.iter().chain(&VISIBILITY_FILES).zip(specs().into_iter().chain(visibility_specs()))
+        {
             assert_eq!(*file, format!("{}.toml", spec.name));
             assert!(!spec.sources.is_empty() && !spec.description.is_empty(), "{file}");
             crate::layout::Layout::from_spec(spec).unwrap();

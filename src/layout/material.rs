@@ -310,16 +310,17 @@ impl MaterialTable {
                 }
             }
             let (centroids, assign) = cluster(&pts, &weights, np, capacity);
-            let index = (0..gb.len())
-                .into_par_iter()
-                .map(|i| {
-                    if gb.coverage[i] {
-                        assign[point_of_cell[grid.cell(&values(&key_at(i)))] as usize]
-                    } else {
-                        0
-                    }
-                })
-                .collect();
+            let index =
+                (0..gb.len())
+                    .into_par_iter()
+                    .map(|i| {
+                        if gb.coverage[i] {
+                            assign[point_of_cell[grid.cell(&values(&key_at(i)))] as usize]
+                        } else {
+                            0
+                        }
+                    })
+                    .collect();
             (centroids, index)
         };
         let (max_abs, mean_abs) = table_errors(&planes, &entries, &index, &gb.coverage);
@@ -490,7 +491,8 @@ fn cluster(pts: &[[f32; MAX_PARAMETERS]], weights: &[u64], np: usize, k: usize) 
     let make = |members: Vec<usize>| -> Box {
         let (mut spread, mut dim) = (-1.0f32, 0);
         for p in 0..np {
-            let (lo, hi) = members.iter().fold((f32::MAX, f32::MIN), |(lo, hi), &i| (lo.min(pts[i][p]), hi.max(pts[i][p])));
+            let (lo, hi) =
+                members.iter().fold((f32::MAX, f32::MIN), |(lo, hi), &i| (lo.min(pts[i][p]), hi.max(pts[i][p])));
             let s = (hi - lo) * inv[p];
             if s > spread {
                 (spread, dim) = (s, p);
@@ -503,13 +505,17 @@ fn cluster(pts: &[[f32; MAX_PARAMETERS]], weights: &[u64], np: usize, k: usize) 
     let mut boxes = vec![make((0..pts.len()).collect())];
     while boxes.len() < k {
         // Split the box with the largest weight × spread (the first on ties).
-        let (bi, score) = boxes.iter().enumerate().fold((usize::MAX, -1.0f32), |best, (i, b)| {
-            if b.score > best.1 {
-                (i, b.score)
-            } else {
-                best
-            }
-        });
+        let (bi, score) =
+            boxes.iter().enumerate().fold(
+                (usize::MAX, -1.0f32),
+                |best, (i, b)| {
+                    if b.score > best.1 {
+                        (i, b.score)
+                    } else {
+                        best
+                    }
+                },
+            );
         if bi == usize::MAX || score <= 0.0 {
             break;
         }

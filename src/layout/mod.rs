@@ -87,19 +87,29 @@ impl Layout {
         builtin::specs().into_iter().map(|s| Layout::from_spec(s).expect("built-in layouts are valid")).collect()
     }
 
-    /// A built-in layout by name.
+    /// The built-in visibility-buffer layouts (IDs + depth; not lit as they are: see `builtin::visibility_specs`).
+    #[must_use]
+    pub fn visibility_builtins() -> Vec<Layout> {
+        builtin::visibility_specs()
+            .into_iter()
+            .map(|s| Layout::from_spec(s).expect("built-in layouts are valid"))
+            .collect()
+    }
+
+    /// A built-in layout by name (the lit layouts and the visibility buffer's).
     #[must_use]
     pub fn by_name(name: &str) -> Option<Layout> {
         builtin::specs()
             .into_iter()
+            .chain(builtin::visibility_specs())
             .find(|s| s.name == name)
             .map(|s| Layout::from_spec(s).expect("built-in layouts are valid"))
     }
 
-    /// Names of the built-in layouts.
+    /// Names of the built-in layouts (the lit ones, then the visibility buffer's).
     #[must_use]
     pub fn builtin_names() -> Vec<String> {
-        builtin::specs().into_iter().map(|s| s.name).collect()
+        builtin::specs().into_iter().chain(builtin::visibility_specs()).map(|s| s.name).collect()
     }
 
     /// Reads and validates a layout file (TOML or JSON, by extension or content). Errors name the file.

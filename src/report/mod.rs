@@ -124,6 +124,7 @@ pub fn pipelines_config(cfg: &SweepConfig) -> crate::analysis::pipelines::Pipeli
         aa_detectors: cfg.detectors.iter().copied().filter(|d| !d.is_baseline()).collect(),
         mlaa: crate::image::mlaa::MlaaConfig::default(),
         geometry: None,
+        visibility_layout: crate::layout::Layout::by_name("visibility-8").expect("the built-in visibility layout"),
     }
 }
 

@@ -58,6 +58,35 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
         let names: Vec<&str> = p.skipped.iter().filter(|(_, w)| w == why).map(|(p, _)| p.name()).collect();
         let _ = writeln!(s, "\nNot measured: {}: {why}", names.join(", "));
     }
+    if let Some(v) = &p.visibility_packing {
+        let ids_ok = v.primitive_id_mismatches == 0 && v.object_id_mismatches == 0 && v.missing.is_empty();
+        let _ = writeln!(
+            s,
+            "\nVisibility buffer layout `{}` ({} B per sample), packed and unpacked on this frame: triangle IDs {}, \
+             instance IDs {}, depth {}{}.",
+            v.layout,
+            v.bytes,
+            if v.primitive_id_mismatches == 0 {
+                "exact".to_string()
+            } else {
+                format!("{} samples changed", v.primitive_id_mismatches)
+            },
+            if v.object_id_mismatches == 0 {
+                "exact".to_string()
+            } else {
+                format!("{} samples changed", v.object_id_mismatches)
+            },
+            if v.depth_max_rel_error == 0.0 {
+                "exact".to_string()
+            } else {
+                format!("max relative error {:.1e}", v.depth_max_rel_error)
+            },
+            if v.missing.is_empty() { String::new() } else { format!("; not stored: {}", v.missing.join(", ")) },
+        );
+        if !ids_ok {
+            let _ = writeln!(s, "**The layout loses IDs this frame needs: its visibility row's counts stand, but re-materialisation from it would shade the wrong triangles.**");
+        }
+    }
     match (&p.rematerialised, &p.rematerialise_error) {
         (Some(r), _) => {
             let worst = r.attributes.iter().map(|a| a.max_abs).fold(0.0f64, f64::max);
@@ -178,7 +207,10 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
             );
         }
     }
-    let _ = writeln!(s, "\n{h} Traffic model (C covered samples, P pixels, B bytes per sample)\n");
+    let _ = writeln!(
+        s,
+        "\n{h} Traffic model (C covered samples, P pixels, B bytes per sample, V the visibility layout's)\n"
+    );
     for r in &p.rows {
         let _ = writeln!(s, "- {}: {}", r.pipeline, r.pipeline.bandwidth_formula());
     }
