@@ -463,12 +463,10 @@ impl Grid {
 
     /// The cell of a tuple inside the ranges (the top of each range joins the last level).
     fn cell(&self, v: &[f32; MAX_PARAMETERS]) -> usize {
-        let mut cell = 0usize;
-        for p in 0..self.np {
-            let q = (((v[p] - self.lo[p]) * self.scale[p]) as u32).min(self.levels - 1);
-            cell = cell * self.levels as usize + q as usize;
-        }
-        cell
+        v.iter().zip(&self.lo).zip(&self.scale).take(self.np).fold(0usize, |cell, ((&x, &lo), &scale)| {
+            let q = (((x - lo) * scale) as u32).min(self.levels - 1);
+            cell * self.levels as usize + q as usize
+        })
     }
 }
 
