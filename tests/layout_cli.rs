@@ -21,7 +21,9 @@ fn layouts_json_has_the_seed_footprint() {
     let dir = tempfile::tempdir().unwrap();
     let rows = json(&gbuf(dir.path(), &["layouts", "--resolution", "1900x1200", "--msaa", "4", "--json"]));
     let rows = rows.as_array().unwrap();
-    assert_eq!(rows.len(), Layout::builtins().len());
+    // The lit layouts, then the visibility buffer's.
+    assert_eq!(rows.len(), Layout::builtins().len() + Layout::visibility_builtins().len());
+    assert_eq!(rows.last().unwrap()["name"], "visibility-8");
     let fat = rows.iter().find(|r| r["name"] == "fat-20").unwrap();
     assert_eq!(fat["bytes_per_sample"], 20);
     assert_eq!(fat["footprint_bytes"], 182_400_000u64);
