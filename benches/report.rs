@@ -7,7 +7,9 @@
 //! - `report/plain-resolve/<detector>/WxHxS`: the baseline, what `gbuf resolve --no-reference` does for the same
 //!   frame: the detector and the resolve on the unpacked G-buffer.
 //!
-//! - `report/reference/WxHxS`: the f64 every-sample reference alone, the largest part of a row.
+//! - `report/reference/WxHxS`: the f64 every-sample reference alone, the largest part of a row, beside
+//!   `report/resolve-every-sample/WxHxS`, the f32 resolve shading every sample (its baseline: issue 14 asks for the
+//!   reference within 3× of it).
 //!
 //! The ratio of the two (measured in the same run) is what a report row costs in resolves. The room and its lights
 //! are built once, outside the timed loop. Run briefly:
@@ -55,6 +57,14 @@ fn benches(c: &mut Criterion) {
     group.bench_function(format!("plain-resolve/{}/{size}", DETECTOR.name()), |b| {
         b.iter(|| {
             let mask = detect(black_box(&gb), DETECTOR, &det_cfg).unwrap();
+            resolve(&gb, black_box(&lights), &mask, &resolve_cfg).unwrap()
+        })
+    });
+    // The f32 resolve doing the reference's work (every sample shaded, tiled culling): the reference's baseline
+    // (issue 14: the f64 reference with conservative culling within 3× of it).
+    group.bench_function(format!("resolve-every-sample/{size}"), |b| {
+        b.iter(|| {
+            let mask = detect(black_box(&gb), Detector::Ssaa, &det_cfg).unwrap();
             resolve(&gb, black_box(&lights), &mask, &resolve_cfg).unwrap()
         })
     });

@@ -38,6 +38,10 @@ pub struct Args {
     /// Seed for `--lights`.
     #[arg(long, value_name = "S", default_value_t = 1)]
     pub seed: u64,
+    /// Compression of the EXR (all lossless): zip (default) is small, none writes fastest (docs/FORMAT.md has the
+    /// times and sizes).
+    #[arg(long, value_name = "C", default_value = "zip")]
+    pub compression: gbuf::io::exr::WriteCompression,
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
@@ -126,7 +130,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if ispc {
         gbuf::io::ispc::write(&args.out, &gb, &lights).with_context(|| format!("writing {}", args.out.display()))?;
     } else {
-        gbuf::io::canonical::write(&args.out, &gb).with_context(|| format!("writing {}", args.out.display()))?;
+        gbuf::io::canonical::write_with(&args.out, &gb, args.compression)
+            .with_context(|| format!("writing {}", args.out.display()))?;
         let doc = scene::scene_sidecar(&gb, &lights);
         let mut text = serde_json::to_vec_pretty(&doc).context("serialising the sidecar")?;
         text.push(b'\n');

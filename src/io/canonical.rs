@@ -15,6 +15,7 @@ use crate::io::exr::{RawChannel, RawData, RawImage};
 use crate::io::sidecar::SidecarCamera;
 use crate::io::LoadOptions;
 use glam::{Vec2, Vec3};
+use rayon::prelude::*;
 use std::path::Path;
 
 /// Value of the `gbuf.format` header attribute.
@@ -73,21 +74,28 @@ pub fn header<'a>(raw: &'a RawImage, key: &str) -> Option<&'a str> {
 pub fn to_raw(gb: &GBuffer) -> RawImage {
     let n = gb.pixel_count();
     let spp = gb.samples as usize;
-    let mut channels = Vec::new();
-    for s in 0..spp {
-        let cov: Vec<u32> = (0..n).map(|p| u32::from(gb.coverage[p * spp + s])).collect();
-        channels.push(RawChannel { name: channel_name(s as u32, COVERAGE, "V"), data: RawData::U32(cov) });
-    }
+    // Every channel: coverage per sample, then per attribute, sample and component (`None`: coverage). They are
+    // de-interleaved from the pixel-major planes in parallel, in this order.
+    /// A channel to make: `None` (coverage) or (attribute, component), the sample, the name.
+    type Job = (Option<(Attribute, usize)>, usize, String);
+    let mut jobs: Vec<Job> = (0..spp).map(|s| (None, s, channel_name(s as u32, COVERAGE, "V"))).collect();
     for attr in gb.attributes() {
-        let comps = components(attr);
         for s in 0..spp {
-            for (ci, comp) in comps.iter().enumerate() {
-                // De-interleave the pixel-major plane: one channel per sample and component.
-                let data = plane_channel(gb, attr, ci, s, n, spp);
-                channels.push(RawChannel { name: channel_name(s as u32, attr.name(), comp), data });
+            for (ci, comp) in components(attr).iter().enumerate() {
+                jobs.push((Some((attr, ci)), s, channel_name(s as u32, attr.name(), comp)));
             }
         }
     }
+    let channels: Vec<RawChannel> = jobs
+        .into_par_iter()
+        .map(|(what, s, name)| {
+            let data = match what {
+                None => RawData::U32((0..n).map(|p| u32::from(gb.coverage[p * spp + s])).collect()),
+                Some((attr, ci)) => plane_channel(gb, attr, ci, s, n, spp),
+            };
+            RawChannel { name, data }
+        })
+        .collect();
     let positions: Vec<[f32; 2]> = gb.sample_positions.iter().map(|p| [p.x, p.y]).collect();
     let mut attributes = vec![
         (ATTR_FORMAT.to_string(), FORMAT_NAME.to_string()),
@@ -368,10 +376,15 @@ fn set_u32(gb: &mut GBuffer, attr: Attribute, v: Vec<u32>) {
     }
 }
 
-/// Writes `gb` as a canonical EXR at `path`, atomically (temporary file + rename).
+/// Writes `gb` as a canonical EXR at `path` with ZIP compression, atomically (temporary file + rename).
 pub fn write(path: &Path, gb: &GBuffer) -> Result<()> {
+    write_with(path, gb, crate::io::exr::WriteCompression::Zip)
+}
+
+/// [`write`] with the compression given (all lossless).
+pub fn write_with(path: &Path, gb: &GBuffer, compression: crate::io::exr::WriteCompression) -> Result<()> {
     gb.validate()?;
-    crate::io::exr::write_raw(path, &to_raw(gb))
+    crate::io::exr::write_raw_owned(path, to_raw(gb), compression)
 }
 
 /// Reads a canonical EXR (only the G-buffer; use [`crate::io::load`] for sidecars, folding and sanitizing).

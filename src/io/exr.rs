@@ -524,13 +524,50 @@ fn read_raw_from<R: std::io::Read + std::io::Seek>(
 /// Writes `image` as a single-part, ZIP16-compressed (lossless) scan-line EXR, atomically (temporary file + rename).
 /// Channel names must be Latin-1; string attributes are stored as text header attributes.
 pub fn write_raw(path: &Path, image: &RawImage) -> Result<()> {
-    use ::exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
+    write_raw_owned(path, image.clone(), WriteCompression::Zip)
+}
+
+crate::named_enum! {
+    /// The lossless compressions gbuf writes. Times and sizes on a 1920×1080 × 4 canonical room dump: docs/FORMAT.md
+    /// (`cargo bench --bench exr_io`).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+    pub enum WriteCompression: "EXR compression" {
+        /// ZIP, 16 scan lines per block (the default: OpenEXR's usual lossless choice; small files).
+        #[default]
+        Zip => "zip",
+        /// PIZ (wavelet + Huffman), 32 scan lines per block.
+        Piz => "piz",
+        /// Run-length encoding: fast, weak on float data.
+        Rle => "rle",
+        /// No compression: the fastest write, the largest file.
+        None => "none",
+    }
+}
+
+impl WriteCompression {
+    fn encoding(self) -> ::exr::image::Encoding {
+        use ::exr::compression::Compression as C;
+        let compression = match self {
+            WriteCompression::Zip => C::ZIP16,
+            WriteCompression::Piz => C::PIZ,
+            WriteCompression::Rle => C::RLE,
+            WriteCompression::None => C::Uncompressed,
+        };
+        ::exr::image::Encoding { compression, ..::exr::image::Encoding::SMALL_LOSSLESS }
+    }
+}
+
+/// [`write_raw`] taking the image by value (its samples move into the encoder instead of being copied: a 1080p × 4
+/// dump is ≈ 600 MB of samples, and a copy of fresh memory costs its page faults too), with the compression given.
+pub fn write_raw_owned(path: &Path, image: RawImage, compression: WriteCompression) -> Result<()> {
+    use ::exr::image::{AnyChannel, AnyChannels, FlatSamples, Image, Layer};
     use ::exr::meta::attribute::{AttributeValue, Text};
     use ::exr::meta::header::LayerAttributes;
     use ::exr::prelude::WritableImage;
     let n = image.width as usize * image.height as usize;
     let mut list = ::exr::prelude::SmallVec::new();
-    for ch in &image.channels {
+    let (width, height) = (image.width, image.height);
+    for ch in image.channels {
         if ch.data.len() != n {
             return Err(Error::SizeMismatch {
                 path: path.into(),
@@ -539,10 +576,10 @@ pub fn write_raw(path: &Path, image: &RawImage) -> Result<()> {
         }
         let name = Text::new_or_none(ch.name.as_str())
             .ok_or_else(|| Error::invalid(path, format!("channel name {:?} is not Latin-1", ch.name)))?;
-        let data = match &ch.data {
-            RawData::F16(v) => FlatSamples::F16(v.clone()),
-            RawData::F32(v) => FlatSamples::F32(v.clone()),
-            RawData::U32(v) => FlatSamples::U32(v.clone()),
+        let data = match ch.data {
+            RawData::F16(v) => FlatSamples::F16(v),
+            RawData::F32(v) => FlatSamples::F32(v),
+            RawData::U32(v) => FlatSamples::U32(v),
         };
         list.push(AnyChannel::new(name, data));
     }
@@ -553,12 +590,8 @@ pub fn write_raw(path: &Path, image: &RawImage) -> Result<()> {
         };
         attributes.other.insert(k, AttributeValue::Text(v));
     }
-    let layer = Layer::new(
-        (image.width as usize, image.height as usize),
-        attributes,
-        Encoding::SMALL_LOSSLESS,
-        AnyChannels::sort(list),
-    );
+    let layer =
+        Layer::new((width as usize, height as usize), attributes, compression.encoding(), AnyChannels::sort(list));
     let mut bytes = std::io::Cursor::new(Vec::new());
     Image::from_layer(layer)
         .write()
