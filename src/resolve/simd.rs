@@ -31,6 +31,9 @@ pub const RSQRT_MAX_REL_ERROR: f32 = 4e-7;
 /// Relative error bound of [`Lanes::rsqrt_approx`] (`vrsqrt14ps`: 2⁻¹⁴).
 #[cfg_attr(not(test), allow(dead_code))] // the bound / scalar path the tests check against
 pub const RSQRT_APPROX_REL_ERROR: f32 = 1.0 / 16384.0;
+/// Relative error bound of [`Lanes::rsqrt_estimate`] (AVX2's `vrsqrtps`: 1.5·2⁻¹², Intel's documented bound).
+#[cfg_attr(not(test), allow(dead_code))] // the bound the tests check against
+pub const RSQRT_ESTIMATE_REL_ERROR: f32 = 1.5 / 4096.0;
 
 /// `2^f ≈ Σ cₖ fᵏ` on |f| ≤ ½ (minimax, relative error 7.5e-8 in exact arithmetic, with its constant term
 /// 1.0000001 rounded to 1 so that `2^0 = 1` exactly: 1.8e-7 — `exp2_nonpositive` must never exceed 1, and
@@ -77,6 +80,13 @@ pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = S
     /// `1/√self` for positive finite lanes to within [`RSQRT_APPROX_REL_ERROR`] (AVX-512: the hardware estimate,
     /// one instruction; the portable lanes compute it exactly).
     fn rsqrt_approx(self) -> Self;
+    /// `1/√self` for positive finite lanes to within [`RSQRT_ESTIMATE_REL_ERROR`]: the cheapest estimate the
+    /// instruction set has (AVX2: `vrsqrtps` alone; elsewhere [`Lanes::rsqrt_approx`]), for callers that take the
+    /// estimate's error out themselves (Blinn-Phong's half vector, corrected in the log domain).
+    #[inline(always)]
+    fn rsqrt_estimate(self) -> Self {
+        self.rsqrt_approx()
+    }
     /// `1/self` for positive finite lanes, accurate to about 1 ulp.
     fn recip(self) -> Self;
     /// `log2` of positive normal lanes (error bound of [`fastmath::log2`]).
@@ -395,6 +405,10 @@ impl<V: Lanes> Lanes for Two<V> {
     #[inline(always)]
     fn rsqrt_approx(self) -> Self {
         Two(self.0.rsqrt_approx(), self.1.rsqrt_approx())
+    }
+    #[inline(always)]
+    fn rsqrt_estimate(self) -> Self {
+        Two(self.0.rsqrt_estimate(), self.1.rsqrt_estimate())
     }
     #[inline(always)]
     fn recip(self) -> Self {
@@ -826,6 +840,10 @@ mod avx2 {
             self.rsqrt()
         }
         #[inline(always)]
+        fn rsqrt_estimate(self) -> Self {
+            both!(self, |x| _mm256_rsqrt_ps(x))
+        }
+        #[inline(always)]
         fn recip(self) -> Self {
             // y ≈ 1/x to 1.5·2⁻¹²; Newton y + y·(1 − x·y).
             both!(self, |x| {
@@ -942,6 +960,14 @@ mod tests {
                 assert!(
                     ((f64::from(y) - want) / want).abs() <= f64::from(RSQRT_APPROX_REL_ERROR),
                     "rsqrt_approx({x}) = {y}"
+                );
+            }
+            V::load(c).rsqrt_estimate().store(&mut out);
+            for (x, y) in c.iter().zip(out.iter().copied()) {
+                let want = 1.0 / f64::from(*x).sqrt();
+                assert!(
+                    ((f64::from(y) - want) / want).abs() <= f64::from(RSQRT_ESTIMATE_REL_ERROR),
+                    "rsqrt_estimate({x}) = {y}"
                 );
             }
             V::load(c).recip().store(&mut out);
