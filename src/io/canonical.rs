@@ -381,7 +381,7 @@ pub fn write(path: &Path, gb: &GBuffer) -> Result<()> {
     write_with(path, gb, crate::io::exr::WriteCompression::Zip)
 }
 
-/// [`write`] with the compression given (all lossless).
+/// [`write()`] with the compression given (all lossless).
 pub fn write_with(path: &Path, gb: &GBuffer, compression: crate::io::exr::WriteCompression) -> Result<()> {
     gb.validate()?;
     crate::io::exr::write_raw_owned(path, to_raw(gb), compression)
