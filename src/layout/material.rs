@@ -382,11 +382,14 @@ fn table_errors(
     (max_abs, sum_abs.iter().map(|s| (s / covered.max(1) as f64) as f32).collect())
 }
 
-/// Distinct parameter tuples over covered samples. The tuples are scattered into 256 partitions by hash (chunk by
-/// chunk in parallel), and each partition's distinct tuples are counted on its own, in parallel: no map of every
-/// tuple is built or merged.
+/// Distinct parameter tuples over covered samples, counted exactly without one map of every tuple: the keys are
+/// scattered into 256 partitions by hash and each partition's distinct keys are counted on its own, in parallel.
+/// What is scattered: each chunk's own distinct keys when every chunk has at most 4,096 (a buffer of few
+/// materials: a few keys per chunk, however many samples), else every covered sample's key (textured parameters,
+/// where a chunk's set would be as large as its samples and cost more than it saves).
 fn count_tuples(gb: &GBuffer, planes: &[(Attribute, &[f32])]) -> usize {
     const PARTITIONS: usize = 256;
+    const CHUNK_SET_CAP: usize = 1 << 12;
     let key_at = |i: usize| -> Key {
         let mut k = [0u32; MAX_PARAMETERS];
         for (p, (_, plane)) in planes.iter().enumerate() {
@@ -394,27 +397,54 @@ fn count_tuples(gb: &GBuffer, planes: &[(Attribute, &[f32])]) -> usize {
         }
         k
     };
-    let hash = |k: &Key| {
+    let part = |k: &Key| {
         let mut h = KeyHasher::default();
         for &v in k {
             h.write_u64(u64::from(v));
         }
-        h.finish()
+        (h.finish() >> 56) as usize
     };
-    let parts: Vec<Vec<Vec<Key>>> = (0..gb.len())
+    let sets: Vec<Option<KeyMap<()>>> = (0..gb.len())
         .into_par_iter()
         .with_min_len(COUNT_CHUNK)
         .fold(
-            || vec![Vec::new(); PARTITIONS],
-            |mut parts: Vec<Vec<Key>>, i| {
-                if gb.coverage[i] {
-                    let k = key_at(i);
-                    parts[(hash(&k) >> 56) as usize].push(k);
+            || Some(KeyMap::<()>::default()),
+            |acc, i| match acc {
+                Some(mut set) if gb.coverage[i] => {
+                    set.insert(key_at(i), ());
+                    (set.len() <= CHUNK_SET_CAP).then_some(set)
                 }
-                parts
+                other => other,
             },
         )
         .collect();
+    let parts: Vec<Vec<Vec<Key>>> = if sets.iter().all(Option::is_some) {
+        sets.into_par_iter()
+            .flatten()
+            .map(|set| {
+                let mut parts = vec![Vec::new(); PARTITIONS];
+                for (k, ()) in set {
+                    parts[part(&k)].push(k);
+                }
+                parts
+            })
+            .collect()
+    } else {
+        (0..gb.len())
+            .into_par_iter()
+            .with_min_len(COUNT_CHUNK)
+            .fold(
+                || vec![Vec::new(); PARTITIONS],
+                |mut parts: Vec<Vec<Key>>, i| {
+                    if gb.coverage[i] {
+                        let k = key_at(i);
+                        parts[part(&k)].push(k);
+                    }
+                    parts
+                },
+            )
+            .collect()
+    };
     (0..PARTITIONS)
         .into_par_iter()
         .map(|p| {
@@ -658,6 +688,13 @@ mod tests {
             pool.install(|| MaterialTable::build(&gb, &attrs, 8))
         };
         let (t, idx) = build(1);
+        let exact: std::collections::HashSet<[u32; 3]> = (0..n)
+            .map(|i| {
+                let p = |v: &Option<Vec<f32>>| v.as_ref().unwrap()[i].to_bits();
+                [p(&gb.specular), p(&gb.roughness), p(&gb.metallic)]
+            })
+            .collect();
+        assert_eq!(t.distinct_tuples, exact.len(), "the distinct count is exact");
         assert!(t.distinct_tuples > GRID_ABOVE, "{}", t.distinct_tuples);
         assert!(!t.lossless && t.entries.len() <= 256);
         assert!(t.max_abs_error.iter().all(|&e| e < 0.01), "{:?}", t.max_abs_error);
