@@ -234,13 +234,7 @@ impl MaterialTable {
     pub fn build(gb: &GBuffer, wanted: &[Attribute], bits: u32) -> (MaterialTable, Vec<u32>) {
         let planes = parameter_planes(gb, wanted);
         debug_assert!(planes.len() <= MAX_PARAMETERS);
-        let key_at = |i: usize| -> Key {
-            let mut k = [0u32; MAX_PARAMETERS];
-            for (p, (_, plane)) in planes.iter().enumerate() {
-                k[p] = clean(plane[i]).to_bits();
-            }
-            k
-        };
+        let key_at = |i: usize| key_of(&planes, i);
         let np = planes.len();
         let values = |k: &Key| -> [f32; MAX_PARAMETERS] { std::array::from_fn(|p| f32::from_bits(k[p])) };
         let capacity = 1usize << bits;
@@ -382,6 +376,16 @@ fn table_errors(
     (max_abs, sum_abs.iter().map(|s| (s / covered.max(1) as f64) as f32).collect())
 }
 
+/// The parameter tuple of sample `i` as bit patterns (non-finite values as 0): the key tables are built on.
+#[inline(always)]
+fn key_of(planes: &[(Attribute, &[f32])], i: usize) -> Key {
+    let mut k = [0u32; MAX_PARAMETERS];
+    for (p, (_, plane)) in planes.iter().enumerate() {
+        k[p] = clean(plane[i]).to_bits();
+    }
+    k
+}
+
 /// Distinct parameter tuples over covered samples, counted exactly without one map of every tuple: the keys are
 /// scattered into 256 partitions by hash and each partition's distinct keys are counted on its own, in parallel.
 /// What is scattered: each chunk's own distinct keys when every chunk has at most 4,096 (a buffer of few
@@ -390,13 +394,7 @@ fn table_errors(
 fn count_tuples(gb: &GBuffer, planes: &[(Attribute, &[f32])]) -> usize {
     const PARTITIONS: usize = 256;
     const CHUNK_SET_CAP: usize = 1 << 12;
-    let key_at = |i: usize| -> Key {
-        let mut k = [0u32; MAX_PARAMETERS];
-        for (p, (_, plane)) in planes.iter().enumerate() {
-            k[p] = clean(plane[i]).to_bits();
-        }
-        k
-    };
+    let key_at = |i: usize| key_of(planes, i);
     let part = |k: &Key| {
         let mut h = KeyHasher::default();
         for &v in k {
