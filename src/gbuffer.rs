@@ -15,6 +15,7 @@
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use glam::{Vec2, Vec3};
+use rayon::prelude::*;
 
 /// One G-buffer attribute. `ALL` lists them in canonical order; `name` is the one spelling used in CLI flags,
 /// JSON output and our canonical EXR channel names.
@@ -449,30 +450,65 @@ impl GBuffer {
     /// and derivable. Returns the attribute it filled, if any.
     pub fn derive_depth_or_position(&mut self) -> Option<Attribute> {
         if self.depth.is_none() {
-            let pos = self.position.as_ref()?;
-            self.depth = Some(pos.iter().zip(&self.coverage).map(|(p, &c)| if c { -p.z } else { 0.0 }).collect());
+            self.position.as_ref()?;
+            self.fill_depth_from_position();
             return Some(Attribute::Depth);
         }
         if self.position.is_none() {
-            let cam = self.camera.as_ref()?;
-            let depth = self.depth.as_ref()?;
-            let mut pos = vec![Vec3::ZERO; self.len()];
-            for y in 0..self.height {
-                for x in 0..self.width {
-                    for s in 0..self.samples {
-                        let i = self.index(x, y, s);
-                        if self.coverage[i] {
-                            pos[i] = cam.view_position(self.sample_px(x, y, s), depth[i], self.width, self.height);
-                        }
-                    }
-                }
-            }
-            self.position = Some(pos);
+            self.camera.as_ref()?;
+            self.fill_position_from_depth();
             return Some(Attribute::Position);
         }
         None
     }
+
+    /// (Re)computes `depth` from `position` (depth = −z on covered samples, 0 elsewhere), in place when the plane
+    /// exists. Does nothing without positions.
+    pub fn fill_depth_from_position(&mut self) {
+        let Some(pos) = self.position.as_ref() else { return };
+        let n = pos.len();
+        let depth = self.depth.get_or_insert_with(|| vec![0.0; n]);
+        depth
+            .par_chunks_mut(DERIVE_CHUNK)
+            .zip(pos.par_chunks(DERIVE_CHUNK))
+            .zip(self.coverage.par_chunks(DERIVE_CHUNK))
+            .for_each(|((d, p), c)| {
+                for ((d, p), &c) in d.iter_mut().zip(p).zip(c) {
+                    *d = if c { -p.z } else { 0.0 };
+                }
+            });
+    }
+
+    /// (Re)computes `position` from `depth` and the camera's ray through each sample (0 on background samples), in
+    /// place when the plane exists. Does nothing without depth or camera.
+    pub fn fill_position_from_depth(&mut self) {
+        let (Some(cam), Some(depth)) = (self.camera.as_ref(), self.depth.as_ref()) else { return };
+        let rays = cam.ray_caster(self.width, self.height);
+        let (w, s) = (self.width as usize, self.samples as usize);
+        let n = depth.len();
+        let offsets = &self.sample_positions;
+        let pos = self.position.get_or_insert_with(|| crate::util::zeroed_vec3(n));
+        let chunk = (w * s).max(1);
+        pos.par_chunks_mut(chunk)
+            .zip(depth.par_chunks(chunk))
+            .zip(self.coverage.par_chunks(chunk))
+            .enumerate()
+            .for_each(|(y, ((p, d), c))| {
+                for (i, ((p, &d), &c)) in p.iter_mut().zip(d).zip(c).enumerate() {
+                    *p = if c {
+                        let o = offsets[i % s];
+                        let px = Vec2::new((i / s) as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y);
+                        rays.ray(px) * d
+                    } else {
+                        Vec3::ZERO
+                    };
+                }
+            });
+    }
 }
+
+/// Samples per parallel block when deriving depth from position.
+const DERIVE_CHUNK: usize = 1 << 14;
 
 /// `width × height × samples` as a usize, refusing overflow and absurd sizes (over 2^32 samples).
 pub fn checked_len(width: u32, height: u32, samples: u32) -> Result<usize> {

@@ -269,9 +269,11 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, progress: Progre
             ..Default::default()
         };
         progress(done, total, &format!("{}: pack/unpack", layout.name()));
-        let packed = time_runs(cfg.runs, || layout.pack(gb));
-        let decoded =
-            packed.and_then(|(p, te)| time_runs(cfg.runs, || layout.unpack(&p, gb)).map(|(d, td)| (d, te, td)));
+        // Band by band, the decoded planes reused across the runs: the packed frame never exists whole.
+        let decoded = layout.roundtrip_timed(gb, cfg.runs).map(|r| {
+            let timing = |ms| Timing::from_ms(ms).expect("at least one run");
+            (r.decoded, timing(r.encode_ms), timing(r.decode_ms))
+        });
         done += 1;
         let (decoded, te, td) = match decoded {
             Ok(v) => v,

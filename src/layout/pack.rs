@@ -15,6 +15,8 @@ use crate::error::{Error, Result};
 use crate::gbuffer::{Attribute, GBuffer};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
+use std::ops::Range;
+use std::time::{Duration, Instant};
 
 /// Samples per parallel work item (rounded to whole rows): big enough to amortize scheduling and the per-field
 /// slice calls, small enough for several per thread and for the block's scratch buffers to stay in L1/L2.
@@ -63,6 +65,42 @@ impl Packed {
     #[must_use]
     pub fn total_bytes(&self) -> usize {
         self.targets.iter().map(|t| t.bytes.len()).sum()
+    }
+}
+
+/// Samples per band of [`Layout::roundtrip_timed`] (rounded to whole rows): about 20 MB of packed bytes for an
+/// 84-byte layout, several parallel blocks per thread.
+pub const BAND_SAMPLES: usize = 1 << 18;
+
+/// A timed roundtrip ([`Layout::roundtrip_timed`]).
+#[derive(Clone, Debug)]
+pub struct Roundtrip {
+    /// The unpacked G-buffer.
+    pub decoded: GBuffer,
+    /// Each run's encode (pack) time, ms.
+    pub encode_ms: Vec<f64>,
+    /// Each run's decode (unpack) time, ms.
+    pub decode_ms: Vec<f64>,
+}
+
+/// The packed texels of some samples, with what decoding them needs.
+struct Band<'a> {
+    targets: &'a [TargetPlane],
+    table: Option<&'a MaterialTable>,
+    present: &'a [Attribute],
+}
+
+/// An unpacked G-buffer before any plane is decoded: `like`'s geometry, camera, coverage and materials.
+fn shell(like: &GBuffer) -> GBuffer {
+    GBuffer {
+        width: like.width,
+        height: like.height,
+        samples: like.samples,
+        sample_positions: like.sample_positions.clone(),
+        camera: like.camera,
+        coverage: like.coverage.clone(),
+        materials: like.materials.clone(),
+        ..GBuffer::default()
     }
 }
 
@@ -196,11 +234,19 @@ fn load_codes<W: Word, const N: usize>(bytes: &[u8], offset: u32, bits: u32, cod
     }
 }
 
-/// Packs one target's bytes: blocks of whole rows in parallel, each field through its codec's slice path.
-fn pack_target<W: Word>(fields: &[(&Field, &Coder, Src<'_>)], cov: &[bool], size: usize, row: usize, bytes: &mut [u8]) {
+/// Packs one target's bytes for the samples from `first` on (a whole row): blocks of whole rows in parallel, each
+/// field through its codec's slice path.
+fn pack_target<W: Word>(
+    fields: &[(&Field, &Coder, Src<'_>)],
+    cov: &[bool],
+    size: usize,
+    row: usize,
+    first: usize,
+    bytes: &mut [u8],
+) {
     let chunk = rows_chunk(row);
     bytes.par_chunks_mut(chunk * size).enumerate().for_each(|(ci, out)| {
-        let base = ci * chunk;
+        let base = first + ci * chunk;
         let len = out.len() / size;
         let mut words = vec![W::default(); len];
         let mut codes = vec![0u64; len];
@@ -277,35 +323,9 @@ impl Layout {
         gb.validate()?;
         let depth_range = self.depth_range_for(gb);
         let coders = self.coders(depth_range)?;
-        let (material_table, index) = match self.indirection() {
-            Some(ind) => {
-                let (t, i) = MaterialTable::build_keyed(gb, &ind.parameters, ind.bits, ind.key);
-                (Some(t), i)
-            }
-            None => (None, Vec::new()),
-        };
-        let n = gb.len();
-        let mut targets = Vec::with_capacity(self.formats().len());
-        for (ti, (format, tspec)) in self.formats().iter().zip(&self.spec().targets).enumerate() {
-            let size = format.bytes();
-            let fields: Vec<(&Field, &Coder, Src<'_>)> = self
-                .fields()
-                .iter()
-                .zip(&coders)
-                .filter(|(f, _)| f.target == ti)
-                .map(|(f, c)| (f, c, source(gb, f.slot, &index)))
-                .filter(|(_, _, s)| !matches!(s, Src::Absent))
-                .collect();
-            let mut bytes = vec![0u8; n * size];
-            let row = gb.width as usize * gb.samples as usize;
-            if size <= 8 {
-                pack_target::<u64>(&fields, &gb.coverage, size, row, &mut bytes);
-            } else {
-                pack_target::<u128>(&fields, &gb.coverage, size, row, &mut bytes);
-            }
-            targets.push(TargetPlane { name: tspec.name.clone(), format: *format, bytes });
-        }
-        let present = self.stored_attributes().into_iter().filter(|a| gb.has(*a)).collect();
+        let (material_table, index) = self.material_index(gb);
+        let mut targets = self.empty_targets();
+        self.pack_samples(gb, &coders, &index, 0..gb.len(), &mut targets);
         Ok(Packed {
             layout: self.name().to_string(),
             width: gb.width,
@@ -314,8 +334,64 @@ impl Layout {
             targets,
             material_table,
             depth_range,
-            present,
+            present: self.present(gb),
         })
+    }
+
+    /// The material table and every sample's index into it, when the layout uses indirection.
+    fn material_index(&self, gb: &GBuffer) -> (Option<MaterialTable>, Vec<u32>) {
+        match self.indirection() {
+            Some(ind) => {
+                let (t, i) = MaterialTable::build_keyed(gb, &ind.parameters, ind.bits, ind.key);
+                (Some(t), i)
+            }
+            None => (None, Vec::new()),
+        }
+    }
+
+    /// Attributes `gb` has that the layout stores.
+    fn present(&self, gb: &GBuffer) -> Vec<Attribute> {
+        self.stored_attributes().into_iter().filter(|a| gb.has(*a)).collect()
+    }
+
+    /// One empty byte plane per render target.
+    fn empty_targets(&self) -> Vec<TargetPlane> {
+        self.formats()
+            .iter()
+            .zip(&self.spec().targets)
+            .map(|(format, t)| TargetPlane { name: t.name.clone(), format: *format, bytes: Vec::new() })
+            .collect()
+    }
+
+    /// Packs samples `range` (whole rows) of `gb` into `targets`, whose bytes are resized to the range (`index`:
+    /// every sample's material index, empty without indirection).
+    fn pack_samples(
+        &self,
+        gb: &GBuffer,
+        coders: &[Coder],
+        index: &[u32],
+        range: Range<usize>,
+        targets: &mut [TargetPlane],
+    ) {
+        let row = gb.width as usize * gb.samples as usize;
+        for (ti, target) in targets.iter_mut().enumerate() {
+            let size = target.format.bytes();
+            let fields: Vec<(&Field, &Coder, Src<'_>)> = self
+                .fields()
+                .iter()
+                .zip(coders)
+                .filter(|(f, _)| f.target == ti)
+                .map(|(f, c)| (f, c, source(gb, f.slot, index)))
+                .filter(|(_, _, s)| !matches!(s, Src::Absent))
+                .collect();
+            // Every byte is written by `pack_target`: no clearing needed when the plane is reused.
+            target.bytes.resize(range.len() * size, 0);
+            if size <= 8 {
+                pack_target::<u64>(&fields, &gb.coverage, size, row, range.start, &mut target.bytes);
+            } else {
+                pack_target::<u128>(&fields, &gb.coverage, size, row, range.start, &mut target.bytes);
+            }
+        }
     }
 
     /// Reads `packed` back into a G-buffer. Size, sample positions, camera and coverage come from `like` (the
@@ -325,22 +401,32 @@ impl Layout {
     pub fn unpack(&self, packed: &Packed, like: &GBuffer) -> Result<GBuffer> {
         self.check(packed, like)?;
         let coders = self.coders(packed.depth_range)?;
+        let mut out = shell(like);
+        let mut index = Vec::new();
+        let band = Band { targets: &packed.targets, table: packed.material_table.as_ref(), present: &packed.present };
+        self.unpack_samples(&band, &coders, like, 0..like.len(), &mut out, &mut index)?;
+        self.finish_unpack(&mut out);
+        Ok(out)
+    }
+
+    /// Decodes the texels of `band` (samples `range` of `like`, whole rows) into the same samples of `out`'s
+    /// planes, creating zeroed planes that are missing. `index` is scratch for the band's material indices.
+    fn unpack_samples(
+        &self,
+        band: &Band<'_>,
+        coders: &[Coder],
+        like: &GBuffer,
+        range: Range<usize>,
+        out: &mut GBuffer,
+        index: &mut Vec<u32>,
+    ) -> Result<()> {
         let n = like.len();
-        let cov = &like.coverage[..];
-        let mut out = GBuffer {
-            width: like.width,
-            height: like.height,
-            samples: like.samples,
-            sample_positions: like.sample_positions.clone(),
-            camera: like.camera,
-            coverage: like.coverage.clone(),
-            materials: like.materials.clone(),
-            ..GBuffer::default()
-        };
+        let cov = &like.coverage[range.clone()];
+        let r = range.clone();
         let row = like.width as usize * like.samples as usize;
-        let mut index: Vec<u32> = Vec::new();
-        for (f, coder) in self.fields().iter().zip(&coders) {
-            let t = &packed.targets[f.target];
+        let mut has_index = false;
+        for (f, coder) in self.fields().iter().zip(coders) {
+            let t = &band.targets[f.target];
             let src = Texels { bytes: &t.bytes[..], size: t.format.bytes(), offset: f.offset, bits: f.bits, cov, row };
             let ids = |cs: &[u64], o: &mut [u32]| {
                 for (o, c) in o.iter_mut().zip(cs) {
@@ -350,33 +436,35 @@ impl Layout {
             match (f.slot, coder) {
                 (Slot::Reserved, _) => {}
                 (Slot::MaterialIndex, _) => {
-                    index = vec![0; n];
-                    src.fill(&mut index, ids, whole);
+                    index.clear();
+                    index.resize(range.len(), 0);
+                    src.fill(index, ids, whole);
+                    has_index = true;
                 }
-                (Slot::Whole(a), _) if !packed.present.contains(&a) => {}
-                (Slot::Component(a, _), _) if !packed.present.contains(&a) => {}
+                (Slot::Whole(a), _) if !band.present.contains(&a) => {}
+                (Slot::Component(a, _), _) if !band.present.contains(&a) => {}
                 (Slot::Whole(Attribute::Normal), Coder::Normal(c)) => {
                     let plane = out.normal.get_or_insert_with(|| crate::util::zeroed_vec3(n));
-                    src.fill(plane, |cs, o| c.decode_slice(cs, o), whole);
+                    src.fill(&mut plane[r.clone()], |cs, o| c.decode_slice(cs, o), whole);
                 }
                 (Slot::Whole(Attribute::Albedo), Coder::Color(c)) => {
                     let plane = out.albedo.get_or_insert_with(|| crate::util::zeroed_vec3(n));
-                    src.fill(plane, |cs, o| c.decode_slice(cs, o), whole);
+                    src.fill(&mut plane[r.clone()], |cs, o| c.decode_slice(cs, o), whole);
                 }
                 (Slot::Whole(Attribute::Depth), Coder::Depth(c)) => {
                     let plane = out.depth.get_or_insert_with(|| vec![0.0; n]);
-                    src.fill(plane, |cs, o| c.decode_slice(cs, o), whole);
+                    src.fill(&mut plane[r.clone()], |cs, o| c.decode_slice(cs, o), whole);
                 }
                 (Slot::Whole(a), Coder::Scalar(c)) => {
-                    src.fill(scalar_plane(&mut out, a, n)?, |cs, o| c.decode_slice(cs, o), whole);
+                    src.fill(&mut scalar_plane(out, a, n)?[r.clone()], |cs, o| c.decode_slice(cs, o), whole);
                 }
                 (Slot::Whole(a), Coder::Id(_)) => {
-                    src.fill(id_plane(&mut out, a, n)?, ids, whole);
+                    src.fill(&mut id_plane(out, a, n)?[r.clone()], ids, whole);
                 }
                 (Slot::Component(a, k), Coder::Scalar(c)) => match a {
                     Attribute::Motion => {
                         let plane = out.motion.get_or_insert_with(|| vec![Vec2::ZERO; n]);
-                        src.fill(plane, |cs, o| c.decode_slice(cs, o), |d: &mut Vec2, v| d[k] = v);
+                        src.fill(&mut plane[r.clone()], |cs, o| c.decode_slice(cs, o), |d: &mut Vec2, v| d[k] = v);
                     }
                     _ => {
                         let plane = match a {
@@ -385,7 +473,7 @@ impl Layout {
                             _ => &mut out.position,
                         };
                         let plane = plane.get_or_insert_with(|| crate::util::zeroed_vec3(n));
-                        src.fill(plane, |cs, o| c.decode_slice(cs, o), |d: &mut Vec3, v| d[k] = v);
+                        src.fill(&mut plane[r.clone()], |cs, o| c.decode_slice(cs, o), |d: &mut Vec3, v| d[k] = v);
                     }
                 },
                 (slot, _) => {
@@ -393,34 +481,96 @@ impl Layout {
                 }
             }
         }
-        if let Some(table) = &packed.material_table {
+        if let Some(table) = band.table {
+            let chunk = rows_chunk(row);
             for (p, a) in table.attributes().into_iter().enumerate() {
-                let mut plane = vec![0f32; n];
-                for i in (0..n).filter(|&i| cov[i]) {
-                    let row = table.entries.get(index.get(i).copied().unwrap_or(0) as usize).ok_or_else(|| {
-                        Error::Argument(format!(
-                            "material index {} outside the table of {} entries",
-                            index[i],
-                            table.entries.len()
-                        ))
-                    })?;
-                    plane[i] = row[p];
-                }
-                *scalar_plane(&mut out, a, n)? = plane;
+                let plane = &mut scalar_plane(out, a, n)?[r.clone()];
+                plane.par_chunks_mut(chunk).zip(cov.par_chunks(chunk)).enumerate().try_for_each(|(ci, (d, c))| {
+                    for (j, (d, &covered)) in d.iter_mut().zip(c).enumerate() {
+                        if covered {
+                            let k = if has_index { index[ci * chunk + j] } else { 0 };
+                            let entry = table.entries.get(k as usize).ok_or_else(|| {
+                                Error::Argument(format!(
+                                    "material index {k} outside the table of {} entries",
+                                    table.entries.len()
+                                ))
+                            })?;
+                            *d = entry[p];
+                        }
+                    }
+                    Ok::<(), Error>(())
+                })?;
             }
         }
-        for (a, vals) in self.constants() {
-            set_constant(&mut out, *a, vals, n);
-        }
-        if !self.stores(Attribute::Position) || !self.stores(Attribute::Depth) {
-            out.derive_depth_or_position();
-        }
-        Ok(out)
+        Ok(())
     }
 
-    /// Packs and unpacks: the G-buffer the lighting pass of a renderer using this layout would see.
+    /// What unpacking does once every band is decoded: the layout's constants, and position (or depth) derived
+    /// from the other when the layout stores only one.
+    fn finish_unpack(&self, out: &mut GBuffer) {
+        let n = out.len();
+        for (a, vals) in self.constants() {
+            set_constant(out, *a, vals, n);
+        }
+        if !self.stores(Attribute::Position) && self.stores(Attribute::Depth) && out.depth.is_some() {
+            out.fill_position_from_depth();
+        } else if !self.stores(Attribute::Depth) && self.stores(Attribute::Position) && out.position.is_some() {
+            out.fill_depth_from_position();
+        } else if !self.stores(Attribute::Position) || !self.stores(Attribute::Depth) {
+            out.derive_depth_or_position();
+        }
+    }
+
+    /// Packs and unpacks: the G-buffer the lighting pass of a renderer using this layout would see. Works band by
+    /// band ([`Layout::roundtrip_timed`]), so only one band's packed bytes exist at a time.
     pub fn roundtrip(&self, gb: &GBuffer) -> Result<GBuffer> {
-        self.unpack(&self.pack(gb)?, gb)
+        self.roundtrip_timed(gb, 1).map(|r| r.decoded)
+    }
+
+    /// Packs and unpacks `gb` `runs` times (at least once), timing each run's encode and decode. Each run goes
+    /// band by band (about [`BAND_SAMPLES`] samples of whole rows): the band is packed into render-target bytes
+    /// and unpacked into the output at once, so the packed frame never exists whole (a lossless 84-byte layout of a
+    /// 1080p × 4 frame would be 700 MB), and the band's bytes and the output planes are reused from run to run, so
+    /// only the first run pays for fresh memory. The decoded G-buffer is bit-identical to
+    /// `unpack(&pack(gb)?, gb)` (tested).
+    ///
+    /// The encode time of a run is the material table (with indirection) plus every band's packing; the decode
+    /// time every band's unpacking plus the constants and the derived depth or position.
+    pub fn roundtrip_timed(&self, gb: &GBuffer, runs: usize) -> Result<Roundtrip> {
+        gb.validate()?;
+        let depth_range = self.depth_range_for(gb);
+        let coders = self.coders(depth_range)?;
+        let present = self.present(gb);
+        let row = (gb.width as usize * gb.samples as usize).max(1);
+        let band_len = row * (BAND_SAMPLES / row).max(1);
+        let mut targets = self.empty_targets();
+        let mut out = shell(gb);
+        let mut index = Vec::new();
+        let (mut encode_ms, mut decode_ms) = (Vec::new(), Vec::new());
+        for _ in 0..runs.max(1) {
+            let t = Instant::now();
+            let (table, material) = self.material_index(gb);
+            let mut enc = t.elapsed();
+            let mut dec = Duration::ZERO;
+            let mut start = 0;
+            while start < gb.len() {
+                let range = start..(start + band_len).min(gb.len());
+                let t = Instant::now();
+                self.pack_samples(gb, &coders, &material, range.clone(), &mut targets);
+                enc += t.elapsed();
+                let t = Instant::now();
+                let band = Band { targets: &targets, table: table.as_ref(), present: &present };
+                self.unpack_samples(&band, &coders, gb, range.clone(), &mut out, &mut index)?;
+                dec += t.elapsed();
+                start = range.end;
+            }
+            let t = Instant::now();
+            self.finish_unpack(&mut out);
+            dec += t.elapsed();
+            encode_ms.push(enc.as_secs_f64() * 1e3);
+            decode_ms.push(dec.as_secs_f64() * 1e3);
+        }
+        Ok(Roundtrip { decoded: out, encode_ms, decode_ms })
     }
 
     fn check(&self, packed: &Packed, like: &GBuffer) -> Result<()> {
@@ -526,35 +676,38 @@ fn id_plane(gb: &mut GBuffer, a: Attribute, n: usize) -> Result<&mut Vec<u32>> {
     Ok(p.get_or_insert_with(|| vec![0; n]))
 }
 
+/// Sets attribute `a` to the constant `v` on covered samples and 0 elsewhere, in place (the plane is created if
+/// missing, reused otherwise).
 fn set_constant(gb: &mut GBuffer, a: Attribute, v: &[f32], n: usize) {
-    let cov = gb.coverage.clone();
-    let pick = |i: usize| cov[i];
+    fn fill<T: Copy + Send + Sync>(plane: &mut Option<Vec<T>>, cov: &[bool], n: usize, val: T, zero: T) {
+        let plane = plane.get_or_insert_with(|| vec![zero; n]);
+        plane.par_chunks_mut(CHUNK).zip(cov.par_chunks(CHUNK)).for_each(|(d, c)| {
+            for (d, &c) in d.iter_mut().zip(c) {
+                *d = if c { val } else { zero };
+            }
+        });
+    }
+    let cov = std::mem::take(&mut gb.coverage);
     match a {
         Attribute::Normal | Attribute::Albedo | Attribute::Position => {
-            let val = Vec3::new(v[0], v[1], v[2]);
-            let plane = (0..n).map(|i| if pick(i) { val } else { Vec3::ZERO }).collect();
-            match a {
-                Attribute::Normal => gb.normal = Some(plane),
-                Attribute::Albedo => gb.albedo = Some(plane),
-                _ => gb.position = Some(plane),
-            }
+            let plane = match a {
+                Attribute::Normal => &mut gb.normal,
+                Attribute::Albedo => &mut gb.albedo,
+                _ => &mut gb.position,
+            };
+            fill(plane, &cov, n, Vec3::new(v[0], v[1], v[2]), Vec3::ZERO);
         }
-        Attribute::Motion => {
-            let val = Vec2::new(v[0], v[1]);
-            gb.motion = Some((0..n).map(|i| if pick(i) { val } else { Vec2::ZERO }).collect());
-        }
-        a if a.is_id() => {
-            let val = v[0] as u32;
-            if let Ok(p) = id_plane(gb, a, n) {
-                *p = (0..n).map(|i| if pick(i) { val } else { 0 }).collect();
-            }
-        }
-        a => {
-            if let Ok(p) = scalar_plane(gb, a, n) {
-                *p = (0..n).map(|i| if pick(i) { v[0] } else { 0.0 }).collect();
-            }
-        }
+        Attribute::Motion => fill(&mut gb.motion, &cov, n, Vec2::new(v[0], v[1]), Vec2::ZERO),
+        Attribute::MaterialId => fill(&mut gb.material_id, &cov, n, v[0] as u32, 0),
+        Attribute::ObjectId => fill(&mut gb.object_id, &cov, n, v[0] as u32, 0),
+        Attribute::PrimitiveId => fill(&mut gb.primitive_id, &cov, n, v[0] as u32, 0),
+        Attribute::Depth => fill(&mut gb.depth, &cov, n, v[0], 0.0),
+        Attribute::Specular => fill(&mut gb.specular, &cov, n, v[0], 0.0),
+        Attribute::SpecularPower => fill(&mut gb.specular_power, &cov, n, v[0], 0.0),
+        Attribute::Roughness => fill(&mut gb.roughness, &cov, n, v[0], 0.0),
+        Attribute::Metallic => fill(&mut gb.metallic, &cov, n, v[0], 0.0),
     }
+    gb.coverage = cov;
 }
 
 /// The code a field holds for sample `i` of a packed target (for tests and tools that inspect raw bytes).
