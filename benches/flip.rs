@@ -4,6 +4,8 @@
 //! - `flip/ldr/1920x1080`: `measure::flip::ldr_flip` of two sRGB images (the displayed images of a report row);
 //! - `flip/hdr/1920x1080`: `measure::flip::hdr_flip` of two linear images (the exposure sweep: one LDR-FLIP per
 //!   exposure, the count taken from the reference image as NVIDIA's code does);
+//! - `flip/ldr-4-pairs/1920x1080` and `flip/ldr-4-batched/1920x1080`: four tests against one reference, as four
+//!   pairs and as one `ldr_flip_many` (the reference filtered once; the same maps bit for bit);
 //! - `flip/rmse/1920x1080`: the baseline, `measure::image::compare` (RMSE, PSNR, max, relative MSE) of the same
 //!   pair: what every report row computes anyway.
 //!
@@ -14,7 +16,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use gbuf::image::HdrImage;
-use gbuf::measure::flip::{hdr_flip, ldr_flip, FlipOptions};
+use gbuf::measure::flip::{hdr_flip, ldr_flip, ldr_flip_many, FlipOptions};
 use gbuf::measure::image::compare;
 use glam::Vec3;
 use std::hint::black_box;
@@ -60,6 +62,17 @@ fn benches(c: &mut Criterion) {
         .bench_function(format!("ldr/{W}x{H}"), |bn| bn.iter(|| ldr_flip(black_box(&sa), black_box(&sb), W, H, &opts)));
     group
         .bench_function(format!("hdr/{W}x{H}"), |bn| bn.iter(|| hdr_flip(black_box(&la), black_box(&lb), W, H, &opts)));
+    // Four tests against one reference, as a report's rows are: four pairs, then the batch that filters the
+    // reference once (the same maps bit for bit). The ratio of the two is what batching saves.
+    let tests: Vec<Vec<f32>> =
+        (0..4).map(|k| sb.iter().map(|v| (v * (1.0 - 0.01 * k as f32)).min(1.0)).collect()).collect();
+    let refs: Vec<&[f32]> = tests.iter().map(Vec::as_slice).collect();
+    group.bench_function(format!("ldr-4-pairs/{W}x{H}"), |bn| {
+        bn.iter(|| refs.iter().map(|t| ldr_flip(black_box(&sa), t, W, H, &opts).mean).sum::<f64>())
+    });
+    group.bench_function(format!("ldr-4-batched/{W}x{H}"), |bn| {
+        bn.iter(|| ldr_flip_many(black_box(&sa), &refs, W, H, &opts).iter().map(|m| m.mean).sum::<f64>())
+    });
     group.finish();
 }
 

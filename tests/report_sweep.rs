@@ -118,6 +118,12 @@ fn sweep_rows_match_layouts_and_lossless_is_exact() {
     // The lossless layout is on the bytes front (nothing has less error), whatever its size.
     assert!(out.rows.iter().any(|r| r.layout == "reference-f32" && r.pareto.bytes));
     assert_eq!(out.maps.len(), 3);
+    // Only the layouts with the largest layout error keep their per-pixel planes (the heatmaps drawn); the
+    // lossless one, with error 0, is the one emptied.
+    let kept: Vec<&str> = out.maps.iter().filter(|m| m.normal_deg.is_some()).map(|m| m.layout.as_str()).collect();
+    assert_eq!(kept.len(), gbuf::analysis::sweep::HEATMAP_LAYOUTS, "{kept:?}");
+    assert!(!kept.contains(&"reference-f32"), "{kept:?}");
+    assert!(out.maps.iter().filter(|m| !kept.contains(&m.layout.as_str())).all(|m| m.image_abs.is_none()));
     assert_eq!(out.masks.len(), 2);
     assert_eq!(out.lights_per_pixel.as_ref().map(Vec::len), Some(gb.pixel_count()));
 }

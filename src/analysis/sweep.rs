@@ -18,7 +18,7 @@ use crate::layout::Layout;
 use crate::light::Light;
 use crate::measure;
 use crate::measure::flip::FlipMap;
-use crate::measure::image::{error_set, ErrorSet, Viewing};
+use crate::measure::image::{error_set, flip_many, ErrorSet, Viewing};
 use crate::resolve::{self, Culling, ResolveConfig};
 use serde::Serialize;
 
@@ -84,7 +84,8 @@ pub struct SweepOutput {
     pub reference: HdrImage,
     /// Timing of the reference resolve.
     pub reference_timing: Timing,
-    /// Error maps, one per layout that could be roundtripped.
+    /// Error maps, one per layout that could be roundtripped; only the [`HEATMAP_LAYOUTS`] with the largest layout
+    /// error keep their per-pixel planes.
     pub maps: Vec<ErrorMaps>,
     /// Edge masks of the first layout, per detector.
     pub masks: Vec<(String, EdgeMask)>,
@@ -208,7 +209,7 @@ fn detector_results(
             Ok((mask, res, quad)) => {
                 r.shading_fraction = Some(mask.evaluated_fraction(&detect::covered_per_pixel(gb)));
                 r.edge_fraction = Some(mask.edge_fraction());
-                r.aa_error = Some(error_set(reference, &res.image, viewing));
+                r.aa_error = Some(error_set(reference, &res.image, None));
                 r.quad_light_fragments = Some(quad);
                 images.push(Some(res.image));
             }
@@ -218,6 +219,18 @@ fn detector_results(
             }
         }
         results.push(r);
+    }
+    // FLIP of every detector's image against the reference in one batch (the reference filtered once).
+    if let Some(v) = viewing {
+        let lit: Vec<(usize, &HdrImage)> =
+            images.iter().enumerate().filter_map(|(i, m)| Some((i, m.as_ref()?))).collect();
+        let tests: Vec<&HdrImage> = lit.iter().map(|(_, m)| *m).collect();
+        for ((i, _), f) in lit.iter().zip(flip_many(reference, &tests, v)) {
+            if let (Some(e), Some((map, hdr))) = (results[*i].aa_error.as_mut(), f) {
+                e.flip_ldr = Some(map.mean);
+                e.flip_hdr = Some(hdr);
+            }
+        }
     }
     mark_detector_front(&mut results);
     (images, results)
@@ -256,6 +269,7 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, progress: Progre
     let mut masks = Vec::new();
     let mut lights_per_pixel = None;
     let mut worst_flip: Option<(String, FlipMap)> = None;
+    let mut pending: Vec<PendingFlip> = Vec::new();
     // Layouts keep the coverage: one count of covered samples serves every row's shading fraction.
     let covered = detect::covered_per_pixel(gb);
     for (li, layout) in cfg.layouts.iter().enumerate() {
@@ -343,24 +357,15 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, progress: Progre
                     FlipRows::Decisive => decisive,
                     FlipRows::None => false,
                 };
-                let viewing = flip.then_some(&cfg.viewing);
                 match time_runs(cfg.runs, || resolve::resolve(&decoded, lights, &mask, &rcfg)) {
                     Ok((res, t)) => {
                         r.set_timing("resolve", t);
                         if c == Some(Culling::Quad) {
                             r.bandwidth_mb = bandwidth(gb, bytes, Some(res.stats.light_pairs_tested));
                         }
-                        r.total_error = Some(error_set(&reference, &res.image, viewing));
+                        r.total_error = Some(error_set(&reference, &res.image, None));
                         if let Some(x) = exact[di].as_ref() {
-                            let mut e = ErrorSet::numeric(&measure::image::compare(x, &res.image));
-                            if let Some((map, hdr)) = viewing.and_then(|v| measure::image::flip_pair(x, &res.image, v))
-                            {
-                                e.flip_ldr = Some(map.mean);
-                                e.flip_hdr = Some(hdr);
-                                if decisive && worst_flip.as_ref().is_none_or(|(_, w)| map.mean > w.mean) {
-                                    worst_flip = Some((layout.name().to_string(), map));
-                                }
-                            }
+                            let e = ErrorSet::numeric(&measure::image::compare(x, &res.image));
                             r.layout_error = Some(e);
                             if e.rmse == 0.0 {
                                 r.add_note("image identical to the exact G-buffer's (layout error 0)");
@@ -376,17 +381,29 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, progress: Progre
                         if lights_per_pixel.is_none() {
                             lights_per_pixel = Some(res.lights_per_pixel.clone());
                         }
+                        if flip {
+                            pending.push(PendingFlip { row: rows.len(), detector: di, decisive, image: res.image });
+                        }
                     }
                     Err(e) => r.error = Some(format!("resolve failed: {e}")),
                 }
                 rows.push(r);
                 done += 1;
+                if pending.len() >= FLIP_BATCH {
+                    progress(done, total, "FLIP");
+                    flush_flip(&mut pending, &mut rows, &reference, &exact, &cfg.viewing, &mut worst_flip);
+                }
             }
             if li == 0 {
                 masks.push((det.name().to_string(), mask));
             }
         }
         maps.push(lmaps);
+        keep_worst_maps(&mut maps, &rows);
+    }
+    if !pending.is_empty() {
+        progress(done, total, "FLIP");
+        flush_flip(&mut pending, &mut rows, &reference, &exact, &cfg.viewing, &mut worst_flip);
     }
     progress(total, total, "done");
     mark_pareto(&mut rows);
@@ -402,6 +419,83 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, progress: Progre
         worst_flip,
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// How many layouts keep their per-pixel error maps: those with the largest layout error (the report draws their
+/// heatmaps). A map of a 1080p frame is 17 MB per attribute; keeping every layout's held half a GB.
+pub const HEATMAP_LAYOUTS: usize = 2;
+
+/// Drops the per-pixel planes of every layout but the [`HEATMAP_LAYOUTS`] with the largest best layout RMSE (over
+/// their rows); the entries stay, empty.
+fn keep_worst_maps(maps: &mut [ErrorMaps], rows: &[Row]) {
+    let best = |m: &ErrorMaps| {
+        rows.iter().filter(|r| r.layout == m.layout).filter_map(Row::layout_rmse).fold(f64::NAN, f64::min)
+    };
+    let mut order: Vec<(usize, f64)> = maps.iter().enumerate().map(|(i, m)| (i, best(m))).collect();
+    // Largest first; layouts without a finite error last (the report draws none for them).
+    order.sort_by(|a, b| match (a.1.is_finite(), b.1.is_finite()) {
+        (true, true) => b.1.total_cmp(&a.1),
+        (x, y) => y.cmp(&x),
+    });
+    for &(i, _) in order.iter().skip(HEATMAP_LAYOUTS).chain(order.iter().filter(|(_, e)| !e.is_finite())) {
+        let m = &mut maps[i];
+        (m.normal_deg, m.depth_rel, m.albedo_abs, m.image_abs) = (None, None, None, None);
+    }
+}
+
+/// Rows whose images wait for FLIP, batched so that each reference is filtered once per batch, not once per row.
+const FLIP_BATCH: usize = 8;
+
+/// A row's image waiting for FLIP: against the reference (total error) and the exact G-buffer lit with its
+/// detector (layout error).
+struct PendingFlip {
+    row: usize,
+    detector: usize,
+    decisive: bool,
+    image: HdrImage,
+}
+
+/// FLIP of the pending rows' images: all of them against the reference in one batch, then per detector against
+/// that detector's exact image. Keeps the decisive row with the largest layout LDR-FLIP in `worst` (the first on
+/// ties, in row order).
+fn flush_flip(
+    pending: &mut Vec<PendingFlip>,
+    rows: &mut [Row],
+    reference: &HdrImage,
+    exact: &[Option<HdrImage>],
+    viewing: &Viewing,
+    worst: &mut Option<(String, FlipMap)>,
+) {
+    let set = |e: &mut Option<ErrorSet>, f: Option<(FlipMap, f64)>| -> Option<FlipMap> {
+        let (e, (map, hdr)) = (e.as_mut()?, f?);
+        e.flip_ldr = Some(map.mean);
+        e.flip_hdr = Some(hdr);
+        Some(map)
+    };
+    let images: Vec<&HdrImage> = pending.iter().map(|p| &p.image).collect();
+    for (p, f) in pending.iter().zip(flip_many(reference, &images, viewing)) {
+        set(&mut rows[p.row].total_error, f);
+    }
+    let mut layout_maps: Vec<Option<FlipMap>> = pending.iter().map(|_| None).collect();
+    for (d, x) in exact.iter().enumerate() {
+        let Some(x) = x else { continue };
+        let group: Vec<usize> = (0..pending.len()).filter(|&i| pending[i].detector == d).collect();
+        if group.is_empty() {
+            continue;
+        }
+        let images: Vec<&HdrImage> = group.iter().map(|&i| &pending[i].image).collect();
+        for (&i, f) in group.iter().zip(flip_many(x, &images, viewing)) {
+            layout_maps[i] = set(&mut rows[pending[i].row].layout_error, f);
+        }
+    }
+    for (p, map) in pending.iter().zip(layout_maps) {
+        if let Some(map) = map.filter(|_| p.decisive) {
+            if worst.as_ref().is_none_or(|(_, w)| map.mean > w.mean) {
+                *worst = Some((rows[p.row].layout.clone(), map));
+            }
+        }
+    }
+    pending.clear();
 }
 
 /// Copies the roundtrip's attribute errors into a row.

@@ -118,8 +118,16 @@ impl HdrImage {
     /// 8-bit sRGB bytes (RGB, row-major) after `tone`, rounded to nearest.
     #[must_use]
     pub fn to_srgb8(&self, tone: ToneMap) -> Vec<u8> {
+        use rayon::prelude::*;
         let enc = |x: f32| (srgb_encode(tone.apply(x)) * 255.0 + 0.5) as u8;
-        self.rgb.iter().flat_map(|c| [enc(c.x), enc(c.y), enc(c.z)]).collect()
+        let mut out = vec![0u8; 3 * self.rgb.len()];
+        let row = self.width.max(1) as usize;
+        out.par_chunks_mut(3 * row).zip(self.rgb.par_chunks(row)).for_each(|(o, px)| {
+            for (o, c) in o.chunks_exact_mut(3).zip(px) {
+                o.copy_from_slice(&[enc(c.x), enc(c.y), enc(c.z)]);
+            }
+        });
+        out
     }
 
     /// The ISPC `deferred` sample's 8-bit output: `(u8)(pow(clamp(x, 0, 1), 1/2.2) · 255)` per channel (truncation,

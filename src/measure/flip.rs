@@ -630,6 +630,263 @@ unsafe fn band_avx2(inp: &Inputs<'_>, y0: usize, out: &mut [f32], merge: Option<
     band_impl(inp, y0, out, merge)
 }
 
+// ---------------------------------------------------------------------------
+// Several test images against one reference
+// ---------------------------------------------------------------------------
+
+/// Per-pixel values one image contributes to FLIP after filtering: Hunt-adjusted L, a, b, and the edge and point
+/// feature magnitudes. Planes of a band, `FEATURES` floats per pixel, plane-major per tile row.
+const FEATURES: usize = 5;
+
+/// LDR-FLIP of several **sRGB-encoded** test images against one reference ([`ldr_flip`] for each, bit for bit),
+/// filtering the reference once instead of once per test.
+pub fn ldr_flip_many(
+    reference_srgb: &[f32],
+    tests: &[&[f32]],
+    width: usize,
+    height: usize,
+    opts: &FlipOptions,
+) -> Vec<FlipMap> {
+    for t in tests {
+        check_sizes(reference_srgb, t, width, height);
+    }
+    let npix = width * height;
+    let mut maps: Vec<Vec<f32>> = tests.iter().map(|_| vec![0.0f32; npix]).collect();
+    if npix > 0 && !tests.is_empty() {
+        let ctx = Ctx::new(width, height, opts.pixels_per_degree);
+        run_bands_many(&ctx, reference_srgb, tests, Encoding::Srgb, &mut maps, None);
+    }
+    maps.into_iter()
+        .map(|values| {
+            let mean = mean_f64(&values);
+            FlipMap { width, height, values, mean }
+        })
+        .collect()
+}
+
+/// HDR-FLIP of several linear test images against one reference with the reference defaults ([`hdr_flip`] for
+/// each, bit for bit): the exposures come from the reference, and at each exposure the reference is filtered once
+/// instead of once per test.
+pub fn hdr_flip_many(
+    reference_linear: &[f32],
+    tests: &[&[f32]],
+    width: usize,
+    height: usize,
+    opts: &FlipOptions,
+) -> Vec<HdrFlip> {
+    for t in tests {
+        check_sizes(reference_linear, t, width, height);
+    }
+    let tm = ToneMapper::default();
+    let (start, stop) = compute_exposures(reference_linear, tm);
+    let n = (stop - start).clamp(0.0, MAX_EXPOSURE_RANGE).ceil().max(2.0) as usize;
+    let step = (stop - start) / (n - 1) as f32;
+    let exposures: Vec<f32> = (0..n).map(|i| start + i as f32 * step).collect();
+    let npix = width * height;
+    let mut maxes: Vec<Vec<f32>> = tests.iter().map(|_| vec![0.0f32; npix]).collect();
+    let mut tags: Vec<Vec<f32>> = tests.iter().map(|_| vec![0.0f32; npix]).collect();
+    if npix > 0 && !tests.is_empty() {
+        let ctx = Ctx::new(width, height, opts.pixels_per_degree);
+        for (i, &e) in exposures.iter().enumerate() {
+            let enc = Encoding::Hdr { scale: 2.0f32.powf(e), tm };
+            let tag = i as f32 / (n - 1) as f32;
+            run_bands_many(&ctx, reference_linear, tests, enc, &mut maxes, Some((&mut tags, tag)));
+        }
+    }
+    maxes
+        .into_iter()
+        .zip(tags)
+        .map(|(values, exposure_map)| {
+            let mean = mean_f64(&values);
+            HdrFlip {
+                map: FlipMap { width, height, values, mean },
+                exposures: exposures.clone(),
+                start_exposure: start,
+                stop_exposure: stop,
+                tone_mapper: tm,
+                exposure_map,
+            }
+        })
+        .collect()
+}
+
+/// One test's rows of a band: its error map's, and its exposure map's when merging.
+type BandRows<'a> = (&'a mut [f32], Option<&'a mut [f32]>);
+
+/// [`run_bands`] for several tests: per band, the reference's features once, then each test against them.
+fn run_bands_many(
+    ctx: &Ctx,
+    r: &[f32],
+    tests: &[&[f32]],
+    enc: Encoding,
+    outs: &mut [Vec<f32>],
+    merge: Option<(&mut [Vec<f32>], f32)>,
+) {
+    let (w, h) = (ctx.w, ctx.h);
+    let threads = rayon::current_num_threads().max(1);
+    let min_band = (4 * ctx.rmax).max(16);
+    let nbands = (threads * 3).min(h.div_ceil(min_band)).max(1);
+    let band_h = h.div_ceil(nbands).next_multiple_of(2);
+    // Per band, the rows of every test's output (and exposure map).
+    let mut bands: Vec<Vec<BandRows<'_>>> = (0..h.div_ceil(band_h)).map(|_| Vec::new()).collect();
+    let (tag, mut tag_maps) = match merge {
+        Some((m, tag)) => (tag, Some(m.iter_mut().map(|m| m.chunks_mut(band_h * w)).collect::<Vec<_>>())),
+        None => (0.0, None),
+    };
+    for (k, out) in outs.iter_mut().enumerate() {
+        for (b, rows) in out.chunks_mut(band_h * w).enumerate() {
+            let e = tag_maps.as_mut().map(|t| t[k].next().expect("as many exposure-map bands as map bands"));
+            bands[b].push((rows, e));
+        }
+    }
+    let merging = tag_maps.is_some();
+    bands.into_par_iter().enumerate().for_each(|(b, mut outs)| {
+        let y0 = b * band_h;
+        let rows = outs[0].0.len() / w;
+        let mut feats = vec![0.0f32; FEATURES * rows * w];
+        band_features(ctx, r, enc, y0, rows, &mut Sink::Store(&mut feats));
+        for (k, (out, em)) in outs.iter_mut().enumerate() {
+            let merge = if merging { em.as_deref_mut().map(|e| (e, tag)) } else { None };
+            band_features(ctx, tests[k], enc, y0, rows, &mut Sink::Compare { reference: &feats, out, merge });
+        }
+    });
+}
+
+/// What a one-image band pass does with each tile row's features: store them (the reference's), or compare them
+/// with the stored reference features into an error map (a test's), optionally keeping the per-pixel maximum and
+/// tagging where it grew (HDR-FLIP's exposures). Buffers are band-sized, `FEATURES` planes of `rows × w`.
+enum Sink<'a> {
+    Store(&'a mut [f32]),
+    Compare { reference: &'a [f32], out: &'a mut [f32], merge: Option<(&'a mut [f32], f32)> },
+}
+
+/// Hands tile row `ry` (columns `x0..x0 + n`) of the features `f` to `sink`.
+#[inline(always)]
+fn sink_row(ctx: &Ctx, sink: &mut Sink<'_>, rows: usize, ry: usize, x0: usize, f: &[[f32; TW]; FEATURES]) {
+    let w = ctx.w;
+    let n = (w - x0).min(TW);
+    let at = |p: usize| (p * rows + ry) * w + x0;
+    match sink {
+        Sink::Store(feats) => {
+            for (p, plane) in f.iter().enumerate() {
+                feats[at(p)..at(p) + n].copy_from_slice(&plane[..n]);
+            }
+        }
+        Sink::Compare { reference, out, merge } => {
+            let (cmax, pccmax) = (ctx.cmax, ctx.pccmax);
+            let r = |p: usize| &reference[at(p)..at(p) + n];
+            let (lr, ar, br, er, pr) = (r(0), r(1), r(2), r(3), r(4));
+            let mut e = [0.0f32; TW];
+            for i in 0..n {
+                let cd = lab_error(lr[i], ar[i], br[i], f[0][i], f[1][i], f[2][i], cmax, pccmax);
+                e[i] = flip_error(cd, er[i], pr[i], f[3][i], f[4][i]);
+            }
+            let orow = &mut out[ry * w + x0..ry * w + x0 + n];
+            match merge {
+                None => orow.copy_from_slice(&e[..n]),
+                Some((em, tag)) => {
+                    let erow = &mut em[ry * w + x0..ry * w + x0 + n];
+                    for ((o, x), &v) in orow.iter_mut().zip(erow.iter_mut()).zip(&e[..n]) {
+                        let grow = v > *o;
+                        *o = if grow { v } else { *o };
+                        *x = if grow { *tag } else { *x };
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The features of rows `y0..y0 + rows` of one image, handed to `sink` tile row by tile row. Runtime dispatch to an AVX2 build on x86-64, as [`band`].
+fn band_features(ctx: &Ctx, img: &[f32], enc: Encoding, y0: usize, rows: usize, sink: &mut Sink<'_>) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        #[cfg(test)]
+        let generic = tests::FORCE_GENERIC.load(std::sync::atomic::Ordering::Relaxed);
+        #[cfg(not(test))]
+        let generic = false;
+        if !generic && crate::base::isa::Isa::detect() >= crate::base::isa::Isa::Avx2 {
+            // SAFETY: the CPU supports AVX2 and FMA (checked by `Isa::detect`).
+            unsafe { band_features_avx2(ctx, img, enc, y0, rows, sink) };
+            return;
+        }
+    }
+    band_features_impl(ctx, img, enc, y0, rows, sink)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn band_features_avx2(ctx: &Ctx, img: &[f32], enc: Encoding, y0: usize, rows: usize, sink: &mut Sink<'_>) {
+    band_features_impl(ctx, img, enc, y0, rows, sink)
+}
+
+/// One image's pass of [`band_impl`]: the same ring, horizontal and vertical sums (7 planes instead of 14), then
+/// per pixel the Lab colour and feature magnitudes that [`vrow2`] computes for each image of a pair.
+#[inline(always)]
+fn band_features_impl(ctx: &Ctx, img: &[f32], enc: Encoding, y0: usize, rows: usize, sink: &mut Sink<'_>) {
+    const NH1: usize = NH / 2;
+    let (w, h) = (ctx.w, ctx.h);
+    let row_len = NH1 * TW;
+    let mut ring = vec![0.0f32; ctx.ring * row_len];
+    let mut pad = vec![0.0f32; 4 * (TW + 2 * ctx.rmax)];
+    let mut rgb = vec![0.0f32; 3 * (TW + 2 * ctx.rmax)];
+    let mut offs_s = vec![0usize; 2 * ctx.rs + 2];
+    let mut offs_f = vec![0usize; 2 * ctx.rf + 2];
+    let mut acc = Box::new([[[0.0f32; TW]; 8]; 2]);
+    let mut feats = Box::new([[0.0f32; TW]; FEATURES]);
+    let mut x0 = 0;
+    while x0 < w {
+        let tw = TW.min(w - x0);
+        let tws = tw.next_multiple_of(COLS);
+        let mut next = y0.saturating_sub(ctx.rmax);
+        let mut y = y0;
+        while y < y0 + rows {
+            let hi = (y + 1 + ctx.rmax).min(h - 1);
+            while next <= hi {
+                let slot = next % ctx.ring;
+                let dst = &mut ring[slot * row_len..(slot + 1) * row_len];
+                hrow(ctx, &[img], enc, next, x0, tw, tws, &mut pad, &mut rgb, dst);
+                next += 1;
+            }
+            for (i, o) in offs_s.iter_mut().enumerate() {
+                *o = ((y + i).saturating_sub(ctx.rs).min(h - 1) % ctx.ring) * row_len;
+            }
+            for (i, o) in offs_f.iter_mut().enumerate() {
+                *o = ((y + i).saturating_sub(ctx.rf).min(h - 1) % ctx.ring) * row_len;
+            }
+            assert!(offs_s.iter().chain(&offs_f).all(|&o| o + row_len <= ring.len()));
+            // acc[row][plane]: Y, Cx, Cz1, Cz2, dx, ddx, dy, ddy.
+            let mut c = 0;
+            while c < tws {
+                let (a, b) = vsum2(&ring, &offs_s, c, [HP_Y, HP_CX, HP_CZ1, HP_CZ2], &ctx.ws, [0, 1, 2, 3]);
+                let (fa, fb) = vsum2(&ring, &offs_f, c, [HP_DX, HP_DDX, HP_G, HP_G], &ctx.wf, [0, 0, 1, 2]);
+                for k in 0..4 {
+                    acc[0][k][c..c + LANES].copy_from_slice(&a[k].0);
+                    acc[1][k][c..c + LANES].copy_from_slice(&b[k].0);
+                    acc[0][4 + k][c..c + LANES].copy_from_slice(&fa[k].0);
+                    acc[1][4 + k][c..c + LANES].copy_from_slice(&fb[k].0);
+                }
+                c += LANES;
+            }
+            for dy in 0..2.min(y0 + rows - y) {
+                let [sy, scx, sz1, sz2, dx, ddx, dyy, ddy] = &acc[dy];
+                let [fl, fa, fb, fe, fp] = &mut *feats;
+                for i in 0..tws {
+                    let (l, a, b) = ycxcz_to_lab_hunt(sy[i], scx[i], sz1[i] + sz2[i]);
+                    fl[i] = l;
+                    fa[i] = a;
+                    fb[i] = b;
+                    fe[i] = (dx[i] * dx[i] + dyy[i] * dyy[i]).sqrt();
+                    fp[i] = (ddx[i] * ddx[i] + ddy[i] * ddy[i]).sqrt();
+                }
+                sink_row(ctx, sink, rows, y + dy - y0, x0, &feats);
+            }
+            y += 2;
+        }
+        x0 += tw;
+    }
+}
+
 /// Column tile width: a tile's ring of horizontally filtered rows
 /// (`(2 rmax + 1) * NH * TW` floats, ~300 KB at 67 ppd) stays in L2.
 const TW: usize = 256;
@@ -664,7 +921,7 @@ fn band_impl(inp: &Inputs<'_>, y0: usize, out: &mut [f32], mut merge: Option<(&m
             while next <= hi {
                 let slot = next % ctx.ring;
                 let dst = &mut ring[slot * row_len..(slot + 1) * row_len];
-                hrow(ctx, r, t, enc, next, x0, tw, tws, &mut pad, &mut rgb, dst);
+                hrow(ctx, &[r, t], enc, next, x0, tw, tws, &mut pad, &mut rgb, dst);
                 next += 1;
             }
             // offs[i]: ring offset of input row clamp(y - radius + i), i = 0..=2 radius + 1.
@@ -698,14 +955,13 @@ fn band_impl(inp: &Inputs<'_>, y0: usize, out: &mut [f32], mut merge: Option<(&m
 }
 
 /// Converts columns `[x0 - rmax, x0 + tws + rmax)` (clamped to the image) of row `y`
-/// of both images to YCxCz and filters them horizontally into `out`
-/// (NH planes of stride `TW`, `tws` columns each).
+/// of the images (both of a pair, or one) to YCxCz and filters them horizontally into `out`
+/// (7 planes per image of stride `TW`, `tws` columns each).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn hrow(
     ctx: &Ctx,
-    r: &[f32],
-    t: &[f32],
+    imgs: &[&[f32]],
     enc: Encoding,
     y: usize,
     x0: usize,
@@ -723,7 +979,7 @@ fn hrow(
     let hi = (x0 + tw + rp).min(w);
     let n = hi - lo;
     let lpad = rp - (x0 - lo);
-    for (img, src) in [r, t].into_iter().enumerate() {
+    for (img, src) in imgs.iter().enumerate() {
         let row = &src[(y * w + lo) * 3..(y * w + hi) * 3];
         let (rr, rest) = rgb[..3 * n].split_at_mut(n);
         let (gg, bb) = rest.split_at_mut(n);
@@ -800,7 +1056,7 @@ fn hrow(
         }
     }
     let (rs, rf) = (ctx.rs, ctx.rf);
-    for img in 0..2 {
+    for img in 0..imgs.len() {
         let plane = |p: usize| &pad[(img * 4 + p) * pw..(img * 4 + p + 1) * pw];
         let o = |q: usize| (img * 7 + q) * TW;
         conv_rows::<1, 4>(plane(0), [&ctx.sy], rp - rs, tws, &mut out[o(HP_Y)..o(HP_Y) + tws]);
@@ -958,13 +1214,20 @@ fn vrow2(ctx: &Ctx, ring: &[f32], tws: usize, offs_s: &[usize], offs_f: &[usize]
             let pr = (ddx_r[i] * ddx_r[i] + ddy_r[i] * ddy_r[i]).sqrt();
             let et = (dx_t[i] * dx_t[i] + dy_t[i] * dy_t[i]).sqrt();
             let pt = (ddx_t[i] * ddx_t[i] + ddy_t[i] * ddy_t[i]).sqrt();
-            let ed = (er - et).abs();
-            let pd = (pr - pt).abs();
-            let m = if ed > pd { ed } else { pd };
-            let fd = (std::f32::consts::FRAC_1_SQRT_2 * m).sqrt(); // ^gqf, gqf = 0.5
-            o[i] = fast_pow(cd, 1.0 - fd);
+            o[i] = flip_error(cd, er, pr, et, pt);
         }
     }
+}
+
+/// The FLIP error of a pixel from its colour error `cd` and the edge / point feature magnitudes of the reference
+/// (`er`, `pr`) and the test (`et`, `pt`).
+#[inline(always)]
+fn flip_error(cd: f32, er: f32, pr: f32, et: f32, pt: f32) -> f32 {
+    let ed = (er - et).abs();
+    let pd = (pr - pt).abs();
+    let m = if ed > pd { ed } else { pd };
+    let fd = (std::f32::consts::FRAC_1_SQRT_2 * m).sqrt(); // ^gqf, gqf = 0.5
+    fast_pow(cd, 1.0 - fd)
 }
 
 /// Colour error in [0, 1] between two CSF-filtered YCxCz colours.
@@ -972,6 +1235,12 @@ fn vrow2(ctx: &Ctx, ring: &[f32], tws: usize, offs_s: &[usize], offs_f: &[usize]
 fn color_error(yr: f32, cxr: f32, czr: f32, yt: f32, cxt: f32, czt: f32, cmax: f32, pccmax: f32) -> f32 {
     let (lr, ar, br) = ycxcz_to_lab_hunt(yr, cxr, czr);
     let (lt, at, bt) = ycxcz_to_lab_hunt(yt, cxt, czt);
+    lab_error(lr, ar, br, lt, at, bt, cmax, pccmax)
+}
+
+/// Colour error in [0, 1] between two Hunt-adjusted Lab colours (HyAB, compressed).
+#[inline(always)]
+fn lab_error(lr: f32, ar: f32, br: f32, lt: f32, at: f32, bt: f32, cmax: f32, pccmax: f32) -> f32 {
     let hyab = (lr - lt).abs() + ((ar - at) * (ar - at) + (br - bt) * (br - bt)).sqrt();
     let c = fast_pow(hyab, GQC);
     if c < pccmax {
@@ -1174,6 +1443,41 @@ mod tests {
         assert_eq!(fast.values, slow.values);
         assert_eq!(hfast.map.values, hslow.map.values);
         assert_eq!(hfast.exposure_map, hslow.exposure_map);
+    }
+
+    /// Several tests against one reference, the reference filtered once, give each pair's maps bit for bit: LDR
+    /// and HDR (maps, exposure maps, means), two column tiles (the second partial), several bands, an identical
+    /// test, both code paths.
+    #[test]
+    fn many_tests_against_one_reference_equal_each_pair() {
+        let (w, h) = (300, 70);
+        let a = lcg_image(w, h, 5);
+        let b: Vec<f32> = a.iter().map(|v| (v * 0.9 + 0.03).min(1.0)).collect();
+        let c = lcg_image(w, h, 11);
+        let opts = FlipOptions { pixels_per_degree: 40.0 };
+        let hd = |x: &[f32]| -> Vec<f32> { x.iter().map(|v| v * v * 30.0).collect() };
+        let (ha, hb, hc) = (hd(&a), hd(&b), hd(&c));
+        for generic in [false, true] {
+            FORCE_GENERIC.store(generic, std::sync::atomic::Ordering::Relaxed);
+            let ldr = ldr_flip_many(&a, &[&b, &a, &c], w, h, &opts);
+            for (m, t) in ldr.iter().zip([&b, &a, &c]) {
+                let pair = ldr_flip(&a, t, w, h, &opts);
+                assert_eq!((&m.values, m.mean), (&pair.values, pair.mean), "LDR, generic {generic}");
+            }
+            assert!(ldr[0].mean > 0.0 && ldr[1].mean == 0.0);
+            let hdr = hdr_flip_many(&ha, &[&hb, &ha, &hc], w, h, &opts);
+            for (m, t) in hdr.iter().zip([&hb, &ha, &hc]) {
+                let pair = hdr_flip(&ha, t, w, h, &opts);
+                assert_eq!(m.map.values, pair.map.values, "HDR, generic {generic}");
+                assert_eq!(
+                    (&m.exposure_map, &m.exposures, m.map.mean),
+                    (&pair.exposure_map, &pair.exposures, pair.map.mean)
+                );
+            }
+            assert!(hdr[0].exposures.len() >= 2 && hdr[2].mean() > hdr[0].mean());
+        }
+        FORCE_GENERIC.store(false, std::sync::atomic::Ordering::Relaxed);
+        assert!(ldr_flip_many(&a, &[], w, h, &opts).is_empty());
     }
 
     #[test]

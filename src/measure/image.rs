@@ -13,6 +13,7 @@ use crate::light::Light;
 use crate::measure::flip;
 use crate::resolve::{resolve, ResolveConfig, Schedule};
 use crate::GBuffer;
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// How far `test` is from `reference`, per channel value (3 per pixel), in f64.
@@ -183,15 +184,46 @@ pub fn flip_pair(reference: &HdrImage, test: &HdrImage, viewing: &Viewing) -> Op
     }
     let (w, h) = (reference.width as usize, reference.height as usize);
     let opts = flip::FlipOptions { pixels_per_degree: viewing.pixels_per_degree };
-    let shown =
-        |img: &HdrImage| -> Vec<f32> { img.to_srgb8(viewing.tone()).iter().map(|&b| f32::from(b) / 255.0).collect() };
-    let ldr = flip::ldr_flip(&shown(reference), &shown(test), w, h, &opts);
-    // HDR-FLIP needs finite, non-negative radiance: what the resolve writes, but a dump's reference may not be.
-    let linear = |img: &HdrImage| -> Vec<f32> {
-        img.rgb.iter().flat_map(|c| c.to_array()).map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 }).collect()
+    let shown = |img: &HdrImage| -> Vec<f32> {
+        img.to_srgb8(viewing.tone()).par_iter().map(|&b| f32::from(b) / 255.0).collect()
     };
+    let ldr = flip::ldr_flip(&shown(reference), &shown(test), w, h, &opts);
     let hdr = flip::hdr_flip(&linear(reference), &linear(test), w, h, &opts).mean();
     Some((ldr, hdr))
+}
+
+/// [`flip_pair`] of several tests against one reference (`None` for a test of another size), the same numbers bit
+/// for bit, with the reference filtered once per pass instead of once per test: the LDR pass of every test, then
+/// the HDR exposures. The displayed and linear copies of the tests exist one kind at a time.
+#[must_use]
+pub fn flip_many(reference: &HdrImage, tests: &[&HdrImage], viewing: &Viewing) -> Vec<Option<(flip::FlipMap, f64)>> {
+    let same = |t: &&HdrImage| {
+        t.width == reference.width && t.height == reference.height && t.rgb.len() == reference.rgb.len()
+    };
+    let fit: Vec<&HdrImage> = tests.iter().copied().filter(same).collect();
+    let (w, h) = (reference.width as usize, reference.height as usize);
+    let opts = flip::FlipOptions { pixels_per_degree: viewing.pixels_per_degree };
+    let shown = |img: &HdrImage| -> Vec<f32> {
+        img.to_srgb8(viewing.tone()).par_iter().map(|&b| f32::from(b) / 255.0).collect()
+    };
+    let ldr = {
+        let tests: Vec<Vec<f32>> = fit.iter().map(|t| shown(t)).collect();
+        let views: Vec<&[f32]> = tests.iter().map(Vec::as_slice).collect();
+        flip::ldr_flip_many(&shown(reference), &views, w, h, &opts)
+    };
+    let hdr = {
+        let tests: Vec<Vec<f32>> = fit.iter().map(|t| linear(t)).collect();
+        let views: Vec<&[f32]> = tests.iter().map(Vec::as_slice).collect();
+        flip::hdr_flip_many(&linear(reference), &views, w, h, &opts)
+    };
+    let mut results = ldr.into_iter().zip(hdr).map(|(l, h)| Some((l, h.mean())));
+    tests.iter().map(|t| if same(t) { results.next().expect("one result per fitting test") } else { None }).collect()
+}
+
+/// An image as HDR-FLIP takes it: interleaved linear RGB, finite and non-negative (what the resolve writes, but a
+/// dump's reference may not be).
+fn linear(img: &HdrImage) -> Vec<f32> {
+    img.rgb.par_iter().flat_map_iter(|c| c.to_array()).map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 }).collect()
 }
 
 /// The [`ErrorSet`] of `test` against `reference`, with FLIP when `viewing` is given. Images of different sizes

@@ -15,8 +15,8 @@ use image::{Rgb, RgbImage};
 /// Size of the scatter plots in pixels.
 pub const PLOT_SIZE: (u32, u32) = (720, 440);
 
-/// How many of the worst layouts get error heatmaps.
-pub const WORST_LAYOUTS: usize = 2;
+/// How many of the worst layouts get error heatmaps (the sweep keeps the maps of that many).
+pub const WORST_LAYOUTS: usize = crate::analysis::sweep::HEATMAP_LAYOUTS;
 
 /// Heatmaps wider than this are downscaled (nearest pixel) to keep the report folder small.
 pub const MAX_PICTURE_WIDTH: u32 = 960;
