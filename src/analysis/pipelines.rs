@@ -21,7 +21,7 @@ use crate::image::mlaa::{mlaa, MlaaConfig, MlaaStats};
 use crate::image::HdrImage;
 use crate::layout::Layout;
 use crate::light::Light;
-use crate::measure::image::{error_set, ErrorSet, Viewing};
+use crate::measure::image::{error_set, flip_many, ErrorSet, Viewing};
 use crate::resolve::{self, Culling, MsaaSchedule, ResolveConfig, Schedule};
 use crate::scene::rematerialise::{rematerialise, Rematerialised};
 use crate::scene::SceneName;
@@ -292,6 +292,59 @@ pub fn check_single(gb: &GBuffer, one: &GBuffer) -> Result<()> {
     Ok(())
 }
 
+/// Which row an image's FLIP goes to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum FlipSlot {
+    Row(Pipeline),
+    Aa(usize),
+}
+
+/// The images whose FLIP against the reference the pipelines need, each distinct image once, and the rows that
+/// want each: computed in one batch at the end (the reference filtered once per pass).
+#[derive(Default)]
+struct FlipBatch {
+    images: std::cell::RefCell<Vec<HdrImage>>,
+    wants: std::cell::RefCell<Vec<(FlipSlot, Option<usize>)>>,
+}
+
+impl FlipBatch {
+    /// The index of `img` among the distinct images (added if new), or `None` when FLIP is not wanted.
+    fn image(&self, img: &HdrImage, wanted: bool) -> Option<usize> {
+        if !wanted {
+            return None;
+        }
+        let mut images = self.images.borrow_mut();
+        let same = |m: &HdrImage| m.width == img.width && m.height == img.height && m.rgb == img.rgb;
+        Some(images.iter().position(same).unwrap_or_else(|| {
+            images.push(img.clone());
+            images.len() - 1
+        }))
+    }
+
+    /// Row `slot` gets the FLIP of image `key`.
+    fn wants(&self, slot: FlipSlot, key: Option<usize>) {
+        self.wants.borrow_mut().push((slot, key));
+    }
+
+    /// Computes the FLIPs and writes them into the rows' error sets.
+    fn fill(self, reference: &HdrImage, viewing: &Viewing, rows: &mut [PipelineRow], aa: &mut [AaRow]) {
+        let images = self.images.into_inner();
+        let tests: Vec<&HdrImage> = images.iter().collect();
+        let results = flip_many(reference, &tests, viewing);
+        for (slot, key) in self.wants.into_inner() {
+            let Some((map, hdr)) = key.and_then(|k| results[k].as_ref()) else { continue };
+            let error = match slot {
+                FlipSlot::Row(p) => rows.iter_mut().find(|r| r.pipeline == p).and_then(|r| r.error.as_mut()),
+                FlipSlot::Aa(i) => aa.get_mut(i).map(|r| &mut r.error),
+            };
+            if let Some(e) = error {
+                e.flip_ldr = Some(map.mean);
+                e.flip_hdr = Some(*hdr);
+            }
+        }
+    }
+}
+
 /// Measures every pipeline on `gb` lit by `lights`; `reference` is the every-sample reference image when the caller
 /// has it (else it is computed). `single`, the same frame rendered with 1 sample at pixel centres, is the no-AA
 /// image MLAA works on and gives the forward row's exact quads; without it sample 0 stands in (an estimate, flagged
@@ -320,7 +373,10 @@ pub fn pipelines(
             &computed
         }
     };
-    let err = |img: &HdrImage| error_set(reference, img, cfg.viewing.as_ref());
+    // Numerical errors now; FLIP at the end, once per distinct image and in one batch against the reference
+    // (several rows share an image: forward MSAA, forward+ and the visibility buffer; the deferred schedules).
+    let err = |img: &HdrImage| error_set(reference, img, None);
+    let flips = FlipBatch::default();
     let run = |mask: &EdgeMask, culling: Culling, schedule: Schedule| -> Result<(resolve::Resolved, f64)> {
         let rc = ResolveConfig { culling, schedule, ..cfg.resolve };
         let t = Instant::now();
@@ -383,6 +439,12 @@ pub fn pipelines(
             }
             let (msaa_img, _) = run(&fm_mask, Culling::Tiled, Schedule::Deferred)?;
             let msaa_err = err(&msaa_img.image);
+            let msaa_key = flips.image(&msaa_img.image, cfg.viewing.is_some());
+            flips.wants(FlipSlot::Row(Pipeline::ForwardMsaa), msaa_key);
+            flips.wants(FlipSlot::Row(Pipeline::ForwardPlus), msaa_key);
+            flips.wants(FlipSlot::Row(Pipeline::VisibilityBuffer), msaa_key);
+            let no_aa_key = flips.image(&no_aa.image, cfg.viewing.is_some());
+            flips.wants(FlipSlot::Row(Pipeline::Forward), no_aa_key);
             let util = |q: &QuadShading| if q.lanes > 0 { q.covered_lanes as f64 / q.lanes as f64 } else { 1.0 };
             let msaa_colour = 4.0 * covered + 8.0 * covered + 8.0 * covered + 8.0 * pixels;
             let row =
@@ -519,6 +581,7 @@ pub fn pipelines(
             estimated: false,
             note,
         });
+        flips.wants(FlipSlot::Row(pipeline), flips.image(&r.image, cfg.viewing.is_some()));
     }
     if rows.is_empty() {
         return Err(Error::Argument("no pipeline could be measured".into()));
@@ -567,6 +630,7 @@ pub fn pipelines(
     let mlaa_ms = t.elapsed().as_secs_f64() * 1e3;
     let smoothed = HdrImage { width: w, height: h, rgb: smoothed };
     let evals = no_aa.stats.shading_evaluations;
+    flips.wants(FlipSlot::Aa(aa.len()), flips.image(&no_aa.image, cfg.viewing.is_some()));
     aa.push(AaRow {
         method: "no-aa".into(),
         evaluations: evals,
@@ -576,6 +640,7 @@ pub fn pipelines(
         note: no_aa_note.into(),
     });
     // MLAA's buffers on a GPU: an RG8 edge texture and an RGBA8 blend-weight texture.
+    flips.wants(FlipSlot::Aa(aa.len()), flips.image(&smoothed, cfg.viewing.is_some()));
     aa.push(AaRow {
         method: "mlaa".into(),
         evaluations: evals,
@@ -596,6 +661,7 @@ pub fn pipelines(
                 run(&m, Culling::Tiled, Schedule::Deferred)?
             }
         };
+        flips.wants(FlipSlot::Aa(aa.len()), flips.image(&r.image, cfg.viewing.is_some()));
         aa.push(AaRow {
             method,
             evaluations: r.stats.shading_evaluations,
@@ -605,6 +671,9 @@ pub fn pipelines(
             note: String::new(),
         });
         aa_images.push(r.image);
+    }
+    if let Some(v) = cfg.viewing.as_ref() {
+        flips.fill(reference, v, &mut rows, &mut aa);
     }
     let (rematerialised, rematerialise_error) = match cfg.geometry {
         Some(name) => match rematerialise(name, gb) {
