@@ -83,9 +83,6 @@ fn f32_at(b: &[u8], i: usize) -> f32 {
 fn i32_at(b: &[u8], i: usize) -> i32 {
     i32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]])
 }
-fn f16_at(b: &[u8], i: usize) -> f32 {
-    f16::from_bits(u16::from_le_bytes([b[i], b[i + 1]])).to_f32()
-}
 
 impl Header {
     /// Parses the first 152 bytes (no validation). `None` when `b` is shorter than the header.
@@ -335,39 +332,56 @@ struct Band<'a> {
 }
 
 impl Band<'_> {
-    /// Converts the band's pixels; returns how many have a depth with no surface in front of the camera.
+    /// Converts the band's pixels; returns how many have a depth with no surface in front of the camera. Row by
+    /// row: the half-float arrays are converted a row at a time (F16C where the CPU has it), then each pixel.
     fn convert(self, h: &Header, chunk: &[u8], w: usize, ht: usize) -> u64 {
-        let off = |k: usize| h.offsets[k] as usize;
+        use half::slice::{HalfBitsSliceExt, HalfFloatSliceExt};
         let p = &h.proj;
         let mut out_of_range = 0u64;
-        for j in 0..self.coverage.len() {
-            let (y, x) = (self.y0 + j / w, j % w);
-            let i = y * w + x;
-            let z = f32_at(chunk, off(0) + 4 * i);
-            // z = 1 is the cleared depth buffer (sky); anything outside [0, 1) has no surface in front of the camera.
-            if !(0.0..1.0).contains(&z) {
-                if z != 1.0 {
-                    out_of_range += 1;
+        let mut bits = vec![0u16; w];
+        let mut halves = [vec![0.0f32; w], vec![0.0f32; w], vec![0.0f32; w], vec![0.0f32; w]];
+        for r in 0..self.coverage.len() / w {
+            let y = self.y0 + r;
+            // Array `k` (elements of `elem` bytes) over this row; the header check bounded every array by the chunk.
+            let row = |k: usize, elem: usize| {
+                let o = h.offsets[k] as usize + elem * y * w;
+                &chunk[o..o + elem * w]
+            };
+            for (k, out) in halves.iter_mut().enumerate() {
+                for (b, v) in row(1 + k, 2).chunks_exact(2).zip(bits.iter_mut()) {
+                    *v = u16::from_le_bytes([b[0], b[1]]);
                 }
-                continue;
+                bits.reinterpret_cast::<f16>().convert_to_f32_slice(out);
             }
-            let view_z = p[3][2] / (z - p[2][2]);
-            if !(view_z.is_finite() && view_z > 0.0) {
-                out_of_range += 1;
-                continue;
+            let [ex, ey, spec, power] = &halves;
+            let (zs, ar, ag, ab) = (row(0, 4), row(5, 1), row(6, 1), row(7, 1));
+            let o = r * w;
+            for x in 0..w {
+                let z = f32::from_le_bytes([zs[4 * x], zs[4 * x + 1], zs[4 * x + 2], zs[4 * x + 3]]);
+                // z = 1 is the cleared depth buffer (sky); anything outside [0, 1) has no surface in front of the
+                // camera.
+                if !(0.0..1.0).contains(&z) {
+                    if z != 1.0 {
+                        out_of_range += 1;
+                    }
+                    continue;
+                }
+                let view_z = p[3][2] / (z - p[2][2]);
+                if !(view_z.is_finite() && view_z > 0.0) {
+                    out_of_range += 1;
+                    continue;
+                }
+                let j = o + x;
+                self.coverage[j] = true;
+                self.depth[j] = view_z;
+                let sx = (x as f32 + 0.5) * 2.0 / w as f32 - 1.0;
+                let sy = -(((y as f32 + 0.5) * 2.0 / ht as f32) - 1.0);
+                self.position[j] = Vec3::new(sx * view_z / p[0][0], sy * view_z / p[1][1], -view_z);
+                self.normal[j] = decode_spheremap(ex[x], ey[x]);
+                self.spec[j] = spec[x];
+                self.power[j] = power[x];
+                self.albedo[j] = Vec3::new(f32::from(ar[x]), f32::from(ag[x]), f32::from(ab[x])) / 255.0;
             }
-            self.coverage[j] = true;
-            self.depth[j] = view_z;
-            let sx = (x as f32 + 0.5) * 2.0 / w as f32 - 1.0;
-            let sy = -(((y as f32 + 0.5) * 2.0 / ht as f32) - 1.0);
-            self.position[j] = Vec3::new(sx * view_z / p[0][0], sy * view_z / p[1][1], -view_z);
-            let (ex, ey) = (f16_at(chunk, off(1) + 2 * i), f16_at(chunk, off(2) + 2 * i));
-            self.normal[j] = decode_spheremap(ex, ey);
-            self.spec[j] = f16_at(chunk, off(3) + 2 * i);
-            self.power[j] = f16_at(chunk, off(4) + 2 * i);
-            self.albedo[j] =
-                Vec3::new(f32::from(chunk[off(5) + i]), f32::from(chunk[off(6) + i]), f32::from(chunk[off(7) + i]))
-                    / 255.0;
         }
         out_of_range
     }
@@ -478,6 +492,7 @@ fn decode(h: &Header, chunk: &[u8], path: &Path) -> Result<Loaded> {
 /// Decodes the sample's spheremap normal (`f = (x−x²)+(y−y²)`, `m = √(4f−1)`, `n = (m(4x−2), m(4y−2), 3−8f)`, in
 /// the file's left-handed view space) and returns it in ours (z negated), renormalised. Encodings outside the disc
 /// (4f − 1 < 0) clamp to the rim.
+#[inline]
 #[must_use]
 pub fn decode_spheremap(x: f32, y: f32) -> Vec3 {
     let f = (x - x * x) + (y - y * y);

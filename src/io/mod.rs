@@ -347,7 +347,10 @@ fn finish(mut loaded: Loaded, path: &Path, side: Option<(&Sidecar, &Path)>, opts
     let depth_read = loaded.sources.iter().any(|s| s.attribute == Attribute::Depth.name() && !s.channels.is_empty());
     loaded.sanitized = sanitize::sanitize(&mut loaded.gbuffer);
     loaded.gbuffer.validate().map_err(|e| Error::invalid(path, e.to_string()))?;
-    let mut warnings = plausible::check(&loaded.gbuffer, depth_read, loaded.positions_assumed, path)?;
+    let positions_read =
+        loaded.sources.iter().any(|s| s.attribute == Attribute::Position.name() && !s.channels.is_empty());
+    let mut warnings =
+        plausible::check(&loaded.gbuffer, depth_read, positions_read, loaded.positions_assumed, path)?;
     loaded.warnings.append(&mut warnings);
     Ok(loaded)
 }

@@ -41,14 +41,88 @@ pub fn normal_is_valid(n: glam::Vec3) -> bool {
     l.is_finite() && (l - 1.0).abs() <= UNIT_TOLERANCE
 }
 
+/// What one pass over the covered samples counts.
+#[derive(Clone, Copy, Default)]
+struct Counts {
+    covered: u64,
+    zero_normal: u64,
+    bad_normal: u64,
+    away: u64,
+    behind: u64,
+    below_near: u64,
+}
+
+impl Counts {
+    fn add(self, o: Counts) -> Counts {
+        Counts {
+            covered: self.covered + o.covered,
+            zero_normal: self.zero_normal + o.zero_normal,
+            bad_normal: self.bad_normal + o.bad_normal,
+            away: self.away + o.away,
+            behind: self.behind + o.behind,
+            below_near: self.below_near + o.below_near,
+        }
+    }
+}
+
+/// Samples per parallel block of the counting pass.
+const CHUNK: usize = 1 << 14;
+
+/// Every per-sample count of [`check`] in one parallel pass over the planes (the counts do not depend on the
+/// order): covered samples, zero and invalid normals, valid normals facing away (from the view direction when
+/// positions are known, else +z), positions behind the camera, depths nearer than the camera's near plane.
+fn count(gb: &GBuffer) -> Counts {
+    let near = gb.camera.as_ref().map(|c| c.znear * 0.999);
+    let (normal, position, depth) = (gb.normal.as_deref(), gb.position.as_deref(), gb.depth.as_deref());
+    gb.coverage
+        .par_chunks(CHUNK)
+        .enumerate()
+        .map(|(k, cov)| {
+            let r = k * CHUNK..k * CHUNK + cov.len();
+            let (n, p, d) = (normal.map(|x| &x[r.clone()]), position.map(|x| &x[r.clone()]), depth.map(|x| &x[r]));
+            let mut c = Counts::default();
+            for (j, _) in cov.iter().enumerate().filter(|(_, &c)| c) {
+                c.covered += 1;
+                if let Some(n) = n {
+                    let len = n[j].length();
+                    c.zero_normal += u64::from(len < ZERO_NORMAL);
+                    let valid = len.is_finite() && (len - 1.0).abs() <= UNIT_TOLERANCE;
+                    c.bad_normal += u64::from(!valid);
+                    let facing = match p {
+                        Some(p) => n[j].dot(-p[j]),
+                        None => n[j].z,
+                    };
+                    c.away += u64::from(valid && facing < 0.0);
+                }
+                if let Some(p) = p {
+                    c.behind += u64::from(p[j].z >= 0.0);
+                }
+                if let (Some(d), Some(near)) = (d, near) {
+                    c.below_near += u64::from(d[j] < near);
+                }
+            }
+            c
+        })
+        .reduce(Counts::default, Counts::add)
+}
+
 /// Runs every check on `gb`. `depth_read` says the depth plane came from the file (not derived from positions);
-/// `positions_assumed` that the sample positions were not in the file.
-pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Path) -> Result<Vec<Warning>> {
+/// `positions_read` that the positions did (not derived from depth through the camera, which makes them agree
+/// with depth and reproject exactly by construction: those two checks are skipped); `positions_assumed` that the
+/// sample positions were not in the file.
+pub fn check(
+    gb: &GBuffer,
+    depth_read: bool,
+    positions_read: bool,
+    positions_assumed: bool,
+    path: &Path,
+) -> Result<Vec<Warning>> {
     let mut out = Vec::new();
-    // Every count below is over the covered samples, in parallel (counts do not depend on the order), without a
-    // list of their indices (8 bytes per sample: 66 MB on a 1080p × 4 dump, on top of the G-buffer).
+    // One pass counts what every check below needs, without a list of the covered samples' indices (8 bytes per
+    // sample: 66 MB on a 1080p × 4 dump, on top of the G-buffer).
+    let counts = count(gb);
     let covered = || (0..gb.len()).into_par_iter().filter(|&i| gb.coverage[i]);
-    let nc = covered().count() as u64;
+    let nc = counts.covered;
     let pct = |k: u64| 100.0 * k as f64 / nc.max(1) as f64;
     if nc == 0 {
         out.push(Warning {
@@ -60,10 +134,8 @@ pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Pat
         });
         return Ok(out);
     }
-    if let Some(n) = &gb.normal {
-        let (zero, bad) = covered()
-            .map(|i| (u64::from(n[i].length() < ZERO_NORMAL), u64::from(!normal_is_valid(n[i]))))
-            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+    if gb.normal.is_some() {
+        let (zero, bad) = (counts.zero_normal, counts.bad_normal);
         if bad > 0 {
             out.push(Warning {
                 code: "invalid-normals",
@@ -82,14 +154,7 @@ pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Pat
                 ),
             });
         }
-        // Facing: against the view direction when positions are known, else +z.
-        let away = covered()
-            .filter(|&i| normal_is_valid(n[i]))
-            .filter(|&i| match &gb.position {
-                Some(p) => n[i].dot(-p[i]) < 0.0,
-                None => n[i].z < 0.0,
-            })
-            .count() as u64;
+        let away = counts.away;
         if away * 4 > nc {
             out.push(Warning {
                 code: "normals-face-away",
@@ -104,7 +169,7 @@ pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Pat
         }
     }
     if let Some(p) = &gb.position {
-        let behind = covered().filter(|&i| p[i].z >= 0.0).count() as u64;
+        let behind = counts.behind;
         if behind > 0 {
             let msg = format!(
                 "{behind} of {nc} covered positions ({:.1}%) are behind the camera (z ≥ 0 in view space): \
@@ -116,7 +181,7 @@ pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Pat
             }
             out.push(Warning { code: "behind-camera", count: behind, of: nc, message: msg });
         }
-        if let (Some(d), true) = (&gb.depth, depth_read) {
+        if let (Some(d), true, true) = (&gb.depth, depth_read, positions_read) {
             let off: Vec<usize> =
                 covered().filter(|&i| (-p[i].z - d[i]).abs() > POSITION_DEPTH_REL * d[i].abs().max(1e-3)).collect();
             if !off.is_empty() {
@@ -142,7 +207,7 @@ pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Pat
                 });
             }
         }
-        if let Some((median, max, far)) = reprojection(gb) {
+        if let Some((median, max, far)) = positions_read.then(|| reprojection(gb)).flatten() {
             if far > 0 {
                 out.push(Warning {
                     code: "reprojection",
@@ -157,8 +222,8 @@ pub fn check(gb: &GBuffer, depth_read: bool, positions_assumed: bool, path: &Pat
             }
         }
     }
-    if let (Some(d), Some(cam)) = (&gb.depth, &gb.camera) {
-        let below = covered().filter(|&i| d[i] < cam.znear * 0.999).count() as u64;
+    if let (Some(_), Some(cam)) = (&gb.depth, &gb.camera) {
+        let below = counts.below_near;
         if below * 2 > nc {
             out.push(Warning {
                 code: "depth-convention",
@@ -214,4 +279,64 @@ pub fn reprojection(gb: &GBuffer) -> Option<(f32, f32, u64)> {
     let mid = errs.len() / 2;
     let (_, median, _) = errs.select_nth_unstable_by(mid, f32::total_cmp);
     Some((*median, max, far))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Camera;
+    use glam::Vec3;
+
+    /// A 40×30 × 2 G-buffer with positions through `cam` at depth 5, normals towards the camera, and the listed
+    /// samples changed: `away` normals flipped, `bad` normals halved, `near` depths set inside the near plane.
+    fn frame(cam: Camera, away: &[usize], bad: &[usize], near: &[usize]) -> GBuffer {
+        let mut gb = GBuffer::new(40, 30, 2).unwrap();
+        gb.camera = Some(cam);
+        gb.coverage = (0..gb.len()).map(|i| i % 7 != 0).collect();
+        gb.depth = Some(vec![5.0; gb.len()]);
+        gb.fill_position_from_depth();
+        let p = gb.position.clone().unwrap();
+        gb.normal = Some(p.iter().map(|p| (-*p).normalize_or(Vec3::Z)).collect());
+        let n = gb.normal.as_mut().unwrap();
+        for &i in away {
+            n[i] = -n[i];
+        }
+        for &i in bad {
+            n[i] *= 0.5;
+        }
+        for &i in near {
+            gb.depth.as_mut().unwrap()[i] = 0.01;
+        }
+        gb
+    }
+
+    #[test]
+    fn one_pass_counts_every_check() {
+        let cam = Camera::identity(0.9, 40.0 / 30.0, 0.1, 100.0);
+        let covered: Vec<usize> = (0..2400).filter(|i| i % 7 != 0).collect();
+        // Covered samples only count: 1 and 8 are covered, 0 and 7 are not.
+        let gb = frame(cam, &covered[..700], &[1, 8, 0, 7], &covered[..1100]);
+        let c = count(&gb);
+        assert_eq!(c.covered, covered.len() as u64);
+        assert_eq!((c.bad_normal, c.zero_normal, c.behind, c.below_near), (2, 0, 0, 1100));
+        assert_eq!(c.away, 700 - 2, "the two halved normals are invalid, not away");
+        let w = check(&gb, true, true, false, Path::new("f")).unwrap();
+        let codes: Vec<&str> = w.iter().map(|w| w.code).collect();
+        assert_eq!(codes, ["invalid-normals", "normals-face-away", "position-depth", "depth-convention"], "{w:?}");
+    }
+
+    /// Positions read from a file are reprojected through the camera; positions the loader derived from depth
+    /// through that camera agree by construction, and the check is skipped.
+    #[test]
+    fn reprojection_is_checked_for_positions_read_not_derived() {
+        let gb = frame(Camera::identity(0.9, 40.0 / 30.0, 0.1, 100.0), &[], &[], &[]);
+        let mut wrong = gb.clone();
+        wrong.camera = Some(Camera::identity(1.2, 40.0 / 30.0, 0.1, 100.0));
+        let codes = |gb: &GBuffer, read: bool| -> Vec<&'static str> {
+            check(gb, true, read, false, Path::new("f")).unwrap().iter().map(|w| w.code).collect()
+        };
+        assert!(codes(&gb, true).is_empty());
+        assert_eq!(codes(&wrong, true), ["reprojection"]);
+        assert!(codes(&wrong, false).is_empty(), "derived positions are not reprojected");
+    }
 }
