@@ -349,8 +349,7 @@ fn finish(mut loaded: Loaded, path: &Path, side: Option<(&Sidecar, &Path)>, opts
     loaded.gbuffer.validate().map_err(|e| Error::invalid(path, e.to_string()))?;
     let positions_read =
         loaded.sources.iter().any(|s| s.attribute == Attribute::Position.name() && !s.channels.is_empty());
-    let mut warnings =
-        plausible::check(&loaded.gbuffer, depth_read, positions_read, loaded.positions_assumed, path)?;
+    let mut warnings = plausible::check(&loaded.gbuffer, depth_read, positions_read, loaded.positions_assumed, path)?;
     loaded.warnings.append(&mut warnings);
     Ok(loaded)
 }

@@ -80,26 +80,26 @@ fn count(gb: &GBuffer) -> Counts {
         .map(|(k, cov)| {
             let r = k * CHUNK..k * CHUNK + cov.len();
             let (n, p, d) = (normal.map(|x| &x[r.clone()]), position.map(|x| &x[r.clone()]), depth.map(|x| &x[r]));
-            let mut c = Counts::default();
-            for (j, _) in cov.iter().enumerate().filter(|(_, &c)| c) {
-                c.covered += 1;
-                if let Some(n) = n {
-                    let len = n[j].length();
-                    c.zero_normal += u64::from(len < ZERO_NORMAL);
+            // One branch-free loop per plane (each vectorises); `u64::from(covered && test)` counts.
+            let mut c = Counts { covered: cov.iter().map(|&c| u64::from(c)).sum(), ..Counts::default() };
+            if let Some(n) = n {
+                for (j, (n, &cv)) in n.iter().zip(cov).enumerate() {
+                    let len = n.length();
                     let valid = len.is_finite() && (len - 1.0).abs() <= UNIT_TOLERANCE;
-                    c.bad_normal += u64::from(!valid);
                     let facing = match p {
-                        Some(p) => n[j].dot(-p[j]),
-                        None => n[j].z,
+                        Some(p) => n.dot(-p[j]),
+                        None => n.z,
                     };
-                    c.away += u64::from(valid && facing < 0.0);
+                    c.zero_normal += u64::from(cv && len < ZERO_NORMAL);
+                    c.bad_normal += u64::from(cv && !valid);
+                    c.away += u64::from(cv && valid && facing < 0.0);
                 }
-                if let Some(p) = p {
-                    c.behind += u64::from(p[j].z >= 0.0);
-                }
-                if let (Some(d), Some(near)) = (d, near) {
-                    c.below_near += u64::from(d[j] < near);
-                }
+            }
+            if let Some(p) = p {
+                c.behind = p.iter().zip(cov).map(|(p, &cv)| u64::from(cv && p.z >= 0.0)).sum();
+            }
+            if let (Some(d), Some(near)) = (d, near) {
+                c.below_near = d.iter().zip(cov).map(|(d, &cv)| u64::from(cv && *d < near)).sum();
             }
             c
         })
