@@ -5,7 +5,9 @@
 //! on all threads, and the ratio to a memcpy of the packed bytes (one thread: `copy_from_slice`; all threads:
 //! the copy split over the pool). Pack and unpack include allocating their output (and for destiny-96 building
 //! the material table; for unpack, re-deriving position from depth). Then criterion measures the all-thread
-//! operations. Run: `cargo bench --bench pack -- --warm-up-time 1 --measurement-time 2`.
+//! operations. A second table times the report's path, the banded roundtrip with its output reused across runs
+//! (`Layout::roundtrip_timed`), in GB/s of packed bytes. Run:
+//! `cargo bench --bench pack -- --warm-up-time 1 --measurement-time 2`.
 
 use criterion::{Criterion, Throughput};
 use gbuf::codec::eval::best_time;
@@ -103,6 +105,34 @@ fn ratio_table(gb: &GBuffer) {
         );
     }
     println!("(N = {threads} threads)\n");
+    // What a report measures: the banded roundtrip (`Layout::roundtrip_timed`), output planes reused from run to
+    // run, so the best of its runs has no fresh-memory page faults. GB/s of packed bytes, N threads.
+    println!("banded roundtrip (report's path), best of 5 runs, N threads; GB/s of packed bytes (issue 14: ≥ 2)");
+    println!(
+        "{:<14} {:>6} {:>8} {:>8} {:>8} {:>8} {:>8}",
+        "layout", "MB", "memcpyN", "encode", "GB/s", "decode", "GB/s"
+    );
+    for name in LAYOUTS {
+        let layout = Layout::by_name(name).unwrap();
+        let bytes = gb.len() * layout.bytes_per_sample();
+        let src = vec![0x5au8; bytes];
+        let mut dst = vec![0u8; bytes];
+        let mn = best_time(REPS, || par_copy(&mut dst, black_box(&src)));
+        let r = layout.roundtrip_timed(gb, 5).unwrap();
+        let best = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+        let (e, d) = (best(&r.encode_ms), best(&r.decode_ms));
+        let gbs = |ms: f64| bytes as f64 / (ms * 1e-3) / 1e9;
+        println!(
+            "{name:<14} {:>6.1} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
+            bytes as f64 / 1e6,
+            mn * 1e3,
+            e,
+            gbs(e),
+            d,
+            gbs(d)
+        );
+    }
+    println!();
 }
 
 fn bench(c: &mut Criterion, gb: &GBuffer) {
