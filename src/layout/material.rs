@@ -137,21 +137,51 @@ impl MaterialTable {
             return (t, i);
         };
         // The distinct IDs: a set per chunk in parallel, merged, then sorted (the rank is the ID's order).
-        let mut distinct: Vec<u32> = (0..gb.len())
-            .into_par_iter()
-            .with_min_len(COUNT_CHUNK)
-            .fold(std::collections::HashSet::<u32>::new, |mut set, i| {
-                if gb.coverage[i] {
-                    set.insert(ids[i]);
-                }
-                set
-            })
-            .reduce(std::collections::HashSet::new, |mut a, b| {
-                a.extend(b);
-                a
-            })
-            .into_iter()
-            .collect();
+        // The distinct covered IDs. Small IDs (the usual case) go into a bitmap per block, merged; others into a
+        // hash set per block, inserting an ID only when it changes (a surface covers neighbouring samples).
+        let covered_ids = || ids.par_chunks(COUNT_CHUNK).zip(gb.coverage.par_chunks(COUNT_CHUNK));
+        let max_id = covered_ids()
+            .map(|(ids, cov)| ids.iter().zip(cov).filter(|(_, &c)| c).map(|(&id, _)| id).max().unwrap_or(0))
+            .max()
+            .unwrap_or(0);
+        let mut distinct: Vec<u32> = if max_id < 1 << 20 {
+            let words = max_id as usize / 64 + 1;
+            let bits = covered_ids()
+                .map(|(ids, cov)| {
+                    let mut b = vec![0u64; words];
+                    for (&id, _) in ids.iter().zip(cov).filter(|(_, &c)| c) {
+                        b[id as usize / 64] |= 1 << (id % 64);
+                    }
+                    b
+                })
+                .reduce(
+                    || vec![0u64; words],
+                    |mut a, b| {
+                        a.iter_mut().zip(&b).for_each(|(x, y)| *x |= y);
+                        a
+                    },
+                );
+            (0..=max_id).filter(|&id| bits[id as usize / 64] >> (id % 64) & 1 == 1).collect()
+        } else {
+            covered_ids()
+                .map(|(ids, cov)| {
+                    let mut set = std::collections::HashSet::<u32>::new();
+                    let mut last = None;
+                    for (&id, _) in ids.iter().zip(cov).filter(|(_, &c)| c) {
+                        if last != Some(id) {
+                            set.insert(id);
+                            last = Some(id);
+                        }
+                    }
+                    set
+                })
+                .reduce(std::collections::HashSet::new, |mut a, b| {
+                    a.extend(b);
+                    a
+                })
+                .into_iter()
+                .collect()
+        };
         distinct.sort_unstable();
         let capacity = 1usize << bits;
         if distinct.len() > capacity {
@@ -164,9 +194,39 @@ impl MaterialTable {
         }
         let planes = parameter_planes(gb, wanted);
         let np = planes.len();
-        let rank: HashMap<u32, u32> = distinct.iter().enumerate().map(|(r, &id)| (id, r as u32)).collect();
-        let index: Vec<u32> =
-            (0..gb.len()).into_par_iter().map(|i| if gb.coverage[i] { rank[&ids[i]] } else { 0 }).collect();
+        // An ID's rank: a dense table when the IDs are small numbers (the usual case), else a binary search.
+        let dense: Option<Vec<u32>> = distinct.last().filter(|&&m| m < 1 << 20).map(|&m| {
+            let mut t = vec![0u32; m as usize + 1];
+            for (r, &id) in distinct.iter().enumerate() {
+                t[id as usize] = r as u32;
+            }
+            t
+        });
+        let rank_of = |id: u32| -> u32 {
+            match &dense {
+                Some(t) => t[id as usize],
+                None => distinct.binary_search(&id).map_or(0, |r| r as u32),
+            }
+        };
+        let mut index = vec![0u32; gb.len()];
+        index
+            .par_chunks_mut(COUNT_CHUNK)
+            .zip(ids.par_chunks(COUNT_CHUNK))
+            .zip(gb.coverage.par_chunks(COUNT_CHUNK))
+            .for_each(|((out, ids), cov)| {
+                // The rank of the previous ID is reused while the ID repeats (one hash lookup per run).
+                let mut last: Option<(u32, u32)> = None;
+                for ((o, &id), &c) in out.iter_mut().zip(ids).zip(cov) {
+                    if c {
+                        let r = match last {
+                            Some((l, r)) if l == id => r,
+                            _ => rank_of(id),
+                        };
+                        last = Some((id, r));
+                        *o = r;
+                    }
+                }
+            });
         // Per-ID means, summed in f64 in sample order (deterministic).
         let mut sums = vec![vec![0f64; np]; distinct.len().max(1)];
         let mut counts = vec![0u64; distinct.len().max(1)];
@@ -729,5 +789,23 @@ mod tests {
         gb.material_id = None;
         let (t, _) = MaterialTable::build_keyed(&gb, &attrs, 2, MaterialKey::MaterialId);
         assert!(t.key == "palette" && t.note.is_some());
+    }
+
+    /// The distinct IDs and their ranks take a bitmap and a dense table below 2^20 and a hash set and a binary
+    /// search above: both give the same table and index, with an uncovered sample's ID left out either way.
+    #[test]
+    fn small_and_large_ids_give_the_same_table() {
+        let mut gb = buffer(&[(0.1, 0.0), (0.2, 1.0), (0.4, 1.0), (0.9, 0.5), (0.1, 0.0), (0.3, 0.3)]);
+        gb.coverage[5] = false;
+        let attrs = [Attribute::Roughness, Attribute::Metallic];
+        let small = vec![70, 12, 12, 900, 70, 5];
+        let large: Vec<u32> = small.iter().map(|&id| id + (1 << 24)).collect();
+        gb.material_id = Some(small);
+        let (a, ia) = MaterialTable::build_keyed(&gb, &attrs, 2, MaterialKey::MaterialId);
+        gb.material_id = Some(large);
+        let (b, ib) = MaterialTable::build_keyed(&gb, &attrs, 2, MaterialKey::MaterialId);
+        assert_eq!(a.ids, [12, 70, 900], "the uncovered sample's ID 5 is not a material");
+        assert_eq!(b.ids, a.ids.iter().map(|&id| id + (1 << 24)).collect::<Vec<_>>());
+        assert_eq!((a.entries, ia), (b.entries, ib));
     }
 }
