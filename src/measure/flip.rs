@@ -598,6 +598,17 @@ fn run_bands(ctx: &Ctx, r: &[f32], t: &[f32], enc: Encoding, out: &mut [f32], me
     }
 }
 
+/// HDR-FLIP's merge of one exposure's row `e` into the running maximum `out`, writing `tag` into the exposure map
+/// `em` where the maximum grew.
+#[inline(always)]
+fn keep_max(out: &mut [f32], em: &mut [f32], e: &[f32], tag: f32) {
+    for ((o, x), &v) in out.iter_mut().zip(em.iter_mut()).zip(e) {
+        let grow = v > *o;
+        *o = if grow { v } else { *o };
+        *x = if grow { tag } else { *x };
+    }
+}
+
 /// What every band of one evaluation reads: the filters, the two images and their encoding.
 #[derive(Clone, Copy)]
 struct Inputs<'a> {
@@ -784,14 +795,7 @@ fn sink_row(ctx: &Ctx, sink: &mut Sink<'_>, rows: usize, ry: usize, x0: usize, f
             let orow = &mut out[ry * w + x0..ry * w + x0 + n];
             match merge {
                 None => orow.copy_from_slice(&e[..n]),
-                Some((em, tag)) => {
-                    let erow = &mut em[ry * w + x0..ry * w + x0 + n];
-                    for ((o, x), &v) in orow.iter_mut().zip(erow.iter_mut()).zip(&e[..n]) {
-                        let grow = v > *o;
-                        *o = if grow { v } else { *o };
-                        *x = if grow { *tag } else { *x };
-                    }
-                }
+                Some((em, tag)) => keep_max(orow, &mut em[ry * w + x0..ry * w + x0 + n], &e[..n], *tag),
             }
         }
     }
@@ -938,14 +942,7 @@ fn band_impl(inp: &Inputs<'_>, y0: usize, out: &mut [f32], mut merge: Option<(&m
                 let orow = &mut out[ry * w + x0..ry * w + x0 + tw];
                 match merge.as_mut() {
                     None => orow.copy_from_slice(e),
-                    Some((em, tag)) => {
-                        let erow = &mut em[ry * w + x0..ry * w + x0 + tw];
-                        for ((o, x), &v) in orow.iter_mut().zip(erow.iter_mut()).zip(e.iter()) {
-                            let grow = v > *o;
-                            *o = if grow { v } else { *o };
-                            *x = if grow { *tag } else { *x };
-                        }
-                    }
+                    Some((em, tag)) => keep_max(orow, &mut em[ry * w + x0..ry * w + x0 + tw], e, *tag),
                 }
             }
             y += 2;

@@ -179,21 +179,17 @@ impl ErrorSet {
 /// HDR-FLIP of the linear ones). `None` when the sizes differ.
 #[must_use]
 pub fn flip_pair(reference: &HdrImage, test: &HdrImage, viewing: &Viewing) -> Option<(flip::FlipMap, f64)> {
-    if reference.width != test.width || reference.height != test.height || reference.rgb.len() != test.rgb.len() {
-        return None;
-    }
-    let (w, h) = (reference.width as usize, reference.height as usize);
-    let opts = flip::FlipOptions { pixels_per_degree: viewing.pixels_per_degree };
-    let shown = |img: &HdrImage| -> Vec<f32> {
-        img.to_srgb8(viewing.tone()).par_iter().map(|&b| f32::from(b) / 255.0).collect()
-    };
-    let ldr = flip::ldr_flip(&shown(reference), &shown(test), w, h, &opts);
-    let hdr = flip::hdr_flip(&linear(reference), &linear(test), w, h, &opts).mean();
-    Some((ldr, hdr))
+    flip_many(reference, &[test], viewing).pop().flatten()
 }
 
-/// [`flip_pair`] of several tests against one reference (`None` for a test of another size), the same numbers bit
-/// for bit, with the reference filtered once per pass instead of once per test: the LDR pass of every test, then
+/// An image as LDR-FLIP sees it on the display: tone-mapped, 8-bit sRGB, back to `[0, 1]`.
+fn shown(img: &HdrImage, viewing: &Viewing) -> Vec<f32> {
+    img.to_srgb8(viewing.tone()).par_iter().map(|&b| f32::from(b) / 255.0).collect()
+}
+
+/// FLIP of several tests against one reference (`None` for a test of another size): each test's numbers are those
+/// of `flip::ldr_flip` / `flip::hdr_flip` on the pair bit for bit, with the reference filtered once per pass instead
+/// of once per test: the LDR pass of every test, then
 /// the HDR exposures. The displayed and linear copies of the tests exist one kind at a time.
 #[must_use]
 pub fn flip_many(reference: &HdrImage, tests: &[&HdrImage], viewing: &Viewing) -> Vec<Option<(flip::FlipMap, f64)>> {
@@ -203,13 +199,10 @@ pub fn flip_many(reference: &HdrImage, tests: &[&HdrImage], viewing: &Viewing) -
     let fit: Vec<&HdrImage> = tests.iter().copied().filter(same).collect();
     let (w, h) = (reference.width as usize, reference.height as usize);
     let opts = flip::FlipOptions { pixels_per_degree: viewing.pixels_per_degree };
-    let shown = |img: &HdrImage| -> Vec<f32> {
-        img.to_srgb8(viewing.tone()).par_iter().map(|&b| f32::from(b) / 255.0).collect()
-    };
     let ldr = {
-        let tests: Vec<Vec<f32>> = fit.iter().map(|t| shown(t)).collect();
+        let tests: Vec<Vec<f32>> = fit.iter().map(|t| shown(t, viewing)).collect();
         let views: Vec<&[f32]> = tests.iter().map(Vec::as_slice).collect();
-        flip::ldr_flip_many(&shown(reference), &views, w, h, &opts)
+        flip::ldr_flip_many(&shown(reference, viewing), &views, w, h, &opts)
     };
     let hdr = {
         let tests: Vec<Vec<f32>> = fit.iter().map(|t| linear(t)).collect();
