@@ -118,8 +118,12 @@ impl HdrImage {
     /// 8-bit sRGB bytes (RGB, row-major) after `tone`, rounded to nearest.
     #[must_use]
     pub fn to_srgb8(&self, tone: ToneMap) -> Vec<u8> {
+        self.encode_rgb8(|x| (srgb_encode(tone.apply(x)) * 255.0 + 0.5) as u8)
+    }
+
+    /// Interleaved RGB bytes, `enc` applied to every channel, rows in parallel.
+    fn encode_rgb8(&self, enc: impl Fn(f32) -> u8 + Sync) -> Vec<u8> {
         use rayon::prelude::*;
-        let enc = |x: f32| (srgb_encode(tone.apply(x)) * 255.0 + 0.5) as u8;
         let mut out = vec![0u8; 3 * self.rgb.len()];
         let row = self.width.max(1) as usize;
         out.par_chunks_mut(3 * row).zip(self.rgb.par_chunks(row)).for_each(|(o, px)| {
@@ -134,18 +138,9 @@ impl HdrImage {
     /// not rounding, exactly as its `Float32ToUnorm8`). NaN becomes 0.
     #[must_use]
     pub fn to_ldr_gamma22(&self) -> Vec<u8> {
-        use rayon::prelude::*;
-        let lut = Gamma22Lut::get();
-        let enc = |x: f32| lut.encode(x);
         // Rows in parallel: a fixed cost of every `gbuf resolve --png`.
-        let mut out = vec![0u8; 3 * self.rgb.len()];
-        let row = self.width.max(1) as usize;
-        out.par_chunks_mut(3 * row).zip(self.rgb.par_chunks(row)).for_each(|(o, px)| {
-            for (o, c) in o.chunks_exact_mut(3).zip(px) {
-                o.copy_from_slice(&[enc(c.x), enc(c.y), enc(c.z)]);
-            }
-        });
-        out
+        let lut = Gamma22Lut::get();
+        self.encode_rgb8(|x| lut.encode(x))
     }
 
     /// Writes a tone-mapped sRGB PNG.

@@ -214,14 +214,9 @@ pub fn hdr_flip_with(
         }
     };
     assert!(start <= stop, "HDR-FLIP: start exposure ({start}) must not exceed stop exposure ({stop})");
-    let n = match params.num_exposures {
-        Some(n) => n,
-        None => (stop - start).clamp(0.0, MAX_EXPOSURE_RANGE).ceil().max(2.0) as usize,
-    };
+    let n = params.num_exposures.unwrap_or_else(|| exposure_count(start, stop));
     assert!(n >= 1, "HDR-FLIP: need at least one exposure");
-    // With n == 1 the reference divides by zero (step = inf/NaN); we evaluate `start` only.
-    let step = if n > 1 { (stop - start) / (n - 1) as f32 } else { 0.0 };
-    let exposures: Vec<f32> = (0..n).map(|i| start + i as f32 * step).collect();
+    let exposures = exposure_list(start, stop, n);
 
     let npix = width * height;
     let mut max_map = vec![0.0f32; npix];
@@ -243,6 +238,18 @@ pub fn hdr_flip_with(
         tone_mapper: tm,
         exposure_map,
     }
+}
+
+/// The reference's default number of exposures between `start` and `stop` (at least 2).
+fn exposure_count(start: f32, stop: f32) -> usize {
+    (stop - start).clamp(0.0, MAX_EXPOSURE_RANGE).ceil().max(2.0) as usize
+}
+
+/// `n` exposures evenly from `start` to `stop`. With n == 1 the reference divides by zero (step = inf/NaN); we
+/// evaluate `start` only.
+fn exposure_list(start: f32, stop: f32, n: usize) -> Vec<f32> {
+    let step = if n > 1 { (stop - start) / (n - 1) as f32 } else { 0.0 };
+    (0..n).map(|i| start + i as f32 * step).collect()
 }
 
 /// Maps error values in `[0, 1]` to sRGB-encoded RGB8 with the magma colour map,
@@ -690,9 +697,8 @@ pub fn hdr_flip_many(
     }
     let tm = ToneMapper::default();
     let (start, stop) = compute_exposures(reference_linear, tm);
-    let n = (stop - start).clamp(0.0, MAX_EXPOSURE_RANGE).ceil().max(2.0) as usize;
-    let step = (stop - start) / (n - 1) as f32;
-    let exposures: Vec<f32> = (0..n).map(|i| start + i as f32 * step).collect();
+    let n = exposure_count(start, stop);
+    let exposures = exposure_list(start, stop, n);
     let npix = width * height;
     let mut maxes: Vec<Vec<f32>> = tests.iter().map(|_| vec![0.0f32; npix]).collect();
     let mut tags: Vec<Vec<f32>> = tests.iter().map(|_| vec![0.0f32; npix]).collect();
