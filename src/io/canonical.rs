@@ -224,12 +224,9 @@ fn build(mut src: Source<'_>, path: &Path) -> Result<GBuffer> {
         ..Default::default()
     };
     let reader = Reader { raw, path, samples, n };
-    for s in 0..spp {
-        let ch = reader.channel(s as u32, COVERAGE, "V")?;
-        for p in 0..n {
-            gb.coverage[p * spp + s] = ch.data.f32_at(p) != 0.0;
-        }
-    }
+    let coverage: Vec<[&RawChannel; 1]> =
+        (0..spp).map(|s| reader.channel(s as u32, COVERAGE, "V").map(|c| [c])).collect::<Result<_>>()?;
+    interleave(&mut gb.coverage, &coverage, |[v]| v != 0.0);
     src.release(COVERAGE);
     for attr in Attribute::ALL {
         let raw = src.raw();
@@ -262,21 +259,23 @@ fn build(mut src: Source<'_>, path: &Path) -> Result<GBuffer> {
         let channels: Vec<Vec<&RawChannel>> = (0..spp)
             .map(|s| comps.iter().map(|comp| reader.float_channel(s as u32, attr.name(), comp)).collect())
             .collect::<Result<_>>()?;
-        let at = |s: usize, ci: usize, p: usize| channels[s][ci].data.f32_at(p);
-        let gather = |c: usize| -> Vec<f32> { (0..len).map(|i| at(i % spp, c, i / spp)).collect() };
         match comps.len() {
-            1 => set_f32(&mut gb, attr, gather(0)),
+            1 => {
+                let one: Vec<[&RawChannel; 1]> = channels.iter().map(|c| [c[0]]).collect();
+                let mut v = vec![0.0f32; len];
+                interleave(&mut v, &one, |[x]| x);
+                set_f32(&mut gb, attr, v);
+            }
             2 => {
-                gb.motion =
-                    Some((0..len).map(|i| Vec2::new(at(i % spp, 0, i / spp), at(i % spp, 1, i / spp))).collect())
+                let two: Vec<[&RawChannel; 2]> = channels.iter().map(|c| [c[0], c[1]]).collect();
+                let mut v = vec![Vec2::ZERO; len];
+                interleave(&mut v, &two, Vec2::from_array);
+                gb.motion = Some(v);
             }
             _ => {
-                let v: Vec<Vec3> = (0..len)
-                    .map(|i| {
-                        let (s, p) = (i % spp, i / spp);
-                        Vec3::new(at(s, 0, p), at(s, 1, p), at(s, 2, p))
-                    })
-                    .collect();
+                let three: Vec<[&RawChannel; 3]> = channels.iter().map(|c| [c[0], c[1], c[2]]).collect();
+                let mut v = vec![Vec3::ZERO; len];
+                interleave(&mut v, &three, Vec3::from_array);
                 match attr {
                     Attribute::Position => gb.position = Some(v),
                     Attribute::Normal => gb.normal = Some(v),
@@ -289,6 +288,40 @@ fn build(mut src: Source<'_>, path: &Path) -> Result<GBuffer> {
     }
     gb.validate().map_err(|e| Error::invalid(path, e.to_string()))?;
     Ok(gb)
+}
+
+/// Fills the pixel-major plane `out` (`n × spp` values, a pixel's samples side by side) from the per-sample
+/// channels `channels[s]` (`C` components each, `n` values, float, half or uint): `out[p·spp + s] =
+/// make(channels[s][..][p])`. In parallel over blocks of pixels; each channel's block converted to f32 at once
+/// (half with the F16C / NEON conversion where the CPU has it).
+fn interleave<T: Send, const C: usize>(
+    out: &mut [T],
+    channels: &[[&RawChannel; C]],
+    make: impl Fn([f32; C]) -> T + Sync,
+) {
+    use half::slice::HalfFloatSliceExt;
+    const BLOCK: usize = 4096;
+    let spp = channels.len();
+    if spp == 0 || out.is_empty() {
+        return;
+    }
+    out.par_chunks_mut(BLOCK * spp).enumerate().for_each(|(b, o)| {
+        let (p0, np) = (b * BLOCK, o.len() / spp);
+        let mut tmp = vec![[0.0f32; BLOCK]; C];
+        for (s, chs) in channels.iter().enumerate() {
+            for (t, ch) in tmp.iter_mut().zip(chs) {
+                let t = &mut t[..np];
+                match &ch.data {
+                    RawData::F32(v) => t.copy_from_slice(&v[p0..p0 + np]),
+                    RawData::F16(v) => v[p0..p0 + np].convert_to_f32_slice(t),
+                    RawData::U32(v) => t.iter_mut().zip(&v[p0..p0 + np]).for_each(|(t, &u)| *t = u as f32),
+                }
+            }
+            for (i, o) in o.iter_mut().skip(s).step_by(spp).enumerate() {
+                *o = make(std::array::from_fn(|c| tmp[c][i]));
+            }
+        }
+    });
 }
 
 struct Reader<'a> {
