@@ -326,8 +326,7 @@ impl<'a> Channels<'a> {
     /// A half or float channel as f32 (uint is refused: it is not a measurement).
     pub(super) fn floats(&self, name: &str) -> Result<Vec<f32>> {
         match self.data(name)? {
-            RawData::F16(v) => Ok(v.iter().map(|h| h.to_f32()).collect()),
-            RawData::F32(v) => Ok(v.clone()),
+            d @ (RawData::F16(_) | RawData::F32(_)) => Ok(d.to_f32_vec()),
             RawData::U32(_) => Err(Error::UnsupportedSampleType {
                 path: self.path.into(),
                 channel: name.into(),

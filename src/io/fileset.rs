@@ -431,10 +431,7 @@ fn read_entries(
                     let ids = exr_ids(&raw.channels[comps[0]].data, conventions.ids, &e.file)?;
                     set_ids(&mut gb, e.attr, ids);
                 } else {
-                    let planes: Vec<Vec<f32>> = comps
-                        .iter()
-                        .map(|&i| (0..raw.channels[i].data.len()).map(|j| raw.channels[i].data.f32_at(j)).collect())
-                        .collect();
+                    let planes: Vec<Vec<f32>> = comps.iter().map(|&i| raw.channels[i].data.to_f32_vec()).collect();
                     set_floats(&mut gb, e.attr, planes, e.transform);
                 }
                 if matches!(e.attr, Attribute::Depth | Attribute::Position) && alpha.is_none() {
@@ -442,7 +439,7 @@ fn read_entries(
                         .channels
                         .iter()
                         .find(|c| c.name == "A" || c.name.ends_with(".A"))
-                        .map(|c| (0..c.data.len()).map(|j| c.data.f32_at(j)).collect());
+                        .map(|c| c.data.to_f32_vec());
                 }
                 (ty, names.iter().map(|c| format!("{fname}:{c}")).collect::<Vec<_>>(), None)
             }
@@ -554,15 +551,10 @@ fn exr_ids(data: &RawData, enc: Option<IdEncoding>, path: &Path) -> Result<Vec<u
             "IDs in rgb8 encoding need an 8-bit RGB PNG; this is an EXR (use --id-encoding float or u32)",
         )),
         (RawData::U32(v), _) => Ok(v.clone()),
-        (other, _) => Ok((0..other.len())
-            .map(|i| {
-                let f = other.f32_at(i);
-                if f.is_finite() && f > 0.0 {
-                    f.round().min(u32::MAX as f32) as u32
-                } else {
-                    0
-                }
-            })
+        (other, _) => Ok(other
+            .to_f32_vec()
+            .into_iter()
+            .map(|f| if f.is_finite() && f > 0.0 { f.round().min(u32::MAX as f32) as u32 } else { 0 })
             .collect()),
     }
 }

@@ -35,24 +35,16 @@ pub fn channel<'a>(raw: &'a RawImage, path: &Path, name: &str) -> Result<&'a Raw
 pub fn ids(ch: &RawChannel) -> Vec<u32> {
     match &ch.data {
         RawData::U32(v) => v.clone(),
-        other => (0..other.len())
-            .map(|i| {
-                let f = other.f32_at(i);
-                if f.is_finite() && f > 0.0 {
-                    f.round() as u32
-                } else {
-                    0
-                }
-            })
+        other => other
+            .to_f32_vec()
+            .into_iter()
+            .map(|f| if f.is_finite() && f > 0.0 { f.round() as u32 } else { 0 })
             .collect(),
     }
 }
 
 fn floats(ch: &RawChannel) -> Vec<f32> {
-    match &ch.data {
-        RawData::F32(v) => v.clone(),
-        other => (0..other.len()).map(|i| other.f32_at(i)).collect(),
-    }
+    ch.data.to_f32_vec()
 }
 
 /// Reads `raw` with the explicit mapping `opts.map` (see the module docs) under the declared conventions
@@ -89,7 +81,7 @@ pub fn read(raw: &RawImage, path: &Path, camera: Option<&Camera>, opts: &LoadOpt
         set_plane(&mut gb, *attr, &chans);
         sources.push(AttributeSource { attribute: attr.name(), channels: names.clone(), file_type, note });
     }
-    let alpha: Option<Vec<f32>> = raw.channel("A").map(|c| (0..c.data.len()).map(|i| c.data.f32_at(i)).collect());
+    let alpha: Option<Vec<f32>> = raw.channel("A").map(|c| c.data.to_f32_vec());
     for (attr, note) in conventions.apply(&mut gb, camera, alpha.as_deref(), path)? {
         if let Some(s) = sources.iter_mut().find(|s| s.attribute == attr) {
             s.note = Some(format!("{}; {note}", s.note.take().unwrap_or_default()));
