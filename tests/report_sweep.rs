@@ -41,6 +41,12 @@ fn sweep_rows_match_layouts_and_lossless_is_exact() {
     .unwrap();
     assert!(calls > 3);
     assert_eq!(out.rows.len(), 6);
+    // Where the time went: each kind of stage once, in the order met, adding up to at most the sweep's time.
+    let kinds: Vec<&str> = out.stage_seconds.iter().map(|(k, _)| k.as_str()).collect();
+    assert_eq!(kinds, ["reference", "detectors on the exact G-buffer", "pack/unpack", "detect", "resolve", "FLIP"]);
+    let staged: f64 = out.stage_seconds.iter().map(|(_, t)| t).sum();
+    assert!(out.stage_seconds.iter().all(|(_, t)| *t >= 0.0) && staged <= out.seconds, "{staged} of {}", out.seconds);
+    assert!(staged > 0.5 * out.seconds, "the stages cover the sweep: {staged} of {} s", out.seconds);
     for r in &out.rows {
         let l = layouts.iter().find(|l| l.name() == r.layout).unwrap();
         assert_eq!(r.bytes_per_sample as usize, l.bytes_per_sample(), "{}", r.layout);

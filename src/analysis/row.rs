@@ -241,6 +241,9 @@ pub struct Frame {
     /// Wall time of this frame's sweep in seconds.
     #[serde(deserialize_with = "crate::util::f64_or_nan")]
     pub sweep_seconds: f64,
+    /// Where the sweep's wall time went, by kind of stage (seconds, in the order first met).
+    #[serde(default)]
+    pub stage_seconds: Vec<(String, f64)>,
     /// The scene-needs analysis.
     pub needs: Needs,
     /// Each detector on the exact G-buffer: its anti-aliasing error and the shading it costs.
@@ -295,6 +298,7 @@ pub(crate) fn test_report(input: &str, width: u32, height: u32, rows: Vec<Row>, 
             lights_source: "none".into(),
             reference: None,
             sweep_seconds: 0.5,
+            stage_seconds: vec![],
             needs: crate::analysis::needs::analyze(&gb),
             detectors: vec![],
             pipelines: None,

@@ -100,6 +100,9 @@ pub struct SweepOutput {
     pub worst_flip: Option<(String, FlipMap)>,
     /// Wall time of the sweep in seconds.
     pub seconds: f64,
+    /// Wall time by kind of stage (`reference`, `detectors on the exact G-buffer`, `pack/unpack`, `detect`,
+    /// `resolve`, `FLIP`), in seconds, in the order first met.
+    pub stage_seconds: Vec<(String, f64)>,
 }
 
 /// A detector on the exact G-buffer: what its anti-aliasing costs in error and in shading.
@@ -248,8 +251,13 @@ pub fn mark_detector_front(results: &mut [DetectorResult]) {
 }
 
 /// Runs the sweep. `lights` are in view space. The reference is computed once.
-pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, progress: Progress<'_>) -> Result<SweepOutput> {
+pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<'_>) -> Result<SweepOutput> {
     let start = std::time::Instant::now();
+    let mut clock = StageClock::default();
+    let mut progress = |done: usize, total: usize, what: &str| {
+        clock.enter(what);
+        outer(done, total, what);
+    };
     let cullings: Vec<Option<Culling>> =
         if cfg.culling.is_empty() { vec![None] } else { cfg.culling.iter().copied().map(Some).collect() };
     let per_layout = cfg.detectors.len() * cullings.len();
@@ -418,7 +426,34 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, progress: Progre
         exact,
         worst_flip,
         seconds: start.elapsed().as_secs_f64(),
+        stage_seconds: clock.seconds,
     })
+}
+
+/// Wall time by kind of sweep stage, from the progress messages: the time from one message to the next goes to the
+/// first's kind (the part after its last `": "`, e.g. `pack/unpack`, `detect`, `resolve`; else the whole message:
+/// `reference`, `FLIP`, …). `done` ends the clock.
+#[derive(Default)]
+struct StageClock {
+    current: Option<(String, std::time::Instant)>,
+    seconds: Vec<(String, f64)>,
+}
+
+impl StageClock {
+    fn enter(&mut self, what: &str) {
+        let now = std::time::Instant::now();
+        if let Some((kind, since)) = self.current.take() {
+            let s = now.duration_since(since).as_secs_f64();
+            match self.seconds.iter_mut().find(|(k, _)| *k == kind) {
+                Some((_, t)) => *t += s,
+                None => self.seconds.push((kind, s)),
+            }
+        }
+        if what != "done" {
+            let kind = what.rsplit(": ").next().unwrap_or(what);
+            self.current = Some((kind.to_string(), now));
+        }
+    }
 }
 
 /// How many layouts keep their per-pixel error maps: those with the largest layout error (the report draws their

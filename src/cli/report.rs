@@ -231,6 +231,16 @@ pub fn print_summary(rep: &Report, dir: &Path) {
         secs,
         dir.join("report.md").display()
     );
+    let mut stages: Vec<(String, f64)> = Vec::new();
+    for (k, t) in rep.frames.iter().flat_map(|f| &f.stage_seconds) {
+        match stages.iter_mut().find(|(s, _)| s == k) {
+            Some((_, sum)) => *sum += t,
+            None => stages.push((k.clone(), *t)),
+        }
+    }
+    if !stages.is_empty() {
+        println!("sweep time by stage: {}", gbuf::report::stage_summary(&stages));
+    }
 }
 
 fn short(frame: &str) -> String {

@@ -286,6 +286,9 @@ fn frame_header(s: &mut String, f: &Frame, rows: usize, runs: usize) {
             t.median_ms, t.min_ms, t.max_ms
         );
     }
+    if !f.stage_seconds.is_empty() {
+        let _ = writeln!(s, "Where the sweep's time went: {}.\n", crate::report::stage_summary(&f.stage_seconds));
+    }
 }
 
 fn fronts(s: &mut String, rows: &[Row]) {

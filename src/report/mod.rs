@@ -30,6 +30,14 @@ pub struct FrameResult {
     pub figures: Vec<Figure>,
 }
 
+/// `kind 1.2 s, kind 0.3 s, …` of a sweep's [`Frame::stage_seconds`](crate::analysis::row::Frame), largest first.
+#[must_use]
+pub fn stage_summary(stages: &[(String, f64)]) -> String {
+    let mut v: Vec<&(String, f64)> = stages.iter().collect();
+    v.sort_by(|a, b| b.1.total_cmp(&a.1));
+    v.iter().map(|(k, t)| format!("{k} {t:.1} s")).collect::<Vec<_>>().join(", ")
+}
+
 /// Runs the needs analysis and the sweep on one frame, prunes, and builds the frame's figures. With
 /// `with_plots` the scatter plots of this frame are drawn (a single-frame report); `prefix` starts the figures'
 /// file names.
@@ -100,6 +108,7 @@ pub fn run_frame(
         lights_source: input.lights_source.clone(),
         reference: Some(out.reference_timing),
         sweep_seconds: out.seconds,
+        stage_seconds: out.stage_seconds,
         needs,
         detectors: out.detectors,
         pipelines,
