@@ -430,6 +430,14 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
     })
 }
 
+/// Adds `s` seconds to `kind` in `stages` (appended when new, so the kinds stay in the order first met).
+pub fn add_stage_time(stages: &mut Vec<(String, f64)>, kind: &str, s: f64) {
+    match stages.iter_mut().find(|(k, _)| k == kind) {
+        Some((_, t)) => *t += s,
+        None => stages.push((kind.to_string(), s)),
+    }
+}
+
 /// Wall time by kind of sweep stage, from the progress messages: the time from one message to the next goes to the
 /// first's kind (the part after its last `": "`, e.g. `pack/unpack`, `detect`, `resolve`; else the whole message:
 /// `reference`, `FLIP`, …). `done` ends the clock.
@@ -443,11 +451,7 @@ impl StageClock {
     fn enter(&mut self, what: &str) {
         let now = std::time::Instant::now();
         if let Some((kind, since)) = self.current.take() {
-            let s = now.duration_since(since).as_secs_f64();
-            match self.seconds.iter_mut().find(|(k, _)| *k == kind) {
-                Some((_, t)) => *t += s,
-                None => self.seconds.push((kind, s)),
-            }
+            add_stage_time(&mut self.seconds, &kind, now.duration_since(since).as_secs_f64());
         }
         if what != "done" {
             let kind = what.rsplit(": ").next().unwrap_or(what);

@@ -231,15 +231,9 @@ pub fn print_summary(rep: &Report, dir: &Path) {
         secs,
         dir.join("report.md").display()
     );
-    let mut stages: Vec<(String, f64)> = Vec::new();
-    for (k, t) in rep.frames.iter().flat_map(|f| &f.stage_seconds) {
-        match stages.iter_mut().find(|(s, _)| s == k) {
-            Some((_, sum)) => *sum += t,
-            None => stages.push((k.clone(), *t)),
-        }
-    }
+    let stages = gbuf::report::stage_summary(rep.frames.iter().flat_map(|f| &f.stage_seconds));
     if !stages.is_empty() {
-        println!("sweep time by stage: {}", gbuf::report::stage_summary(&stages));
+        println!("sweep time by stage: {stages}");
     }
 }
 

@@ -30,12 +30,16 @@ pub struct FrameResult {
     pub figures: Vec<Figure>,
 }
 
-/// `kind 1.2 s, kind 0.3 s, …` of a sweep's [`Frame::stage_seconds`](crate::analysis::row::Frame), largest first.
+/// `kind 1.2 s, kind 0.3 s, …` of sweeps' [`Frame::stage_seconds`](crate::analysis::row::Frame) (one frame's, or
+/// several frames' summed by kind), largest first; empty when there are none.
 #[must_use]
-pub fn stage_summary(stages: &[(String, f64)]) -> String {
-    let mut v: Vec<&(String, f64)> = stages.iter().collect();
-    v.sort_by(|a, b| b.1.total_cmp(&a.1));
-    v.iter().map(|(k, t)| format!("{k} {t:.1} s")).collect::<Vec<_>>().join(", ")
+pub fn stage_summary<'a>(stages: impl IntoIterator<Item = &'a (String, f64)>) -> String {
+    let mut sums = Vec::new();
+    for (kind, s) in stages {
+        crate::analysis::sweep::add_stage_time(&mut sums, kind, *s);
+    }
+    sums.sort_by(|a, b| b.1.total_cmp(&a.1));
+    sums.iter().map(|(k, t)| format!("{k} {t:.1} s")).collect::<Vec<_>>().join(", ")
 }
 
 /// Runs the needs analysis and the sweep on one frame, prunes, and builds the frame's figures. With
@@ -205,4 +209,16 @@ pub fn run(
     let (rep, mut files) = assemble(vec![f.frame], f.rows, f.figures, &Assembly::of(cfg, Over::default(), None))?;
     files.extend(f.files);
     Ok((rep, files))
+}
+
+#[cfg(test)]
+mod tests {
+    /// Several frames' stages sum by kind and list largest first; none gives an empty summary.
+    #[test]
+    fn stage_summary_sums_frames_by_kind() {
+        let a = [("FLIP".to_string(), 1.0), ("resolve".to_string(), 0.5)];
+        let b = [("resolve".to_string(), 2.0), ("reference".to_string(), 0.25)];
+        assert_eq!(super::stage_summary(a.iter().chain(&b)), "resolve 2.5 s, FLIP 1.0 s, reference 0.2 s");
+        assert_eq!(super::stage_summary(&[]), "");
+    }
 }
