@@ -20,6 +20,7 @@ pub mod fixture;
 mod kernel;
 mod lights;
 mod reference;
+mod reference_lanes;
 mod schedule;
 mod simd;
 mod split;

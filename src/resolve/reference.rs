@@ -4,13 +4,16 @@
 //! light whose distance is at or beyond its range is skipped (both falloffs are exactly 0 there), and lights are
 //! culled per tile only where that holds for the whole tile, so the image is the every-light one bit for bit.
 
+#[cfg(test)]
 use super::brdf;
 use super::brdf::DIELECTRIC_F0;
 use super::config::Brdf;
 use super::config::ResolveConfig;
 use super::lights::{sanitize, Hemisphere};
+use super::reference_lanes::{self, LightLanes, LANES};
 use super::surface::{SanitizedCounts, SurfaceReader};
 use super::worklist::Surface;
+use crate::base::isa::Isa;
 use crate::error::{Error, Result};
 use crate::gbuffer::GBuffer;
 use crate::image::HdrImage;
@@ -58,10 +61,26 @@ const REFERENCE_TILE: usize = 16;
 /// are monotone). The sums therefore add the same non-zero terms in the same order: the image is bit-identical to
 /// shading every sample against every light (`culling_leaves_the_reference_bit_identical`).
 fn per_sample_f64(gb: &GBuffer, lights: &[Light], cfg: &ResolveConfig) -> Result<Vec<DVec3>> {
-    per_sample_f64_culled(gb, lights, cfg, true)
+    per_sample_f64_culled(gb, lights, cfg, true, Shading::Lanes(Some(Isa::detect())))
 }
 
-fn per_sample_f64_culled(gb: &GBuffer, lights: &[Light], cfg: &ResolveConfig, cull: bool) -> Result<Vec<DVec3>> {
+/// How the reference evaluates its pairs: [`LANES`] samples at a time (instruction set capped as in
+/// `reference_lanes::shade`), or pair by pair through `brdf::shade`, the definition the lanes are tested
+/// against.
+#[derive(Clone, Copy, Debug)]
+enum Shading {
+    Lanes(Option<Isa>),
+    #[cfg(test)]
+    Scalar,
+}
+
+fn per_sample_f64_culled(
+    gb: &GBuffer,
+    lights: &[Light],
+    cfg: &ResolveConfig,
+    cull: bool,
+    shading: Shading,
+) -> Result<Vec<DVec3>> {
     cfg.validate()?;
     let reader = SurfaceReader::new(gb)?;
     let clean = sanitize(lights);
@@ -70,12 +89,15 @@ fn per_sample_f64_culled(gb: &GBuffer, lights: &[Light], cfg: &ResolveConfig, cu
     if w == 0 || s == 0 {
         return Ok(out);
     }
+    let prepared: Vec<LightLanes> = clean.lights.iter().map(LightLanes::new).collect();
     out.par_chunks_mut(w * s * REFERENCE_TILE).enumerate().for_each(|(band, rows)| {
         let mut counts = SanitizedCounts::default();
         let y0 = band * REFERENCE_TILE;
         let band_rows = rows.len() / (w * s);
         let mut surfaces: Vec<(usize, Surface)> = Vec::new();
-        let mut tile_lights: Vec<&Light> = Vec::new();
+        let mut tile_lights: Vec<usize> = Vec::new();
+        let mut lanes_lights: Vec<LightLanes> = Vec::new();
+        let mut block: Vec<Surface> = Vec::with_capacity(LANES);
         for x0 in (0..w).step_by(REFERENCE_TILE) {
             surfaces.clear();
             let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
@@ -94,22 +116,46 @@ fn per_sample_f64_culled(gb: &GBuffer, lights: &[Light], cfg: &ResolveConfig, cu
                 continue;
             }
             tile_lights.clear();
-            tile_lights.extend(clean.lights.iter().filter(|l| {
+            tile_lights.extend(clean.lights.iter().enumerate().filter_map(|(i, l)| {
                 if !cull || l.is_directional() {
-                    return true;
+                    return Some(i);
                 }
                 let c = l.position.as_dvec3();
-                (c.clamp(lo, hi) - c).length() < f64::from(l.range)
+                ((c.clamp(lo, hi) - c).length() < f64::from(l.range)).then_some(i)
             }));
-            for (i, surf) in &surfaces {
-                let mut sum = DVec3::ZERO;
-                for l in &tile_lights {
-                    sum += brdf::shade(surf, l, cfg.brdf, cfg.falloff);
-                }
+            let finish = |surf: &Surface, mut sum: DVec3| {
                 for e in &clean.environment {
                     sum += environment(surf, e, cfg.brdf);
                 }
-                rows[*i] = if sum.is_finite() { sum } else { DVec3::ZERO };
+                if sum.is_finite() {
+                    sum
+                } else {
+                    DVec3::ZERO
+                }
+            };
+            match shading {
+                Shading::Lanes(isa) => {
+                    lanes_lights.clear();
+                    lanes_lights.extend(tile_lights.iter().map(|&i| prepared[i]));
+                    for chunk in surfaces.chunks(LANES) {
+                        block.clear();
+                        block.extend(chunk.iter().map(|(_, surf)| *surf));
+                        let sum = reference_lanes::shade(isa, &block, &lanes_lights, cfg.brdf, cfg.falloff);
+                        for (j, (i, surf)) in chunk.iter().enumerate() {
+                            rows[*i] = finish(surf, DVec3::new(sum[0][j], sum[1][j], sum[2][j]));
+                        }
+                    }
+                }
+                #[cfg(test)]
+                Shading::Scalar => {
+                    for (i, surf) in &surfaces {
+                        let mut sum = DVec3::ZERO;
+                        for &l in &tile_lights {
+                            sum += brdf::shade(surf, &clean.lights[l], cfg.brdf, cfg.falloff);
+                        }
+                        rows[*i] = finish(surf, sum);
+                    }
+                }
             }
         }
     });
@@ -171,10 +217,10 @@ mod tests {
     /// Per-tile culling only leaves out lights that add exactly 0 to every sample of the tile: the reference is
     /// bit for bit the every-light one, for each BRDF and falloff, with point, spot and directional lights — and
     /// culling did leave lights out.
-    #[test]
-    fn culling_leaves_the_reference_bit_identical() {
-        let gb = render(SceneName::Room, 96, 64, 4).unwrap();
-        let mut lights = scatter_lights(&gb, 200, 5);
+    /// Point lights (some with small ranges, so culling has something to cull), every 7th a spot, and one
+    /// directional light.
+    fn mixed_lights(gb: &GBuffer) -> Vec<Light> {
+        let mut lights = scatter_lights(gb, 200, 5);
         for (i, l) in lights.iter_mut().enumerate().filter(|(i, _)| i % 7 == 0) {
             l.kind = LightKind::Spot {
                 direction: Vec3::new(0.3, -1.0, -0.2 * (i % 3) as f32).normalize(),
@@ -186,16 +232,68 @@ mod tests {
             kind: LightKind::Directional { direction: Vec3::new(0.2, -1.0, -0.4).normalize() },
             ..Light::point(Vec3::ZERO, Vec3::ONE, 0.5, 1.0)
         });
+        lights
+    }
+
+    #[test]
+    fn culling_leaves_the_reference_bit_identical() {
+        let gb = render(SceneName::Room, 96, 64, 4).unwrap();
+        let lights = mixed_lights(&gb);
         // Culling must have something to cull: some light misses some tile's box.
         assert!(lights.iter().any(|l| l.range < 5.0), "small ranges");
         for brdf in [Brdf::Lambert, Brdf::BlinnPhong, Brdf::Ggx] {
             for falloff in [Falloff::Gltf, Falloff::Linear] {
                 let cfg = ResolveConfig { brdf, falloff, ..ResolveConfig::default() };
-                let culled = per_sample_f64_culled(&gb, &lights, &cfg, true).unwrap();
-                let all = per_sample_f64_culled(&gb, &lights, &cfg, false).unwrap();
+                let lanes = Shading::Lanes(Some(Isa::detect()));
+                let culled = per_sample_f64_culled(&gb, &lights, &cfg, true, lanes).unwrap();
+                let all = per_sample_f64_culled(&gb, &lights, &cfg, false, lanes).unwrap();
                 let bits = |v: &[DVec3]| v.iter().flat_map(|c| c.to_array().map(f64::to_bits)).collect::<Vec<_>>();
                 assert!(bits(&culled) == bits(&all), "{brdf:?} {falloff:?}");
                 assert!(all.iter().any(|c| *c != DVec3::ZERO));
+            }
+        }
+    }
+
+    /// The lanes are the scalar definition (`brdf::shade` pair by pair): bit for bit for Lambert and GGX, and for
+    /// Blinn-Phong within what the lanes' `pow` may differ from libm's, on every instruction set this CPU runs and
+    /// the portable lanes; and bit-identical across instruction sets. The frame has a light at a sample
+    /// (distance 0), lights out of range and behind surfaces, and unbounded lights.
+    #[test]
+    fn lanes_equal_the_scalar_definition() {
+        let gb = render(SceneName::Room, 64, 48, 4).unwrap();
+        let mut lights = mixed_lights(&gb);
+        let on_a_sample = gb.position.as_ref().unwrap()[gb.coverage.iter().position(|c| *c).unwrap()];
+        lights.push(Light::point(on_a_sample, Vec3::new(1.0, 0.5, 0.25), 2.0, 3.0));
+        lights.push(Light::point(Vec3::new(0.5, 1.0, -4.0), Vec3::ONE, 3.0, f32::INFINITY));
+        let mut isas: Vec<Option<Isa>> = Isa::available().into_iter().map(Some).collect();
+        isas.push(None);
+        for brdf in [Brdf::Lambert, Brdf::BlinnPhong, Brdf::Ggx] {
+            for falloff in [Falloff::Gltf, Falloff::Linear] {
+                let cfg = ResolveConfig { brdf, falloff, ..ResolveConfig::default() };
+                let scalar = per_sample_f64_culled(&gb, &lights, &cfg, true, Shading::Scalar).unwrap();
+                assert!(scalar.iter().any(|c| *c != DVec3::ZERO));
+                let mut first: Option<Vec<DVec3>> = None;
+                for &isa in &isas {
+                    let lanes = per_sample_f64_culled(&gb, &lights, &cfg, true, Shading::Lanes(isa)).unwrap();
+                    for (i, (a, b)) in lanes.iter().zip(&scalar).enumerate() {
+                        let ok = if brdf == Brdf::BlinnPhong {
+                            (*a - *b).abs().max_element() <= 1e-12 * b.abs().max_element()
+                        } else {
+                            a.to_array().map(f64::to_bits) == b.to_array().map(f64::to_bits)
+                        };
+                        assert!(ok, "{brdf:?} {falloff:?} {isa:?} sample {i}: {a} vs {b}");
+                    }
+                    match &first {
+                        None => first = Some(lanes),
+                        Some(f) => assert!(
+                            f.iter()
+                                .zip(&lanes)
+                                .all(|(a, b)| a.to_array().map(f64::to_bits) == b.to_array().map(f64::to_bits)),
+                            "{brdf:?} {falloff:?}: {isa:?} differs from {:?}",
+                            isas[0]
+                        ),
+                    }
+                }
             }
         }
     }
