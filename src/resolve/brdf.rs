@@ -1,5 +1,6 @@
 //! The BRDFs, written once in f64 as the reference definition of what one light adds to one sample. The batched
-//! f32 kernel (`kernel.rs`) evaluates the same formulas; the f64 reference (`reference.rs`) calls these directly.
+//! f32 kernel (`kernel.rs`) evaluates the same formulas; the f64 reference evaluates them in lanes
+//! (`reference_lanes.rs`), tested against these pair by pair.
 //!
 //! Conventions (view space, the crate's +X right, +Y up, looking −Z): `V = −p/|p|` points from the surface to the
 //! eye; `L` points from the surface to the light (`−direction` for a directional light); `H = normalize(L + V)`.

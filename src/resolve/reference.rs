@@ -1,5 +1,7 @@
 //! The reference image: the unpacked, unquantized G-buffer, every covered sample shaded against every light in
-//! f64 (the formulas of `brdf.rs`, exact `powf`), box-filtered into pixels with background samples contributing 0.
+//! f64 (the formulas of `brdf.rs`, evaluated 8 samples at a time by `reference_lanes`: the same bits for Lambert
+//! and GGX, `powf` within 6e-16 relative for Blinn-Phong), box-filtered into pixels with background samples
+//! contributing 0.
 //! No schedule: the configuration's BRDF and falloff are used, its culling, tile size and schedule are ignored. A
 //! light whose distance is at or beyond its range is skipped (both falloffs are exactly 0 there), and lights are
 //! culled per tile only where that holds for the whole tile, so the image is the every-light one bit for bit.
