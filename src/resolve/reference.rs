@@ -1,6 +1,6 @@
 //! The reference image: the unpacked, unquantized G-buffer, every covered sample shaded against every light in
 //! f64 (the formulas of `brdf.rs`, evaluated 8 samples at a time by `reference_lanes`: the same bits for Lambert
-//! and GGX, `powf` within 6e-16 relative for Blinn-Phong), box-filtered into pixels with background samples
+//! and GGX, `powf` within a tested bound of libm's for Blinn-Phong), box-filtered into pixels with background samples
 //! contributing 0.
 //! No schedule: the configuration's BRDF and falloff are used, its culling, tile size and schedule are ignored. A
 //! light whose distance is at or beyond its range is skipped (both falloffs are exactly 0 there), and lights are
@@ -96,12 +96,14 @@ fn per_sample_f64_culled(
         let mut counts = SanitizedCounts::default();
         let y0 = band * REFERENCE_TILE;
         let band_rows = rows.len() / (w * s);
-        let mut surfaces: Vec<(usize, Surface)> = Vec::new();
+        // The tile's covered samples and where each goes in `rows`.
+        let mut surfaces: Vec<Surface> = Vec::new();
+        let mut at: Vec<usize> = Vec::new();
         let mut tile_lights: Vec<usize> = Vec::new();
         let mut lanes_lights: Vec<LightLanes> = Vec::new();
-        let mut block: Vec<Surface> = Vec::with_capacity(LANES);
         for x0 in (0..w).step_by(REFERENCE_TILE) {
             surfaces.clear();
+            at.clear();
             let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
             for dy in 0..band_rows {
                 for x in x0..(x0 + REFERENCE_TILE).min(w) {
@@ -109,7 +111,8 @@ fn per_sample_f64_culled(
                         if let Some(surf) = reader.read(x as u32, (y0 + dy) as u32, k as u32, &mut counts) {
                             let p = surf.p.as_dvec3();
                             (lo, hi) = (lo.min(p), hi.max(p));
-                            surfaces.push(((dy * w + x) * s + k, surf));
+                            surfaces.push(surf);
+                            at.push((dy * w + x) * s + k);
                         }
                     }
                 }
@@ -139,23 +142,21 @@ fn per_sample_f64_culled(
                 Shading::Lanes(isa) => {
                     lanes_lights.clear();
                     lanes_lights.extend(tile_lights.iter().map(|&i| prepared[i]));
-                    for chunk in surfaces.chunks(LANES) {
-                        block.clear();
-                        block.extend(chunk.iter().map(|(_, surf)| *surf));
-                        let sum = reference_lanes::shade(isa, &block, &lanes_lights, cfg.brdf, cfg.falloff);
-                        for (j, (i, surf)) in chunk.iter().enumerate() {
-                            rows[*i] = finish(surf, DVec3::new(sum[0][j], sum[1][j], sum[2][j]));
+                    for (block, at) in surfaces.chunks(LANES).zip(at.chunks(LANES)) {
+                        let sum = reference_lanes::shade(isa, block, &lanes_lights, cfg.brdf, cfg.falloff);
+                        for (j, (surf, &i)) in block.iter().zip(at).enumerate() {
+                            rows[i] = finish(surf, DVec3::new(sum[0][j], sum[1][j], sum[2][j]));
                         }
                     }
                 }
                 #[cfg(test)]
                 Shading::Scalar => {
-                    for (i, surf) in &surfaces {
+                    for (surf, &i) in surfaces.iter().zip(&at) {
                         let mut sum = DVec3::ZERO;
                         for &l in &tile_lights {
                             sum += brdf::shade(surf, &clean.lights[l], cfg.brdf, cfg.falloff);
                         }
-                        rows[*i] = finish(surf, sum);
+                        rows[i] = finish(surf, sum);
                     }
                 }
             }
@@ -216,9 +217,6 @@ mod tests {
     use crate::resolve::config::Falloff;
     use crate::scene::{render, scatter_lights, SceneName};
 
-    /// Per-tile culling only leaves out lights that add exactly 0 to every sample of the tile: the reference is
-    /// bit for bit the every-light one, for each BRDF and falloff, with point, spot and directional lights — and
-    /// culling did leave lights out.
     /// Point lights (some with small ranges, so culling has something to cull), every 7th a spot, and one
     /// directional light.
     fn mixed_lights(gb: &GBuffer) -> Vec<Light> {
@@ -237,6 +235,9 @@ mod tests {
         lights
     }
 
+    /// Per-tile culling only leaves out lights that add exactly 0 to every sample of the tile: the reference is
+    /// bit for bit the every-light one, for each BRDF and falloff, with point, spot and directional lights — and
+    /// culling did leave lights out.
     #[test]
     fn culling_leaves_the_reference_bit_identical() {
         let gb = render(SceneName::Room, 96, 64, 4).unwrap();
