@@ -39,6 +39,7 @@ pub use kernel::instruction_set;
 pub fn kernel_lanes() -> usize {
     simd::BLOCK
 }
+pub use falloff::{MIN_DISTANCE, MIN_RAMP_FRACTION};
 pub use reference::{check_meaningful, reference, reference_per_sample};
 pub use split::{ResolveInput, SplitSamples};
 pub use surface::SanitizedCounts;
