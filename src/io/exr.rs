@@ -541,7 +541,17 @@ fn read_raw_from<R: std::io::Read + std::io::Seek>(
 /// Writes `image` as a single-part, ZIP16-compressed (lossless) scan-line EXR, atomically (temporary file + rename).
 /// Channel names must be Latin-1; string attributes are stored as text header attributes.
 pub fn write_raw(path: &Path, image: &RawImage) -> Result<()> {
-    write_raw_owned(path, image.clone(), WriteCompression::Zip)
+    write_raw_with(path, image, WriteCompression::Zip)
+}
+
+/// [`write_raw`] with the compression given. ZIP and NONE go through gbuf's own block writer (`io::exr_write`:
+/// parallel zlib-rs, blocks written as they are made); PIZ and RLE through the exr crate's.
+pub fn write_raw_with(path: &Path, image: &RawImage, compression: WriteCompression) -> Result<()> {
+    match compression {
+        WriteCompression::Zip => super::exr_write::write(path, image, super::exr_write::Compression::Zip),
+        WriteCompression::None => super::exr_write::write(path, image, super::exr_write::Compression::None),
+        WriteCompression::Piz | WriteCompression::Rle => write_with_exr_crate(path, image.clone(), compression),
+    }
 }
 
 crate::named_enum! {
@@ -574,9 +584,18 @@ impl WriteCompression {
     }
 }
 
-/// [`write_raw`] taking the image by value (its samples move into the encoder instead of being copied: a 1080p × 4
-/// dump is ≈ 600 MB of samples, and a copy of fresh memory costs its page faults too), with the compression given.
+/// [`write_raw_with`] taking the image by value: for PIZ and RLE its samples move into the exr crate's encoder
+/// instead of being copied (a 1080p × 4 dump is ≈ 600 MB of samples, and a copy of fresh memory costs its page
+/// faults too); ZIP and NONE write from it in place.
 pub fn write_raw_owned(path: &Path, image: RawImage, compression: WriteCompression) -> Result<()> {
+    match compression {
+        WriteCompression::Zip | WriteCompression::None => write_raw_with(path, &image, compression),
+        WriteCompression::Piz | WriteCompression::Rle => write_with_exr_crate(path, image, compression),
+    }
+}
+
+/// The exr crate's writer (PIZ and RLE), with the header's attributes sorted afterwards.
+fn write_with_exr_crate(path: &Path, image: RawImage, compression: WriteCompression) -> Result<()> {
     use ::exr::image::{AnyChannel, AnyChannels, FlatSamples, Image, Layer};
     use ::exr::meta::attribute::{AttributeValue, Text};
     use ::exr::meta::header::LayerAttributes;

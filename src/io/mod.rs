@@ -6,6 +6,7 @@ pub mod camera_fit;
 pub mod canonical;
 pub mod conventions;
 pub mod exr;
+mod exr_write;
 pub mod fileset;
 pub mod fold;
 pub mod ispc;
