@@ -397,10 +397,6 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
                 }
                 rows.push(r);
                 done += 1;
-                if pending.len() >= FLIP_BATCH {
-                    progress(done, total, "FLIP");
-                    flush_flip(&mut pending, &mut rows, &reference, &exact, &cfg.viewing, &mut worst_flip);
-                }
             }
             if li == 0 {
                 masks.push((det.name().to_string(), mask));
@@ -408,6 +404,13 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
         }
         maps.push(lmaps);
         keep_worst_maps(&mut maps, &rows);
+        // FLIP runs between layouts, once this one's decoded G-buffer (as large as the input) is gone: the batch's
+        // images, their displayed copies and maps then never share the memory with two G-buffers.
+        drop(decoded);
+        if pending.len() >= FLIP_BATCH {
+            progress(done, total, "FLIP");
+            flush_flip(&mut pending, &mut rows, &reference, &exact, &cfg.viewing, &mut worst_flip);
+        }
     }
     if !pending.is_empty() {
         progress(done, total, "FLIP");

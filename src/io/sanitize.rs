@@ -38,34 +38,12 @@ fn scalars(p: &mut [f32]) -> (u64, u64) {
 }
 
 fn vec2s(p: &mut [Vec2]) -> (u64, u64) {
-    floats(bytemuck_floats(p))
+    floats(bytemuck::cast_slice_mut(p))
 }
 
 fn vec3s(p: &mut [Vec3]) -> (u64, u64) {
-    floats(bytemuck_floats(p))
+    floats(bytemuck::cast_slice_mut(p))
 }
-
-/// A slice of glam vectors as their f32 components (glam's `Vec2`/`Vec3` are `#[repr(C)]` structs of f32 fields
-/// with no padding).
-fn bytemuck_floats<T: Components>(p: &mut [T]) -> &mut [f32] {
-    let n = p.len() * T::N;
-    // SAFETY: `T` is `Vec2` or `Vec3`: `#[repr(C)]`, exactly `N` f32 fields, size `4·N`, f32 alignment (checked
-    // below at compile time), so `p` is `n` initialised f32s; the borrow is carried over.
-    unsafe { std::slice::from_raw_parts_mut(p.as_mut_ptr().cast::<f32>(), n) }
-}
-
-/// glam vectors made of `N` f32s and nothing else.
-trait Components {
-    const N: usize;
-}
-impl Components for Vec2 {
-    const N: usize = 2;
-}
-impl Components for Vec3 {
-    const N: usize = 3;
-}
-const _: () = assert!(std::mem::size_of::<Vec2>() == 8 && std::mem::align_of::<Vec2>() == 4);
-const _: () = assert!(std::mem::size_of::<Vec3>() == 12 && std::mem::align_of::<Vec3>() == 4);
 
 /// Replaces every NaN and ±Inf value (per component) in the float attributes of `gb` and returns, for each
 /// attribute that had any, `(name, NaN count, Inf count)` in canonical attribute order.

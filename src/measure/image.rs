@@ -15,6 +15,7 @@ use crate::resolve::{resolve, ResolveConfig, Schedule};
 use crate::GBuffer;
 use rayon::prelude::*;
 use serde::Serialize;
+use std::borrow::Cow;
 
 /// How far `test` is from `reference`, per channel value (3 per pixel), in f64.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -205,18 +206,25 @@ pub fn flip_many(reference: &HdrImage, tests: &[&HdrImage], viewing: &Viewing) -
         flip::ldr_flip_many(&shown(reference, viewing), &views, w, h, &opts)
     };
     let hdr = {
-        let tests: Vec<Vec<f32>> = fit.iter().map(|t| linear(t)).collect();
-        let views: Vec<&[f32]> = tests.iter().map(Vec::as_slice).collect();
+        let tests: Vec<Cow<'_, [f32]>> = fit.iter().map(|t| linear(t)).collect();
+        let views: Vec<&[f32]> = tests.iter().map(|t| &**t).collect();
         flip::hdr_flip_many(&linear(reference), &views, w, h, &opts)
     };
     let mut results = ldr.into_iter().zip(hdr).map(|(l, h)| Some((l, h.mean())));
     tests.iter().map(|t| if same(t) { results.next().expect("one result per fitting test") } else { None }).collect()
 }
 
-/// An image as HDR-FLIP takes it: interleaved linear RGB, finite and non-negative (what the resolve writes, but a
-/// dump's reference may not be).
-fn linear(img: &HdrImage) -> Vec<f32> {
-    img.rgb.par_iter().flat_map_iter(|c| c.to_array()).map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 }).collect()
+/// An image as HDR-FLIP takes it: interleaved linear RGB, finite and non-negative. What the resolve writes already
+/// is, and is then borrowed as it is (a 1080p image is 25 MB, and the report holds several); a dump's reference may
+/// not be, and is copied with its negative and non-finite values set to 0.
+fn linear(img: &HdrImage) -> Cow<'_, [f32]> {
+    let floats: &[f32] = bytemuck::cast_slice(&img.rgb);
+    let usable = |x: &f32| x.is_finite() && *x >= 0.0;
+    if floats.par_iter().all(usable) {
+        Cow::Borrowed(floats)
+    } else {
+        Cow::Owned(floats.par_iter().map(|&x| if usable(&x) { x } else { 0.0 }).collect())
+    }
 }
 
 /// The [`ErrorSet`] of `test` against `reference`, with FLIP when `viewing` is given. Images of different sizes
