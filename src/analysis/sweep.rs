@@ -20,6 +20,7 @@ use crate::measure;
 use crate::measure::flip::FlipMap;
 use crate::measure::image::{error_set, flip_many, ErrorSet, Viewing};
 use crate::resolve::{self, Culling, ResolveConfig};
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// What to sweep.
@@ -142,9 +143,10 @@ pub fn bandwidth(gb: &GBuffer, bytes: u32, quad_light_fragments: Option<u64>) ->
 /// Progress callback: (done, total, what is running).
 pub type Progress<'a> = &'a mut dyn FnMut(usize, usize, &str);
 
-fn per_pixel(gb: &GBuffer, f: impl Fn(usize) -> f32) -> Vec<Option<f32>> {
+fn per_pixel(gb: &GBuffer, f: impl Fn(usize) -> f32 + Sync) -> Vec<Option<f32>> {
     let s = gb.samples as usize;
     (0..gb.pixel_count())
+        .into_par_iter()
         .map(|p| {
             (p * s..(p + 1) * s)
                 .filter(|&i| gb.coverage[i])
@@ -173,7 +175,7 @@ pub fn error_maps(layout: &str, reference: &GBuffer, test: &GBuffer) -> ErrorMap
 }
 
 fn image_abs(reference: &HdrImage, test: &HdrImage) -> Vec<Option<f32>> {
-    reference.rgb.iter().zip(&test.rgb).map(|(a, b)| Some((*b - *a).abs().max_element())).collect()
+    reference.rgb.par_iter().zip(&test.rgb).map(|(a, b)| Some((*b - *a).abs().max_element())).collect()
 }
 
 /// Each detector on the exact G-buffer: the mask, the image (what layouts are compared with for their layout
@@ -317,8 +319,11 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
         let mut attr_row = base.clone();
         attr_row.set_timing("encode", te);
         attr_row.set_timing("decode", td);
-        fill_attribute_errors(&mut attr_row, gb, &decoded);
-        let mut lmaps = error_maps(layout.name(), gb, &decoded);
+        let mut lmaps = rayon::join(
+            || fill_attribute_errors(&mut attr_row, gb, &decoded),
+            || error_maps(layout.name(), gb, &decoded),
+        )
+        .1;
 
         for (di, &det) in cfg.detectors.iter().enumerate() {
             progress(done, total, &format!("{} × {}: detect", layout.name(), det.name()));

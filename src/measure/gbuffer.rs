@@ -10,6 +10,7 @@
 use crate::error::{Error, Result};
 use crate::gbuffer::{Attribute, GBuffer, PlaneRef};
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Where a sample sits.
@@ -152,48 +153,75 @@ pub fn compare(reference: &GBuffer, test: &GBuffer) -> Result<AttributeErrors> {
     test.validate()?;
     let covered = Covered(&reference.coverage);
     let mut out = AttributeErrors { covered_samples: covered.iter().count() as u64, ..Default::default() };
-    for attr in reference.attributes() {
-        let (Some(r), Some(t)) = (reference.plane(attr), test.plane(attr)) else {
+    // Attributes are measured in parallel, each by the same sequential loop as alone (the numbers do not depend on
+    // the thread count), and assembled in canonical order.
+    let measured: Vec<(Attribute, Option<(Measured, u64)>)> = reference
+        .attributes()
+        .into_par_iter()
+        .map(|attr| {
+            let (Some(r), Some(t)) = (reference.plane(attr), test.plane(attr)) else {
+                return (attr, None);
+            };
+            let mut nonfinite = 0;
+            let m = match (attr, r, t) {
+                (Attribute::Normal, PlaneRef::Vec3(r), PlaneRef::Vec3(t)) => {
+                    Measured::Normal(normals(reference, covered, r, t))
+                }
+                (Attribute::Depth, PlaneRef::F32(r), PlaneRef::F32(t)) => {
+                    Measured::Depth(depth(reference, covered, r, t, &mut nonfinite))
+                }
+                (_, PlaneRef::U32(r), PlaneRef::U32(t)) => {
+                    let mut e = IdErrors { attribute: attr.name().into(), ..Default::default() };
+                    for i in covered.iter() {
+                        if r[i] != t[i] {
+                            e.mismatches += 1;
+                            e.first.get_or_insert(at(reference, i));
+                        }
+                    }
+                    Measured::Id(e)
+                }
+                (_, r, t) => {
+                    let comps = |p: PlaneRef<'_>, i: usize| -> [f32; 3] {
+                        match p {
+                            PlaneRef::F32(p) => [p[i], 0.0, 0.0],
+                            PlaneRef::Vec2(p) => [p[i].x, p[i].y, 0.0],
+                            PlaneRef::Vec3(p) => p[i].to_array(),
+                            PlaneRef::U32(p) => [p[i] as f32, 0.0, 0.0],
+                        }
+                    };
+                    Measured::Values(values(reference, attr, covered, |i| (comps(r, i), comps(t, i)), &mut nonfinite))
+                }
+            };
+            (attr, Some((m, nonfinite)))
+        })
+        .collect();
+    for (attr, m) in measured {
+        let Some((m, nonfinite)) = m else {
             out.missing.push(attr.name().to_string());
             continue;
         };
-        match (attr, r, t) {
-            (Attribute::Normal, PlaneRef::Vec3(r), PlaneRef::Vec3(t)) => {
-                out.normal = Some(normals(reference, covered, r, t))
-            }
-            (Attribute::Depth, PlaneRef::F32(r), PlaneRef::F32(t)) => {
-                out.depth = Some(depth(reference, covered, r, t, &mut out.nonfinite))
-            }
-            (_, PlaneRef::U32(r), PlaneRef::U32(t)) => {
-                let mut e = IdErrors { attribute: attr.name().into(), ..Default::default() };
-                for i in covered.iter() {
-                    if r[i] != t[i] {
-                        e.mismatches += 1;
-                        e.first.get_or_insert(at(reference, i));
-                    }
-                }
-                out.ids.push(e);
-            }
-            (_, r, t) => {
-                let comps = |p: PlaneRef<'_>, i: usize| -> [f32; 3] {
-                    match p {
-                        PlaneRef::F32(p) => [p[i], 0.0, 0.0],
-                        PlaneRef::Vec2(p) => [p[i].x, p[i].y, 0.0],
-                        PlaneRef::Vec3(p) => p[i].to_array(),
-                        PlaneRef::U32(p) => [p[i] as f32, 0.0, 0.0],
-                    }
-                };
-                let e = values(reference, attr, covered, |i| (comps(r, i), comps(t, i)), &mut out.nonfinite);
-                match attr {
-                    Attribute::Albedo => out.albedo = Some(e),
-                    Attribute::Position => out.position = Some(e),
-                    Attribute::Motion => out.motion = Some(e),
-                    _ => out.scalars.push(e),
-                }
-            }
+        out.nonfinite += nonfinite;
+        match m {
+            Measured::Normal(e) => out.normal = Some(e),
+            Measured::Depth(e) => out.depth = Some(e),
+            Measured::Id(e) => out.ids.push(e),
+            Measured::Values(e) => match attr {
+                Attribute::Albedo => out.albedo = Some(e),
+                Attribute::Position => out.position = Some(e),
+                Attribute::Motion => out.motion = Some(e),
+                _ => out.scalars.push(e),
+            },
         }
     }
     Ok(out)
+}
+
+/// One attribute's errors, of the kind its plane has.
+enum Measured {
+    Normal(NormalErrors),
+    Depth(DepthErrors),
+    Id(IdErrors),
+    Values(ValueErrors),
 }
 
 /// The covered samples of a G-buffer, by index, without a list of them (a 1080p × 4 dump has 8.3 million).
@@ -338,6 +366,28 @@ mod tests {
         assert_eq!(e.scalars[0].worst, SampleAt { x: 2, y: 0, sample: 1 });
         let ids = e.ids[0].clone();
         assert_eq!((ids.mismatches, ids.first), (1, Some(SampleAt { x: 1, y: 0, sample: 0 })));
+    }
+
+    /// The attributes are measured in parallel: the same numbers, bit for bit, on 1 thread and on 3.
+    #[test]
+    fn numbers_do_not_depend_on_the_thread_count() {
+        let (a, mut b) = pair();
+        let mut rng = crate::util::SplitMix64::new(5);
+        for n in b.normal.as_mut().unwrap() {
+            *n = Vec3::new(rng.range_f32(-0.3, 0.3), rng.range_f32(-0.3, 0.3), 1.0).normalize();
+        }
+        for d in b.depth.as_mut().unwrap() {
+            *d = rng.range_f32(9.0, 11.0);
+        }
+        b.roughness.as_mut().unwrap()[5] = f32::NAN;
+        b.object_id.as_mut().unwrap()[7] = 1234;
+        let on = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| compare(&a, &b).unwrap())
+        };
+        let one = on(1);
+        assert_eq!(one, on(3));
+        assert!(one.normal.as_ref().unwrap().mean_deg > 0.0 && one.nonfinite == 1 && one.ids[0].mismatches == 1);
     }
 
     #[test]
