@@ -1451,8 +1451,15 @@ mod tests {
     /// The level a test caps the band kernels at (0: none; else 1 + the `Isa` as listed).
     static FORCED: std::sync::atomic::AtomicU8 = std::sync::atomic::AtomicU8::new(0);
 
-    /// Caps the band kernels at `isa` (`None`: the CPU's). Every level gives the same bits, so tests running at
-    /// the same time are not disturbed.
+    /// Held by every test that forces a level, so that each runs on the level it names (the cap is global: the
+    /// bands run on rayon's threads).
+    static FORCING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+    fn forcing() -> std::sync::MutexGuard<'static, ()> {
+        FORCING.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    /// Caps the band kernels at `isa` (`None`: the CPU's). Call with [`forcing`] held.
     pub(super) fn force(isa: Option<Isa>) {
         let v = isa.map_or(0, |i| 1 + Isa::ALL.iter().position(|&x| x == i).expect("a listed level") as u8);
         FORCED.store(v, std::sync::atomic::Ordering::Relaxed);
@@ -1470,6 +1477,7 @@ mod tests {
     /// one pair and several tests against one reference.
     #[test]
     fn every_instruction_set_gives_the_same_bits() {
+        let _serial = forcing();
         let (w, h) = (300, 70);
         let a = lcg_image(w, h, 5);
         let b: Vec<f32> = a.iter().map(|v| (v * 0.9 + 0.03).min(1.0)).collect();
@@ -1504,6 +1512,7 @@ mod tests {
     /// test, both code paths.
     #[test]
     fn many_tests_against_one_reference_equal_each_pair() {
+        let _serial = forcing();
         let (w, h) = (300, 70);
         let a = lcg_image(w, h, 5);
         let b: Vec<f32> = a.iter().map(|v| (v * 0.9 + 0.03).min(1.0)).collect();
