@@ -7,10 +7,12 @@
 //! | [`names`]   | the one spelling rule for every closed choice (flags, JSON, layout files)          |
 //! | [`timing`]  | wall-clock stage timing in milliseconds                                            |
 //! | [`mask`]    | [`mask::EdgeMask`]: shading evaluations per pixel, what detectors produce and the resolve reads |
-//! | [`picture`] | 8-bit pictures: sRGB, the colour map, PNG encoding                                 |
+//! | [`picture`] | 8-bit pictures: sRGB, the colour map, PNG files                                    |
+//! | [`png`]     | the PNG encoder: bands of rows filtered and deflated in parallel                   |
 
 pub mod isa;
 pub mod mask;
 pub mod names;
 pub mod picture;
+pub mod png;
 pub mod timing;

@@ -3,7 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::util::write_bytes_atomic;
-use image::{ImageEncoder, RgbImage};
+use image::RgbImage;
 use std::path::Path;
 
 /// The sRGB transfer function (IEC 61966-2-1) of a linear value in [0, 1].
@@ -45,13 +45,9 @@ pub fn colormap(t: f32) -> [u8; 3] {
     [0, 1, 2].map(|k| (STOPS[i][k] + (STOPS[i + 1][k] - STOPS[i][k]) * u).round() as u8)
 }
 
-/// Encodes an RGB image as PNG bytes.
+/// Encodes an RGB image as PNG bytes ([`crate::base::png`]: bands of rows deflated in parallel).
 pub fn png_bytes(img: &RgbImage) -> Result<Vec<u8>> {
-    let mut out = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut out)
-        .write_image(img.as_raw(), img.width(), img.height(), image::ExtendedColorType::Rgb8)
-        .map_err(|e| Error::Argument(format!("PNG encoding failed: {e}")))?;
-    Ok(out)
+    crate::base::png::encode_rgb8(img.width(), img.height(), img.as_raw())
 }
 
 /// Writes an RGB image as a PNG file, atomically (temporary file, then rename). Errors name `path`.
