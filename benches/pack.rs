@@ -213,11 +213,27 @@ fn material_table() {
 }
 
 fn main() {
-    material_table();
+    let roundtrip_only = std::env::var_os("GBUF_BENCH_ROUNDTRIP").is_some();
+    if !roundtrip_only {
+        material_table();
+    }
     if std::env::var_os("GBUF_BENCH_MATERIAL_ONLY").is_some() {
         return;
     }
     let gb = gbuffer();
+    // `GBUF_BENCH_ROUNDTRIP=fat-20,…`: only the banded roundtrip of those layouts, 50 runs each (for a profiler).
+    if let Ok(names) = std::env::var("GBUF_BENCH_ROUNDTRIP") {
+        for name in names.split(',') {
+            let layout = Layout::by_name(name).expect("a built-in layout");
+            let r = layout.roundtrip_timed(&gb, 50).unwrap();
+            let best = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+            let bytes = gb.len() * layout.bytes_per_sample();
+            let gbs = |ms: f64| bytes as f64 / (ms * 1e-3) / 1e9;
+            let (e, d) = (best(&r.encode_ms), best(&r.decode_ms));
+            println!("{name}: encode {e:.2} ms ({:.2} GB/s), decode {d:.2} ms ({:.2} GB/s)", gbs(e), gbs(d));
+        }
+        return;
+    }
     ratio_table(&gb);
     let mut c = Criterion::default().configure_from_args();
     bench(&mut c, &gb);

@@ -17,6 +17,7 @@ use super::normal::{f16_to_finite, round_in_range, F16_MAX, F16_TO_FINITE_OPS};
 use super::simd::{f32_to_f16_bits, run, Element, MapKernel};
 use super::{mask, split_bits, Codec, ColorCodec, TRANSCENDENTAL_OPS};
 use crate::base::isa::Isa;
+use crate::base::lut::CodeLut;
 use glam::Vec3;
 use std::sync::OnceLock;
 
@@ -82,8 +83,13 @@ impl UnormRgb {
     #[inline(always)]
     fn encode_with<const SRGB: bool>(&self, c: Vec3) -> u64 {
         let m = mask(self.bits) as f32;
+        let lut = if SRGB && self.bits == 8 { Some(srgb8_encode_table()) } else { None };
         let q = |v: f32| {
             let v = clean(v, 0.0, 1.0);
+            if let Some(lut) = lut {
+                // srgb8: the formula below through its threshold table, without a `powf` (equal, tested).
+                return u64::from(lut.encode_unit(v));
+            }
             let v = if SRGB { linear_to_srgb(v) } else { v };
             // ≤ 65535: i32 lanes hold it (and vectorise).
             round_in_range(v * m) as u64
@@ -104,6 +110,17 @@ impl UnormRgb {
         };
         Vec3::new(d(code), d(code >> self.bits), d(code >> (2 * self.bits)))
     }
+}
+
+/// srgb8's encode of one channel: `round(linear_to_srgb(v) · 255)`, `v` clamped to [0, 1] (NaN → 0).
+fn srgb8_formula(v: f32) -> u8 {
+    round_in_range(linear_to_srgb(clean(v, 0.0, 1.0)) * 255.0) as u8
+}
+
+/// [`srgb8_formula`] by its thresholds ([`CodeLut`]), built once per process.
+fn srgb8_encode_table() -> &'static CodeLut {
+    static TABLE: OnceLock<CodeLut> = OnceLock::new();
+    TABLE.get_or_init(|| CodeLut::build(srgb8_formula))
 }
 
 /// `srgb_to_linear(c / 255)` for every 8-bit code (what the srgb8 decoder returns, bit for bit).
@@ -439,5 +456,26 @@ mod tests {
         assert_eq!(c.decode(c.encode(Vec3::splat(f32::NAN))), Vec3::ZERO);
         assert!((srgb_to_linear(linear_to_srgb(0.2)) - 0.2).abs() < 1e-6);
         assert_eq!(color_codec("srgb8").unwrap().encode(Vec3::ONE), 0xff_ffff);
+    }
+
+    #[test]
+    fn srgb8_table_equals_the_formula() {
+        let lut = srgb8_encode_table();
+        // Every threshold and 64 bit patterns either side, every 97th bit pattern of [0, 1] (about 11 M values),
+        // the ends and out-of-range input.
+        let diff = lut.first_difference(|x| lut.encode_unit(clean(x, 0.0, 1.0)), srgb8_formula, 64, 97);
+        assert_eq!(diff, None, "the table and the formula differ at {diff:?}");
+        // The codec, through its slice path on this CPU, gives the formula's code for each channel.
+        let codec = color_codec("srgb8").unwrap();
+        let xs: Vec<f32> = (0..=1.0f32.to_bits()).step_by(9973).map(f32::from_bits).collect();
+        let values: Vec<Vec3> = xs.chunks(3).filter(|c| c.len() == 3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+        let mut codes = vec![0u64; values.len()];
+        codec.encode_slice(&values, &mut codes);
+        for (v, code) in values.iter().zip(&codes) {
+            let want = u64::from(srgb8_formula(v.x))
+                | u64::from(srgb8_formula(v.y)) << 8
+                | u64::from(srgb8_formula(v.z)) << 16;
+            assert_eq!(*code, want, "{v}");
+        }
     }
 }

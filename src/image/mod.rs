@@ -13,6 +13,7 @@
 
 pub mod mlaa;
 
+use crate::base::lut::CodeLut;
 use crate::base::picture::{srgb_encode, write_rgb8_png};
 use crate::error::{Error, Result};
 use crate::io::exr::{write_raw, RawChannel, RawData, RawImage};
@@ -172,21 +173,11 @@ impl HdrImage {
     }
 }
 
-/// [`HdrImage::to_ldr_gamma22`]'s encode without a `powf` per channel: the code of `x` is the number of thresholds
-/// `t_1 ≤ … ≤ t_255` at or below it, where `t_k` is the smallest f32 whose `(x^(1/2.2) · 255) as u8` reaches `k`
-/// (found once by bisection over f32 bit patterns, with that very formula). A bucket table on `x` gives the code
-/// at the bucket's start; a few threshold compares finish it. The result equals the formula's wherever it is monotone
-/// in `x` (the test sweeps every threshold's neighbourhood and a dense grid of [0, 1]).
-pub struct Gamma22Lut {
-    /// `t[k]` for k in 1..=255 (`t[0]` = 0).
-    thresholds: [f32; 256],
-    /// The code of each bucket's lower end, `BUCKETS` buckets over [0, 1].
-    start: Vec<u8>,
-}
+/// [`HdrImage::to_ldr_gamma22`]'s encode without a `powf` per channel: a [`CodeLut`] of the ISPC sample's
+/// `(x^(1/2.2) · 255) as u8` (the test sweeps every threshold's neighbourhood and a dense grid of [0, 1]).
+pub struct Gamma22Lut(CodeLut);
 
 impl Gamma22Lut {
-    const BUCKETS: usize = 4096;
-
     /// The formula the table reproduces (the ISPC sample's `Float32ToUnorm8` of `pow(x, 1/2.2)`).
     #[must_use]
     pub fn formula(x: f32) -> u8 {
@@ -197,42 +188,14 @@ impl Gamma22Lut {
     /// The table, built once per process.
     pub fn get() -> &'static Gamma22Lut {
         static LUT: std::sync::OnceLock<Gamma22Lut> = std::sync::OnceLock::new();
-        LUT.get_or_init(|| {
-            let mut thresholds = [0.0f32; 256];
-            for (k, t) in thresholds.iter_mut().enumerate().skip(1) {
-                // Smallest bit pattern in [0, 1.0] whose code is ≥ k (codes grow with the bits of positive floats).
-                let (mut lo, mut hi) = (0u32, 1.0f32.to_bits());
-                while lo < hi {
-                    let mid = lo + (hi - lo) / 2;
-                    if usize::from(Self::formula(f32::from_bits(mid))) >= k {
-                        hi = mid;
-                    } else {
-                        lo = mid + 1;
-                    }
-                }
-                *t = f32::from_bits(lo);
-            }
-            let start = (0..Self::BUCKETS)
-                .map(|b| {
-                    let x = b as f32 / Self::BUCKETS as f32;
-                    thresholds[1..].partition_point(|&t| t <= x) as u8
-                })
-                .collect();
-            Gamma22Lut { thresholds, start }
-        })
+        LUT.get_or_init(|| Gamma22Lut(CodeLut::build(Self::formula)))
     }
 
     /// The 8-bit code of linear `x` (NaN → 0, clamped to [0, 1]).
     #[inline]
     #[must_use]
     pub fn encode(&self, x: f32) -> u8 {
-        let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
-        let b = ((x * Self::BUCKETS as f32) as usize).min(Self::BUCKETS - 1);
-        let mut code = self.start[b];
-        while code < 255 && x >= self.thresholds[usize::from(code) + 1] {
-            code += 1;
-        }
-        code
+        self.0.encode_unit(if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) })
     }
 }
 
@@ -243,21 +206,10 @@ mod tests {
     #[test]
     fn gamma22_table_equals_the_formula() {
         let lut = Gamma22Lut::get();
-        let check = |x: f32| assert_eq!(lut.encode(x), Gamma22Lut::formula(x), "x = {x:e} ({:#x})", x.to_bits());
-        // Every threshold and 64 bit patterns either side of it.
-        for &t in &lut.thresholds[1..] {
-            for d in 0..64u32 {
-                check(f32::from_bits(t.to_bits().saturating_sub(d)));
-                check(f32::from_bits(t.to_bits() + d));
-            }
-        }
-        // A dense grid of [0, 1] (every 97th bit pattern: about 11 M values), the ends, and out-of-range input.
-        for bits in (0..=1.0f32.to_bits()).step_by(97) {
-            check(f32::from_bits(bits));
-        }
-        for x in [0.0, 1.0, -0.0, -1.0, 2.0, f32::NAN, f32::INFINITY, f32::NEG_INFINITY, f32::MIN_POSITIVE] {
-            check(x);
-        }
+        // Every threshold and 64 bit patterns either side, every 97th bit pattern of [0, 1] (about 11 M values),
+        // the ends and out-of-range input.
+        let diff = lut.0.first_difference(|x| lut.encode(x), Gamma22Lut::formula, 64, 97);
+        assert_eq!(diff, None, "the table and the formula differ at {diff:?}");
     }
     use crate::io::exr::{read_raw, ReadLimits};
 

@@ -175,6 +175,13 @@ trait Word: Copy + Default + Send + Sync {
     fn load(src: &[u8]) -> Self;
     /// Little-endian store of the low `out.len()` bytes.
     fn store(self, out: &mut [u8]);
+    /// [`Word::put`] of each code into its word.
+    #[inline(always)]
+    fn put_all(words: &mut [Self], offset: u32, bits: u32, codes: &[u64]) {
+        for (w, c) in words.iter_mut().zip(codes) {
+            w.put(offset, bits, *c);
+        }
+    }
 }
 
 impl Word for u64 {
@@ -196,6 +203,15 @@ impl Word for u64 {
     #[inline(always)]
     fn store(self, out: &mut [u8]) {
         out.copy_from_slice(&self.to_le_bytes()[..out.len()]);
+    }
+    #[inline(always)]
+    fn put_all(words: &mut [Self], offset: u32, bits: u32, codes: &[u64]) {
+        debug_assert!(offset + bits <= 64);
+        // The mask and shift hoisted: the loop is one vector and/shift/or per lane.
+        let m = mask(bits);
+        for (w, c) in words.iter_mut().zip(codes) {
+            *w |= (c & m) << offset;
+        }
     }
 }
 
@@ -253,20 +269,19 @@ fn pack_target<W: Word>(
         let mut tmp = Vec::with_capacity(len);
         for (f, coder, src) in fields {
             encode_block(coder, src, base, &mut codes, &mut tmp);
-            for (w, c) in words.iter_mut().zip(&codes) {
-                w.put(f.offset, f.bits, *c);
-            }
+            W::put_all(&mut words, f.offset, f.bits, &codes);
         }
         // Background samples are a cleared texel.
         for (w, c) in words.iter_mut().zip(&cov[base..base + len]) {
-            if !*c {
-                *w = W::default();
-            }
+            *w = if *c { *w } else { W::default() };
         }
         match size {
             1 => store_words::<W, 1>(&words, out),
             2 => store_words::<W, 2>(&words, out),
+            3 => store_words::<W, 3>(&words, out),
             4 => store_words::<W, 4>(&words, out),
+            6 => store_words::<W, 6>(&words, out),
+            12 => store_words::<W, 12>(&words, out),
             8 => store_words::<W, 8>(&words, out),
             16 => store_words::<W, 16>(&words, out),
             _ => {
@@ -633,8 +648,11 @@ impl Texels<'_> {
                 match size {
                     1 => load_codes::<u64, 1>(b, offset, bits, &mut codes),
                     2 => load_codes::<u64, 2>(b, offset, bits, &mut codes),
+                    3 => load_codes::<u64, 3>(b, offset, bits, &mut codes),
                     4 => load_codes::<u64, 4>(b, offset, bits, &mut codes),
+                    6 => load_codes::<u64, 6>(b, offset, bits, &mut codes),
                     8 => load_codes::<u64, 8>(b, offset, bits, &mut codes),
+                    12 => load_codes::<u128, 12>(b, offset, bits, &mut codes),
                     16 => load_codes::<u128, 16>(b, offset, bits, &mut codes),
                     _ => {
                         for (code, t) in codes.iter_mut().zip(b.chunks_exact(size)) {

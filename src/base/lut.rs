@@ -1,0 +1,113 @@
+//! 8-bit codes of a monotone transfer curve without evaluating it: the LDR gamma-2.2 output
+//! (`image::Gamma22Lut`) and the `srgb8` colour codec (`codec::color`) each paid a `powf` per channel.
+//!
+//! For a formula `f: [0, 1] → 0..=255` that grows with `x`, the code of `x` is the number of thresholds
+//! `t_1 ≤ … ≤ t_255` at or below it, where `t_k` is the smallest f32 with `f(t_k) ≥ k`, found once by bisection
+//! over f32 bit patterns with the formula itself. A bucket table on `x` gives the code at the bucket's start; a few
+//! threshold compares finish it. The result equals the formula's wherever the formula is monotone; each user's
+//! test sweeps every threshold's neighbourhood and a dense grid of [0, 1] against its formula.
+
+/// The thresholds and bucket starts of one formula.
+pub struct CodeLut {
+    /// `t[k]` for k in 1..=255 (`t[0]` = 0).
+    thresholds: [f32; 256],
+    /// The code of each bucket's lower end, [`CodeLut::BUCKETS`] buckets over [0, 1].
+    start: Vec<u8>,
+}
+
+impl CodeLut {
+    /// Buckets over [0, 1].
+    pub const BUCKETS: usize = 4096;
+
+    /// The table of `formula`, which must give 0 at 0, 255 at 1 and grow with `x` in between.
+    ///
+    /// # Panics
+    /// When `formula(0) != 0` or `formula(1) != 255`: a programming error in the caller's formula.
+    pub fn build(formula: impl Fn(f32) -> u8) -> CodeLut {
+        assert_eq!((formula(0.0), formula(1.0)), (0, 255), "CodeLut: the formula must map [0, 1] onto 0..=255");
+        let mut thresholds = [0.0f32; 256];
+        for (k, t) in thresholds.iter_mut().enumerate().skip(1) {
+            // Smallest bit pattern in [0, 1.0] whose code is ≥ k (positive floats order like their bits).
+            let (mut lo, mut hi) = (0u32, 1.0f32.to_bits());
+            while lo < hi {
+                let mid = lo + (hi - lo) / 2;
+                if usize::from(formula(f32::from_bits(mid))) >= k {
+                    hi = mid;
+                } else {
+                    lo = mid + 1;
+                }
+            }
+            *t = f32::from_bits(lo);
+        }
+        let start = (0..Self::BUCKETS)
+            .map(|b| {
+                let x = b as f32 / Self::BUCKETS as f32;
+                thresholds[1..].partition_point(|&t| t <= x) as u8
+            })
+            .collect();
+        CodeLut { thresholds, start }
+    }
+
+    /// The code of `x`, which the caller has clamped to [0, 1] (NaN replaced).
+    #[inline]
+    #[must_use]
+    pub fn encode_unit(&self, x: f32) -> u8 {
+        debug_assert!((0.0..=1.0).contains(&x), "{x}");
+        let b = ((x * Self::BUCKETS as f32) as usize).min(Self::BUCKETS - 1);
+        let mut code = self.start[b];
+        while code < 255 && x >= self.thresholds[usize::from(code) + 1] {
+            code += 1;
+        }
+        code
+    }
+
+    /// `t_1 … t_255`: the smallest input of each code, for the users' tests.
+    #[must_use]
+    pub fn thresholds(&self) -> &[f32] {
+        &self.thresholds[1..]
+    }
+
+    /// Checks the table against `formula` (already clamping and replacing NaN, as the caller's encode does) at
+    /// every threshold and `near` bit patterns either side of it, every `step`-th bit pattern of [0, 1], and
+    /// out-of-range and non-finite inputs; returns the first input where they differ. The users' tests call it.
+    pub fn first_difference(
+        &self,
+        encode: impl Fn(f32) -> u8,
+        formula: impl Fn(f32) -> u8,
+        near: u32,
+        step: usize,
+    ) -> Option<f32> {
+        let differs = |x: f32| encode(x) != formula(x);
+        for &t in self.thresholds() {
+            for d in 0..near {
+                for x in [f32::from_bits(t.to_bits().saturating_sub(d)), f32::from_bits(t.to_bits() + d)] {
+                    if differs(x) {
+                        return Some(x);
+                    }
+                }
+            }
+        }
+        let grid = (0..=1.0f32.to_bits()).step_by(step.max(1)).map(f32::from_bits);
+        let special = [0.0, 1.0, -0.0, -1.0, 2.0, f32::NAN, f32::INFINITY, f32::NEG_INFINITY, f32::MIN_POSITIVE];
+        grid.chain(special).find(|&x| differs(x))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_linear_formula_is_reproduced_and_a_wrong_table_is_caught() {
+        let formula = |x: f32| {
+            let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
+            (x * 255.0 + 0.5) as u8
+        };
+        let lut = CodeLut::build(formula);
+        let encode = |x: f32| lut.encode_unit(if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) });
+        assert_eq!(lut.first_difference(encode, formula, 16, 9973), None);
+        // The check can fail: a formula off by one code above 0.5 is found.
+        let other = |x: f32| formula(x).saturating_add(u8::from(x > 0.5 && x < 1.0));
+        assert!(lut.first_difference(encode, other, 16, 9973).is_some());
+    }
+}
