@@ -1,8 +1,8 @@
 //! The fixed costs of every `gbuf resolve F.bin --png OUT.png` (issue 14, targets 2 and 5), each beside a baseline
 //! timed in the same run, on the room at 1280×720 and 1920×1080, 1 sample, with the ISPC `.bin` it writes:
-//! - **file read** (`std::fs::read` of the `.bin`) and **convert** (`io::ispc::read_bytes`: the file's half floats
-//!   and sphere-map normals into the G-buffer, sanitised and checked) against a memcpy of the same bytes into a
-//!   fresh buffer;
+//! - **file read** (`std::fs::read` of the `.bin`), **convert** (`io::ispc::read_bytes`: the file's half floats
+//!   and sphere-map normals into the G-buffer) and the whole **load** from memory (`io::load_bytes`: the conversion,
+//!   then sanitising and the plausibility checks) against a memcpy of the same bytes into a fresh buffer;
 //! - **8-bit encode** (`HdrImage::to_ldr_gamma22`, the ISPC sample's output) against a memcpy of the f32 image;
 //! - **PNG** (`base::png`: bands deflated in parallel, zlib level 3, adaptive filters) on all threads and on one,
 //!   against the image crate's PNG encoder at its default (`Balanced`: zlib level 6, adaptive filters), the encoder
@@ -68,6 +68,8 @@ fn main() {
             best(runs, || ispc::read_bytes(&bytes, Path::new("room.bin"), None, &opts).expect("convert"));
         assert_eq!(loaded.gbuffer.width, w);
         row("convert .bin → G-buffer", convert_ms, "memcpy", copy_ms);
+        let (load_ms, _) = best(runs, || gbuf::io::load_bytes(&bytes, Path::new("room.bin"), &opts).expect("load"));
+        row("load (convert, sanitise, checks)", load_ms, "memcpy", copy_ms);
         let (convert1_ms, _) = best(runs, || {
             one.install(|| ispc::read_bytes(&bytes, Path::new("room.bin"), None, &opts).expect("convert"))
         });
