@@ -84,6 +84,10 @@ fn resolves_a_canonical_dump_end_to_end() {
     for f in ["lit.exr", "lit.png", "heat.png"] {
         assert!(dir.path().join(f).metadata().unwrap().len() > 0, "{f} not written");
     }
+    // Writing the files is timed (the fixed cost a user pays per run); nothing written, nothing timed.
+    assert!(v["ms"]["output"].as_f64().unwrap() > 0.0, "{v}");
+    let none = json(&gbuf(dir.path(), &["resolve", "room.exr", "--lights", "8", "--no-reference", "--json"]));
+    assert_eq!(none["ms"]["output"].as_f64(), Some(0.0), "{none}");
     // The demo's LDR encoding and a layout round trip.
     let o = gbuf(
         dir.path(),
@@ -91,6 +95,7 @@ fn resolves_a_canonical_dump_end_to_end() {
     );
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).contains("error vs reference"));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("writing the output files"));
     let o = gbuf(dir.path(), &["resolve", "room.exr", "--lights", "8", "--scene", "missing.json"]);
     assert_eq!(o.status.code(), Some(1));
     let o = gbuf(dir.path(), &["resolve", "room.exr"]);

@@ -106,6 +106,8 @@ struct Ms {
     reference: f64,
     /// The full deferred resolve run to measure the light pre-pass against (0 for the deferred schedule).
     deferred_for_prepass: f64,
+    /// Writing the files asked for (`-o` EXR, `--png` with its 8-bit encode, `--heatmap`); 0 when none.
+    output: f64,
 }
 
 /// What `--json` prints.
@@ -230,24 +232,30 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         (Some(compare(&reference, &resolved.image)), Some(error_set(&reference, &resolved.image, flip)), aa, t)
     };
 
-    if let Some(out) = &args.output {
-        resolved.image.write_exr(out).with_context(|| format!("writing {}", out.display()))?;
-    }
-    if let Some(out) = &args.png {
-        let r = if args.ldr.is_some() {
-            resolved.image.write_ldr_gamma22_png(out)
-        } else {
-            resolved.image.write_png(out, ToneMap::new(args.tonemap, args.exposure))
+    let (heatmap_max, t_output) = timed(|| -> anyhow::Result<Option<u32>> {
+        if let Some(out) = &args.output {
+            resolved.image.write_exr(out).with_context(|| format!("writing {}", out.display()))?;
+        }
+        if let Some(out) = &args.png {
+            let r = if args.ldr.is_some() {
+                resolved.image.write_ldr_gamma22_png(out)
+            } else {
+                resolved.image.write_png(out, ToneMap::new(args.tonemap, args.exposure))
+            };
+            r.with_context(|| format!("writing {}", out.display()))?;
+        }
+        let heatmap_max = match &args.heatmap {
+            Some(out) => Some(
+                write_heatmap_png(out, gb.width, gb.height, &resolved.lights_per_pixel)
+                    .with_context(|| format!("writing {}", out.display()))?,
+            ),
+            None => None,
         };
-        r.with_context(|| format!("writing {}", out.display()))?;
-    }
-    let heatmap_max = match &args.heatmap {
-        Some(out) => Some(
-            write_heatmap_png(out, gb.width, gb.height, &resolved.lights_per_pixel)
-                .with_context(|| format!("writing {}", out.display()))?,
-        ),
-        None => None,
-    };
+        Ok(heatmap_max)
+    });
+    let heatmap_max = heatmap_max?;
+    let writes = args.output.is_some() || args.png.is_some() || args.heatmap.is_some();
+    let t_output = if writes { t_output } else { 0.0 };
 
     let s = &resolved.stats;
     let report = Report {
@@ -287,6 +295,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             total: stage.total,
             reference: t_ref,
             deferred_for_prepass: t_deferred,
+            output: t_output,
         },
         heatmap_max,
     };
@@ -396,6 +405,9 @@ fn print_human(r: &Report) -> anyhow::Result<()> {
     )?;
     if m.deferred_for_prepass > 0.0 {
         writeln!(out, "time (ms): full deferred for the pre-pass comparison {:.1}", m.deferred_for_prepass)?;
+    }
+    if m.output > 0.0 {
+        writeln!(out, "time (ms): writing the output files {:.1} (8-bit encode and PNG included)", m.output)?;
     }
     let s = &r.stats.sanitized;
     if s.total() > 0 {
