@@ -80,10 +80,15 @@ pub struct UnormRgb {
 }
 
 impl UnormRgb {
+    /// srgb8's threshold table, looked up once per call or slice rather than per colour.
+    fn encode_table(&self) -> Option<&'static CodeLut> {
+        (self.srgb && self.bits == 8).then(srgb8_encode_table)
+    }
+
+    /// `lut`: [`UnormRgb::encode_table`] (only sRGB uses it).
     #[inline(always)]
-    fn encode_with<const SRGB: bool>(&self, c: Vec3) -> u64 {
+    fn encode_with<const SRGB: bool>(&self, c: Vec3, lut: Option<&CodeLut>) -> u64 {
         let m = mask(self.bits) as f32;
-        let lut = if SRGB && self.bits == 8 { Some(srgb8_encode_table()) } else { None };
         let q = |v: f32| {
             let v = clean(v, 0.0, 1.0);
             if let Some(lut) = lut {
@@ -129,11 +134,11 @@ fn srgb8_decode_table() -> &'static [f32; 256] {
     TABLE.get_or_init(|| std::array::from_fn(|c| srgb_to_linear(c as f32 / 255.0)))
 }
 
-struct UnormRgbEnc<const SRGB: bool>(UnormRgb);
+struct UnormRgbEnc<const SRGB: bool>(UnormRgb, Option<&'static CodeLut>);
 impl<const SRGB: bool> Element<Vec3, u64> for UnormRgbEnc<SRGB> {
     #[inline(always)]
     fn apply(&self, c: &Vec3) -> u64 {
-        self.0.encode_with::<SRGB>(*c)
+        self.0.encode_with::<SRGB>(*c, self.1)
     }
 }
 
@@ -160,9 +165,9 @@ impl Codec for UnormRgb {
     #[inline(always)]
     fn encode(&self, c: Vec3) -> u64 {
         if self.srgb {
-            self.encode_with::<true>(c)
+            self.encode_with::<true>(c, self.encode_table())
         } else {
-            self.encode_with::<false>(c)
+            self.encode_with::<false>(c, None)
         }
     }
     #[inline(always)]
@@ -182,9 +187,9 @@ impl Codec for UnormRgb {
         assert_eq!(input.len(), out.len(), "encode_slice: {} colours into {} codes", input.len(), out.len());
         // One loop per curve, so the linear one has no libm call in it and vectorises.
         if self.srgb {
-            run(isa, MapKernel { input, out, f: UnormRgbEnc::<true>(*self) });
+            run(isa, MapKernel { input, out, f: UnormRgbEnc::<true>(*self, self.encode_table()) });
         } else {
-            run(isa, MapKernel { input, out, f: UnormRgbEnc::<false>(*self) });
+            run(isa, MapKernel { input, out, f: UnormRgbEnc::<false>(*self, None) });
         }
     }
     fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Vec3]) {
