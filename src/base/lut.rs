@@ -62,15 +62,16 @@ impl CodeLut {
     }
 
     /// `t_1 … t_255`: the smallest input of each code, for the users' tests.
-    #[must_use]
-    pub fn thresholds(&self) -> &[f32] {
+    #[cfg(test)]
+    pub(crate) fn thresholds(&self) -> &[f32] {
         &self.thresholds[1..]
     }
 
     /// Checks the table against `formula` (already clamping and replacing NaN, as the caller's encode does) at
     /// every threshold and `near` bit patterns either side of it, every `step`-th bit pattern of [0, 1], and
     /// out-of-range and non-finite inputs; returns the first input where they differ. The users' tests call it.
-    pub fn first_difference(
+    #[cfg(test)]
+    pub(crate) fn first_difference(
         &self,
         encode: impl Fn(f32) -> u8,
         formula: impl Fn(f32) -> u8,
