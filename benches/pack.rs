@@ -108,9 +108,10 @@ fn ratio_table(gb: &GBuffer) {
     // What a report measures: the banded roundtrip (`Layout::roundtrip_timed`), output planes reused from run to
     // run, so the best of its runs has no fresh-memory page faults. GB/s of packed bytes, N threads.
     println!("banded roundtrip (report's path), best of 5 runs, N threads; GB/s of packed bytes (issue 14: ≥ 2)");
+    println!("(encode writes each sample's material index; the table is built once before the runs: `table`)");
     println!(
-        "{:<14} {:>6} {:>8} {:>8} {:>8} {:>8} {:>8}",
-        "layout", "MB", "memcpyN", "encode", "GB/s", "decode", "GB/s"
+        "{:<14} {:>6} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}",
+        "layout", "MB", "memcpyN", "encode", "GB/s", "decode", "GB/s", "table"
     );
     for name in LAYOUTS {
         let layout = Layout::by_name(name).unwrap();
@@ -122,8 +123,9 @@ fn ratio_table(gb: &GBuffer) {
         let best = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
         let (e, d) = (best(&r.encode_ms), best(&r.decode_ms));
         let gbs = |ms: f64| bytes as f64 / (ms * 1e-3) / 1e9;
+        let table = r.table_ms.map_or("—".to_string(), |t| format!("{t:.2}"));
         println!(
-            "{name:<14} {:>6.1} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
+            "{name:<14} {:>6.1} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {table:>8}",
             bytes as f64 / 1e6,
             mn * 1e3,
             e,

@@ -199,7 +199,8 @@ fn unpack_is_bit_exact_across_parallel_row_blocks() {
 
 /// The timed roundtrip goes band by band (a band of whole rows packed, then unpacked at once) and reuses its output
 /// planes from run to run: its G-buffer equals unpacking the whole packed frame, for every layout, over two bands
-/// with a short last one, and after a second run that overwrote the first run's planes.
+/// with a short last one, and after a second run that overwrote the first run's planes (the material table built
+/// once for both runs).
 #[test]
 fn banded_roundtrip_equals_whole_frame_pack_and_unpack() {
     let gb = synthetic(700, 200, 2, 9); // rows of 1,400 samples: bands of 261,800 and 18,200
@@ -209,6 +210,9 @@ fn banded_roundtrip_equals_whole_frame_pack_and_unpack() {
         let timed = layout.roundtrip_timed(&gb, 2).unwrap();
         assert_eq!((timed.encode_ms.len(), timed.decode_ms.len()), (2, 2));
         assert!(timed.encode_ms.iter().chain(&timed.decode_ms).all(|t| t.is_finite() && *t >= 0.0));
+        // The material table is built once, outside the timed runs, and timed only with indirection.
+        assert_eq!(timed.table_ms.is_some(), layout.indirection().is_some(), "{}", layout.name());
+        assert!(timed.table_ms.is_none_or(|t| t.is_finite() && t >= 0.0));
         assert!(timed.decoded == whole, "{}: banded roundtrip differs from pack + unpack", layout.name());
         assert!(layout.roundtrip(&gb).unwrap() == whole, "{}", layout.name());
     }

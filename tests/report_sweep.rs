@@ -130,6 +130,20 @@ fn sweep_rows_match_layouts_and_lossless_is_exact() {
     assert_eq!(kept.len(), gbuf::analysis::sweep::HEATMAP_LAYOUTS, "{kept:?}");
     assert!(!kept.contains(&"reference-f32"), "{kept:?}");
     assert!(out.maps.iter().filter(|m| !kept.contains(&m.layout.as_str())).all(|m| m.image_abs.is_none()));
+    // The attribute maps are NaN exactly at pixels without a covered sample, finite and ≥ 0 elsewhere.
+    let s = gb.samples as usize;
+    let covered: Vec<bool> = (0..gb.pixel_count()).map(|p| gb.coverage[p * s..(p + 1) * s].contains(&true)).collect();
+    assert!(covered.contains(&false) && covered.contains(&true), "the room has sky and surfaces");
+    for m in out.maps.iter().filter(|m| m.normal_deg.is_some()) {
+        for map in [&m.normal_deg, &m.depth_rel, &m.albedo_abs].into_iter().flatten() {
+            assert_eq!(map.len(), gb.pixel_count());
+            for (&e, &c) in map.iter().zip(&covered) {
+                assert_eq!(e.is_nan(), !c, "{}: {e} at a pixel covered: {c}", m.layout);
+                assert!(e.is_nan() || e >= 0.0, "{}: {e}", m.layout);
+            }
+        }
+        assert!(m.image_abs.as_ref().is_some_and(|v| v.len() == gb.pixel_count() && v.iter().all(|e| *e >= 0.0)));
+    }
     assert_eq!(out.masks.len(), 2);
     assert_eq!(out.lights_per_pixel.as_ref().map(Vec::len), Some(gb.pixel_count()));
 }

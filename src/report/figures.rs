@@ -235,10 +235,11 @@ pub fn figures(
             ("image", "absolute radiance against the exact G-buffer's image", &m.image_abs),
         ] {
             let Some(v) = map else { continue };
-            let max = percentile_max(v);
+            let v: Vec<Option<f32>> = v.iter().map(|&e| (!e.is_nan()).then_some(e)).collect();
+            let max = percentile_max(&v);
             png(
                 &format!("heatmap_{slug}_{what}.png"),
-                heat_plot(format!("{name}: {what} error"), v, gb, max, format!("{what} error ({unit})"))?,
+                heat_plot(format!("{name}: {what} error"), &v, gb, max, format!("{what} error ({unit})"))?,
                 format!("{name}: per-pixel {what} error ({unit}; the colour bar's top = {max:.3e} or more, grey = background)"),
                 &mut files,
                 &mut figs,
