@@ -446,3 +446,44 @@ fields = [{ attribute = "albedo", codec = "rgb9e5", offset = 0, bits = 32 }]
         assert!((got[i] - *v).abs().cmple(bound).all(), "{v} → {}: off by {} > {bound}", got[i], (got[i] - *v).abs());
     }
 }
+
+/// The report's roundtrip leaves positions to the lighting where the layout stores depth only: no position plane,
+/// every other plane the same as the plain roundtrip's, and the resolve of either gives the same image bit for bit
+/// (the lighting derives each position exactly as the plain roundtrip's plane holds it), also for an off-centre
+/// camera; layouts that store position keep it.
+#[test]
+fn lighting_roundtrip_leaves_positions_to_the_lighting_with_the_same_image() {
+    use gbuf::resolve::{resolve, ResolveConfig};
+    let mut gb = synthetic(40, 24, 2, 5);
+    let mut cam = gb.camera.unwrap();
+    cam.principal = Vec2::new(0.1, -0.05);
+    gb.camera = Some(cam);
+    gb.position = None;
+    gb.fill_position_from_depth();
+    let lights: Vec<gbuf::light::Light> = (0..6)
+        .map(|k| {
+            let p = Vec3::new(-3.0 + k as f32, 0.5 * (k % 3) as f32 - 0.5, -2.0 - 9.0 * k as f32);
+            gbuf::light::Light::point(p, Vec3::new(1.0, 0.8, 0.6), 40.0, 200.0)
+        })
+        .collect();
+    let mask = gbuf::detect::baselines::ssaa(&gb);
+    let cfg = ResolveConfig::default();
+    let mut derived = 0;
+    for layout in Layout::builtins() {
+        let full = layout.roundtrip_timed(&gb, 1).unwrap().decoded;
+        let mut lit = layout.roundtrip_for_lighting(&gb, 1).unwrap().decoded;
+        let depth_only = layout.stores(Attribute::Depth) && !layout.stores(Attribute::Position);
+        assert_eq!(lit.position.is_none(), depth_only, "{}", layout.name());
+        assert!(full.position.is_some(), "{}", layout.name());
+        let a = resolve(&full, &lights, &mask, &cfg).unwrap();
+        let b = resolve(&lit, &lights, &mask, &cfg).unwrap();
+        assert!(a.image.rgb.iter().any(|c| c.max_element() > 0.0), "{}: lit", layout.name());
+        assert!(a.image.rgb == b.image.rgb, "{}: the image changed without the position plane", layout.name());
+        if depth_only {
+            derived += 1;
+            lit.position.clone_from(&full.position);
+        }
+        assert!(lit == full, "{}: a plane other than position differs", layout.name());
+    }
+    assert!(derived >= 4, "most built-ins store depth only ({derived})");
+}

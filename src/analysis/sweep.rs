@@ -12,7 +12,7 @@
 use crate::analysis::row::{mark_pareto, time_runs, Bandwidth, Row, Timing};
 use crate::detect::{self, Detector, DetectorConfig, EdgeMask};
 use crate::error::Result;
-use crate::gbuffer::GBuffer;
+use crate::gbuffer::{Attribute, GBuffer};
 use crate::image::HdrImage;
 use crate::layout::Layout;
 use crate::light::Light;
@@ -290,8 +290,9 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
             ..Default::default()
         };
         progress(done, total, &format!("{}: pack/unpack", layout.name()));
-        // Band by band, the decoded planes reused across the runs: the packed frame never exists whole.
-        let decoded = layout.roundtrip_timed(gb, cfg.runs).map(|r| {
+        // Band by band, the decoded planes reused across the runs: the packed frame never exists whole. Positions
+        // stay derived from depth where the layout stores only depth, as the lighting reads them.
+        let decoded = layout.roundtrip_for_lighting(gb, cfg.runs).map(|r| {
             let timing = |ms| Timing::from_ms(ms).expect("at least one run");
             (r.decoded, timing(r.encode_ms), timing(r.decode_ms), r.table_ms.map(|ms| timing(vec![ms])))
         });
@@ -563,7 +564,10 @@ fn fill_attribute_errors(row: &mut Row, reference: &GBuffer, decoded: &GBuffer) 
     // Specular power is an exponent (1..4096): its absolute error is not comparable with the [0, 1] scalars.
     row.scalar_max_abs =
         e.scalars.iter().filter(|s| s.attribute != "specular_power").map(|s| s.max_abs).reduce(f64::max);
-    if !e.missing.is_empty() {
-        row.add_note(format!("not stored by the layout: {}", e.missing.join(", ")));
+    // Positions the lighting derives from the stored depth and the camera are not missing.
+    let derived = |m: &String| m == Attribute::Position.name() && decoded.depth.is_some() && decoded.camera.is_some();
+    let missing: Vec<&str> = e.missing.iter().filter(|m| !derived(m)).map(String::as_str).collect();
+    if !missing.is_empty() {
+        row.add_note(format!("not stored by the layout: {}", missing.join(", ")));
     }
 }

@@ -15,7 +15,7 @@ use super::config::Brdf;
 use super::simd::LANES;
 use super::worklist::{Items, Surface};
 use crate::base::isa::Isa;
-use crate::camera::Camera;
+use crate::camera::RayCaster;
 use crate::error::{Error, Result};
 use crate::gbuffer::GBuffer;
 use glam::{Vec2, Vec3};
@@ -99,9 +99,9 @@ impl SanitizedCounts {
 /// [`SampleOrder`]).
 pub struct SurfaceReader<'a> {
     gb: &'a GBuffer,
-    camera: Option<Camera>,
-    /// `(tan(fov/2) · aspect, tan(fov/2))`: the camera's ray slopes, computed once.
-    slopes: Vec2,
+    /// The camera's rays, its constants computed once: [`crate::camera::Camera::view_ray`] bit for bit, principal
+    /// point included.
+    rays: Option<RayCaster>,
     /// Where each sample sits in the planes.
     at: SampleIndex,
 }
@@ -201,12 +201,9 @@ impl<'a> SurfaceReader<'a> {
                     .into(),
             ));
         }
-        let slopes = gb.camera.map_or(Vec2::ZERO, |c| {
-            let ray = c.view_ray(Vec2::ZERO, 2, 2);
-            Vec2::new(-ray.x, ray.y)
-        });
+        let rays = gb.camera.map(|c| c.ray_caster(gb.width, gb.height));
         let at = SampleIndex::new(order, gb.pixel_count(), gb.samples as usize);
-        Ok(SurfaceReader { gb, camera: gb.camera, slopes, at })
+        Ok(SurfaceReader { gb, rays, at })
     }
 
     /// Plane index of sample `s` of pixel (`x`, `y`), in the reader's sample order.
@@ -246,14 +243,13 @@ impl<'a> SurfaceReader<'a> {
         if !gb.coverage[i] {
             return None;
         }
-        let p = match (&gb.position, &gb.depth, &self.camera) {
+        let p = match (&gb.position, &gb.depth, &self.rays) {
             (Some(pos), _, _) => pos[i],
-            (None, Some(depth), Some(_)) => {
-                // Camera::view_position with the ray slopes hoisted.
+            (None, Some(depth), Some(rays)) => {
+                // Camera::view_position (and GBuffer::fill_position_from_depth) bit for bit, principal point
+                // included: an off-centre camera shifts the rays, it does not scale them.
                 let o = gb.sample_positions[s as usize];
-                let ndc_x = (x as f32 + 0.5 + o.x) / gb.width as f32 * 2.0 - 1.0;
-                let ndc_y = 1.0 - (y as f32 + 0.5 + o.y) / gb.height as f32 * 2.0;
-                Vec3::new(ndc_x * self.slopes.x, ndc_y * self.slopes.y, -1.0) * depth[i]
+                rays.ray(Vec2::new(x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y)) * depth[i]
             }
             _ => Vec3::NAN,
         };
@@ -673,6 +669,7 @@ mod avx512 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::camera::Camera;
 
     fn one_pixel() -> GBuffer {
         let mut g = GBuffer::new(1, 1, 1).unwrap();
@@ -725,6 +722,42 @@ mod tests {
         let r = SurfaceReader::new(&g).unwrap();
         let s = r.read(1, 0, 0, &mut SanitizedCounts::default()).unwrap();
         assert!((s.p.z + 3.0).abs() < 1e-6 && s.p.x > 0.0 && s.p.y > 0.0, "{}", s.p);
+    }
+
+    /// A position derived from depth is the camera's own (`Camera::view_position`, and the plane
+    /// `GBuffer::fill_position_from_depth` writes) bit for bit, for every sample of a multisampled off-centre
+    /// camera: the principal point shifts the rays (before, it scaled them: wrong positions for a sidecar's
+    /// intrinsics).
+    #[test]
+    fn derived_positions_are_the_cameras_own_with_an_off_centre_principal_point() {
+        let (w, h) = (7u32, 5u32);
+        let mut g = GBuffer::new(w, h, 4).unwrap();
+        g.coverage = vec![true; g.len()];
+        g.depth = Some((0..g.len()).map(|i| 1.0 + 0.37 * i as f32).collect());
+        let mut cam = Camera::identity(0.9, 1.6, 0.1, 100.0);
+        cam.principal = Vec2::new(0.3, -0.2);
+        g.camera = Some(cam);
+        let mut filled = g.clone();
+        filled.fill_position_from_depth();
+        let r = SurfaceReader::new(&g).unwrap();
+        let mut counts = SanitizedCounts::default();
+        for y in 0..h {
+            for x in 0..w {
+                for s in 0..4 {
+                    let i = r.index(x, y, s);
+                    let o = g.sample_positions[s as usize];
+                    let px = Vec2::new(x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y);
+                    let want = cam.view_position(px, g.depth.as_ref().unwrap()[i], w, h);
+                    let got = r.read(x, y, s, &mut counts).unwrap().p;
+                    assert_eq!(got.to_array(), want.to_array(), "({x}, {y}) sample {s}");
+                    assert_eq!(got.to_array(), filled.position.as_ref().unwrap()[i].to_array());
+                }
+            }
+        }
+        // The centre of the image is on the principal point's side: x = 0 at ndc 0.3, not at ndc 0.
+        let centre = cam.view_position(Vec2::new(0.65 * w as f32, 0.6 * h as f32), 1.0, w, h);
+        assert!(centre.x.abs() < 1e-6 && centre.y.abs() < 1e-6, "{centre}");
+        assert_eq!(counts, SanitizedCounts::default());
     }
 
     #[test]
