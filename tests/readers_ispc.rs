@@ -199,6 +199,12 @@ fn writer_refuses_what_the_format_cannot_hold() {
     let too_many = vec![Light::point(Vec3::ZERO, Vec3::ONE, 1.0, 1.0); LIGHT_SLOTS + 1];
     assert!(ispc::write(&out, &g, &too_many).is_err());
     assert!(!out.exists());
+    // An off-centre camera: the format's readers rebuild positions with a centred projection.
+    let mut off = g.clone();
+    off.camera.as_mut().unwrap().principal = Vec2::new(0.25, 0.0);
+    let e = ispc::write(&out, &off, &[]).unwrap_err().to_string();
+    assert!(e.contains("principal point (0.25, 0)") && e.contains("x.bin"), "{e}");
+    assert!(!out.exists());
     ispc::write(&out, &g, &too_many[..LIGHT_SLOTS]).unwrap();
     assert_eq!(load(&out).unwrap().lights.unwrap().len(), LIGHT_SLOTS);
 }

@@ -515,7 +515,8 @@ fn align(v: usize) -> usize {
 
 /// Writes `gb` (1 sample per pixel, with a camera, depth and normal; absent albedo/specular default to 0 and the
 /// specular power to 1) and up to 1024 point lights (view space) as an ISPC `deferred` input file, atomically.
-/// The camera's world→view transform is ignored: the file is in view space.
+/// The camera's world→view transform is ignored: the file is in view space. An off-centre principal point is
+/// refused (the format's projection is centred).
 pub fn write(path: &Path, gb: &GBuffer, lights: &[Light]) -> Result<()> {
     let arg = |what: &str| Error::Argument(format!("{}: cannot write ISPC .bin: {what}", path.display()));
     gb.validate()?;
@@ -523,6 +524,14 @@ pub fn write(path: &Path, gb: &GBuffer, lights: &[Light]) -> Result<()> {
         return Err(arg(&format!("{} samples per pixel (the format has 1)", gb.samples)));
     }
     let cam = gb.camera.as_ref().ok_or_else(|| arg("no camera"))?;
+    if cam.principal != glam::Vec2::ZERO {
+        // The format's readers (the ISPC example's and ours) rebuild positions from cameraProj[0][0] and [1][1]
+        // only: an off-centre camera would come back with every position shifted.
+        return Err(arg(&format!(
+            "the camera's principal point ({}, {}) is off centre; the format's projection is centred",
+            cam.principal.x, cam.principal.y
+        )));
+    }
     let depth = gb.depth.as_ref().ok_or_else(|| arg("no depth"))?;
     let normal = gb.normal.as_ref().ok_or_else(|| arg("no normal"))?;
     if lights.len() > LIGHT_SLOTS {
