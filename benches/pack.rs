@@ -6,7 +6,8 @@
 //! the copy split over the pool). Pack and unpack include allocating their output (and for destiny-96 building
 //! the material table; for unpack, re-deriving position from depth). Then criterion measures the all-thread
 //! operations. A second table times the report's path, the banded roundtrip with its output reused across runs
-//! (`Layout::roundtrip_timed`), in GB/s of packed bytes. Run:
+//! (`Layout::roundtrip_for_lighting`: positions of depth-only layouts left to the lighting), in GB/s of packed
+//! bytes. Run:
 //! `cargo bench --bench pack -- --warm-up-time 1 --measurement-time 2`.
 
 use criterion::{Criterion, Throughput};
@@ -105,8 +106,8 @@ fn ratio_table(gb: &GBuffer) {
         );
     }
     println!("(N = {threads} threads)\n");
-    // What a report measures: the banded roundtrip (`Layout::roundtrip_timed`), output planes reused from run to
-    // run, so the best of its runs has no fresh-memory page faults. GB/s of packed bytes, N threads.
+    // What a report measures: the banded roundtrip (`Layout::roundtrip_for_lighting`), output planes reused from run
+    // to run, so the best of its runs has no fresh-memory page faults. GB/s of packed bytes, N threads.
     println!("banded roundtrip (report's path), best of 5 runs, N threads; GB/s of packed bytes (issue 14: ≥ 2)");
     println!("(encode writes each sample's material index; the table is built once before the runs: `table`)");
     println!(
@@ -119,7 +120,7 @@ fn ratio_table(gb: &GBuffer) {
         let src = vec![0x5au8; bytes];
         let mut dst = vec![0u8; bytes];
         let mn = best_time(REPS, || par_copy(&mut dst, black_box(&src)));
-        let r = layout.roundtrip_timed(gb, 5).unwrap();
+        let r = layout.roundtrip_for_lighting(gb, 5).unwrap();
         let best = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
         let (e, d) = (best(&r.encode_ms), best(&r.decode_ms));
         let gbs = |ms: f64| bytes as f64 / (ms * 1e-3) / 1e9;
@@ -227,7 +228,7 @@ fn main() {
     if let Ok(names) = std::env::var("GBUF_BENCH_ROUNDTRIP") {
         for name in names.split(',') {
             let layout = Layout::by_name(name).expect("a built-in layout");
-            let r = layout.roundtrip_timed(&gb, 50).unwrap();
+            let r = layout.roundtrip_for_lighting(&gb, 50).unwrap();
             let best = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
             let bytes = gb.len() * layout.bytes_per_sample();
             let gbs = |ms: f64| bytes as f64 / (ms * 1e-3) / 1e9;
