@@ -902,7 +902,9 @@ fn band_features_impl(ctx: &Ctx, img: &[f32], enc: Encoding, y0: usize, rows: us
             for dy in 0..2.min(y0 + rows - y) {
                 let [sy, scx, sz1, sz2, dx, ddx, dyy, ddy] = &acc[dy];
                 let [fl, fa, fb, fe, fp] = &mut *feats;
-                for i in 0..tws {
+                // `tws <= TW` (a tile is at most TW columns), said so that the loop has no bounds checks and runs
+                // in vector lanes: without it the Lab conversion ran one pixel at a time, half of FLIP's time.
+                for i in 0..tws.min(TW) {
                     let (l, a, b) = ycxcz_to_lab_hunt(sy[i], scx[i], sz1[i] + sz2[i]);
                     fl[i] = l;
                     fa[i] = a;
