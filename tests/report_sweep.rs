@@ -185,3 +185,98 @@ fn needs_of_the_room() {
     assert!(lo > 0.0 && hi > lo);
     assert_eq!(n.normals_face_camera, Some(n.back_facing_normals == 0));
 }
+
+/// The report's pipelines take the sweep's FLIP of each detector's exact image instead of comparing that image
+/// again: the numbers equal those of a pipelines run that computes every FLIP itself, and (with made-up known
+/// numbers) they really are the known ones, for exactly the rows whose image is the known image.
+#[test]
+fn pipelines_take_known_flips_for_equal_images_only() {
+    use gbuf::analysis::pipelines::{pipelines, pipelines_with, KnownFlip};
+    use gbuf::measure::image::error_set;
+    let (gb, lights) = small_room();
+    let cfg = gbuf::report::pipelines_config(&SweepConfig {
+        layouts: vec![Layout::by_name("fat-20").unwrap()],
+        detectors: vec![Detector::Lauritzen, Detector::Normal],
+        detector_config: DetectorConfig::default(),
+        culling: vec![],
+        resolve: ResolveConfig::default(),
+        runs: 1,
+        flip: FlipRows::Decisive,
+        viewing: Default::default(),
+    });
+    let viewing = cfg.viewing.expect("FLIP on");
+    let reference = gbuf::resolve::reference(&gb, &lights, &cfg.resolve).unwrap();
+    let exact: Vec<(Detector, gbuf::image::HdrImage)> = cfg
+        .aa_detectors
+        .iter()
+        .map(|&d| {
+            let mask = gbuf::detect::detect(&gb, d, &cfg.detector_config).unwrap();
+            (d, gbuf::resolve::resolve(&gb, &lights, &mask, &cfg.resolve).unwrap().image)
+        })
+        .collect();
+    let flips: Vec<(f64, f64)> = exact
+        .iter()
+        .map(|(_, img)| {
+            let e = error_set(&reference, img, Some(&viewing));
+            (e.flip_ldr.unwrap(), e.flip_hdr.unwrap())
+        })
+        .collect();
+    let known: Vec<KnownFlip<'_>> =
+        exact.iter().zip(&flips).map(|((_, image), &(ldr, hdr))| KnownFlip { image, ldr, hdr }).collect();
+    let own = pipelines(&gb, &lights, &cfg, Some(&reference), None).unwrap();
+    let reused = pipelines_with(&gb, &lights, &cfg, Some(&reference), None, &known).unwrap();
+    let numbers = |p: &gbuf::analysis::pipelines::Pipelines| {
+        let rows = p.rows.iter().map(|r| r.error.map(|e| (e.flip_ldr, e.flip_hdr)));
+        rows.chain(p.aa.iter().map(|a| Some((a.error.flip_ldr, a.error.flip_hdr)))).collect::<Vec<_>>()
+    };
+    assert_eq!(numbers(&own), numbers(&reused), "known FLIPs equal FLIPs computed again");
+    assert!(numbers(&own).iter().flatten().all(|(l, h)| l.is_some() && h.is_some()));
+
+    // Made-up numbers for the first detector's image: its adaptive MSAA row and the tiled deferred row (the same
+    // image) take them; the no-AA, MLAA, SSAA and light pre-pass rows do not.
+    let fake = [KnownFlip { image: &exact[0].1, ldr: 0.123, hdr: 4.5 }];
+    let p = pipelines_with(&gb, &lights, &cfg, Some(&reference), None, &fake).unwrap();
+    let first = format!("msaa:{}", exact[0].0);
+    for a in &p.aa {
+        let took = a.error.flip_ldr == Some(0.123) && a.error.flip_hdr == Some(4.5);
+        assert_eq!(took, a.method == first, "{}: {:?}", a.method, a.error);
+    }
+    let tiled = p.rows.iter().find(|r| r.pipeline == gbuf::analysis::pipelines::Pipeline::TiledDeferred).unwrap();
+    assert_eq!(tiled.error.unwrap().flip_ldr, Some(0.123));
+    let prepass = p.rows.iter().find(|r| r.pipeline == gbuf::analysis::pipelines::Pipeline::LightPrepass).unwrap();
+    assert_ne!(prepass.error.unwrap().flip_ldr, Some(0.123));
+}
+
+/// The report says where its time outside the sweep went: each step of a frame once, none negative, and all of
+/// them within the frame's wall time.
+#[test]
+fn a_frame_times_its_steps_outside_the_sweep() {
+    let (gb, lights) = small_room();
+    let cfg = SweepConfig {
+        layouts: vec![Layout::by_name("fat-20").unwrap()],
+        detectors: vec![Detector::Lauritzen],
+        detector_config: DetectorConfig::default(),
+        culling: vec![],
+        resolve: ResolveConfig::default(),
+        runs: 1,
+        flip: FlipRows::Decisive,
+        viewing: Default::default(),
+    };
+    let input = gbuf::analysis::ReportInput {
+        name: "room".into(),
+        gbuffer: &gb,
+        lights: &lights,
+        lights_source: "default".into(),
+        single: None,
+        geometry: None,
+    };
+    let t = std::time::Instant::now();
+    let r = gbuf::report::run_frame(&input, &cfg, true, "", &mut |_, _, _| {}).unwrap();
+    let wall = t.elapsed().as_secs_f64();
+    let kinds: Vec<&str> = r.frame.other_seconds.iter().map(|(k, _)| k.as_str()).collect();
+    assert_eq!(kinds, ["needs analysis", "figures", "pruned layout", "pipelines"]);
+    let other: f64 = r.frame.other_seconds.iter().map(|(_, s)| s).sum();
+    assert!(r.frame.other_seconds.iter().all(|(_, s)| *s >= 0.0));
+    assert!(other + r.frame.sweep_seconds <= wall, "{other} + {} s of {wall} s", r.frame.sweep_seconds);
+    assert!(r.frame.other_seconds.iter().any(|(k, s)| k == "pipelines" && *s > 0.0));
+}

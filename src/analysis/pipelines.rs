@@ -299,30 +299,58 @@ enum FlipSlot {
     Aa(usize),
 }
 
-/// The images whose FLIP against the reference the pipelines need, each distinct image once, and the rows that
-/// want each: computed in one batch at the end (the reference filtered once per pass).
-#[derive(Default)]
-struct FlipBatch {
-    images: std::cell::RefCell<Vec<HdrImage>>,
-    wants: std::cell::RefCell<Vec<(FlipSlot, Option<usize>)>>,
+/// An image whose FLIP against the pipelines' reference (with the same viewing conditions) the caller has already
+/// computed: the report's sweep lights the exact G-buffer with each detector, the images of the pipelines' adaptive
+/// MSAA rows. An image of the pipelines equal to it bit for bit takes these numbers instead of a FLIP of its own.
+#[derive(Clone, Copy, Debug)]
+pub struct KnownFlip<'a> {
+    /// The image.
+    pub image: &'a HdrImage,
+    /// Its mean LDR-FLIP against the reference.
+    pub ldr: f64,
+    /// Its mean HDR-FLIP against the reference.
+    pub hdr: f64,
 }
 
-impl FlipBatch {
-    /// The index of `img` among the distinct images (added if new), or `None` when FLIP is not wanted.
-    fn image(&self, img: &HdrImage, wanted: bool) -> Option<usize> {
+/// Where a row's FLIP comes from: the batch's `n`th distinct image, or the caller's `n`th known FLIP.
+#[derive(Clone, Copy, Debug)]
+enum FlipKey {
+    New(usize),
+    Known(usize),
+}
+
+/// The images whose FLIP against the reference the pipelines need, each distinct image once, and the rows that
+/// want each: computed in one batch at the end (the reference filtered once per pass). Images equal to a known one
+/// are not computed again.
+struct FlipBatch<'a> {
+    known: &'a [KnownFlip<'a>],
+    images: std::cell::RefCell<Vec<HdrImage>>,
+    wants: std::cell::RefCell<Vec<(FlipSlot, Option<FlipKey>)>>,
+}
+
+impl<'a> FlipBatch<'a> {
+    fn new(known: &'a [KnownFlip<'a>]) -> Self {
+        FlipBatch { known, images: Default::default(), wants: Default::default() }
+    }
+
+    /// Where the FLIP of `img` comes from (a new distinct image is added), or `None` when FLIP is not wanted.
+    fn image(&self, img: &HdrImage, wanted: bool) -> Option<FlipKey> {
         if !wanted {
             return None;
         }
-        let mut images = self.images.borrow_mut();
         let same = |m: &HdrImage| m.width == img.width && m.height == img.height && m.rgb == img.rgb;
-        Some(images.iter().position(same).unwrap_or_else(|| {
+        if let Some(k) = self.known.iter().position(|k| same(k.image)) {
+            return Some(FlipKey::Known(k));
+        }
+        let mut images = self.images.borrow_mut();
+        Some(FlipKey::New(images.iter().position(same).unwrap_or_else(|| {
             images.push(img.clone());
             images.len() - 1
-        }))
+        })))
     }
 
     /// Row `slot` gets the FLIP of image `key`.
-    fn wants(&self, slot: FlipSlot, key: Option<usize>) {
+    fn wants(&self, slot: FlipSlot, key: Option<FlipKey>) {
         self.wants.borrow_mut().push((slot, key));
     }
 
@@ -330,16 +358,21 @@ impl FlipBatch {
     fn fill(self, reference: &HdrImage, viewing: &Viewing, rows: &mut [PipelineRow], aa: &mut [AaRow]) {
         let images = self.images.into_inner();
         let tests: Vec<&HdrImage> = images.iter().collect();
-        let results = flip_many(reference, &tests, viewing);
+        let results = if tests.is_empty() { Vec::new() } else { flip_many(reference, &tests, viewing) };
         for (slot, key) in self.wants.into_inner() {
-            let Some((map, hdr)) = key.and_then(|k| results[k].as_ref()) else { continue };
+            let flip = match key {
+                Some(FlipKey::New(k)) => results[k].as_ref().map(|(map, hdr)| (map.mean, *hdr)),
+                Some(FlipKey::Known(k)) => Some((self.known[k].ldr, self.known[k].hdr)),
+                None => None,
+            };
+            let Some((ldr, hdr)) = flip else { continue };
             let error = match slot {
                 FlipSlot::Row(p) => rows.iter_mut().find(|r| r.pipeline == p).and_then(|r| r.error.as_mut()),
                 FlipSlot::Aa(i) => aa.get_mut(i).map(|r| &mut r.error),
             };
             if let Some(e) = error {
-                e.flip_ldr = Some(map.mean);
-                e.flip_hdr = Some(*hdr);
+                e.flip_ldr = Some(ldr);
+                e.flip_hdr = Some(hdr);
             }
         }
     }
@@ -355,6 +388,20 @@ pub fn pipelines(
     cfg: &PipelinesConfig,
     reference: Option<&HdrImage>,
     single: Option<&GBuffer>,
+) -> Result<Pipelines> {
+    pipelines_with(gb, lights, cfg, reference, single, &[])
+}
+
+/// [`pipelines`], with FLIPs the caller has already computed against `reference` under `cfg.viewing` (the report's
+/// exact images per detector): an image equal to a known one bit for bit takes its numbers instead of being
+/// compared again.
+pub fn pipelines_with(
+    gb: &GBuffer,
+    lights: &[Light],
+    cfg: &PipelinesConfig,
+    reference: Option<&HdrImage>,
+    single: Option<&GBuffer>,
+    known: &[KnownFlip<'_>],
 ) -> Result<Pipelines> {
     let (w, h, s) = (gb.width, gb.height, gb.samples);
     if let Some(one) = single {
@@ -376,7 +423,7 @@ pub fn pipelines(
     // Numerical errors now; FLIP at the end, once per distinct image and in one batch against the reference
     // (several rows share an image: forward MSAA, forward+ and the visibility buffer; the deferred schedules).
     let err = |img: &HdrImage| error_set(reference, img, None);
-    let flips = FlipBatch::default();
+    let flips = FlipBatch::new(known);
     let run = |mask: &EdgeMask, culling: Culling, schedule: Schedule| -> Result<(resolve::Resolved, f64)> {
         let rc = ResolveConfig { culling, schedule, ..cfg.resolve };
         let t = Instant::now();

@@ -244,6 +244,10 @@ pub struct Frame {
     /// Where the sweep's wall time went, by kind of stage (seconds, in the order first met).
     #[serde(default)]
     pub stage_seconds: Vec<(String, f64)>,
+    /// Where the frame's wall time outside the sweep went (seconds, in the order met): reading the dump, the needs
+    /// analysis, the figures, the pruned layout's check, the pipelines comparison.
+    #[serde(default)]
+    pub other_seconds: Vec<(String, f64)>,
     /// The scene-needs analysis.
     pub needs: Needs,
     /// Each detector on the exact G-buffer: its anti-aliasing error and the shading it costs.
@@ -299,6 +303,7 @@ pub(crate) fn test_report(input: &str, width: u32, height: u32, rows: Vec<Row>, 
             reference: None,
             sweep_seconds: 0.5,
             stage_seconds: vec![],
+            other_seconds: vec![],
             needs: crate::analysis::needs::analyze(&gb),
             detectors: vec![],
             pipelines: None,

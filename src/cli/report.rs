@@ -235,6 +235,10 @@ pub fn print_summary(rep: &Report, dir: &Path) {
     if !stages.is_empty() {
         println!("sweep time by stage: {stages}");
     }
+    let other = gbuf::report::stage_summary(rep.frames.iter().flat_map(|f| &f.other_seconds));
+    if !other.is_empty() {
+        println!("time outside the sweep: {other}");
+    }
 }
 
 fn short(frame: &str) -> String {
@@ -273,7 +277,9 @@ pub fn run_frames(
     let mut files = Vec::new();
     let mut figures = Vec::new();
     for i in 0..count {
+        let t = std::time::Instant::now();
         let f = next(i)?;
+        let load_seconds = t.elapsed().as_secs_f64();
         let mut progress = |done: usize, total: usize, what: &str| {
             pb.set_length(total as u64);
             pb.set_position(done as u64);
@@ -291,7 +297,9 @@ pub fn run_frames(
             if count > 1 { format!("frame{:0w$}_", i + 1, w = count.to_string().len()) } else { String::new() };
         let r = gbuf::report::run_frame(&input, cfg, count == 1, &prefix, &mut progress)
             .with_context(|| format!("{}: report", f.name))?;
-        frames.push(r.frame);
+        let mut frame = r.frame;
+        frame.other_seconds.insert(0, ("reading the input".to_string(), load_seconds));
+        frames.push(frame);
         rows.extend(r.rows);
         files.extend(r.files);
         figures.extend(r.figures);

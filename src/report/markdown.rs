@@ -289,6 +289,9 @@ fn frame_header(s: &mut String, f: &Frame, rows: usize, runs: usize) {
     if !f.stage_seconds.is_empty() {
         let _ = writeln!(s, "Where the sweep's time went: {}.\n", crate::report::stage_summary(&f.stage_seconds));
     }
+    if !f.other_seconds.is_empty() {
+        let _ = writeln!(s, "Outside the sweep: {}.\n", crate::report::stage_summary(&f.other_seconds));
+    }
 }
 
 fn fronts(s: &mut String, rows: &[Row]) {

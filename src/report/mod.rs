@@ -10,6 +10,7 @@ pub mod write;
 
 use crate::analysis::aggregate::{aggregate, aggregate_detectors, BudgetChoice, Over};
 use crate::analysis::needs;
+use crate::analysis::pipelines::KnownFlip;
 use crate::analysis::row::{Figure, Frame, Report, Row};
 use crate::analysis::sweep::{self, FlipRows, SweepConfig};
 use crate::analysis::{pruned_layout, ReportInput};
@@ -53,8 +54,17 @@ pub fn run_frame(
     progress: sweep::Progress<'_>,
 ) -> Result<FrameResult> {
     let gb = input.gbuffer;
+    // Wall time outside the sweep, by step (the sweep keeps its own by stage).
+    let mut other = Vec::new();
+    let mut clock = std::time::Instant::now();
+    let mut lap = |kind: &str| {
+        sweep::add_stage_time(&mut other, kind, clock.elapsed().as_secs_f64());
+        clock = std::time::Instant::now();
+    };
     let mut needs = needs::analyze(gb);
+    lap("needs analysis");
     let mut out = sweep::sweep(gb, input.lights, cfg, progress)?;
+    lap("sweep");
     for r in &mut out.rows {
         r.frame.clone_from(&input.name);
     }
@@ -62,7 +72,10 @@ pub fn run_frame(
         d.frame.clone_from(&input.name);
     }
     let (mut files, mut figures) = figures::figures(gb, &out, with_plots, prefix)?;
-    if let Some((p, layout)) = pruned_layout(input, &needs, cfg, &out) {
+    lap("figures");
+    let pruned = pruned_layout(input, &needs, cfg, &out);
+    lap("pruned layout");
+    if let Some((p, layout)) = pruned {
         if !p.changes.is_empty() {
             if let Ok(text) = layout.spec().to_text(crate::layout::SpecSyntax::Toml) {
                 files.push(Attachment { name: format!("{prefix}pruned_layout.toml"), bytes: text.into_bytes() });
@@ -70,16 +83,29 @@ pub fn run_frame(
         }
         needs.pruned_layout = Some(p);
     }
-    let (pipelines, pipelines_error) = match crate::analysis::pipelines::pipelines(
+    // The sweep's exact image per detector has its FLIP against the same reference already: the pipelines' adaptive
+    // MSAA rows are those images, and take the numbers instead of a FLIP of their own.
+    let known: Vec<KnownFlip<'_>> = out
+        .exact
+        .iter()
+        .zip(&out.detectors)
+        .filter_map(|(image, d)| {
+            let e = d.aa_error.as_ref()?;
+            Some(KnownFlip { image: image.as_ref()?, ldr: e.flip_ldr?, hdr: e.flip_hdr? })
+        })
+        .collect();
+    let (pipelines, pipelines_error) = match crate::analysis::pipelines::pipelines_with(
         gb,
         input.lights,
         &crate::analysis::pipelines::PipelinesConfig { geometry: input.geometry, ..pipelines_config(cfg) },
         Some(&out.reference),
         input.single,
+        &known,
     ) {
         Ok(p) => (Some(p), None),
         Err(e) => (None, Some(e.to_string())),
     };
+    lap("pipelines");
     if let Some(p) = &pipelines {
         // One crop under every anti-aliasing method (a failure to draw it loses the picture, not the report).
         if let Ok((pic, (x, y, w, h))) = crate::report::pipelines::aa_crop_picture(p, &out.reference) {
@@ -101,6 +127,7 @@ pub fn run_frame(
             figures.extend(g);
         }
     }
+    lap("figures");
     let covered = gb.len() - gb.background_samples();
     let frame = Frame {
         input: input.name.clone(),
@@ -113,6 +140,7 @@ pub fn run_frame(
         reference: Some(out.reference_timing),
         sweep_seconds: out.seconds,
         stage_seconds: out.stage_seconds,
+        other_seconds: other.into_iter().filter(|(k, _)| k != "sweep").collect(),
         needs,
         detectors: out.detectors,
         pipelines,
