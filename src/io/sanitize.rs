@@ -26,6 +26,12 @@ const CHUNK: usize = 1 << 14;
 fn floats(p: &mut [f32]) -> (u64, u64) {
     p.par_chunks_mut(CHUNK)
         .map(|c| {
+            // A chunk of finite values (all of a well-formed dump) is only read, by a test that runs in vector lanes;
+            // the fix, which branches and writes per value, runs on the chunks that need it. On a 1280×720 `.bin`
+            // this pass was 15% of a 1-thread `gbuf resolve`.
+            if c.iter().fold(true, |ok, v| ok & v.is_finite()) {
+                return (0, 0);
+            }
             let (mut nan, mut inf) = (0, 0);
             c.iter_mut().for_each(|v| fix(v, &mut nan, &mut inf));
             (nan, inf)
@@ -84,5 +90,29 @@ mod tests {
         assert_eq!(gb.depth.as_ref().unwrap(), &vec![1.0, 0.0, f32::MAX, 2.0]);
         assert_eq!(gb.normal.as_ref().unwrap()[0], Vec3::new(0.0, -f32::MAX, 0.0));
         assert!(sanitize(&mut gb).is_empty(), "a second pass finds nothing");
+    }
+
+    /// Values in a few chunks of a plane of many: those chunks are fixed and counted, every other value is left as
+    /// it was, bit for bit.
+    #[test]
+    fn fixes_only_the_chunks_that_need_it_and_counts_exactly() {
+        let n = 5 * CHUNK + 77;
+        let clean: Vec<f32> = (0..n).map(|i| (i as f32 * 0.37).sin() * 1e3).collect();
+        let mut v = clean.clone();
+        let bad =
+            [(3, f32::NAN), (2 * CHUNK + 5, f32::INFINITY), (2 * CHUNK + 6, f32::NAN), (n - 1, f32::NEG_INFINITY)];
+        for &(i, x) in &bad {
+            v[i] = x;
+        }
+        assert_eq!(floats(&mut v), (2, 2));
+        for i in 0..n {
+            let want = match bad.iter().find(|b| b.0 == i) {
+                Some((_, x)) if x.is_nan() => 0.0,
+                Some((_, x)) => f32::MAX.copysign(*x),
+                None => clean[i],
+            };
+            assert_eq!(v[i].to_bits(), want.to_bits(), "value {i}");
+        }
+        assert_eq!(floats(&mut v), (0, 0));
     }
 }
