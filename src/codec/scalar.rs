@@ -19,6 +19,7 @@
 use super::normal::{f16_to_finite, round_in_range_f64, F16_TO_FINITE_OPS};
 use super::simd::f32_to_f16_bits;
 use super::{mask, split_bits, Codec, ScalarCodec, TRANSCENDENTAL_OPS};
+use crate::base::isa::Isa;
 
 /// Every valid name pattern (for error messages).
 pub const VALID_NAMES: &[&str] = &[
@@ -214,6 +215,35 @@ impl Codec for Log2Unorm {
         // the unorm decode, mul by 12, exp2, clamp
         self.inner.decode_ops() + 2 + TRANSCENDENTAL_OPS
     }
+    /// Up to [`LOG2_TABLE_BITS`] bits, a table of every code's [`Codec::decode`] (built once per bit count): the
+    /// same values, without a libm `exp2f` per sample (9% of a `fat-20` roundtrip in `perf`).
+    fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [f32]) {
+        assert_eq!(codes.len(), out.len(), "decode_slice: {} codes into {} values", codes.len(), out.len());
+        match log2_table(self) {
+            Some(t) => {
+                let m = mask(self.inner.bits);
+                for (o, &c) in out.iter_mut().zip(codes) {
+                    *o = t[(c & m) as usize];
+                }
+            }
+            None => crate::codec::simd::run(
+                isa,
+                crate::codec::simd::MapKernel { input: codes, out, f: crate::codec::simd::Decode(self) },
+            ),
+        }
+    }
+}
+
+/// Largest bit count whose [`Log2Unorm`] decodes through a table (4096 entries, 16 KiB).
+pub const LOG2_TABLE_BITS: u32 = 12;
+
+/// The decode table of `codec`'s bit count, built on first use; `None` above [`LOG2_TABLE_BITS`].
+fn log2_table(codec: &Log2Unorm) -> Option<&'static [f32]> {
+    static TABLES: [std::sync::OnceLock<Box<[f32]>>; LOG2_TABLE_BITS as usize + 1] =
+        [const { std::sync::OnceLock::new() }; LOG2_TABLE_BITS as usize + 1];
+    let bits = codec.inner.bits;
+    let slot = TABLES.get(bits as usize).filter(|_| bits <= LOG2_TABLE_BITS)?;
+    Some(slot.get_or_init(|| (0..1u64 << bits).map(|c| codec.decode(c)).collect()))
 }
 
 impl ScalarCodec for Log2Unorm {
@@ -352,6 +382,25 @@ mod tests {
             ["snorm-1", "snorm-25", "snorm-8:0", "snorm-8:-1", "snorm-8:inf", "snorm-8:nan", "snorm-:2", "snorm-8:"]
         {
             assert!(scalar_codec(bad).is_none(), "{bad}");
+        }
+    }
+
+    /// The table decode equals `decode` bit for bit on every code of every tabled bit count (and on codes with
+    /// bits set above the field), and the codecs above the table still decode per value.
+    #[test]
+    fn log2_table_decode_equals_decode_on_every_code() {
+        for bits in 2..=LOG2_TABLE_BITS + 2 {
+            let c = Log2Unorm { inner: Unorm::new(bits, 0.0, 1.0, "") };
+            let n = 1u64 << bits.min(14);
+            let codes: Vec<u64> = (0..n).chain((0..64).map(|k| (k << bits) | (k % n))).collect();
+            let mut out = vec![0.0f32; codes.len()];
+            for isa in Isa::available() {
+                c.decode_slice_isa(isa, &codes, &mut out);
+                for (&code, &v) in codes.iter().zip(&out) {
+                    assert_eq!(v.to_bits(), c.decode(code).to_bits(), "log2-unorm-{bits} code {code} on {isa:?}");
+                }
+            }
+            assert_eq!(log2_table(&c).is_some(), bits <= LOG2_TABLE_BITS);
         }
     }
 
