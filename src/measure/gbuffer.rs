@@ -234,23 +234,47 @@ impl<'a> Covered<'a> {
     }
 }
 
+/// Samples per chunk of [`normals`]' parallel passes.
+const NORMAL_CHUNK: usize = 1 << 16;
+
+/// Normal errors in two parallel passes over fixed chunks of samples: the valid normals per chunk, then each
+/// chunk's angles into its own part of one list (the list's order, its sum and so the mean, the first sample of
+/// the largest angle and the 95th percentile are those of one loop in sample order, whatever the thread count).
 fn normals(gb: &GBuffer, covered: Covered<'_>, r: &[Vec3], t: &[Vec3]) -> NormalErrors {
-    let (mut skipped_invalid, mut worst, mut max) = (0u64, 0usize, -1.0f64);
-    let mut angles: Vec<f64> = Vec::new();
-    for i in covered.iter() {
-        if !crate::io::plausible::normal_is_valid(r[i]) {
-            skipped_invalid += 1;
-            continue;
-        }
-        let a = angle_deg(r[i], t[i]);
-        if a > max {
-            (worst, max) = (i, a);
-        }
-        angles.push(a);
-    }
-    if angles.is_empty() {
+    let chunks = covered.0.len().div_ceil(NORMAL_CHUNK);
+    let span = |k: usize| k * NORMAL_CHUNK..((k + 1) * NORMAL_CHUNK).min(covered.0.len());
+    let valid = |i: usize| covered.0[i] && crate::io::plausible::normal_is_valid(r[i]);
+    let counts: Vec<usize> = (0..chunks).into_par_iter().map(|k| span(k).filter(|&i| valid(i)).count()).collect();
+    let total: usize = counts.iter().sum();
+    let skipped_invalid = (covered.iter().count() - total) as u64;
+    if total == 0 {
         return NormalErrors { skipped_invalid, ..NormalErrors::default() };
     }
+    let mut angles = vec![0.0f64; total];
+    let mut parts = Vec::with_capacity(chunks);
+    let mut rest = angles.as_mut_slice();
+    for &n in &counts {
+        let (part, tail) = rest.split_at_mut(n);
+        parts.push(part);
+        rest = tail;
+    }
+    // Per chunk: its largest angle and the first sample with it.
+    let maxima: Vec<(f64, usize)> = parts
+        .into_par_iter()
+        .enumerate()
+        .map(|(k, part)| {
+            let (mut max, mut worst) = (-1.0f64, 0usize);
+            for (slot, i) in part.iter_mut().zip(span(k).filter(|&i| valid(i))) {
+                let a = angle_deg(r[i], t[i]);
+                if a > max {
+                    (worst, max) = (i, a);
+                }
+                *slot = a;
+            }
+            (max, worst)
+        })
+        .collect();
+    let (max, worst) = maxima.into_iter().fold((-1.0f64, 0usize), |m, c| if c.0 > m.0 { c } else { m });
     let mean = angles.iter().sum::<f64>() / angles.len() as f64;
     let k = ((angles.len() as f64 * 0.95).ceil() as usize).clamp(1, angles.len()) - 1;
     let (_, p95, _) = angles.select_nth_unstable_by(k, f64::total_cmp);
@@ -329,6 +353,54 @@ mod tests {
         a.roughness = Some(vec![0.25; a.len()]);
         a.object_id = Some((0..a.len() as u32).collect());
         (a.clone(), a)
+    }
+
+    /// Over several chunks, with uncovered samples, invalid reference normals and the largest angle reached twice
+    /// in different chunks: the numbers of one loop in sample order, bit for bit, on 1 and 2 threads.
+    #[test]
+    fn normal_errors_over_chunks_equal_one_loop_in_sample_order() {
+        let mut a = GBuffer::new(300, 120, 4).unwrap();
+        assert!(a.len() > 2 * NORMAL_CHUNK);
+        let mut rng = crate::util::SplitMix64::new(11);
+        a.coverage = (0..a.len()).map(|i| i % 7 != 3).collect();
+        a.normal = Some((0..a.len()).map(|_| Vec3::new(rng.range_f32(-0.2, 0.2), 0.1, 1.0).normalize()).collect());
+        let mut b = a.clone();
+        for n in b.normal.as_mut().unwrap() {
+            *n = (*n + Vec3::new(rng.range_f32(-0.01, 0.01), 0.0, 0.0)).normalize();
+        }
+        let (first, second) = (NORMAL_CHUNK + 5, 2 * NORMAL_CHUNK + 9);
+        {
+            let (rn, tn) = (a.normal.as_mut().unwrap(), b.normal.as_mut().unwrap());
+            rn[11] = Vec3::ZERO; // invalid: skipped
+            rn[NORMAL_CHUNK + 2] = Vec3::new(0.0, 0.0, 3.0); // invalid: skipped
+            for i in [first, second] {
+                (rn[i], tn[i]) = (Vec3::Z, Vec3::X); // 90°, the largest, twice
+            }
+        }
+        let (rn, tn) = (a.normal.as_deref().unwrap(), b.normal.as_deref().unwrap());
+        let (mut angles, mut skipped, mut max, mut worst) = (Vec::new(), 0u64, -1.0f64, 0usize);
+        for i in (0..a.len()).filter(|&i| a.coverage[i]) {
+            if !crate::io::plausible::normal_is_valid(rn[i]) {
+                skipped += 1;
+                continue;
+            }
+            let x = angle_deg(rn[i], tn[i]);
+            if x > max {
+                (worst, max) = (i, x);
+            }
+            angles.push(x);
+        }
+        let mean = angles.iter().sum::<f64>() / angles.len() as f64;
+        let k = ((angles.len() as f64 * 0.95).ceil() as usize).clamp(1, angles.len()) - 1;
+        let p95 = *angles.select_nth_unstable_by(k, f64::total_cmp).1;
+        assert_eq!((worst, skipped), (first, 2));
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let e = pool.install(|| normals(&a, Covered(&a.coverage), rn, tn));
+            assert_eq!(e.mean_deg.to_bits(), mean.to_bits(), "{threads} threads");
+            assert_eq!((e.p95_deg, e.max_deg, e.skipped_invalid), (p95, max, skipped));
+            assert_eq!(e.worst, at(&a, worst));
+        }
     }
 
     #[test]
