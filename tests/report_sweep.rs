@@ -245,6 +245,9 @@ fn pipelines_take_known_flips_for_equal_images_only() {
     assert_eq!(tiled.error.unwrap().flip_ldr, Some(0.123));
     let prepass = p.rows.iter().find(|r| r.pipeline == gbuf::analysis::pipelines::Pipeline::LightPrepass).unwrap();
     assert_ne!(prepass.error.unwrap().flip_ldr, Some(0.123));
+    // Without the caller's reference (the pipelines compute their own) no known number applies.
+    let own_ref = pipelines_with(&gb, &lights, &cfg, None, None, &fake).unwrap();
+    assert!(own_ref.aa.iter().all(|a| a.error.flip_ldr != Some(0.123)));
 }
 
 /// The report says where its time outside the sweep went: each step of a frame once, none negative, and all of

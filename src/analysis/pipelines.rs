@@ -413,6 +413,7 @@ pub fn pipelines_with(
     let n_lights = lights.len() as u64;
     let mb = |bytes: f64| bytes / 1e6;
     let computed;
+    let computed_reference = reference.is_none();
     let reference = match reference {
         Some(r) => r,
         None => {
@@ -423,7 +424,8 @@ pub fn pipelines_with(
     // Numerical errors now; FLIP at the end, once per distinct image and in one batch against the reference
     // (several rows share an image: forward MSAA, forward+ and the visibility buffer; the deferred schedules).
     let err = |img: &HdrImage| error_set(reference, img, None);
-    let flips = FlipBatch::new(known);
+    // Known FLIPs are against the caller's reference: none apply to one computed here.
+    let flips = FlipBatch::new(if computed_reference { &[] } else { known });
     let run = |mask: &EdgeMask, culling: Culling, schedule: Schedule| -> Result<(resolve::Resolved, f64)> {
         let rc = ResolveConfig { culling, schedule, ..cfg.resolve };
         let t = Instant::now();
