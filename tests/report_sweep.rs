@@ -18,6 +18,20 @@ fn small_room() -> (gbuf::GBuffer, Vec<gbuf::Light>) {
     (gb, lights)
 }
 
+/// A sweep of `layouts` × `detectors`, one timing run, default thresholds, resolve and viewing.
+fn one_run(layouts: &[&str], detectors: Vec<Detector>, flip: FlipRows) -> SweepConfig {
+    SweepConfig {
+        layouts: layouts.iter().map(|n| Layout::by_name(n).expect("built-in")).collect(),
+        detectors,
+        detector_config: DetectorConfig::default(),
+        culling: vec![],
+        resolve: ResolveConfig::default(),
+        runs: 1,
+        flip,
+        viewing: Default::default(),
+    }
+}
+
 #[test]
 fn sweep_rows_match_layouts_and_lossless_is_exact() {
     let (gb, lights) = small_room();
@@ -154,16 +168,7 @@ fn failing_rows_say_why() {
     // Without IDs the `id` detector cannot run; the row must carry the reason, not a number.
     gb.material_id = None;
     gb.object_id = None;
-    let cfg = SweepConfig {
-        layouts: vec![Layout::by_name("minimal-8").unwrap()],
-        detectors: vec![Detector::Id, Detector::Lauritzen],
-        detector_config: DetectorConfig::default(),
-        culling: vec![],
-        resolve: ResolveConfig::default(),
-        runs: 1,
-        flip: FlipRows::None,
-        viewing: Default::default(),
-    };
+    let cfg = one_run(&["minimal-8"], vec![Detector::Id, Detector::Lauritzen], FlipRows::None);
     let out = sweep(&gb, &lights, &cfg, &mut |_, _, _| {}).unwrap();
     let id = out.rows.iter().find(|r| r.detector == "id").unwrap();
     assert!(id.error.as_deref().is_some_and(|e| e.contains("detector")), "{:?}", id.error);
@@ -194,16 +199,11 @@ fn pipelines_take_known_flips_for_equal_images_only() {
     use gbuf::analysis::pipelines::{pipelines, pipelines_with, KnownFlip};
     use gbuf::measure::image::error_set;
     let (gb, lights) = small_room();
-    let cfg = gbuf::report::pipelines_config(&SweepConfig {
-        layouts: vec![Layout::by_name("fat-20").unwrap()],
-        detectors: vec![Detector::Lauritzen, Detector::Normal],
-        detector_config: DetectorConfig::default(),
-        culling: vec![],
-        resolve: ResolveConfig::default(),
-        runs: 1,
-        flip: FlipRows::Decisive,
-        viewing: Default::default(),
-    });
+    let cfg = gbuf::report::pipelines_config(&one_run(
+        &["fat-20"],
+        vec![Detector::Lauritzen, Detector::Normal],
+        FlipRows::Decisive,
+    ));
     let viewing = cfg.viewing.expect("FLIP on");
     let reference = gbuf::resolve::reference(&gb, &lights, &cfg.resolve).unwrap();
     let exact: Vec<(Detector, gbuf::image::HdrImage)> = cfg
@@ -255,16 +255,7 @@ fn pipelines_take_known_flips_for_equal_images_only() {
 #[test]
 fn a_frame_times_its_steps_outside_the_sweep() {
     let (gb, lights) = small_room();
-    let cfg = SweepConfig {
-        layouts: vec![Layout::by_name("fat-20").unwrap()],
-        detectors: vec![Detector::Lauritzen],
-        detector_config: DetectorConfig::default(),
-        culling: vec![],
-        resolve: ResolveConfig::default(),
-        runs: 1,
-        flip: FlipRows::Decisive,
-        viewing: Default::default(),
-    };
+    let cfg = one_run(&["fat-20"], vec![Detector::Lauritzen], FlipRows::Decisive);
     let input = gbuf::analysis::ReportInput {
         name: "room".into(),
         gbuffer: &gb,
