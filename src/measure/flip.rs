@@ -903,7 +903,8 @@ fn band_features_impl(ctx: &Ctx, img: &[f32], enc: Encoding, y0: usize, rows: us
                 let [sy, scx, sz1, sz2, dx, ddx, dyy, ddy] = &acc[dy];
                 let [fl, fa, fb, fe, fp] = &mut *feats;
                 // `tws <= TW` (a tile is at most TW columns), said so that the loop has no bounds checks and runs
-                // in vector lanes: without it the Lab conversion ran one pixel at a time, half of FLIP's time.
+                // in vector lanes: without it the Lab conversion ran one pixel at a time (scalar instructions were
+                // 17% of this pass in `perf`, 6% after; 4 tests against one 1080p reference 216 → 199 ms, Xeon).
                 for i in 0..tws.min(TW) {
                     let (l, a, b) = ycxcz_to_lab_hunt(sy[i], scx[i], sz1[i] + sz2[i]);
                     fl[i] = l;
