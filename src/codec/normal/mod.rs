@@ -484,27 +484,30 @@ pub fn round_half_away_f64(v: f64) -> i32 {
     t + i32::from(f >= 0.5) - i32::from(f <= -0.5)
 }
 
-/// [`round_half_away_f64`] for a value the caller has clamped to |v| ≤ 2^24 (a unorm/snorm/depth code before
-/// rounding): the truncation skips the saturating checks of `as`, which otherwise turn the vectorised loop back
-/// into one scalar conversion per element. Equal to [`round_half_away_f64`] on that range (tested).
+/// [`round_half_away_f64`] for a code before rounding (a unorm/snorm/depth code the caller has clamped to
+/// |v| ≤ 2^24): the truncation skips the saturating checks of `as`, which otherwise turn the vectorised loop back
+/// into one scalar conversion per element. Safe for every input: NaN gives 0 and values beyond ±2^24 are clamped
+/// there first (a select and a min/max, which stay in vector lanes), so the unchecked truncation always fits.
+/// Equal to [`round_half_away_f64`] on |v| ≤ 2^24 (tested, with NaN and out-of-range inputs).
 #[inline(always)]
 #[must_use]
 pub fn round_in_range_f64(v: f64) -> i32 {
-    debug_assert!(v.abs() <= 16_777_216.0, "{v}");
-    // SAFETY: callers pass a finite value clamped to |v| ≤ 2^24 (NaN replaced first), whose truncation fits an
-    // i32.
+    const LIMIT: f64 = 16_777_216.0;
+    let v = if v.is_nan() { 0.0 } else { v.clamp(-LIMIT, LIMIT) };
+    // SAFETY: `v` is finite with |v| ≤ 2^24, so its truncation fits an i32.
     let t: i32 = unsafe { v.to_int_unchecked() };
     let f = v - f64::from(t);
     t + i32::from(f >= 0.5) - i32::from(f <= -0.5)
 }
 
-/// [`round_half_away`] for a value already known to be finite with |v| ≤ 2^16 (a clamped, scaled coordinate):
-/// the truncation skips the saturating checks of `as`, which keeps the vectorised loop at one conversion.
+/// [`round_half_away`] for a clamped, scaled coordinate (|v| ≤ 2^16 at the call sites): the truncation skips the
+/// saturating checks of `as`, which keeps the vectorised loop at one conversion. Safe for every input: NaN gives 0
+/// and values beyond ±2^24 are clamped there first. Equal to [`round_half_away`] on |v| ≤ 2^24 (tested).
 #[inline(always)]
 pub(crate) fn round_in_range(v: f32) -> i32 {
-    debug_assert!(v.abs() <= 65536.0, "{v}");
-    // SAFETY: callers pass a value clamped to [−(2^16−1), 2^16−1] after replacing NaN, so it is finite and its
-    // truncation fits in an i32.
+    const LIMIT: f32 = 16_777_216.0;
+    let v = if v.is_nan() { 0.0 } else { v.clamp(-LIMIT, LIMIT) };
+    // SAFETY: `v` is finite with |v| ≤ 2^24, so its truncation fits an i32.
     let t: i32 = unsafe { v.to_int_unchecked() };
     let f = v - t as f32;
     t + i32::from(f >= 0.5) - i32::from(f <= -0.5)
@@ -822,6 +825,41 @@ mod tests {
             assert_eq!(round_in_range_f64(v), v.round() as i32, "{v}");
             let k = (rng.next_u64() % (1 << 24)) as f64 + 0.5;
             assert_eq!(round_half_away_f64(k), k.round() as i32, "{k}");
+        }
+    }
+
+    /// The unchecked roundings are safe on every input (NaN, ±Inf, beyond ±2^24, the extremes of f32/f64) and
+    /// equal to the saturating roundings on their documented range (every f32 of a dense sweep up to 2^24).
+    #[test]
+    fn in_range_roundings_are_total() {
+        const LIMIT: i32 = 1 << 24;
+        for v in [f64::NAN, -f64::NAN, f64::INFINITY, f64::NEG_INFINITY, f64::MAX, f64::MIN, 1e30, -1e30, 3e9, -3e9] {
+            let want = if v.is_nan() {
+                0
+            } else if v > 0.0 {
+                LIMIT
+            } else {
+                -LIMIT
+            };
+            assert_eq!(round_in_range_f64(v), want, "{v}");
+        }
+        for v in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, f32::MAX, f32::MIN, 1e30, -1e30, 3e9, -3e9] {
+            let want = if v.is_nan() {
+                0
+            } else if v > 0.0 {
+                LIMIT
+            } else {
+                -LIMIT
+            };
+            assert_eq!(round_in_range(v), want, "{v}");
+        }
+        let mut v = 0.25f32;
+        while v <= 16_777_216.0 {
+            for x in [v, -v, v + 0.5, -v - 0.5] {
+                assert_eq!(round_in_range(x), round_half_away(x), "{x}");
+                assert_eq!(round_in_range_f64(f64::from(x)), round_half_away_f64(f64::from(x)), "{x}");
+            }
+            v = v * 1.0009 + 0.25;
         }
     }
 
