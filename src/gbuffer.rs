@@ -254,6 +254,71 @@ pub enum PlaneRef<'a> {
     U32(&'a [u32]),
 }
 
+impl PlaneRef<'_> {
+    /// Values in the plane (one per sample).
+    #[must_use]
+    pub fn len(&self) -> usize {
+        match self {
+            PlaneRef::F32(v) => v.len(),
+            PlaneRef::Vec2(v) => v.len(),
+            PlaneRef::Vec3(v) => v.len(),
+            PlaneRef::U32(v) => v.len(),
+        }
+    }
+
+    /// Is the plane empty?
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Bytes it holds (4 per f32 or ID component).
+    #[must_use]
+    pub fn bytes(&self) -> usize {
+        match self {
+            PlaneRef::F32(v) => std::mem::size_of_val(*v),
+            PlaneRef::Vec2(v) => std::mem::size_of_val(*v),
+            PlaneRef::Vec3(v) => std::mem::size_of_val(*v),
+            PlaneRef::U32(v) => std::mem::size_of_val(*v),
+        }
+    }
+}
+
+/// The storage slot of one attribute plane, typed: what generic code over the planes writes through. With
+/// [`GBuffer::plane`] it is one of the two places that list the planes by field (shared and mutable borrows); every
+/// other walk over the planes goes through them ([`GBuffer::visit_planes_mut`], [`GBuffer::map_planes`]).
+#[derive(Debug)]
+pub enum PlaneSlot<'a> {
+    /// A scalar f32 plane.
+    F32(&'a mut Option<Vec<f32>>),
+    /// A 2-component plane.
+    Vec2(&'a mut Option<Vec<Vec2>>),
+    /// A 3-component plane.
+    Vec3(&'a mut Option<Vec<Vec3>>),
+    /// An integer ID plane.
+    U32(&'a mut Option<Vec<u32>>),
+}
+
+/// Copies `from` into the slot `to`, reusing its allocation; true.
+fn copy_into<T: Copy>(to: &mut Option<Vec<T>>, from: &[T]) -> bool {
+    let v = to.get_or_insert_with(Vec::new);
+    v.clear();
+    v.extend_from_slice(from);
+    true
+}
+
+/// What a walk over every present plane does to one, whatever its element type ([`GBuffer::visit_planes_mut`]).
+pub trait PlaneVisitor {
+    /// Called once per present plane, in canonical attribute order.
+    fn visit<T: Copy + Default + Send + Sync>(&mut self, attr: Attribute, plane: &mut [T]);
+}
+
+/// Builds a new plane from an existing one, whatever its element type ([`GBuffer::map_planes`]).
+pub trait PlaneMapper {
+    /// The new plane of `attr` from its old one; `None` drops the attribute.
+    fn map<T: Copy + Default + Send + Sync>(&mut self, attr: Attribute, plane: &[T]) -> Option<Vec<T>>;
+}
+
 impl GBuffer {
     /// An empty G-buffer (all background, no attributes) of the given size with standard (or, for non-standard
     /// counts that are perfect squares, ordered-grid) sample positions.
@@ -323,17 +388,7 @@ impl GBuffer {
     /// coverage per sample (what loading a dump must hold at the end, the yardstick of its peak memory).
     #[must_use]
     pub fn plane_bytes(&self) -> usize {
-        let planes: usize = self
-            .attributes()
-            .into_iter()
-            .filter_map(|a| self.plane(a))
-            .map(|p| match p {
-                PlaneRef::F32(v) => 4 * v.len(),
-                PlaneRef::U32(v) => 4 * v.len(),
-                PlaneRef::Vec2(v) => 8 * v.len(),
-                PlaneRef::Vec3(v) => 12 * v.len(),
-            })
-            .sum();
+        let planes: usize = Attribute::ALL.into_iter().filter_map(|a| self.plane(a)).map(|p| p.bytes()).sum();
         planes + self.coverage.len()
     }
 
@@ -374,44 +429,123 @@ impl GBuffer {
         })
     }
 
+    /// The storage slot of `attr`'s plane (present or not).
+    pub fn slot(&mut self, attr: Attribute) -> PlaneSlot<'_> {
+        match attr {
+            Attribute::Depth => PlaneSlot::F32(&mut self.depth),
+            Attribute::Position => PlaneSlot::Vec3(&mut self.position),
+            Attribute::Normal => PlaneSlot::Vec3(&mut self.normal),
+            Attribute::Albedo => PlaneSlot::Vec3(&mut self.albedo),
+            Attribute::Specular => PlaneSlot::F32(&mut self.specular),
+            Attribute::SpecularPower => PlaneSlot::F32(&mut self.specular_power),
+            Attribute::Roughness => PlaneSlot::F32(&mut self.roughness),
+            Attribute::Metallic => PlaneSlot::F32(&mut self.metallic),
+            Attribute::MaterialId => PlaneSlot::U32(&mut self.material_id),
+            Attribute::ObjectId => PlaneSlot::U32(&mut self.object_id),
+            Attribute::PrimitiveId => PlaneSlot::U32(&mut self.primitive_id),
+            Attribute::Motion => PlaneSlot::Vec2(&mut self.motion),
+        }
+    }
+
+    /// Calls `v` on every present plane, in canonical attribute order.
+    pub fn visit_planes_mut(&mut self, v: &mut impl PlaneVisitor) {
+        for attr in Attribute::ALL {
+            match self.slot(attr) {
+                PlaneSlot::F32(Some(p)) => v.visit(attr, p),
+                PlaneSlot::Vec2(Some(p)) => v.visit(attr, p),
+                PlaneSlot::Vec3(Some(p)) => v.visit(attr, p),
+                PlaneSlot::U32(Some(p)) => v.visit(attr, p),
+                _ => {}
+            }
+        }
+    }
+
+    /// A G-buffer of `width` × `height` × `samples` with `sample_positions` and `coverage`, this one's camera and
+    /// materials, and every present plane mapped by `m` (which must return planes of the new size).
+    pub fn map_planes(
+        &self,
+        (width, height, samples): (u32, u32, u32),
+        sample_positions: Vec<Vec2>,
+        coverage: Vec<bool>,
+        m: &mut impl PlaneMapper,
+    ) -> GBuffer {
+        let mut out = GBuffer {
+            width,
+            height,
+            samples,
+            sample_positions,
+            camera: self.camera,
+            coverage,
+            materials: self.materials.clone(),
+            ..GBuffer::default()
+        };
+        for attr in Attribute::ALL {
+            match (self.plane(attr), out.slot(attr)) {
+                (Some(PlaneRef::F32(p)), PlaneSlot::F32(o)) => *o = m.map(attr, p),
+                (Some(PlaneRef::Vec2(p)), PlaneSlot::Vec2(o)) => *o = m.map(attr, p),
+                (Some(PlaneRef::Vec3(p)), PlaneSlot::Vec3(o)) => *o = m.map(attr, p),
+                (Some(PlaneRef::U32(p)), PlaneSlot::U32(o)) => *o = m.map(attr, p),
+                _ => {}
+            }
+        }
+        out
+    }
+
+    /// This G-buffer's size, sample positions, camera, coverage and materials with no attribute planes: what an
+    /// unpacked or rebuilt G-buffer starts from.
+    #[must_use]
+    pub fn shell(&self) -> GBuffer {
+        GBuffer {
+            width: self.width,
+            height: self.height,
+            samples: self.samples,
+            sample_positions: self.sample_positions.clone(),
+            camera: self.camera,
+            coverage: self.coverage.clone(),
+            materials: self.materials.clone(),
+            ..GBuffer::default()
+        }
+    }
+
+    /// Sets every attribute of the background (uncovered) samples to zero (0 for IDs).
+    pub fn zero_background(&mut self) {
+        struct Zero<'a>(&'a [bool]);
+        impl PlaneVisitor for Zero<'_> {
+            fn visit<T: Copy + Default + Send + Sync>(&mut self, _: Attribute, plane: &mut [T]) {
+                plane.iter_mut().zip(self.0).filter(|(_, c)| !**c).for_each(|(v, _)| *v = T::default());
+            }
+        }
+        let coverage = std::mem::take(&mut self.coverage);
+        self.visit_planes_mut(&mut Zero(&coverage));
+        self.coverage = coverage;
+    }
+
     /// Replaces the plane of `attr` by `other`'s (absent there: absent here). False, and nothing changed, when
     /// the two G-buffers differ in size.
     pub fn copy_plane_from(&mut self, other: &GBuffer, attr: Attribute) -> bool {
         if (self.width, self.height, self.samples) != (other.width, other.height, other.samples) {
             return false;
         }
-        match attr {
-            Attribute::Depth => self.depth.clone_from(&other.depth),
-            Attribute::Position => self.position.clone_from(&other.position),
-            Attribute::Normal => self.normal.clone_from(&other.normal),
-            Attribute::Albedo => self.albedo.clone_from(&other.albedo),
-            Attribute::Specular => self.specular.clone_from(&other.specular),
-            Attribute::SpecularPower => self.specular_power.clone_from(&other.specular_power),
-            Attribute::Roughness => self.roughness.clone_from(&other.roughness),
-            Attribute::Metallic => self.metallic.clone_from(&other.metallic),
-            Attribute::MaterialId => self.material_id.clone_from(&other.material_id),
-            Attribute::ObjectId => self.object_id.clone_from(&other.object_id),
-            Attribute::PrimitiveId => self.primitive_id.clone_from(&other.primitive_id),
-            Attribute::Motion => self.motion.clone_from(&other.motion),
+        let copied = match (self.slot(attr), other.plane(attr)) {
+            (PlaneSlot::F32(o), Some(PlaneRef::F32(p))) => copy_into(o, p),
+            (PlaneSlot::Vec2(o), Some(PlaneRef::Vec2(p))) => copy_into(o, p),
+            (PlaneSlot::Vec3(o), Some(PlaneRef::Vec3(p))) => copy_into(o, p),
+            (PlaneSlot::U32(o), Some(PlaneRef::U32(p))) => copy_into(o, p),
+            _ => false,
+        };
+        if !copied {
+            self.remove(attr);
         }
         true
     }
 
     /// Removes `attr` (makes it absent).
     pub fn remove(&mut self, attr: Attribute) {
-        match attr {
-            Attribute::Depth => self.depth = None,
-            Attribute::Position => self.position = None,
-            Attribute::Normal => self.normal = None,
-            Attribute::Albedo => self.albedo = None,
-            Attribute::Specular => self.specular = None,
-            Attribute::SpecularPower => self.specular_power = None,
-            Attribute::Roughness => self.roughness = None,
-            Attribute::Metallic => self.metallic = None,
-            Attribute::MaterialId => self.material_id = None,
-            Attribute::ObjectId => self.object_id = None,
-            Attribute::PrimitiveId => self.primitive_id = None,
-            Attribute::Motion => self.motion = None,
+        match self.slot(attr) {
+            PlaneSlot::F32(o) => *o = None,
+            PlaneSlot::Vec2(o) => *o = None,
+            PlaneSlot::Vec3(o) => *o = None,
+            PlaneSlot::U32(o) => *o = None,
         }
     }
 
@@ -433,12 +567,7 @@ impl GBuffer {
             return Err(Error::Argument(format!("coverage has {} entries, expected {n}", self.coverage.len())));
         }
         for attr in self.attributes() {
-            let len = match self.plane(attr).expect("present") {
-                PlaneRef::F32(p) => p.len(),
-                PlaneRef::Vec2(p) => p.len(),
-                PlaneRef::Vec3(p) => p.len(),
-                PlaneRef::U32(p) => p.len(),
-            };
+            let len = self.plane(attr).expect("present").len();
             if len != n {
                 return Err(Error::Argument(format!("{} plane has {len} entries, expected {n}", attr.name())));
             }

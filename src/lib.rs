@@ -21,6 +21,7 @@ pub mod measure;
 pub mod report;
 pub mod resolve;
 pub mod scene;
+pub mod study;
 pub mod util;
 
 pub use camera::Camera;

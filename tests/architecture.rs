@@ -1,17 +1,21 @@
 //! The tree is the pipeline (docs/ARCHITECTURE.md): every top-level module of `src/` imports only the modules
-//! before it in [`LAYERS`], the files of `src/resolve` import each other without a cycle, and every
+//! before it in [`LAYERS`], no two files of `src/` (in any directory) import each other in a circle, and every
 //! `#[target_feature(enable = …)]` names one of the feature lists of `base::isa`.
 //!
-//! Imports are read as text, as `crate::<module>` paths anywhere outside a file's `#[cfg(test)]` part (doc links
-//! count: a link up the pipeline is a dependency a reader follows), and `super::<file>` inside `src/resolve`.
+//! Files are read whole, as text, with only their `#[cfg(test)] mod NAME { … }` blocks left out (tests may reach
+//! anywhere). The layer check reads `crate::<module>` paths anywhere, doc links included (a link up the pipeline is
+//! a dependency a reader follows); the cycle check reads `crate::…`, `super::…` and `self::…` paths (and grouped
+//! `use …::{a, b}` imports) outside comments, resolved to the file that defines the module, as
+//! `../shared/tools/file_cycles.py` does. A `mod.rs` naming its own children is the parent re-exporting them, not
+//! an edge.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// The top-level modules in pipeline order: each may import only those before it.
-const LAYERS: [&str; 16] = [
+const LAYERS: [&str; 17] = [
     "error", "util", "base", "camera", "light", "gbuffer", "io", "image", "scene", "codec", "layout", "detect",
-    "resolve", "measure", "analysis", "report",
+    "resolve", "measure", "analysis", "report", "study",
 ];
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
@@ -25,9 +29,48 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     }
 }
 
-/// The part of a file before its test module.
-fn non_test(text: &str) -> &str {
-    text.split("#[cfg(test)]").next().unwrap_or("")
+/// The file without its `#[cfg(test)] mod NAME { … }` blocks (braces matched).
+fn non_test(text: &str) -> String {
+    let mut out = String::new();
+    let mut rest = text;
+    while let Some(i) = rest.find("#[cfg(test)]") {
+        let after = &rest[i + "#[cfg(test)]".len()..];
+        let t = after.trim_start();
+        let t = t.strip_prefix("pub(crate)").or_else(|| t.strip_prefix("pub")).unwrap_or(t).trim_start();
+        let Some(m) = t.strip_prefix("mod ") else {
+            out.push_str(&rest[..i + "#[cfg(test)]".len()]);
+            rest = after;
+            continue;
+        };
+        let Some(open) = m.find('{').filter(|&o| m[..o].trim().chars().all(|c| c.is_alphanumeric() || c == '_')) else {
+            out.push_str(&rest[..i + "#[cfg(test)]".len()]);
+            rest = after;
+            continue;
+        };
+        out.push_str(&rest[..i]);
+        let body = &m[open + 1..];
+        let mut depth = 1;
+        let mut end = body.len();
+        for (j, c) in body.char_indices() {
+            depth += match c {
+                '{' => 1,
+                '}' => -1,
+                _ => 0,
+            };
+            if depth == 0 {
+                end = j + 1;
+                break;
+            }
+        }
+        rest = &body[end..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// `text` without `//` comments (doc links name modules without importing them).
+fn without_comments(text: &str) -> String {
+    text.lines().map(|l| l.find("//").map_or(l, |i| &l[..i])).collect::<Vec<_>>().join("\n")
 }
 
 /// Every `<prefix><ident>` in `text` (identifiers of lower-case letters, digits and `_`) not followed by `!`.
@@ -67,7 +110,7 @@ fn every_import_points_down_the_pipeline() {
         let own = layer(&first).unwrap_or_else(|| panic!("src/{first} is not in LAYERS: add it where it belongs"));
         seen.insert(first.clone());
         let text = std::fs::read_to_string(f).unwrap();
-        for m in paths(non_test(&text), "crate::") {
+        for m in paths(&non_test(&text), "crate::") {
             match layer(m) {
                 Some(l) if l > own => wrong.push(format!("{} imports crate::{m} (a later stage)", rel.display())),
                 _ => {}
@@ -78,48 +121,201 @@ fn every_import_points_down_the_pipeline() {
     assert_eq!(seen.len(), LAYERS.len(), "every layer exists in src/: {seen:?}");
 }
 
-#[test]
-fn the_resolve_files_import_each_other_without_a_cycle() {
-    let dir = src().join("resolve");
+/// The module path of a file: `src/a/b.rs` → `[a, b]`, `src/a/mod.rs` → `[a]`, `src/lib.rs` → `[]`.
+fn module_path(root: &Path, f: &Path) -> Vec<String> {
+    let rel = f.strip_prefix(root).unwrap().with_extension("");
+    let mut parts: Vec<String> = rel.components().map(|c| c.as_os_str().to_string_lossy().to_string()).collect();
+    if parts.last().is_some_and(|l| l == "mod" || l == "lib") {
+        parts.pop();
+    }
+    parts
+}
+
+/// Module paths named in `text` (comments and test modules already removed) by a file at module path `me`:
+/// `crate::a::b`, `super::x` (any number of `super::`), `self::x`, and the items of grouped imports.
+fn named_paths(text: &str, me: &[String]) -> Vec<Vec<String>> {
+    let ident = |s: &str| s.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_') && !s.is_empty();
+    let mut out = Vec::new();
+    let bytes = text.as_bytes();
+    let mut i = 0;
+    while i < text.len() {
+        let starts_word =
+            i == 0 || !(bytes[i - 1].is_ascii_alphanumeric() || bytes[i - 1] == b'_' || bytes[i - 1] == b':');
+        let rest = &text[i..];
+        let head = ["crate::", "super::", "self::"].into_iter().find(|h| starts_word && rest.starts_with(h));
+        let Some(head) = head else {
+            i += rest.chars().next().map_or(1, char::len_utf8);
+            continue;
+        };
+        // The base module and the remaining `a::b::{…}` path.
+        let mut base: Vec<String> = match head {
+            "crate::" => vec![],
+            "self::" => me.to_vec(),
+            _ => me.to_vec(),
+        };
+        let mut j = i + head.len();
+        if head == "super::" {
+            base.pop();
+            while text[j..].starts_with("super::") {
+                base.pop();
+                j += "super::".len();
+            }
+        }
+        let mut path = base;
+        loop {
+            let seg_end =
+                text[j..].find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).map_or(text.len(), |e| j + e);
+            let seg = &text[j..seg_end];
+            if !ident(seg) {
+                if text[j..].starts_with('{') {
+                    let close = text[j..].find('}').map_or(text.len(), |e| j + e);
+                    for item in text[j + 1..close].split(',') {
+                        let item = item.trim().split(" as ").next().unwrap_or("").trim();
+                        let segs: Vec<String> =
+                            item.split("::").filter(|s| ident(s) && *s != "self").map(String::from).collect();
+                        if !segs.is_empty() {
+                            out.push(path.iter().cloned().chain(segs).collect());
+                        }
+                    }
+                    j = close;
+                }
+                break;
+            }
+            path.push(seg.to_string());
+            j = seg_end;
+            if text[j..].starts_with("::") {
+                j += 2;
+            } else {
+                break;
+            }
+        }
+        if !text[j..].starts_with('!') {
+            out.push(path);
+        }
+        i = j.max(i + 1);
+    }
+    out
+}
+
+/// Every group of files that import each other (strongly connected components of more than one file).
+fn file_cycles(root: &Path) -> Vec<Vec<String>> {
     let mut files = Vec::new();
-    rust_files(&dir, &mut files);
-    let name = |p: &Path| p.file_stem().unwrap().to_string_lossy().to_string();
-    let names: BTreeSet<String> = files.iter().map(|p| name(p)).collect();
-    let mut graph: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
-    for f in &files {
-        let me = name(f);
-        let text = std::fs::read_to_string(f).unwrap();
-        let body = non_test(&text);
-        let deps = paths(body, "super::").into_iter().chain(paths(body, "crate::resolve::"));
-        let deps: BTreeSet<String> =
-            deps.filter(|d| names.contains(*d) && *d != me && *d != "mod").map(String::from).collect();
-        graph.insert(me, deps);
-    }
-    // Depth-first search for a back edge.
-    fn visit(
-        n: &str,
-        g: &BTreeMap<String, BTreeSet<String>>,
-        state: &mut BTreeMap<String, u8>,
-        path: &mut Vec<String>,
-    ) {
-        match state.get(n) {
-            Some(2) => return,
-            Some(1) => panic!("import cycle in src/resolve: {} -> {n}", path.join(" -> ")),
-            _ => {}
+    rust_files(root, &mut files);
+    files.retain(|f| f.file_name().is_some_and(|n| n != "main.rs"));
+    let by_module: BTreeMap<Vec<String>, usize> =
+        files.iter().enumerate().map(|(i, f)| (module_path(root, f), i)).collect();
+    let file_of = |path: &[String]| (0..=path.len()).rev().find_map(|k| by_module.get(&path[..k]).copied());
+    let mut graph: Vec<BTreeSet<usize>> = vec![BTreeSet::new(); files.len()];
+    for (i, f) in files.iter().enumerate() {
+        let me = module_path(root, f);
+        let is_parent = matches!(f.file_name().and_then(|n| n.to_str()), Some("mod.rs" | "lib.rs"))
+            || f.with_extension("").is_dir();
+        let text = without_comments(&non_test(&std::fs::read_to_string(f).unwrap()));
+        for p in named_paths(&text, &me) {
+            let Some(q) = file_of(&p) else { continue };
+            let target = module_path(root, &files[q]);
+            if q == i || (is_parent && target.starts_with(&me)) {
+                continue;
+            }
+            graph[i].insert(q);
         }
-        state.insert(n.to_string(), 1);
-        path.push(n.to_string());
-        for d in g.get(n).into_iter().flatten() {
-            visit(d, g, state, path);
+    }
+    // Tarjan's strongly connected components.
+    struct T<'a> {
+        g: &'a [BTreeSet<usize>],
+        index: Vec<Option<usize>>,
+        low: Vec<usize>,
+        on: Vec<bool>,
+        stack: Vec<usize>,
+        next: usize,
+        out: Vec<Vec<usize>>,
+    }
+    fn visit(t: &mut T<'_>, v: usize) {
+        t.index[v] = Some(t.next);
+        t.low[v] = t.next;
+        t.next += 1;
+        t.stack.push(v);
+        t.on[v] = true;
+        for &w in t.g[v].iter() {
+            match t.index[w] {
+                None => {
+                    visit(t, w);
+                    t.low[v] = t.low[v].min(t.low[w]);
+                }
+                Some(iw) if t.on[w] => t.low[v] = t.low[v].min(iw),
+                _ => {}
+            }
         }
-        path.pop();
-        state.insert(n.to_string(), 2);
+        if Some(t.low[v]) == t.index[v] {
+            let mut comp = Vec::new();
+            while let Some(w) = t.stack.pop() {
+                t.on[w] = false;
+                comp.push(w);
+                if w == v {
+                    break;
+                }
+            }
+            if comp.len() > 1 {
+                t.out.push(comp);
+            }
+        }
     }
-    let mut state = BTreeMap::new();
-    for n in graph.keys() {
-        visit(n, &graph, &mut state, &mut Vec::new());
+    let n = files.len();
+    let mut t =
+        T { g: &graph, index: vec![None; n], low: vec![0; n], on: vec![false; n], stack: vec![], next: 0, out: vec![] };
+    for v in 0..n {
+        if t.index[v].is_none() {
+            visit(&mut t, v);
+        }
     }
-    assert!(graph["kernel"].contains("worklist") && graph["surface"].contains("worklist"), "the graph was read");
+    let name = |i: usize| files[i].strip_prefix(root).unwrap().display().to_string();
+    let mut out: Vec<Vec<String>> = t
+        .out
+        .iter()
+        .map(|c| {
+            let mut c: Vec<String> = c.iter().map(|&i| name(i)).collect();
+            c.sort();
+            c
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+#[test]
+fn no_files_import_each_other_in_a_circle() {
+    let cycles = file_cycles(&src());
+    assert!(
+        cycles.is_empty(),
+        "files of src/ that import each other (move the shared data below the code that fills it):\n{}",
+        cycles.iter().map(|c| c.join(", ")).collect::<Vec<_>>().join("\n")
+    );
+}
+
+/// The cycle finder finds a cycle through `super::`, `self::` and grouped imports, ignores a parent naming its
+/// children, comments and test modules.
+#[test]
+fn the_cycle_finder_sees_every_kind_of_import() {
+    let dir = std::env::temp_dir().join(format!("gbuf-arch-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let put = |p: &str, t: &str| {
+        let f = dir.join(p);
+        std::fs::create_dir_all(f.parent().unwrap()).unwrap();
+        std::fs::write(f, t).unwrap();
+    };
+    put("lib.rs", "pub mod a;\npub mod b;\n");
+    put("a/mod.rs", "pub mod x;\npub mod y;\nuse self::x::X;\n");
+    put("a/x.rs", "use super::{y::Y, z};\n");
+    put("a/y.rs", "// crate::a::x::X is only named here\n#[cfg(test)]\nmod tests { use crate::a::x; }\n");
+    put("b.rs", "");
+    assert!(file_cycles(&dir).is_empty(), "{:?}", file_cycles(&dir));
+    put("a/y.rs", "pub fn f() { crate::a::x::g(); }\n");
+    assert_eq!(file_cycles(&dir), [vec!["a/x.rs".to_string(), "a/y.rs".to_string()]]);
+    put("a/y.rs", "");
+    put("b.rs", "use crate::a::{x::X as Z};\n");
+    put("a/x.rs", "fn f() { super::super::b::g() }\n");
+    assert_eq!(file_cycles(&dir), [vec!["a/x.rs".to_string(), "b.rs".to_string()]]);
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -146,5 +342,6 @@ fn the_reader_finds_paths_and_skips_macros() {
     let t = "use crate::gbuffer::GBuffer; crate::named!(X); [`crate::measure::edges`] super::kernel::shade";
     assert_eq!(paths(t, "crate::"), ["gbuffer", "measure"]);
     assert_eq!(paths(t, "super::"), ["kernel"]);
-    assert_eq!(non_test("a\n#[cfg(test)]\nuse crate::report;"), "a\n");
+    assert_eq!(non_test("a\n#[cfg(test)]\nmod tests { use crate::report; }\nb"), "a\n\nb");
+    assert_eq!(non_test("#[cfg(test)]\nfn f() { crate::report::x() }"), "#[cfg(test)]\nfn f() { crate::report::x() }");
 }

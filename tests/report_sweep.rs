@@ -199,7 +199,7 @@ fn pipelines_take_known_flips_for_equal_images_only() {
     use gbuf::analysis::pipelines::{pipelines, pipelines_with, KnownFlip};
     use gbuf::measure::image::error_set;
     let (gb, lights) = small_room();
-    let cfg = gbuf::report::pipelines_config(&one_run(
+    let cfg = gbuf::study::pipelines_config(&one_run(
         &["fat-20"],
         vec![Detector::Lauritzen, Detector::Normal],
         FlipRows::Decisive,
@@ -265,7 +265,7 @@ fn a_frame_times_its_steps_outside_the_sweep() {
         geometry: None,
     };
     let t = std::time::Instant::now();
-    let r = gbuf::report::run_frame(&input, &cfg, true, "", &mut |_, _, _| {}).unwrap();
+    let r = gbuf::study::run_frame(&input, &cfg, true, "", &mut |_, _, _| {}).unwrap();
     let wall = t.elapsed().as_secs_f64();
     let kinds: Vec<&str> = r.frame.other_seconds.iter().map(|(k, _)| k.as_str()).collect();
     assert_eq!(kinds, ["needs analysis", "figures", "pruned layout", "pipelines"]);

@@ -12,8 +12,10 @@ pub mod needs;
 pub mod pareto;
 pub mod pipelines;
 pub mod prune;
+pub mod record;
 pub mod row;
 pub mod sweep;
+pub mod traffic;
 
 use crate::analysis::needs::{Needs, PrunedLayout};
 use crate::analysis::sweep::{SweepConfig, SweepOutput};

@@ -4,7 +4,7 @@
 //!
 //! Input: a G-buffer, its lights, a [`PipelinesConfig`]. Output: [`Pipelines`]. The counts come from
 //! [`crate::analysis::forward`] (quads, fragment lists, utilisation) and from the resolve (light pairs, light
-//! lists); the traffic formulas are [`Pipeline::bandwidth_formula`] (also in docs/GUIDE.md).
+//! lists); the footprints and traffic come from one model, [`crate::analysis::traffic`] (also in docs/GUIDE.md).
 //!
 //! Which image each pipeline makes: forward without MSAA shades one sample per pixel (the `none` detector's image,
 //! the no-AA image); forward MSAA, forward+ and the visibility buffer shade once per (triangle, pixel) (the
@@ -12,7 +12,7 @@
 //! primitive IDs: without them they are listed with the reason and no numbers.
 
 use crate::analysis::forward::{self, ForwardSamples, FragmentLists, QuadShading, Utilisation};
-use crate::analysis::sweep::bandwidth;
+use crate::analysis::traffic::{bandwidth, Counts};
 use crate::base::mask::EdgeMask;
 use crate::detect::{self, Detector, DetectorConfig};
 use crate::error::{Error, Result};
@@ -28,47 +28,7 @@ use crate::scene::SceneName;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
-crate::named_enum! {
-    /// A rendering pipeline of the comparison.
-    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-    #[serde(rename_all = "kebab-case")]
-    pub enum Pipeline: "pipeline" {
-        /// Forward shading, no MSAA: one sample per pixel, every light per fragment.
-        Forward => "forward",
-        /// Forward shading with MSAA: one shade per (triangle, pixel), in quads; every light per fragment.
-        ForwardMsaa => "forward-msaa",
-        /// Forward+ (tiled forward): a depth pre-pass, per-tile light lists stored in memory, then forward MSAA
-        /// shading against the tile's list.
-        ForwardPlus => "forward-plus",
-        /// Deferred, each light a screen quad: the G-buffer read once per light-fragment pair.
-        DeferredQuad => "deferred-quad",
-        /// Tiled deferred (Andersson 2009, Lauritzen 2010): lights culled per tile in on-chip memory, the G-buffer
-        /// read once; what `gbuf resolve` runs.
-        TiledDeferred => "tiled-deferred",
-        /// Deferred lighting (light pre-pass): a thin G-buffer, a light buffer, a second geometry pass.
-        LightPrepass => "light-prepass",
-        /// Visibility buffer: triangle ID + depth per sample, per-tile lists of (triangle, quad) fragments,
-        /// attributes re-fetched from the meshes when shading.
-        VisibilityBuffer => "visibility-buffer",
-    }
-}
-
-impl Pipeline {
-    /// The traffic model of this pipeline, per frame (C covered samples, P pixels, B G-buffer bytes per sample,
-    /// L light-fragment pairs, T light-list bytes, F fragment-list entries).
-    #[must_use]
-    pub fn bandwidth_formula(self) -> &'static str {
-        match self {
-            Pipeline::Forward => "4·C₁ depth + 8·P colour (C₁ covered pixels)",
-            Pipeline::ForwardMsaa => "4·C depth + 8·C colour + 8·C resolve read + 8·P resolve write",
-            Pipeline::ForwardPlus => "forward-msaa + 4·C depth read by the culling + 2·T light lists",
-            Pipeline::DeferredQuad => "B·C write + L·(B + 16) reads and RGBA16F read-modify-writes",
-            Pipeline::TiledDeferred => "B·C write + B·C read + 8·P output",
-            Pipeline::LightPrepass => "8·C thin G-buffer write + 8·C read + 8·C light buffer write + 8·C read + 8·P",
-            Pipeline::VisibilityBuffer => "V·C write + V·C read + 2·8·F lists + 96·F vertex fetch + 8·P output",
-        }
-    }
-}
+pub use crate::analysis::traffic::Pipeline;
 
 /// What [`pipelines`] measures with.
 #[derive(Clone, Debug)]
@@ -165,7 +125,7 @@ pub struct PipelineRow {
     /// Render-target memory in MB (G-buffer or MSAA colour + depth, light or fragment lists, output).
     #[serde(deserialize_with = "crate::util::f64_or_nan")]
     pub footprint_mb: f64,
-    /// Modelled traffic in MB per frame ([`Pipeline::bandwidth_formula`]).
+    /// Modelled traffic in MB per frame ([`Pipeline::traffic_model`]).
     #[serde(deserialize_with = "crate::util::f64_or_nan")]
     pub bandwidth_mb: f64,
     /// Shading work: fragment-shader lanes (forward, visibility buffer: helpers included) or shading evaluations
@@ -495,7 +455,22 @@ pub fn pipelines_with(
             let no_aa_key = flips.image(&no_aa.image, cfg.viewing.is_some());
             flips.wants(FlipSlot::Row(Pipeline::Forward), no_aa_key);
             let util = |q: &QuadShading| if q.lanes > 0 { q.covered_lanes as f64 / q.lanes as f64 } else { 1.0 };
-            let msaa_colour = 4.0 * covered + 8.0 * covered + 8.0 * covered + 8.0 * pixels;
+            let vb = cfg.visibility_layout.bytes_per_sample() as f64;
+            let n = Counts {
+                pixels,
+                samples: f64::from(s),
+                covered,
+                covered_pixels: covered_px,
+                bytes: f64::from(cfg.gbuffer_bytes),
+                light_pairs: None,
+                light_list_bytes: light_list_bytes as f64,
+                fragments: fl.entries as f64,
+                visibility_bytes: vb,
+            };
+            debug_assert_eq!(fl.bytes, 8 * fl.entries, "the footprint model's 8·F");
+            let model = |p: Pipeline| {
+                (p.footprint(&n).expect("every count is known"), p.traffic(&n).expect("every count is known"))
+            };
             let row =
                 |pipeline, footprint: f64, traffic: f64, q: &QuadShading, pairs, error, note: String| PipelineRow {
                     pipeline,
@@ -510,10 +485,11 @@ pub fn pipelines_with(
                     estimated: q.estimated,
                     note,
                 };
+            let (fp, tr) = model(Pipeline::Forward);
             rows.push(row(
                 Pipeline::Forward,
-                12.0 * pixels,
-                4.0 * covered_px + 8.0 * pixels,
+                fp,
+                tr,
                 f1,
                 f1.lanes * n_lights,
                 err(&no_aa.image),
@@ -525,11 +501,11 @@ pub fn pipelines_with(
                     "quads of the single-sample dump".into()
                 },
             ));
-            let msaa_fp = 12.0 * f64::from(s) * pixels + 8.0 * pixels;
+            let (fp, tr) = model(Pipeline::ForwardMsaa);
             rows.push(row(
                 Pipeline::ForwardMsaa,
-                msaa_fp,
-                msaa_colour,
+                fp,
+                tr,
                 fm,
                 fm.lanes * n_lights,
                 msaa_err,
@@ -540,10 +516,11 @@ pub fn pipelines_with(
                     100.0 * fm.helper_fraction
                 ),
             ));
+            let (fp, tr) = model(Pipeline::ForwardPlus);
             rows.push(row(
                 Pipeline::ForwardPlus,
-                msaa_fp + light_list_bytes as f64,
-                msaa_colour + 4.0 * covered + 2.0 * light_list_bytes as f64,
+                fp,
+                tr,
                 fm,
                 tiled_pairs(fm),
                 msaa_err,
@@ -553,13 +530,11 @@ pub fn pipelines_with(
                     tile_lights.len()
                 ),
             ));
-            let vb = cfg.visibility_layout.bytes_per_sample() as f64;
-            let vis_fp = vb * f64::from(s) * pixels + fl.bytes as f64 + 8.0 * pixels;
-            let vis_traffic = 2.0 * vb * covered + 16.0 * fl.entries as f64 + 96.0 * fl.entries as f64 + 8.0 * pixels;
+            let (fp, tr) = model(Pipeline::VisibilityBuffer);
             let mut vis = row(
                 Pipeline::VisibilityBuffer,
-                vis_fp,
-                vis_traffic,
+                fp,
+                tr,
                 fm,
                 tiled_pairs(fm),
                 msaa_err,
@@ -587,7 +562,15 @@ pub fn pipelines_with(
     let mask = detect::detect(gb, cfg.detector, &cfg.detector_config)?;
     let b = cfg.gbuffer_bytes;
     let packed = forward::utilisation(&mask, MsaaSchedule::Packed, cfg.warps.first().copied().unwrap_or(16), ts);
-    let deferred_fp = f64::from(b) * f64::from(s) * pixels + 8.0 * pixels;
+    let n = Counts {
+        pixels,
+        samples: f64::from(s),
+        covered,
+        covered_pixels: covered_px,
+        bytes: f64::from(b),
+        ..Counts::default()
+    };
+    let footprint = |p: Pipeline| p.footprint(&n).expect("every count is known");
     let mut tiled: Option<(resolve::Resolved, f64)> = None;
     for (pipeline, culling, schedule) in [
         (Pipeline::DeferredQuad, Culling::Quad, Schedule::Deferred),
@@ -602,18 +585,18 @@ pub fn pipelines_with(
         let st = &r.stats;
         let (footprint, traffic, note) = match pipeline {
             Pipeline::DeferredQuad => (
-                deferred_fp,
+                footprint(pipeline),
                 bandwidth(gb, b, Some(st.light_pairs_tested)).quad.unwrap_or(f64::NAN) * 1e6,
                 format!("{} G-buffer, {} B/sample; lights as screen quads", cfg.layout, b),
             ),
             Pipeline::TiledDeferred => (
-                deferred_fp,
+                footprint(pipeline),
                 bandwidth(gb, b, None).tiled * 1e6,
                 format!("{} G-buffer, {} B/sample; light lists stay on chip", cfg.layout, b),
             ),
             _ => (
-                16.0 * f64::from(s) * pixels + 8.0 * pixels,
-                32.0 * covered + 8.0 * pixels,
+                footprint(pipeline),
+                pipeline.traffic(&n).expect("every count is known"),
                 "depth + normal/power 8 B and light buffer RGBA16F 8 B per sample".into(),
             ),
         };

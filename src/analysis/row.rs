@@ -1,11 +1,8 @@
-//! What a report holds: one [`Row`] per layout × detector (× culling) run, measured [`Timing`]s, and the
-//! [`Report`] that the writers turn into `report.md`, `report.csv` and `report.json`.
+//! One [`Row`] per layout × detector (× culling) run of a sweep, with its measured [`Timing`]s and modelled
+//! [`Bandwidth`]; the frames and the whole report that hold the rows are in [`crate::analysis::record`].
 
-use crate::analysis::aggregate::{AggregateRow, BudgetChoice, DetectorAggregate, Over};
-use crate::analysis::needs::Needs;
 use crate::analysis::pareto;
-use crate::analysis::sweep::{DetectorResult, FlipRows};
-use crate::measure::image::{ErrorSet, Viewing};
+use crate::measure::image::ErrorSet;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -206,118 +203,6 @@ pub fn mark_pareto(rows: &mut [Row]) {
     let (fb, ft) = (pareto::front(&by_bytes), pareto::front(&by_time));
     for (i, r) in rows.iter_mut().enumerate() {
         r.pareto = ParetoFlags { bytes: fb[i], time: ft[i] };
-    }
-}
-
-/// A figure written next to the report.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Figure {
-    /// File name inside the report folder.
-    pub file: String,
-    /// One-line caption.
-    pub caption: String,
-}
-
-/// One analysed frame (dump) of a report: what it is and what was measured on it apart from the rows.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Frame {
-    /// What was analysed (file path or scene name).
-    pub input: String,
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// Samples per pixel.
-    pub samples: u32,
-    /// Fraction of samples covered by a surface.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
-    pub coverage: f64,
-    /// Number of lights.
-    pub lights: usize,
-    /// Where the lights came from.
-    pub lights_source: String,
-    /// Time of the reference resolve (every sample shaded, f64 accumulation).
-    pub reference: Option<Timing>,
-    /// Wall time of this frame's sweep in seconds.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
-    pub sweep_seconds: f64,
-    /// Where the sweep's wall time went, by kind of stage (seconds, in the order first met).
-    #[serde(default)]
-    pub stage_seconds: Vec<(String, f64)>,
-    /// Where the frame's wall time outside the sweep went (seconds, in the order met): reading the dump, the needs
-    /// analysis, the figures, the pruned layout's check, the pipelines comparison.
-    #[serde(default)]
-    pub other_seconds: Vec<(String, f64)>,
-    /// The scene-needs analysis.
-    pub needs: Needs,
-    /// Each detector on the exact G-buffer: its anti-aliasing error and the shading it costs.
-    pub detectors: Vec<DetectorResult>,
-    /// Forward, deferred and visibility-buffer pipelines measured on this frame.
-    #[serde(default)]
-    pub pipelines: Option<crate::analysis::pipelines::Pipelines>,
-    /// Why the pipelines could not be measured on this frame.
-    #[serde(default)]
-    pub pipelines_error: Option<String>,
-}
-
-/// Everything a report folder holds: the frames, one row per frame × layout × detector (× culling), and the rows
-/// aggregated over the frames.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Report {
-    /// The frames, in the order given.
-    pub frames: Vec<Frame>,
-    /// Timing runs per stage.
-    pub runs: usize,
-    /// How the images were shown for FLIP.
-    pub viewing: Viewing,
-    /// Which rows got FLIP.
-    pub flip: FlipRows,
-    /// What the aggregate fronts rank by: each layout's mean or worst frame.
-    pub over: Over,
-    /// One row per frame × combination; the fronts are marked within each frame.
-    pub rows: Vec<Row>,
-    /// One row per combination over every frame (mean and worst frame); the fronts rank by [`Report::over`].
-    pub aggregate: Vec<AggregateRow>,
-    /// Each detector over every frame.
-    pub detectors: Vec<DetectorAggregate>,
-    /// With a byte budget (`--max-bytes`): the layout of the report that wins over every frame.
-    #[serde(default)]
-    pub budget: Option<BudgetChoice>,
-    /// Plots and pictures.
-    pub figures: Vec<Figure>,
-}
-
-/// A one-frame report of `rows` on an empty `width` × `height` G-buffer, for the writers' tests.
-#[cfg(test)]
-pub(crate) fn test_report(input: &str, width: u32, height: u32, rows: Vec<Row>, figures: Vec<Figure>) -> Report {
-    let gb = crate::GBuffer::new(width, height, 1).expect("a small G-buffer");
-    Report {
-        frames: vec![Frame {
-            input: input.into(),
-            width,
-            height,
-            samples: 1,
-            coverage: 0.0,
-            lights: 0,
-            lights_source: "none".into(),
-            reference: None,
-            sweep_seconds: 0.5,
-            stage_seconds: vec![],
-            other_seconds: vec![],
-            needs: crate::analysis::needs::analyze(&gb),
-            detectors: vec![],
-            pipelines: None,
-            pipelines_error: None,
-        }],
-        runs: 3,
-        viewing: Viewing::default(),
-        flip: FlipRows::default(),
-        over: Over::default(),
-        aggregate: crate::analysis::aggregate::aggregate(&rows, Over::default()),
-        detectors: vec![],
-        budget: None,
-        rows,
-        figures,
     }
 }
 

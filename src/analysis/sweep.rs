@@ -9,7 +9,8 @@
 //! Besides the rows it keeps what the figures need: per-pixel error maps of every layout, the edge masks of the
 //! first layout, and a light-count map.
 
-use crate::analysis::row::{mark_pareto, time_runs, Bandwidth, Row, Timing};
+use crate::analysis::row::{mark_pareto, time_runs, Row, Timing};
+use crate::analysis::traffic::bandwidth;
 use crate::detect::{self, Detector, DetectorConfig, EdgeMask};
 use crate::error::Result;
 use crate::gbuffer::{Attribute, GBuffer};
@@ -128,18 +129,6 @@ pub struct DetectorResult {
     pub on_front: bool,
     /// Why a number is missing.
     pub error: Option<String>,
-}
-
-/// Modelled traffic of a layout of `bytes` per sample on `gb` (see [`Bandwidth`]).
-#[must_use]
-pub fn bandwidth(gb: &GBuffer, bytes: u32, quad_light_fragments: Option<u64>) -> Bandwidth {
-    const OUTPUT_BYTES: f64 = 8.0; // RGBA16F
-    let covered = (gb.len() - gb.background_samples()) as f64;
-    let b = f64::from(bytes);
-    let write = b * covered;
-    let tiled = write + b * covered + OUTPUT_BYTES * gb.pixel_count() as f64;
-    let quad = quad_light_fragments.map(|n| (write + n as f64 * (b + 2.0 * OUTPUT_BYTES)) / 1e6);
-    Bandwidth { tiled: tiled / 1e6, quad, quad_light_fragments }
 }
 
 /// Progress callback: (done, total, what is running).

@@ -10,7 +10,7 @@ use gbuf::analysis::aggregate::Over;
 use gbuf::analysis::budget::{decide, measure_frame, merge_candidates, propose, BudgetConfig, BudgetResult};
 use gbuf::detect::{Detector, DetectorConfig};
 use gbuf::layout::Layout;
-use gbuf::report::markdown::fmt_opt;
+use gbuf::report::format::fmt_opt;
 use gbuf::resolve::ResolveConfig;
 use serde::Serialize;
 use std::path::PathBuf;

@@ -6,8 +6,8 @@
 use crate::cli::report::write_and_print;
 use anyhow::Context;
 use gbuf::analysis::aggregate::Over;
-use gbuf::analysis::row::Report;
-use gbuf::report::Assembly;
+use gbuf::analysis::record::Report;
+use gbuf::study::Assembly;
 use std::path::PathBuf;
 
 /// Flags of `gbuf merge`.
@@ -63,7 +63,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         for f in &rep.frames {
             anyhow::ensure!(
-                !frames.iter().any(|g: &gbuf::analysis::row::Frame| g.input == f.input),
+                !frames.iter().any(|g: &gbuf::analysis::record::Frame| g.input == f.input),
                 "{}: frame {} is already in an earlier report; each frame once",
                 p.display(),
                 f.input
@@ -77,6 +77,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let (_, f) = first.context("no report given")?;
     let how = Assembly { runs: f.runs, viewing: f.viewing, flip: f.flip, over: args.over, max_bytes: args.max_bytes };
-    let (rep, files) = gbuf::report::assemble(frames, rows, vec![], &how)?;
+    let (rep, files) = gbuf::study::assemble(frames, rows, vec![], &how)?;
     write_and_print(&rep, &files, &args.out, args.json)
 }

@@ -6,15 +6,15 @@
 use crate::cli::common::{print_json, FramesArgs};
 use anyhow::Context;
 use gbuf::analysis::aggregate::Over;
-use gbuf::analysis::row::Report;
+use gbuf::analysis::record::Report;
 use gbuf::analysis::sweep::{FlipRows, SweepConfig};
 use gbuf::detect::{Detector, DetectorConfig};
 use gbuf::image::ToneCurve;
 use gbuf::layout::Layout;
 use gbuf::measure::image::Viewing;
-use gbuf::report::markdown::fmt_opt;
-use gbuf::report::Assembly;
+use gbuf::report::format::fmt_opt;
 use gbuf::resolve::{Culling, ResolveConfig};
+use gbuf::study::Assembly;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -231,11 +231,11 @@ pub fn print_summary(rep: &Report, dir: &Path) {
         secs,
         dir.join("report.md").display()
     );
-    let stages = gbuf::report::stage_summary(rep.frames.iter().flat_map(|f| &f.stage_seconds));
+    let stages = gbuf::report::format::stage_summary(rep.frames.iter().flat_map(|f| &f.stage_seconds));
     if !stages.is_empty() {
         println!("sweep time by stage: {stages}");
     }
-    let other = gbuf::report::stage_summary(rep.frames.iter().flat_map(|f| &f.other_seconds));
+    let other = gbuf::report::format::stage_summary(rep.frames.iter().flat_map(|f| &f.other_seconds));
     if !other.is_empty() {
         println!("time outside the sweep: {other}");
     }
@@ -295,7 +295,7 @@ pub fn run_frames(
         };
         let prefix =
             if count > 1 { format!("frame{:0w$}_", i + 1, w = count.to_string().len()) } else { String::new() };
-        let r = gbuf::report::run_frame(&input, cfg, count == 1, &prefix, &mut progress)
+        let r = gbuf::study::run_frame(&input, cfg, count == 1, &prefix, &mut progress)
             .with_context(|| format!("{}: report", f.name))?;
         let mut frame = r.frame;
         frame.other_seconds.insert(0, ("reading the input".to_string(), load_seconds));
@@ -305,7 +305,7 @@ pub fn run_frames(
         figures.extend(r.figures);
     }
     pb.finish_and_clear();
-    let (rep, plots) = gbuf::report::assemble(frames, rows, figures, how)?;
+    let (rep, plots) = gbuf::study::assemble(frames, rows, figures, how)?;
     files.extend(plots);
     write_and_print(&rep, &files, out, json)?;
     Ok(rep)
@@ -314,7 +314,7 @@ pub fn run_frames(
 /// Writes the report folder and prints the summary (or the JSON report).
 pub fn write_and_print(
     rep: &Report,
-    files: &[gbuf::report::write::Attachment],
+    files: &[gbuf::report::format::Attachment],
     out: &Path,
     json: bool,
 ) -> anyhow::Result<()> {

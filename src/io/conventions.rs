@@ -362,7 +362,7 @@ impl Conventions {
                 }
             }
         }
-        crate::io::mapped::zero_background(gb);
+        gb.zero_background();
         Ok(notes)
     }
 }

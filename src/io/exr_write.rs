@@ -15,8 +15,8 @@
 //! and deflates the result in a zlib stream; a block that would not shrink is stored as it was (readers tell it by
 //! its size).
 
-use super::exr::{RawData, RawImage};
 use crate::error::{Error, Result};
+use crate::io::raw::{RawData, RawImage};
 use rayon::prelude::*;
 use std::io::{Seek, SeekFrom, Write};
 use std::path::Path;

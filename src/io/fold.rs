@@ -6,7 +6,7 @@
 //! unchanged: the field of view and the aspect ratio are the same at either resolution.
 
 use crate::error::{Error, Result};
-use crate::gbuffer::{ordered_grid_positions, GBuffer, MAX_SAMPLES};
+use crate::gbuffer::{ordered_grid_positions, Attribute, GBuffer, PlaneMapper, MAX_SAMPLES};
 
 /// Folds every k×k block of a one-sample G-buffer into k² samples of one pixel.
 ///
@@ -32,28 +32,9 @@ pub fn fold(gb: &GBuffer, k: u32) -> Result<GBuffer> {
     }
     gb.validate()?;
     let (w, h) = (gb.width / k, gb.height / k);
-    let map = FoldMap { src_width: gb.width as usize, w: w as usize, h: h as usize, k: k as usize };
-    Ok(GBuffer {
-        width: w,
-        height: h,
-        samples: k * k,
-        sample_positions: ordered_grid_positions(k),
-        camera: gb.camera,
-        coverage: map.gather(&gb.coverage),
-        depth: gb.depth.as_deref().map(|p| map.gather(p)),
-        position: gb.position.as_deref().map(|p| map.gather(p)),
-        normal: gb.normal.as_deref().map(|p| map.gather(p)),
-        albedo: gb.albedo.as_deref().map(|p| map.gather(p)),
-        specular: gb.specular.as_deref().map(|p| map.gather(p)),
-        specular_power: gb.specular_power.as_deref().map(|p| map.gather(p)),
-        roughness: gb.roughness.as_deref().map(|p| map.gather(p)),
-        metallic: gb.metallic.as_deref().map(|p| map.gather(p)),
-        material_id: gb.material_id.as_deref().map(|p| map.gather(p)),
-        object_id: gb.object_id.as_deref().map(|p| map.gather(p)),
-        primitive_id: gb.primitive_id.as_deref().map(|p| map.gather(p)),
-        motion: gb.motion.as_deref().map(|p| map.gather(p)),
-        materials: gb.materials.clone(),
-    })
+    let mut map = FoldMap { src_width: gb.width as usize, w: w as usize, h: h as usize, k: k as usize };
+    let coverage = map.gather(&gb.coverage);
+    Ok(gb.map_planes((w, h, k * k), ordered_grid_positions(k), coverage, &mut map))
 }
 
 /// Index mapping from the folded (pixel-major) order back to the source image.
@@ -77,6 +58,13 @@ impl FoldMap {
             }
         }
         out
+    }
+}
+
+/// Every plane folded the way the coverage is.
+impl PlaneMapper for FoldMap {
+    fn map<T: Copy + Default + Send + Sync>(&mut self, _: Attribute, plane: &[T]) -> Option<Vec<T>> {
+        Some(self.gather(plane))
     }
 }
 

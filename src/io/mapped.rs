@@ -129,29 +129,6 @@ pub fn set_plane(gb: &mut GBuffer, attr: Attribute, chans: &[&RawChannel]) {
     }
 }
 
-/// Writes 0 into every plane at background samples (the G-buffer convention).
-pub fn zero_background(gb: &mut GBuffer) {
-    let cov = std::mem::take(&mut gb.coverage);
-    fn zero<T: Copy + Default>(plane: &mut Option<Vec<T>>, cov: &[bool]) {
-        if let Some(p) = plane {
-            p.iter_mut().zip(cov).filter(|(_, c)| !**c).for_each(|(v, _)| *v = T::default());
-        }
-    }
-    zero(&mut gb.depth, &cov);
-    zero(&mut gb.position, &cov);
-    zero(&mut gb.normal, &cov);
-    zero(&mut gb.albedo, &cov);
-    zero(&mut gb.specular, &cov);
-    zero(&mut gb.specular_power, &cov);
-    zero(&mut gb.roughness, &cov);
-    zero(&mut gb.metallic, &cov);
-    zero(&mut gb.material_id, &cov);
-    zero(&mut gb.object_id, &cov);
-    zero(&mut gb.primitive_id, &cov);
-    zero(&mut gb.motion, &cov);
-    gb.coverage = cov;
-}
-
 /// Replaces scalar and ID attributes of a one-sample G-buffer read by a format-specific reader with the channels
 /// `opts.map` names for them (vectors need the reader's space conversion and are left to it). Returns the
 /// attributes replaced.
@@ -189,7 +166,7 @@ pub fn override_scalars(
         done.push(*attr);
     }
     if !done.is_empty() {
-        zero_background(&mut loaded.gbuffer);
+        loaded.gbuffer.zero_background();
     }
     Ok(done)
 }

@@ -13,6 +13,7 @@ pub mod ispc;
 pub mod mapped;
 pub mod mitsuba;
 pub mod plausible;
+pub mod raw;
 pub mod sanitize;
 pub mod sidecar;
 pub mod stats;

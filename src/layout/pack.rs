@@ -93,20 +93,6 @@ struct Band<'a> {
     present: &'a [Attribute],
 }
 
-/// An unpacked G-buffer before any plane is decoded: `like`'s geometry, camera, coverage and materials.
-fn shell(like: &GBuffer) -> GBuffer {
-    GBuffer {
-        width: like.width,
-        height: like.height,
-        samples: like.samples,
-        sample_positions: like.sample_positions.clone(),
-        camera: like.camera,
-        coverage: like.coverage.clone(),
-        materials: like.materials.clone(),
-        ..GBuffer::default()
-    }
-}
-
 /// A borrowed source plane for one field.
 enum Src<'a> {
     F32(&'a [f32]),
@@ -419,7 +405,7 @@ impl Layout {
     pub fn unpack(&self, packed: &Packed, like: &GBuffer) -> Result<GBuffer> {
         self.check(packed, like)?;
         let coders = self.coders(packed.depth_range)?;
-        let mut out = shell(like);
+        let mut out = like.shell();
         let mut index = Vec::new();
         let band = Band { targets: &packed.targets, table: packed.material_table.as_ref(), present: &packed.present };
         self.unpack_samples(&band, &coders, like, 0..like.len(), &mut out, &mut index)?;
@@ -582,7 +568,7 @@ impl Layout {
         let row = (gb.width as usize * gb.samples as usize).max(1);
         let band_len = row * (BAND_SAMPLES / row).max(1);
         let mut targets = self.empty_targets();
-        let mut out = shell(gb);
+        let mut out = gb.shell();
         let mut index = Vec::new();
         let (mut encode_ms, mut decode_ms) = (Vec::new(), Vec::new());
         let t = Instant::now();

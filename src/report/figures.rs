@@ -3,13 +3,14 @@
 
 use crate::analysis::aggregate::{AggregateRow, Over};
 use crate::analysis::pareto;
-use crate::analysis::row::{Figure, Row};
+use crate::analysis::record::Figure;
+use crate::analysis::row::Row;
 use crate::analysis::sweep::SweepOutput;
 use crate::base::mask::EdgeMask;
 use crate::error::Result;
 use crate::gbuffer::GBuffer;
+use crate::report::format::Attachment;
 use crate::report::plot::{self, PlotPoint, ScatterPlot};
-use crate::report::write::Attachment;
 use image::{Rgb, RgbImage};
 
 /// Size of the scatter plots in pixels.

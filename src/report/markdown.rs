@@ -2,22 +2,11 @@
 
 use crate::analysis::aggregate::{AggregateRow, DetectorAggregate, Stat};
 use crate::analysis::needs::Needs;
-use crate::analysis::row::{Frame, ParetoFlags, Report, Row};
+use crate::analysis::record::{Frame, Report};
+use crate::analysis::row::{ParetoFlags, Row};
 use crate::measure::image::ErrorSet;
+use crate::report::format::fmt_opt;
 use std::fmt::Write as _;
-
-/// Formats an optional number with `prec` decimals; `—` when missing, `∞` when infinite.
-#[must_use]
-pub fn fmt_opt(v: Option<f64>, prec: usize) -> String {
-    match v {
-        None => "—".into(),
-        Some(x) if x.is_nan() => "—".into(),
-        Some(x) if x == f64::INFINITY => "∞".into(),
-        Some(x) if x == f64::NEG_INFINITY => "−∞".into(),
-        Some(x) if x != 0.0 && x.abs() < 10f64.powi(-(prec as i32)) => format!("{x:.1e}"),
-        Some(x) => format!("{x:.prec$}"),
-    }
-}
 
 fn timing_cell(r: &Row, stage: &str) -> String {
     match r.timings.get(stage) {
@@ -287,10 +276,11 @@ fn frame_header(s: &mut String, f: &Frame, rows: usize, runs: usize) {
         );
     }
     if !f.stage_seconds.is_empty() {
-        let _ = writeln!(s, "Where the sweep's time went: {}.\n", crate::report::stage_summary(&f.stage_seconds));
+        let _ =
+            writeln!(s, "Where the sweep's time went: {}.\n", crate::report::format::stage_summary(&f.stage_seconds));
     }
     if !f.other_seconds.is_empty() {
-        let _ = writeln!(s, "Outside the sweep: {}.\n", crate::report::stage_summary(&f.other_seconds));
+        let _ = writeln!(s, "Outside the sweep: {}.\n", crate::report::format::stage_summary(&f.other_seconds));
     }
 }
 
@@ -428,8 +418,8 @@ mod tests {
                 ..Default::default()
             },
         ];
-        let figures = vec![crate::analysis::row::Figure { file: "a.png".into(), caption: "A plot".into() }];
-        let rep = crate::analysis::row::test_report("room", 4, 2, rows, figures);
+        let figures = vec![crate::analysis::record::Figure { file: "a.png".into(), caption: "A plot".into() }];
+        let rep = crate::analysis::record::test_report("room", 4, 2, rows, figures);
         let md = to_markdown(&rep);
         assert!(md.contains("| fat-20 | 20 |"));
         assert!(md.contains("error: no / way"), "pipes in errors are escaped");

@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::image::mlaa::display_luma;
 use crate::image::HdrImage;
 use crate::report::figures::image_picture;
-use crate::report::markdown::fmt_opt;
+use crate::report::format::fmt_opt;
 use crate::report::plot::Panels;
 use image::RgbImage;
 use std::fmt::Write as _;
@@ -207,10 +207,7 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
             );
         }
     }
-    let _ = writeln!(
-        s,
-        "\n{h} Traffic model (C covered samples, P pixels, B bytes per sample, V the visibility layout's)\n"
-    );
+    let _ = writeln!(s, "\n{h} Traffic model ({})\n", crate::analysis::traffic::legend());
     for r in &p.rows {
         let _ = writeln!(s, "- {}: {}", r.pipeline, r.pipeline.bandwidth_formula());
     }

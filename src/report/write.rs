@@ -1,20 +1,12 @@
 //! Writes a report folder: `report.md`, `report.csv`, `report.json` and the figures. Every file is written
 //! atomically; the folder is created if missing; files that are not ours are left untouched.
 
-use crate::analysis::row::Report;
+use crate::analysis::record::Report;
 use crate::error::{Error, Result};
+use crate::report::format::Attachment;
 use crate::report::{csv, markdown};
 use crate::util::write_bytes_atomic;
 use std::path::{Path, PathBuf};
-
-/// A file to put in the report folder besides the three reports (a figure, a layout file).
-#[derive(Clone, Debug)]
-pub struct Attachment {
-    /// File name inside the folder (no directories).
-    pub name: String,
-    /// Contents.
-    pub bytes: Vec<u8>,
-}
 
 /// The JSON text of a report. Non-finite numbers become `null` (an infinite PSNR, i.e. an image identical to the
 /// reference, shows as `null` with `rmse` 0).
@@ -72,7 +64,7 @@ mod tests {
             }),
             ..Default::default()
         }];
-        crate::analysis::row::test_report("t", 2, 2, rows, vec![])
+        crate::analysis::record::test_report("t", 2, 2, rows, vec![])
     }
 
     #[test]

@@ -1,0 +1,225 @@
+//! A study: the report job over one or many frames. Per frame the scene-needs analysis, the sweep of every layout ×
+//! detector, the pruned layout's check, the pipelines comparison and the frame's figures; then the rows aggregated
+//! over the frames into one [`Report`]. `gbuf report`, `gbuf demo` and `gbuf merge` run it; [`crate::report`] writes
+//! what it returns.
+
+use crate::analysis::aggregate::{aggregate, aggregate_detectors, BudgetChoice, Over};
+use crate::analysis::needs;
+use crate::analysis::pipelines::KnownFlip;
+use crate::analysis::record::{Figure, Frame, Report};
+use crate::analysis::row::Row;
+use crate::analysis::sweep::{self, FlipRows, SweepConfig};
+use crate::analysis::{pruned_layout, ReportInput};
+use crate::error::Result;
+use crate::measure::image::Viewing;
+use crate::report::figures;
+use crate::report::format::Attachment;
+
+/// One frame's part of a report: its description, its rows, and its figures (file names prefixed as asked).
+#[derive(Clone, Debug)]
+pub struct FrameResult {
+    /// The frame.
+    pub frame: Frame,
+    /// Its rows (`frame` set to the frame's input name; fronts marked within the frame).
+    pub rows: Vec<Row>,
+    /// Figure files.
+    pub files: Vec<Attachment>,
+    /// Their captions.
+    pub figures: Vec<Figure>,
+}
+
+/// Runs the needs analysis and the sweep on one frame, prunes, and builds the frame's figures. With
+/// `with_plots` the scatter plots of this frame are drawn (a single-frame report); `prefix` starts the figures'
+/// file names.
+pub fn run_frame(
+    input: &ReportInput<'_>,
+    cfg: &SweepConfig,
+    with_plots: bool,
+    prefix: &str,
+    progress: sweep::Progress<'_>,
+) -> Result<FrameResult> {
+    let gb = input.gbuffer;
+    // Wall time outside the sweep, by step (the sweep keeps its own by stage).
+    let mut other = Vec::new();
+    let mut clock = std::time::Instant::now();
+    let mut lap = |kind: &str| {
+        sweep::add_stage_time(&mut other, kind, clock.elapsed().as_secs_f64());
+        clock = std::time::Instant::now();
+    };
+    let mut needs = needs::analyze(gb);
+    lap("needs analysis");
+    let mut out = sweep::sweep(gb, input.lights, cfg, progress)?;
+    lap("sweep");
+    for r in &mut out.rows {
+        r.frame.clone_from(&input.name);
+    }
+    for d in &mut out.detectors {
+        d.frame.clone_from(&input.name);
+    }
+    let (mut files, mut figures) = figures::figures(gb, &out, with_plots, prefix)?;
+    lap("figures");
+    let pruned = pruned_layout(input, &needs, cfg, &out);
+    lap("pruned layout");
+    if let Some((p, layout)) = pruned {
+        if !p.changes.is_empty() {
+            if let Ok(text) = layout.spec().to_text(crate::layout::SpecSyntax::Toml) {
+                files.push(Attachment { name: format!("{prefix}pruned_layout.toml"), bytes: text.into_bytes() });
+            }
+        }
+        needs.pruned_layout = Some(p);
+    }
+    // The sweep's exact image per detector has its FLIP against the same reference already: the pipelines' adaptive
+    // MSAA rows are those images, and take the numbers instead of a FLIP of their own.
+    let known: Vec<KnownFlip<'_>> = out
+        .exact
+        .iter()
+        .zip(&out.detectors)
+        .filter_map(|(image, d)| {
+            let e = d.aa_error.as_ref()?;
+            Some(KnownFlip { image: image.as_ref()?, ldr: e.flip_ldr?, hdr: e.flip_hdr? })
+        })
+        .collect();
+    let (pipelines, pipelines_error) = match crate::analysis::pipelines::pipelines_with(
+        gb,
+        input.lights,
+        &crate::analysis::pipelines::PipelinesConfig { geometry: input.geometry, ..pipelines_config(cfg) },
+        Some(&out.reference),
+        input.single,
+        &known,
+    ) {
+        Ok(p) => (Some(p), None),
+        Err(e) => (None, Some(e.to_string())),
+    };
+    lap("pipelines");
+    if let Some(p) = &pipelines {
+        // One crop under every anti-aliasing method (a failure to draw it loses the picture, not the report).
+        if let Ok((pic, (x, y, w, h))) = crate::report::pipelines::aa_crop_picture(p, &out.reference) {
+            let name = format!("{prefix}aa_crops.png");
+            files.push(Attachment { name: name.clone(), bytes: crate::base::picture::png_bytes(&pic)? });
+            figures.push(Figure {
+                file: name,
+                caption: format!(
+                    "Anti-aliasing: the {w}×{h} crop at ({x}, {y}) where no AA errs most, under the reference, no AA, \
+                     MLAA, adaptive MSAA per detector and SSAA"
+                ),
+            });
+        }
+    }
+    if let (Some(p), Some((det, mask))) = (&pipelines, out.masks.first()) {
+        if let Some(fwd) = &p.forward_msaa {
+            let (f, g) = figures::shading_figures(gb, fwd, (det, mask), prefix)?;
+            files.extend(f);
+            figures.extend(g);
+        }
+    }
+    lap("figures");
+    let covered = gb.len() - gb.background_samples();
+    let frame = Frame {
+        input: input.name.clone(),
+        width: gb.width,
+        height: gb.height,
+        samples: gb.samples,
+        coverage: if gb.is_empty() { 0.0 } else { covered as f64 / gb.len() as f64 },
+        lights: input.lights.len(),
+        lights_source: input.lights_source.clone(),
+        reference: Some(out.reference_timing),
+        sweep_seconds: out.seconds,
+        stage_seconds: out.stage_seconds,
+        other_seconds: other.into_iter().filter(|(k, _)| k != "sweep").collect(),
+        needs,
+        detectors: out.detectors,
+        pipelines,
+        pipelines_error,
+    };
+    Ok(FrameResult { frame, rows: out.rows, files, figures })
+}
+
+/// The pipelines comparison's settings from a sweep's: its first detector, its first layout other than the lossless
+/// baseline, its resolve settings, warps of 8 to 64 lanes, FLIP when the sweep computes it.
+#[must_use]
+pub fn pipelines_config(cfg: &SweepConfig) -> crate::analysis::pipelines::PipelinesConfig {
+    let layout = cfg.layouts.iter().find(|l| l.name() != crate::analysis::LOSSLESS_BASELINE).or(cfg.layouts.first());
+    crate::analysis::pipelines::PipelinesConfig {
+        detector: cfg.detectors.first().copied().unwrap_or(crate::detect::Detector::Lauritzen),
+        detector_config: cfg.detector_config,
+        resolve: cfg.resolve,
+        gbuffer_bytes: layout.map_or(20, |l| l.bytes_per_sample() as u32),
+        layout: layout.map_or_else(|| "fat-20".to_string(), |l| l.name().to_string()),
+        warps: vec![8, 16, 32, 64],
+        viewing: (cfg.flip != FlipRows::None).then_some(cfg.viewing),
+        aa_detectors: cfg.detectors.iter().copied().filter(|d| !d.is_baseline()).collect(),
+        mlaa: crate::image::mlaa::MlaaConfig::default(),
+        geometry: None,
+        visibility_layout: crate::layout::Layout::by_name("visibility-8").expect("the built-in visibility layout"),
+    }
+}
+
+/// How per-frame results are put together: the settings they were measured with and how to aggregate them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Assembly {
+    /// Timing runs per stage.
+    pub runs: usize,
+    /// How the images were shown for FLIP.
+    pub viewing: Viewing,
+    /// Which rows got FLIP.
+    pub flip: FlipRows,
+    /// Mean or worst frame.
+    pub over: Over,
+    /// A byte budget to pick the winning layout for.
+    pub max_bytes: Option<u32>,
+}
+
+impl Assembly {
+    /// The settings of `cfg`, aggregated by `over`.
+    #[must_use]
+    pub fn of(cfg: &SweepConfig, over: Over, max_bytes: Option<u32>) -> Self {
+        Assembly { runs: cfg.runs.max(1), viewing: cfg.viewing, flip: cfg.flip, over, max_bytes }
+    }
+}
+
+/// Assembles a report from per-frame results (of one run, or read back from several `report.json` files):
+/// aggregates the rows and detectors over the frames and, for more than one frame, draws the aggregate plots.
+/// Returns the report and the plot files (the frames' own figures are the caller's).
+pub fn assemble(
+    frames: Vec<Frame>,
+    rows: Vec<Row>,
+    mut figures: Vec<Figure>,
+    how: &Assembly,
+) -> Result<(Report, Vec<Attachment>)> {
+    let over = how.over;
+    let aggregate_rows = aggregate(&rows, over);
+    let budget = how.max_bytes.map(|b| BudgetChoice::of(&aggregate_rows, b, over));
+    let detectors: Vec<_> = frames.iter().flat_map(|f| f.detectors.iter().cloned()).collect();
+    let detectors = aggregate_detectors(&detectors, over);
+    let mut files = Vec::new();
+    if frames.len() > 1 {
+        let (f, figs) = figures::aggregate_figures(&aggregate_rows, over)?;
+        files = f;
+        figures.splice(0..0, figs);
+    }
+    let rep = Report {
+        frames,
+        runs: how.runs,
+        viewing: how.viewing,
+        flip: how.flip,
+        over,
+        rows,
+        aggregate: aggregate_rows,
+        detectors,
+        budget,
+        figures,
+    };
+    Ok((rep, files))
+}
+
+/// A single-frame report: [`run_frame`] and [`assemble`].
+pub fn run(
+    input: &ReportInput<'_>,
+    cfg: &SweepConfig,
+    progress: sweep::Progress<'_>,
+) -> Result<(Report, Vec<Attachment>)> {
+    let f = run_frame(input, cfg, true, "", progress)?;
+    let (rep, mut files) = assemble(vec![f.frame], f.rows, f.figures, &Assembly::of(cfg, Over::default(), None))?;
+    files.extend(f.files);
+    Ok((rep, files))
+}
