@@ -100,6 +100,17 @@ pub enum Error {
     /// A parameter given by the caller is out of range or inconsistent (no file involved).
     #[error("invalid argument: {0}")]
     Argument(String),
+    /// A step of a job over several frames failed on one of them.
+    #[error("{frame}: {step}")]
+    InFrame {
+        /// The frame (its path or name).
+        frame: String,
+        /// What was being done.
+        step: &'static str,
+        /// Why it failed.
+        #[source]
+        source: Box<Error>,
+    },
 }
 
 impl Error {

@@ -916,14 +916,60 @@ pub fn decide(
 
 /// Searches for the best layout within the budget on one frame `gb` lit by `lights`.
 pub fn search(gb: &GBuffer, lights: &[Light], cfg: &BudgetConfig) -> Result<BudgetResult> {
+    let frame = || Ok::<_, Error>((gb, lights.to_vec()));
+    search_frames(&["frame".to_string()], |_| frame(), cfg).map(|(r, _)| r)
+}
+
+/// Searches for the best layout within the budget over the frames `names`, reading frame `i` with `load(i)` when
+/// the search needs it: with one frame once (propose and measure in one visit); with several twice (every frame
+/// proposes its candidates, then every candidate is measured on every frame), so one frame is in memory at a
+/// time. Returns the result and the first frame's width, height and samples. A failed step names its frame
+/// ([`Error::InFrame`]).
+pub fn search_frames<G, E>(
+    names: &[String],
+    mut load: impl FnMut(usize) -> std::result::Result<(G, Vec<Light>), E>,
+    cfg: &BudgetConfig,
+) -> std::result::Result<(BudgetResult, (u32, u32, u32)), E>
+where
+    G: std::borrow::Borrow<GBuffer>,
+    E: From<Error>,
+{
     let start = std::time::Instant::now();
-    let p = propose(gb, lights, cfg)?;
+    let in_frame = |i: usize, step: &'static str| {
+        move |e: Error| E::from(Error::InFrame { frame: names[i].clone(), step, source: Box::new(e) })
+    };
     let mut cands = Vec::new();
-    merge_candidates(&mut cands, p.candidates.clone());
-    let here: Vec<String> = cands.iter().map(|c| c.name.clone()).collect();
-    measure_frame("frame", gb, lights, cfg, &mut cands, &here)?;
-    let combinations = p.combinations;
-    decide(vec!["frame".into()], cands, p, combinations, cfg, start.elapsed().as_secs_f64())
+    let mut first = None;
+    let mut combinations = 0;
+    let mut proposed: Vec<Vec<String>> = Vec::new();
+    let mut size = (0, 0, 0);
+    for i in 0..names.len() {
+        let (gb, lights) = load(i)?;
+        let gb = gb.borrow();
+        if i == 0 {
+            size = (gb.width, gb.height, gb.samples);
+        }
+        let prop = propose(gb, &lights, cfg).map_err(in_frame(i, "budget search"))?;
+        combinations += prop.combinations;
+        let before: Vec<String> = cands.iter().map(|c: &Candidate| c.name.clone()).collect();
+        merge_candidates(&mut cands, prop.candidates.clone());
+        proposed.push(cands.iter().map(|c| c.name.clone()).filter(|n| !before.contains(n)).collect());
+        if names.len() == 1 {
+            measure_frame(&names[0], gb, &lights, cfg, &mut cands, &proposed[0])
+                .map_err(in_frame(i, "measuring the candidates"))?;
+        }
+        first.get_or_insert(prop);
+    }
+    if names.len() > 1 {
+        for i in 0..names.len() {
+            let (gb, lights) = load(i)?;
+            measure_frame(&names[i], gb.borrow(), &lights, cfg, &mut cands, &proposed[i])
+                .map_err(in_frame(i, "measuring the candidates"))?;
+        }
+    }
+    let first = first.ok_or_else(|| Error::Argument("no frame given to the budget search".into()))?;
+    let res = decide(names.to_vec(), cands, first, combinations, cfg, start.elapsed().as_secs_f64())?;
+    Ok((res, size))
 }
 
 fn option_costs(space: &Space) -> BTreeMap<String, Vec<(String, u32, f64)>> {

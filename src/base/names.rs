@@ -7,8 +7,11 @@
 //! hand where a variant carries data); clap picks the parser up through `ValueParserFactory`, so a flag of an
 //! enum type needs no `value_parser` attribute.
 
+#[cfg(feature = "cli")]
 use clap::builder::{PossibleValue, TypedValueParser};
+#[cfg(feature = "cli")]
 use std::ffi::OsStr;
+#[cfg(feature = "cli")]
 use std::marker::PhantomData;
 
 /// A closed choice with one name per value.
@@ -48,16 +51,19 @@ pub fn normalize(s: &str) -> String {
 }
 
 /// The clap parser of every [`Named`] type: parses by [`Named::from_name`] and lists [`Named::all`] as the
-/// possible values (shown by `--help` and shell completion).
+/// possible values (shown by `--help` and shell completion). With the `cli` feature.
+#[cfg(feature = "cli")]
 #[derive(Clone, Copy, Debug)]
 pub struct NameParser<T>(PhantomData<fn() -> T>);
 
+#[cfg(feature = "cli")]
 impl<T> Default for NameParser<T> {
     fn default() -> Self {
         NameParser(PhantomData)
     }
 }
 
+#[cfg(feature = "cli")]
 impl<T: Named> TypedValueParser for NameParser<T> {
     type Value = T;
 
@@ -133,6 +139,7 @@ macro_rules! named {
             }
         }
 
+        #[cfg(feature = "cli")]
         impl clap::builder::ValueParserFactory for $name {
             type Parser = $crate::base::names::NameParser<$name>;
             fn value_parser() -> Self::Parser {
@@ -175,6 +182,7 @@ pub use crate::{named, named_enum};
 #[cfg(test)]
 mod tests {
     use super::*;
+    #[cfg(feature = "cli")]
     use clap::Parser;
 
     crate::named_enum! {
@@ -188,6 +196,7 @@ mod tests {
         }
     }
 
+    #[cfg(feature = "cli")]
     #[derive(Parser, Debug)]
     struct Cli {
         #[arg(long, default_value = "apple")]
@@ -206,6 +215,7 @@ mod tests {
         assert_eq!(Fruit::BlueBanana.to_string(), "blue-banana");
     }
 
+    #[cfg(feature = "cli")]
     #[test]
     fn clap_parses_and_lists_the_names() {
         assert_eq!(Cli::try_parse_from(["x"]).unwrap().fruit, Fruit::Apple);

@@ -1,5 +1,5 @@
-//! Wall-clock timing of pipeline stages, in milliseconds (what `--json` reports under `ms`). The one timing
-//! helper of the crate: every stage and command times itself with [`timed`] or [`ms`].
+//! Wall-clock timing of one run of a pipeline stage, in milliseconds (what `--json` reports under `ms`): [`ms`],
+//! [`timed`]. Repeated runs with their median and spread are the analysis' `time_runs` (the report's timings).
 
 use serde::Serialize;
 use std::time::{Duration, Instant};

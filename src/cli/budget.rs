@@ -7,7 +7,7 @@ use crate::cli::common::{print_json, FramesArgs, Resolution};
 use crate::cli::report::frame_lights;
 use anyhow::Context;
 use gbuf::analysis::aggregate::Over;
-use gbuf::analysis::budget::{decide, measure_frame, merge_candidates, propose, BudgetConfig, BudgetResult};
+use gbuf::analysis::budget::{search_frames, BudgetConfig, BudgetResult};
 use gbuf::detect::{Detector, DetectorConfig};
 use gbuf::layout::Layout;
 use gbuf::report::format::fmt_opt;
@@ -79,46 +79,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         resolve: ResolveConfig::default(),
         over: args.over,
     };
-    let start = std::time::Instant::now();
-    // Pass 1: every frame proposes its candidates. With one frame it is measured in the same visit.
-    let mut cands = Vec::new();
-    let mut first = None;
-    let mut combinations = 0;
-    let mut proposed: Vec<Vec<String>> = Vec::new();
-    let mut size = (0, 0, 0);
     let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
-    for (i, p) in paths.iter().enumerate() {
-        let loaded = args.input.load(p)?;
-        let gb = &loaded.gbuffer;
-        if i == 0 {
-            size = (gb.width, gb.height, gb.samples);
-        }
+    let load = |i: usize| -> anyhow::Result<(gbuf::GBuffer, Vec<gbuf::Light>)> {
+        let loaded = args.input.load(&paths[i])?;
         let (lights, _) = frame_lights(&loaded, args.lights, args.seed);
-        let prop = propose(gb, &lights, &cfg).with_context(|| format!("{}: budget search", p.display()))?;
-        combinations += prop.combinations;
-        let before: Vec<String> = cands.iter().map(|c: &gbuf::analysis::budget::Candidate| c.name.clone()).collect();
-        merge_candidates(&mut cands, prop.candidates.clone());
-        proposed.push(cands.iter().map(|c| c.name.clone()).filter(|n| !before.contains(n)).collect());
-        if paths.len() == 1 {
-            measure_frame(&names[0], gb, &lights, &cfg, &mut cands, &proposed[0])
-                .with_context(|| format!("{}: measuring the candidates", p.display()))?;
-        }
-        if first.is_none() {
-            first = Some(prop);
-        }
-    }
-    // Pass 2 (several frames): every candidate measured on every frame, one frame in memory at a time.
-    if paths.len() > 1 {
-        for (i, p) in paths.iter().enumerate() {
-            let loaded = args.input.load(p)?;
-            let (lights, _) = frame_lights(&loaded, args.lights, args.seed);
-            measure_frame(&names[i], &loaded.gbuffer, &lights, &cfg, &mut cands, &proposed[i])
-                .with_context(|| format!("{}: measuring the candidates", p.display()))?;
-        }
-    }
-    let first = first.context("no dump given")?;
-    let res = decide(names.clone(), cands, first, combinations, &cfg, start.elapsed().as_secs_f64())
-        .with_context(|| format!("budget over {}", names.join(", ")))?;
+        Ok((loaded.gbuffer, lights))
+    };
+    let (res, size) = search_frames(&names, load, &cfg).with_context(|| format!("budget over {}", names.join(", ")))?;
     let (rw, rh) = args.resolution.map_or((size.0, size.1), |r| (r.width, r.height));
     let msaa = args.msaa.unwrap_or(size.2);
     let layout = Layout::from_spec(res.winner.spec.clone())?;
