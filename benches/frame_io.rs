@@ -4,9 +4,9 @@
 //!   and sphere-map normals into the G-buffer) and the whole **load** from memory (`io::load_bytes`: the conversion,
 //!   then sanitising and the plausibility checks) against a memcpy of the same bytes into a fresh buffer;
 //! - **8-bit encode** (`HdrImage::to_ldr_gamma22`, the ISPC sample's output) against a memcpy of the f32 image;
-//! - **PNG** (`base::png`: bands deflated in parallel, zlib level 3, adaptive filters) on all threads and on one,
-//!   against the image crate's PNG encoder at its default (`Balanced`: zlib level 6, adaptive filters), the encoder
-//!   gbuf used before; with the file sizes.
+//! - **PNG** (`base::png`: the `png` crate at zlib level 3, adaptive filters) against the image crate's PNG encoder
+//!   at its default (`Balanced`: zlib level 6, adaptive filters) and the `png` crate's `Fast` (fdeflate); with the
+//!   file sizes.
 //!
 //! Best of `GBUF_BENCH_RUNS` (default 5) runs each. Run: `cargo bench --bench frame_io [-- 1920x1080]`.
 
@@ -81,8 +81,6 @@ fn main() {
         row("8-bit gamma-2.2 encode", ldr_ms, "memcpy of the f32 image", copy_img_ms);
 
         let (png_ms, png) = best(runs, || gbuf::base::png::encode_rgb8(w, h, &ldr).expect("png"));
-        let (png1_ms, png1) = best(runs, || one.install(|| gbuf::base::png::encode_rgb8(w, h, &ldr).expect("png")));
-        assert_eq!(png, png1, "PNG bytes depend on the thread count");
         let (crate_ms, crate_png) = best(runs, || {
             let mut out = Vec::new();
             image::codecs::png::PngEncoder::new_with_quality(
@@ -94,14 +92,26 @@ fn main() {
             .expect("image crate png");
             out
         });
-        row(&format!("PNG, {threads} threads"), png_ms, "image crate", crate_ms);
-        row("PNG, 1 thread", png1_ms, "image crate", crate_ms);
-        row(&format!("PNG, {threads} threads"), png_ms, "1 thread", png1_ms);
+        let (fast_ms, fast_png) = best(runs, || {
+            let mut out = Vec::new();
+            image::codecs::png::PngEncoder::new_with_quality(
+                &mut out,
+                image::codecs::png::CompressionType::Fast,
+                image::codecs::png::FilterType::Adaptive,
+            )
+            .write_image(&ldr, w, h, image::ExtendedColorType::Rgb8)
+            .expect("image crate png");
+            out
+        });
+        row("PNG (level 3)", png_ms, "image crate default (level 6)", crate_ms);
+        row("PNG (level 3)", png_ms, "png crate Fast (fdeflate)", fast_ms);
         println!(
-            "  PNG size: {:.3} MB (image crate {:.3} MB, {:+.1}%)",
+            "  PNG size: {:.3} MB (level 6 {:.3} MB, {:+.1}%; Fast {:.3} MB, {:+.1}%)",
             png.len() as f64 / 1e6,
             crate_png.len() as f64 / 1e6,
-            100.0 * (png.len() as f64 / crate_png.len() as f64 - 1.0)
+            100.0 * (png.len() as f64 / crate_png.len() as f64 - 1.0),
+            fast_png.len() as f64 / 1e6,
+            100.0 * (png.len() as f64 / fast_png.len() as f64 - 1.0)
         );
     }
 }

@@ -4,7 +4,7 @@
 //! Pixel coordinates are continuous: (0, 0) is the top-left corner of the image, pixel (x, y) covers
 //! [x, x+1) × [y, y+1) and its centre is (x + 0.5, y + 0.5); +y goes **down** the image.
 
-use glam::{Mat4, Vec2, Vec3, Vec4Swizzles};
+use glam::{Mat3, Mat4, Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
 /// A perspective camera (glTF conventions).
@@ -90,11 +90,25 @@ impl Camera {
         self.world_to_view.transform_point3(p)
     }
 
-    /// World-space direction → view space (normalised; uses the inverse transpose so non-uniform scale is fine).
+    /// World-space direction → view space, unit length (zero stays zero): [`Camera::normal_to_view`] normalised.
     #[must_use]
     pub fn to_view_dir(&self, d: Vec3) -> Vec3 {
-        let m = self.world_to_view.inverse().transpose();
-        (m * d.extend(0.0)).xyz().normalize_or_zero()
+        (self.normal_matrix() * d).normalize_or_zero()
+    }
+
+    /// The normal matrix: the inverse transpose of the world→view transform's linear part, so non-uniform scale
+    /// keeps normals perpendicular to their surfaces. Compute it once for many normals.
+    #[must_use]
+    pub fn normal_matrix(&self) -> Mat3 {
+        Mat3::from_mat4(self.world_to_view).inverse().transpose()
+    }
+
+    /// A world-space normal in view space through `normal_matrix` ([`Camera::normal_matrix`]), **with its length
+    /// kept**: the one rule of every reader, so a zero or non-unit normal in a dump stays visible to the
+    /// plausibility checks and the attribute errors (`invalid-normals`) whichever reader read it.
+    #[must_use]
+    pub fn normal_to_view(normal_matrix: &Mat3, n: Vec3) -> Vec3 {
+        (*normal_matrix * n).normalize_or_zero() * n.length()
     }
 
     /// D3D-style post-projection depth in [0, 1] for view depth `d` (0 at the near plane, 1 at the far plane).

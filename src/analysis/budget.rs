@@ -23,6 +23,7 @@
 //! at a time, so memory is that of one frame.
 
 use crate::analysis::aggregate::{Over, Stat};
+use crate::analysis::errors;
 use crate::analysis::needs::{self, Needs, MATERIAL_PARAMETERS};
 use crate::analysis::prune::prune_spec;
 use crate::codec::{self, NormalScheme};
@@ -664,10 +665,8 @@ fn measure_layout(
     cfg: &BudgetConfig,
     layout: &Layout,
 ) -> Result<ErrorSet> {
-    let decoded = layout.roundtrip(gb)?;
-    let mask = detect::detect(&decoded, cfg.detector, &cfg.detector_config)?;
-    let res = resolve::resolve(&decoded, lights, &mask, &cfg.resolve)?;
-    Ok(ErrorSet::numeric(&measure::image::compare(exact, &res.image)))
+    let e = errors::layout_image_error(gb, lights, layout, exact, cfg.detector, &cfg.detector_config, &cfg.resolve)?;
+    Ok(ErrorSet::numeric(&e))
 }
 
 /// The single-option model's prediction for any layout: each attribute of its roundtrip applied alone (the rest
@@ -803,8 +802,7 @@ pub fn measure_frame(
     cands: &mut [Candidate],
     proposed_here: &[String],
 ) -> Result<()> {
-    let mask = detect::detect(gb, cfg.detector, &cfg.detector_config)?;
-    let exact = resolve::resolve(gb, lights, &mask, &cfg.resolve)?.image;
+    let exact = errors::lit(gb, lights, cfg.detector, &cfg.detector_config, &cfg.resolve)?.image;
     let pricer = pricer(gb, lights, cfg)?;
     for c in cands.iter_mut() {
         let mut m = FrameMeasure { frame: name.to_string(), predicted_rmse: None, layout_error: None, error: None };

@@ -7,6 +7,7 @@
 
 pub mod aggregate;
 pub mod budget;
+pub mod errors;
 pub mod forward;
 pub mod needs;
 pub mod pareto;
@@ -19,9 +20,7 @@ pub mod traffic;
 
 use crate::analysis::needs::{Needs, PrunedLayout};
 use crate::analysis::sweep::{SweepConfig, SweepOutput};
-use crate::error::Result;
 use crate::gbuffer::GBuffer;
-use crate::image::HdrImage;
 use crate::layout::Layout;
 use crate::light::Light;
 
@@ -42,22 +41,6 @@ pub struct ReportInput<'a> {
     /// The analytic scene the frame was rendered from, when it is one of gbuf's (the demo): the visibility buffer
     /// is then re-materialised from its triangles.
     pub geometry: Option<crate::scene::SceneName>,
-}
-
-/// The layout error of `layout` on `gb` lit by `lights`: the image of its roundtrip (first detector of `cfg`,
-/// resolve) against `exact`, the exact G-buffer lit the same way.
-pub fn layout_image_error(
-    gb: &GBuffer,
-    lights: &[Light],
-    layout: &Layout,
-    exact: &HdrImage,
-    cfg: &SweepConfig,
-) -> Result<crate::measure::image::ImageError> {
-    let decoded = layout.roundtrip(gb)?;
-    let det = cfg.detectors.first().copied().unwrap_or(crate::detect::Detector::Lauritzen);
-    let mask = crate::detect::detect(&decoded, det, &cfg.detector_config)?;
-    let res = crate::resolve::resolve(&decoded, lights, &mask, &cfg.resolve)?;
-    Ok(crate::measure::image::compare(exact, &res.image))
 }
 
 /// The lossless measuring baseline among the built-ins: never picked as the layout to prune when another one can
@@ -114,7 +97,15 @@ pub fn pruned_layout(
         note: None,
     };
     match out.exact.first().and_then(Option::as_ref) {
-        Some(exact) => match layout_image_error(input.gbuffer, input.lights, &layout, exact, cfg) {
+        Some(exact) => match errors::layout_image_error(
+            input.gbuffer,
+            input.lights,
+            &layout,
+            exact,
+            cfg.detectors.first().copied().unwrap_or(crate::detect::Detector::Lauritzen),
+            &cfg.detector_config,
+            &cfg.resolve,
+        ) {
             Ok(e) => {
                 p.rmse = Some(e.rmse);
                 p.psnr_db = Some(e.psnr_db);

@@ -6,8 +6,10 @@ use crate::util::write_bytes_atomic;
 use image::RgbImage;
 use std::path::Path;
 
-/// The sRGB transfer function (IEC 61966-2-1) of a linear value in [0, 1].
+/// The sRGB transfer function (IEC 61966-2-1) of a linear value in [0, 1]: the crate's one sRGB (the image
+/// writers, the `srgb8` codec and its decode table; FLIP's vectorised approximation is its own, tested against it).
 #[must_use]
+#[inline]
 pub fn srgb_encode(x: f32) -> f32 {
     if x <= 0.003_130_8 {
         12.92 * x
@@ -18,6 +20,7 @@ pub fn srgb_encode(x: f32) -> f32 {
 
 /// The inverse of [`srgb_encode`]: an sRGB-encoded value in [0, 1] back to linear.
 #[must_use]
+#[inline]
 pub fn srgb_decode(e: f32) -> f32 {
     if e <= 0.040_45 {
         e / 12.92

@@ -40,9 +40,10 @@ pub struct Args {
     /// Over several dumps: rank each candidate by its mean or its worst frame.
     #[arg(long, value_name = "HOW", default_value = "worst")]
     pub over: Over,
-    /// Point lights to scatter when the dump brings none.
-    #[arg(long, default_value_t = 64)]
-    pub lights: u32,
+    /// Scatter N point lights (replacing the dump's own, if any); without it, the dump's or sidecar's lights, or 64
+    /// scattered when it brings none.
+    #[arg(long, value_name = "N")]
+    pub lights: Option<u32>,
     /// Seed for scattered lights.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,

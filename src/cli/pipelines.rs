@@ -43,9 +43,10 @@ pub struct Args {
     /// Distance falloff.
     #[arg(long, value_name = "F", default_value = "linear")]
     pub falloff: Falloff,
-    /// Lights to scatter when the dump and its sidecar have none.
-    #[arg(long, default_value_t = 64)]
-    pub lights: u32,
+    /// Scatter N point lights (replacing the dump's own, if any); without it, the dump's or sidecar's lights, or 64
+    /// scattered when it brings none.
+    #[arg(long, value_name = "N")]
+    pub lights: Option<u32>,
     /// Seed of the scattered lights.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,

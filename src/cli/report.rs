@@ -37,9 +37,10 @@ pub struct SweepArgs {
     /// Timing runs per stage (medians and min–max are reported).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=50))]
     pub runs: u32,
-    /// Point lights to scatter when the dump brings none.
-    #[arg(long, default_value_t = 64)]
-    pub lights: u32,
+    /// Scatter N point lights (replacing the dump's own, if any); without it, the dump's or sidecar's lights, or 64
+    /// scattered when it brings none.
+    #[arg(long, value_name = "N")]
+    pub lights: Option<u32>,
     /// Seed for scattered lights.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -362,13 +363,22 @@ pub struct Args {
     pub json: bool,
 }
 
-/// Lights of a loaded frame: the dump's or sidecar's, else `n` scattered with `seed`.
-pub fn frame_lights(loaded: &gbuf::io::Loaded, n: u32, seed: u64) -> (Vec<gbuf::Light>, String) {
-    match &loaded.lights {
-        Some(l) if !l.is_empty() => (l.clone(), "from the dump/sidecar".to_string()),
-        _ => (gbuf::scene::scatter_lights(&loaded.gbuffer, n as usize, seed), format!("{n} scattered, seed {seed}")),
-    }
+/// Lights of a loaded frame ([`gbuf::scene::choose_lights`]): `--lights N` scattered when given, else the dump's or
+/// sidecar's, else [`DEFAULT_LIGHTS`] scattered.
+pub fn frame_lights(loaded: &gbuf::io::Loaded, n: Option<u32>, seed: u64) -> (Vec<gbuf::Light>, String) {
+    let (lights, source) = gbuf::scene::choose_lights(
+        &loaded.gbuffer,
+        loaded.lights.as_deref(),
+        n.map(|n| n as usize),
+        Some(DEFAULT_LIGHTS),
+        seed,
+    )
+    .expect("a fallback light count");
+    (lights, source.to_string())
 }
+
+/// Point lights scattered on a frame that brings none (report, budget, pipelines).
+pub const DEFAULT_LIGHTS: usize = 64;
 
 /// Runs `gbuf report`.
 pub fn run(args: Args) -> anyhow::Result<()> {

@@ -10,7 +10,7 @@ use gbuf::base::timing::{timed, StageMs};
 use gbuf::detect::{self, Detector};
 use gbuf::image::{LdrEncoding, ToneCurve, ToneMap};
 use gbuf::light::Light;
-use gbuf::measure::image::{against_full_deferred, compare, error_set, ErrorSet, ImageError, Viewing};
+use gbuf::measure::image::{against_full_deferred, compare, error_triad, ErrorSet, ImageError, Viewing};
 use gbuf::resolve::{self, Brdf, Culling, Falloff, ResolveConfig, ResolveStats, Schedule};
 use gbuf::GBuffer;
 use serde::Serialize;
@@ -23,7 +23,7 @@ pub struct Args {
     /// The dump to light.
     #[command(flatten)]
     pub input: InputArgs,
-    /// Scatter N point lights over the visible surfaces when the dump and sidecar have no lights.
+    /// Scatter N point lights over the visible surfaces (replacing the dump's or sidecar's lights, if any).
     #[arg(long, value_name = "N")]
     pub lights: Option<usize>,
     /// Pack and unpack with this layout (built-in name or layout file) before lighting; the reference uses the
@@ -215,22 +215,24 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let flip = (!args.no_flip).then_some(&viewing);
     // With a layout, the exact G-buffer lit the same way separates the layout's loss from the detector's.
     let exact = match &packed {
-        Some(_) => {
-            let m = detect::detect(&gb, args.detector, &det_cfg).with_context(|| format!("{file}: edge detector"))?;
-            Some(resolve::resolve(&gb, &lights, &m, &cfg).with_context(|| format!("{file}: exact resolve"))?.image)
-        }
+        Some(_) => Some(
+            gbuf::analysis::errors::lit(&gb, &lights, args.detector, &det_cfg, &cfg)
+                .with_context(|| format!("{file}: exact resolve"))?
+                .image,
+        ),
         None => None,
     };
-    let layout_error = exact.as_ref().map(|x| error_set(x, &resolved.image, flip));
-    let (error, total_error, aa_error, t_ref) = if args.no_reference {
-        (None, None, None, 0.0)
+    let (reference, t_ref) = if args.no_reference {
+        (None, 0.0)
     } else {
         let (reference, t) = timed(|| resolve::reference(&gb, &lights, &cfg));
         let reference = reference.with_context(|| format!("{file}: reference"))?;
         resolve::check_meaningful(&gb, &lights, &reference).with_context(|| format!("{file}: nothing to compare"))?;
-        let aa = exact.as_ref().map(|x| error_set(&reference, x, flip));
-        (Some(compare(&reference, &resolved.image)), Some(error_set(&reference, &resolved.image, flip)), aa, t)
+        (Some(reference), t)
     };
+    let triad = error_triad(&resolved.image, exact.as_ref(), reference.as_ref(), flip);
+    let (layout_error, total_error, aa_error) = (triad.layout, triad.total, triad.aa);
+    let error = reference.as_ref().map(|r| compare(r, &resolved.image));
 
     let (heatmap_max, t_output) = timed(|| -> anyhow::Result<Option<u32>> {
         if let Some(out) = &args.output {
@@ -305,7 +307,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     print_human(&report)
 }
 
-/// Lights from the dump/sidecar; else `--lights N` scattered; else an error saying how to get some.
+/// Lights by the rule of every command ([`gbuf::scene::choose_lights`]), with no fallback: an error saying how to
+/// get some.
 fn pick_lights(
     from_file: Option<Vec<Light>>,
     scatter: Option<usize>,
@@ -313,10 +316,10 @@ fn pick_lights(
     gb: &GBuffer,
     file: &str,
 ) -> anyhow::Result<(Vec<Light>, &'static str)> {
-    match (from_file, scatter) {
-        (_, Some(n)) => Ok((gbuf::scene::scatter_lights(gb, n, seed), "scattered")),
-        (Some(l), None) => Ok((l, "file")),
-        (None, None) => anyhow::bail!(
+    match gbuf::scene::choose_lights(gb, from_file.as_deref(), scatter, None, seed) {
+        Some((l, gbuf::scene::LightsSource::Dump)) => Ok((l, "file")),
+        Some((l, _)) => Ok((l, "scattered")),
+        None => anyhow::bail!(
             "{file}: no lights: the dump and its sidecar define none; pass --scene SIDECAR with a \"lights\" list, \
              or --lights N [--seed S] to scatter N point lights"
         ),

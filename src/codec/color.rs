@@ -18,6 +18,7 @@ use super::simd::{f32_to_f16_bits, run, Element, MapKernel};
 use super::{mask, split_bits, Codec, ColorCodec, TRANSCENDENTAL_OPS};
 use crate::base::isa::Isa;
 use crate::base::lut::CodeLut;
+use crate::base::picture::{srgb_decode, srgb_encode};
 use glam::Vec3;
 use std::sync::OnceLock;
 
@@ -50,28 +51,6 @@ fn clean(v: f32, lo: f32, hi: f32) -> f32 {
     }
 }
 
-/// sRGB transfer: linear → encoded (IEC 61966-2-1).
-#[must_use]
-#[inline]
-pub fn linear_to_srgb(l: f32) -> f32 {
-    if l <= 0.003_130_8 {
-        l * 12.92
-    } else {
-        1.055 * l.powf(1.0 / 2.4) - 0.055
-    }
-}
-
-/// sRGB transfer: encoded → linear.
-#[must_use]
-#[inline]
-pub fn srgb_to_linear(e: f32) -> f32 {
-    if e <= 0.040_45 {
-        e / 12.92
-    } else {
-        ((e + 0.055) / 1.055).powf(2.4)
-    }
-}
-
 /// Three unorm channels, linear or sRGB-encoded.
 #[derive(Clone, Copy, Debug)]
 pub struct UnormRgb {
@@ -95,7 +74,7 @@ impl UnormRgb {
                 // srgb8: the formula below through its threshold table, without a `powf` (equal, tested).
                 return u64::from(lut.encode_unit(v));
             }
-            let v = if SRGB { linear_to_srgb(v) } else { v };
+            let v = if SRGB { srgb_encode(v) } else { v };
             // ≤ 65535: i32 lanes hold it (and vectorise).
             round_in_range(v * m) as u64
         };
@@ -117,9 +96,9 @@ impl UnormRgb {
     }
 }
 
-/// srgb8's encode of one channel: `round(linear_to_srgb(v) · 255)`, `v` clamped to [0, 1] (NaN → 0).
+/// srgb8's encode of one channel: `round(srgb_encode(v) · 255)`, `v` clamped to [0, 1] (NaN → 0).
 fn srgb8_formula(v: f32) -> u8 {
-    round_in_range(linear_to_srgb(clean(v, 0.0, 1.0)) * 255.0) as u8
+    round_in_range(srgb_encode(clean(v, 0.0, 1.0)) * 255.0) as u8
 }
 
 /// [`srgb8_formula`] by its thresholds ([`CodeLut`]), built once per process.
@@ -128,10 +107,10 @@ fn srgb8_encode_table() -> &'static CodeLut {
     TABLE.get_or_init(|| CodeLut::build(srgb8_formula))
 }
 
-/// `srgb_to_linear(c / 255)` for every 8-bit code (what the srgb8 decoder returns, bit for bit).
+/// `srgb_decode(c / 255)` for every 8-bit code (what the srgb8 decoder returns, bit for bit).
 fn srgb8_decode_table() -> &'static [f32; 256] {
     static TABLE: OnceLock<[f32; 256]> = OnceLock::new();
-    TABLE.get_or_init(|| std::array::from_fn(|c| srgb_to_linear(c as f32 / 255.0)))
+    TABLE.get_or_init(|| std::array::from_fn(|c| srgb_decode(c as f32 / 255.0)))
 }
 
 struct UnormRgbEnc<const SRGB: bool>(UnormRgb, Option<&'static CodeLut>);
@@ -213,7 +192,7 @@ impl ColorCodec for UnormRgb {
         }
         // Largest slope of the sRGB decode over the half step around the encoded value (it grows with e).
         c.map(|l| {
-            let e = (linear_to_srgb(clean(l, 0.0, 1.0)) + half).min(1.0);
+            let e = (srgb_encode(clean(l, 0.0, 1.0)) + half).min(1.0);
             let slope = if e <= 0.040_45 { 1.0 / 12.92 } else { 2.4 / 1.055 * ((e + 0.055) / 1.055).powf(1.4) };
             slope * half + 2f32.powi(-20)
         })
@@ -459,7 +438,7 @@ mod tests {
         assert_eq!(c.decode(c.encode(Vec3::new(1.0, 0.5, 0.25))), Vec3::new(1.0, 0.5, 0.25));
         assert_eq!(c.decode(c.encode(Vec3::splat(1e9))), Vec3::splat(RGB9E5_MAX));
         assert_eq!(c.decode(c.encode(Vec3::splat(f32::NAN))), Vec3::ZERO);
-        assert!((srgb_to_linear(linear_to_srgb(0.2)) - 0.2).abs() < 1e-6);
+        assert!((srgb_decode(srgb_encode(0.2)) - 0.2).abs() < 1e-6);
         assert_eq!(color_codec("srgb8").unwrap().encode(Vec3::ONE), 0xff_ffff);
     }
 

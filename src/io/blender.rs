@@ -17,8 +17,8 @@ use super::sidecar::Sidecar;
 use super::{AttributeSource, LoadOptions, Loaded, SourceFormat};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
-use crate::gbuffer::{Attribute, GBuffer};
-use glam::{Mat3, Vec2, Vec3};
+use crate::gbuffer::{Attribute, GBuffer, PlaneSlot};
+use glam::{Vec2, Vec3};
 use std::path::Path;
 
 /// Depth at or beyond this is Cycles' background value (it writes 1e10 where no surface was hit).
@@ -200,11 +200,8 @@ pub fn read(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
             (ch.floats(&c[0])?, None)
         };
         let plane = mask(&gb.coverage, plane, 0.0);
-        match attr {
-            Attribute::Roughness => gb.roughness = Some(plane),
-            Attribute::Metallic => gb.metallic = Some(plane),
-            Attribute::Specular => gb.specular = Some(plane),
-            _ => gb.specular_power = Some(plane),
+        if let PlaneSlot::F32(slot) = gb.slot(*attr) {
+            *slot = Some(plane);
         }
         sources.push(src(attr.name(), c, ch.type_of(&c[0]), note));
     }
@@ -460,8 +457,8 @@ fn median_reprojection_px(camera: &Camera, world_pos: &[Vec3], coverage: &[bool]
     Some(*errs.select_nth_unstable_by(mid, f32::total_cmp).1)
 }
 
-/// World-space normals → view space (inverse transpose of the world→view rotation part), renormalised. Without a
-/// camera they are left in world space and the note says so loudly.
+/// World-space normals → view space ([`Camera::normal_to_view`]: the normal matrix, lengths kept, the rule of every
+/// reader). Without a camera they are left in world space and the note says so loudly.
 pub(super) fn normals_to_view(
     coverage: &[bool],
     n: &[Vec3],
@@ -470,13 +467,10 @@ pub(super) fn normals_to_view(
 ) -> (Vec<Vec3>, String) {
     match camera {
         Some(c) => {
-            let m = Mat3::from_mat4(c.world_to_view).inverse().transpose();
-            (map_covered(coverage, n, |v| (m * v).normalize_or_zero()), format!("world→view ({detail}), renormalised"))
+            let m = c.normal_matrix();
+            (map_covered(coverage, n, |v| Camera::normal_to_view(&m, v)), format!("world→view ({detail})"))
         }
-        None => (
-            map_covered(coverage, n, |v| v.normalize_or_zero()),
-            format!("LEFT IN WORLD SPACE (not view space): {detail}"),
-        ),
+        None => (map_covered(coverage, n, |v| v), format!("LEFT IN WORLD SPACE (not view space): {detail}")),
     }
 }
 

@@ -300,12 +300,8 @@ impl Conventions {
                 notes.push(("position", "world → view with the camera".to_string()));
             }
             if let Some(nm) = &mut gb.normal {
-                let m = cam.world_to_view.inverse().transpose();
-                nm.iter_mut().zip(cov).filter(|(_, c)| **c).for_each(|(v, _)| {
-                    let len = v.length();
-                    // Keep the length (so zero and non-unit normals stay visible to the plausibility checks).
-                    *v = m.transform_vector3(*v).normalize_or_zero() * len;
-                });
+                let m = cam.normal_matrix();
+                nm.iter_mut().zip(cov).filter(|(_, c)| **c).for_each(|(v, _)| *v = Camera::normal_to_view(&m, *v));
                 notes.push(("normal", "world → view with the camera".to_string()));
             }
         }

@@ -19,7 +19,7 @@ use super::exr::RawImage;
 use super::sidecar::Sidecar;
 use super::{LoadOptions, Loaded, SourceFormat};
 use crate::error::{Error, Result};
-use crate::gbuffer::{Attribute, GBuffer};
+use crate::gbuffer::{Attribute, GBuffer, PlaneSlot};
 use glam::{Vec2, Vec3};
 use std::path::Path;
 
@@ -252,11 +252,8 @@ pub fn read(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
     }
     for (attr, c) in &scalar_ch {
         let plane = mask(&gb.coverage, ch.floats(&c[0])?, 0.0);
-        match attr {
-            Attribute::Specular => gb.specular = Some(plane),
-            Attribute::SpecularPower => gb.specular_power = Some(plane),
-            Attribute::Roughness => gb.roughness = Some(plane),
-            _ => gb.metallic = Some(plane),
+        if let PlaneSlot::F32(slot) = gb.slot(*attr) {
+            *slot = Some(plane);
         }
         sources.push(src(attr.name(), c, ch.type_of(&c[0]), Some("--map")));
     }

@@ -263,6 +263,34 @@ pub fn error_set(reference: &HdrImage, test: &HdrImage, viewing: Option<&Viewing
     e
 }
 
+/// The three image errors of a lit test image, kept apart: what the layout costs (`layout`: the test against the
+/// exact G-buffer lit the same way), what the detector's anti-aliasing costs (`aa`: the exact image against the
+/// every-sample reference) and both (`total`: the test against the reference). Each is `None` when its image is.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ErrorTriad {
+    /// The test image against the exact one.
+    pub layout: Option<ErrorSet>,
+    /// The exact image against the reference.
+    pub aa: Option<ErrorSet>,
+    /// The test image against the reference.
+    pub total: Option<ErrorSet>,
+}
+
+/// The [`ErrorTriad`] of `test`, with FLIP when `viewing` is given.
+#[must_use]
+pub fn error_triad(
+    test: &HdrImage,
+    exact: Option<&HdrImage>,
+    reference: Option<&HdrImage>,
+    viewing: Option<&Viewing>,
+) -> ErrorTriad {
+    ErrorTriad {
+        layout: exact.map(|x| error_set(x, test, viewing)),
+        aa: exact.zip(reference).map(|(x, r)| error_set(r, x, viewing)),
+        total: reference.map(|r| error_set(r, test, viewing)),
+    }
+}
+
 /// The error of `image` (e.g. the light pre-pass's output) against full deferred shading of the same G-buffer,
 /// lights and edge mask: `cfg` with its schedule set to [`Schedule::Deferred`] (culling, BRDF, falloff and tiles
 /// as given). The PSNR peak is the deferred image's largest channel value. Also returns the deferred resolve's

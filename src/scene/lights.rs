@@ -114,6 +114,49 @@ fn covered_box(gb: &GBuffer) -> Option<(Vec3, Vec3)> {
     (lo.x <= hi.x).then_some((lo, hi))
 }
 
+/// Where a frame's lights came from ([`choose_lights`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightsSource {
+    /// The dump's own lights or its sidecar's.
+    Dump,
+    /// `n` point lights scattered with `seed` ([`scatter_lights`]).
+    Scattered {
+        /// How many.
+        n: usize,
+        /// The seed.
+        seed: u64,
+    },
+}
+
+impl std::fmt::Display for LightsSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LightsSource::Dump => f.write_str("from the dump/sidecar"),
+            LightsSource::Scattered { n, seed } => write!(f, "{n} scattered, seed {seed}"),
+        }
+    }
+}
+
+/// The lights of a frame, by the one rule every command follows: lights asked for explicitly (`scatter`: `--lights
+/// N`) are scattered with `seed` and replace the dump's; otherwise the dump's or sidecar's lights (`from_dump`, when
+/// not empty); otherwise `fallback` lights scattered (the commands that always light something), or `None` when
+/// there is no fallback (the caller says how to get lights).
+#[must_use]
+pub fn choose_lights(
+    gb: &GBuffer,
+    from_dump: Option<&[Light]>,
+    scatter: Option<usize>,
+    fallback: Option<usize>,
+    seed: u64,
+) -> Option<(Vec<Light>, LightsSource)> {
+    let scattered = |n: usize| (scatter_lights(gb, n, seed), LightsSource::Scattered { n, seed });
+    match (scatter, from_dump.filter(|l| !l.is_empty())) {
+        (Some(n), _) => Some(scattered(n)),
+        (None, Some(l)) => Some((l.to_vec(), LightsSource::Dump)),
+        (None, None) => fallback.map(scattered),
+    }
+}
+
 /// `n` point lights scattered deterministically (per `seed`) in the visible volume of `gb`, in view space.
 ///
 /// With a usable camera the volume is the view frustum between the nearest and farthest covered depth (or

@@ -21,7 +21,7 @@ pub mod rematerialise;
 pub mod room;
 pub mod stress;
 
-pub use self::lights::{default_lights, scatter_lights, scene_sidecar, sidecar_light};
+pub use self::lights::{choose_lights, default_lights, scatter_lights, scene_sidecar, sidecar_light, LightsSource};
 pub use self::material::Material;
 
 use crate::error::{Error, Result};
