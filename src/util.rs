@@ -28,6 +28,19 @@ pub fn protect_input(path: &Path) {
     }
 }
 
+/// The files recorded by [`protect_input`] in this process (canonical paths, in the order first read). The registry
+/// is process-wide on purpose: no output of any command or library call may replace a file anything read.
+#[must_use]
+pub fn protected_inputs() -> Vec<std::path::PathBuf> {
+    INPUTS.lock().unwrap_or_else(std::sync::PoisonError::into_inner).clone()
+}
+
+/// Forgets every recorded input: for a long-running library user (a server, a batch over many captures) whose
+/// outputs may replace files that earlier jobs read.
+pub fn clear_protected_inputs() {
+    INPUTS.lock().unwrap_or_else(std::sync::PoisonError::into_inner).clear();
+}
+
 /// Refuses `path` as an output when it is a file this run read as input ([`protect_input`]); for callers that
 /// write several files and must refuse before the first (a report folder).
 pub fn check_not_input(path: &Path) -> Result<()> {

@@ -294,7 +294,11 @@ fn a_minimal_layout_in_code_reads() {
     assert!(g.motion.is_none());
     assert_eq!(g.background_samples(), n / 4);
     assert_eq!(g.depth.as_ref().unwrap()[1], depth[1]);
-    assert_eq!(g.normal.as_ref().unwrap()[1], Vec3::Z, "renormalised, left in world space");
+    assert_eq!(
+        g.normal.as_ref().unwrap()[1],
+        2.0 * Vec3::Z,
+        "left in world space, length kept (the rule of every reader)"
+    );
     assert_eq!(l.camera_source, "unknown");
 }
 

@@ -242,20 +242,26 @@ pub fn mark_detector_front(results: &mut [DetectorResult]) {
 pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<'_>) -> Result<SweepOutput> {
     let start = std::time::Instant::now();
     let mut clock = StageClock::default();
-    let mut progress = |done: usize, total: usize, what: &str| {
-        clock.enter(what);
-        outer(done, total, what);
+    // Each step names its stage as a value: the clock times the stage, the caller's progress gets the text.
+    let mut progress = |done: usize, total: usize, stage: Option<Stage>, subject: Option<&str>| {
+        clock.enter(stage);
+        let what = match (subject, stage) {
+            (Some(s), Some(st)) => format!("{s}: {}", st.name()),
+            (None, Some(st)) => st.name().to_string(),
+            (_, None) => "done".to_string(),
+        };
+        outer(done, total, &what);
     };
     let cullings: Vec<Option<Culling>> =
         if cfg.culling.is_empty() { vec![None] } else { cfg.culling.iter().copied().map(Some).collect() };
     let per_layout = cfg.detectors.len() * cullings.len();
     let total = 2 + cfg.layouts.len() * (1 + per_layout);
     let mut done = 0;
-    progress(done, total, "reference");
+    progress(done, total, Some(Stage::Reference), None);
     let (reference, reference_timing) = time_runs(1, || resolve::reference(gb, lights, &cfg.resolve))?;
     resolve::check_meaningful(gb, lights, &reference)?;
     done += 1;
-    progress(done, total, "detectors on the exact G-buffer");
+    progress(done, total, Some(Stage::Detectors), None);
     // The resolve is bit-identical across culling modes, so one exact image per detector serves every culling.
     let (exact, detectors) = detector_results(gb, lights, cfg, &reference);
     done += 1;
@@ -278,7 +284,7 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
             decode_ops_per_sample: Some(layout.decode_ops_per_sample()),
             ..Default::default()
         };
-        progress(done, total, &format!("{}: pack/unpack", layout.name()));
+        progress(done, total, Some(Stage::PackUnpack), Some(layout.name()));
         // Band by band, the decoded planes reused across the runs: the packed frame never exists whole. Positions
         // stay derived from depth where the layout stores only depth, as the lighting reads them.
         let decoded = layout.roundtrip_for_lighting(gb, cfg.runs).map(|r| {
@@ -316,7 +322,7 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
         .1;
 
         for (di, &det) in cfg.detectors.iter().enumerate() {
-            progress(done, total, &format!("{} × {}: detect", layout.name(), det.name()));
+            progress(done, total, Some(Stage::Detect), Some(&format!("{} × {}", layout.name(), det.name())));
             let mut row = Row { detector: det.name().to_string(), ..attr_row.clone() };
             row.aa_error = detectors[di].aa_error;
             row.bandwidth_mb = bandwidth(gb, bytes, detectors[di].quad_light_fragments);
@@ -347,7 +353,7 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
                 None => row.add_note("no object IDs: no ground truth for precision/recall"),
             }
             for (ci, &c) in cullings.iter().enumerate() {
-                progress(done, total, &format!("{} × {}: resolve", layout.name(), det.name()));
+                progress(done, total, Some(Stage::Resolve), Some(&format!("{} × {}", layout.name(), det.name())));
                 let mut rcfg = cfg.resolve;
                 let mut r = row.clone();
                 if let Some(c) = c {
@@ -403,15 +409,15 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
         // images, their displayed copies and maps then never share the memory with two G-buffers.
         drop(decoded);
         if pending.len() >= FLIP_BATCH {
-            progress(done, total, "FLIP");
+            progress(done, total, Some(Stage::Flip), None);
             flush_flip(&mut pending, &mut rows, &reference, &exact, &cfg.viewing, &mut worst_flip);
         }
     }
     if !pending.is_empty() {
-        progress(done, total, "FLIP");
+        progress(done, total, Some(Stage::Flip), None);
         flush_flip(&mut pending, &mut rows, &reference, &exact, &cfg.viewing, &mut worst_flip);
     }
-    progress(total, total, "done");
+    progress(total, total, None, None);
     mark_pareto(&mut rows);
     Ok(SweepOutput {
         rows,
@@ -436,25 +442,39 @@ pub fn add_stage_time(stages: &mut Vec<(String, f64)>, kind: &str, s: f64) {
     }
 }
 
-/// Wall time by kind of sweep stage, from the progress messages: the time from one message to the next goes to the
-/// first's kind (the part after its last `": "`, e.g. `pack/unpack`, `detect`, `resolve`; else the whole message:
-/// `reference`, `FLIP`, …). `done` ends the clock.
+crate::named_enum! {
+    /// A stage of the sweep, as its wall time is reported (`Frame::stage_seconds`) and its progress shown.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum Stage: "sweep stage" {
+        /// The every-sample f64 reference.
+        Reference => "reference",
+        /// Each detector on the exact G-buffer.
+        Detectors => "detectors on the exact G-buffer",
+        /// A layout's pack and unpack (timed runs included).
+        PackUnpack => "pack/unpack",
+        /// A detector on a decoded G-buffer.
+        Detect => "detect",
+        /// The resolve of a decoded G-buffer.
+        Resolve => "resolve",
+        /// A batch of FLIPs.
+        Flip => "FLIP",
+    }
+}
+
+/// Wall time per stage: the time from entering one stage to entering the next (or the end, `None`).
 #[derive(Default)]
 struct StageClock {
-    current: Option<(String, std::time::Instant)>,
+    current: Option<(Stage, std::time::Instant)>,
     seconds: Vec<(String, f64)>,
 }
 
 impl StageClock {
-    fn enter(&mut self, what: &str) {
+    fn enter(&mut self, stage: Option<Stage>) {
         let now = std::time::Instant::now();
         if let Some((kind, since)) = self.current.take() {
-            add_stage_time(&mut self.seconds, &kind, now.duration_since(since).as_secs_f64());
+            add_stage_time(&mut self.seconds, kind.name(), now.duration_since(since).as_secs_f64());
         }
-        if what != "done" {
-            let kind = what.rsplit(": ").next().unwrap_or(what);
-            self.current = Some((kind.to_string(), now));
-        }
+        self.current = stage.map(|s| (s, now));
     }
 }
 
