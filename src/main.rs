@@ -27,6 +27,9 @@ enum Command {
     Layouts(cli::layouts::Args),
     /// Pack a dump with a layout, unpack it, and report the error per attribute.
     Roundtrip(cli::roundtrip::Args),
+    /// Write a dump packed with a layout as render-target files: DDS in the exact DXGI formats, MSAA samples as
+    /// array slices, the material table as JSON.
+    Pack(cli::pack::Args),
     /// Run an MSAA edge detector and evaluate it against ground truth.
     Edges(cli::edges::Args),
     /// Light a (packed) G-buffer on the CPU and measure its error against the reference.
@@ -50,6 +53,7 @@ fn main() -> ExitCode {
         Command::Codecs(a) => cli::codecs::run(a),
         Command::Layouts(a) => cli::layouts::run(a),
         Command::Roundtrip(a) => cli::roundtrip::run(a),
+        Command::Pack(a) => cli::pack::run(a),
         Command::Edges(a) => cli::edges::run(a),
         Command::Resolve(a) => cli::resolve::run(a),
         Command::Report(a) => cli::report::run(a),

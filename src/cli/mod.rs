@@ -8,6 +8,7 @@ pub mod edges;
 pub mod info;
 pub mod layouts;
 pub mod merge;
+pub mod pack;
 pub mod pipelines;
 pub mod report;
 pub mod resolve;
