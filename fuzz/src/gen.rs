@@ -725,6 +725,6 @@ pub fn sample_gbuffer() -> gbuf::gbuffer::GBuffer {
             _ => (i as f32 * 0.07 + c as f32 * 0.1).fract(),
         });
     }
-    gbuf::io::mapped::zero_background(&mut gb);
+    gb.zero_background();
     gb
 }
