@@ -81,28 +81,15 @@ fn main() {
         row("8-bit gamma-2.2 encode", ldr_ms, "memcpy of the f32 image", copy_img_ms);
 
         let (png_ms, png) = best(runs, || gbuf::base::png::encode_rgb8(w, h, &ldr).expect("png"));
-        let (crate_ms, crate_png) = best(runs, || {
+        let image_crate = |level| {
             let mut out = Vec::new();
-            image::codecs::png::PngEncoder::new_with_quality(
-                &mut out,
-                image::codecs::png::CompressionType::Default,
-                image::codecs::png::FilterType::Adaptive,
-            )
-            .write_image(&ldr, w, h, image::ExtendedColorType::Rgb8)
-            .expect("image crate png");
+            image::codecs::png::PngEncoder::new_with_quality(&mut out, level, image::codecs::png::FilterType::Adaptive)
+                .write_image(&ldr, w, h, image::ExtendedColorType::Rgb8)
+                .expect("image crate png");
             out
-        });
-        let (fast_ms, fast_png) = best(runs, || {
-            let mut out = Vec::new();
-            image::codecs::png::PngEncoder::new_with_quality(
-                &mut out,
-                image::codecs::png::CompressionType::Fast,
-                image::codecs::png::FilterType::Adaptive,
-            )
-            .write_image(&ldr, w, h, image::ExtendedColorType::Rgb8)
-            .expect("image crate png");
-            out
-        });
+        };
+        let (crate_ms, crate_png) = best(runs, || image_crate(image::codecs::png::CompressionType::Default));
+        let (fast_ms, fast_png) = best(runs, || image_crate(image::codecs::png::CompressionType::Fast));
         row("PNG (level 3)", png_ms, "image crate default (level 6)", crate_ms);
         row("PNG (level 3)", png_ms, "png crate Fast (fdeflate)", fast_ms);
         println!(
