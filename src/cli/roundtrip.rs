@@ -2,8 +2,9 @@
 
 use super::common::InputArgs;
 use anyhow::Context;
-use gbuf::layout::{Layout, MaterialTable};
-use gbuf::measure::gbuffer::{compare, AttributeErrors, SampleAt};
+use gbuf::layout::Layout;
+use gbuf::measure::gbuffer::SampleAt;
+use gbuf::measure::roundtrip::{roundtrip, Roundtrip};
 use serde::Serialize;
 
 /// Flags of `gbuf roundtrip`.
@@ -20,111 +21,21 @@ pub struct Args {
     pub json: bool,
 }
 
-/// The JSON row of `gbuf roundtrip`: headline numbers flat, the full breakdown under `errors`.
-#[derive(Debug, Serialize)]
-pub struct Row {
-    /// Input file.
-    pub file: String,
-    /// Layout name.
-    pub layout: String,
-    /// Bytes per sample.
-    pub bytes_per_sample: usize,
-    /// Width, height, samples.
-    pub size: [u32; 3],
-    /// Mean normal error, degrees.
-    pub normal_mean_deg: Option<f64>,
-    /// 95th percentile normal error, degrees.
-    pub normal_p95_deg: Option<f64>,
-    /// Largest normal error, degrees.
-    pub normal_max_deg: Option<f64>,
-    /// Largest relative depth error.
-    pub depth_rel_max: Option<f64>,
-    /// Mean relative depth error.
-    pub depth_rel_mean: Option<f64>,
-    /// Largest absolute albedo error.
-    pub albedo_max_abs: Option<f64>,
-    /// Albedo RMSE.
-    pub albedo_rmse: Option<f64>,
-    /// Attributes of the dump the layout neither stores nor assumes a constant for.
-    pub dropped: Vec<String>,
-    /// The material table, when the layout uses indirection.
-    pub material_table: Option<MaterialTableRow>,
-    /// Every measured error with where the worst sample sits.
-    pub errors: AttributeErrors,
-}
-
-/// Material table summary (the entries themselves are left out).
-#[derive(Debug, Serialize)]
-pub struct MaterialTableRow {
-    /// Parameters in the table.
-    pub parameters: Vec<String>,
-    /// Distinct tuples in the dump.
-    pub distinct_tuples: usize,
-    /// Table entries used.
-    pub entries: usize,
-    /// Index bits.
-    pub bits: u32,
-    /// Every tuple has its own entry.
-    pub lossless: bool,
-    /// Per parameter, the largest error the table introduces.
-    pub max_abs_error: Vec<f32>,
-    /// Per parameter, the mean error over covered samples.
-    pub mean_abs_error: Vec<f32>,
-    /// What indexes the table: `material-id` (the engine's IDs) or `palette` (clustered tuples).
-    pub key: String,
-    /// Table values taken from the sidecar's `materials` (the rest are per-ID means).
-    pub from_sidecar: usize,
-    /// Why the table is not what the layout asked for, if so.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub note: Option<String>,
-}
-
-impl From<&MaterialTable> for MaterialTableRow {
-    fn from(t: &MaterialTable) -> Self {
-        MaterialTableRow {
-            parameters: t.parameters.clone(),
-            distinct_tuples: t.distinct_tuples,
-            entries: t.entries.len(),
-            bits: t.bits,
-            lossless: t.lossless,
-            max_abs_error: t.max_abs_error.clone(),
-            mean_abs_error: t.mean_abs_error.clone(),
-            key: t.key.clone(),
-            from_sidecar: t.from_sidecar,
-            note: t.note.clone(),
-        }
-    }
-}
-
-/// Packs, unpacks and measures; the library part of the command.
-pub fn measure(gb: &gbuf::GBuffer, layout: &Layout, file: &str) -> anyhow::Result<Row> {
-    let packed = layout.pack(gb).with_context(|| format!("packing with layout {}", layout.name()))?;
-    let back = layout.unpack(&packed, gb).with_context(|| format!("unpacking with layout {}", layout.name()))?;
-    let e = compare(gb, &back)?;
-    let dropped = gb.attributes().into_iter().filter(|a| !back.has(*a)).map(|a| a.name().to_string()).collect();
-    Ok(Row {
-        file: file.to_string(),
-        layout: layout.name().to_string(),
-        bytes_per_sample: layout.bytes_per_sample(),
-        size: [gb.width, gb.height, gb.samples],
-        normal_mean_deg: e.normal.as_ref().map(|n| n.mean_deg),
-        normal_p95_deg: e.normal.as_ref().map(|n| n.p95_deg),
-        normal_max_deg: e.normal.as_ref().map(|n| n.max_deg),
-        depth_rel_max: e.depth.as_ref().map(|d| d.rel_max),
-        depth_rel_mean: e.depth.as_ref().map(|d| d.rel_mean),
-        albedo_max_abs: e.albedo.as_ref().map(|a| a.max_abs),
-        albedo_rmse: e.albedo.as_ref().map(|a| a.rmse),
-        dropped,
-        material_table: packed.material_table.as_ref().map(MaterialTableRow::from),
-        errors: e,
-    })
+/// The JSON of `gbuf roundtrip`: the input file, then the roundtrip's numbers.
+#[derive(Serialize)]
+struct Row {
+    file: String,
+    #[serde(flatten)]
+    roundtrip: Roundtrip,
 }
 
 /// Runs `gbuf roundtrip`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let layout = Layout::by_name_or_path(&args.layout)?;
     let loaded = args.input.load().with_context(|| format!("loading {}", args.input.file.display()))?;
-    let row = measure(&loaded.gbuffer, &layout, &args.input.file.display().to_string())?;
+    let file = args.input.file.display().to_string();
+    let roundtrip = roundtrip(&loaded.gbuffer, &layout).with_context(|| format!("{file}: layout {}", layout.name()))?;
+    let row = Row { file, roundtrip };
     if args.json {
         return super::common::print_json(&row);
     }
@@ -144,14 +55,15 @@ fn worst(err: f64, s: &SampleAt) -> String {
     }
 }
 
-fn print_text(r: &Row) -> anyhow::Result<()> {
+fn print_text(row: &Row) -> anyhow::Result<()> {
+    let r = &row.roundtrip;
     use std::io::Write;
     let mut out = std::io::stdout().lock();
     let e = &r.errors;
     writeln!(
         out,
         "{}: {}×{}×{} through layout {} ({} B/sample), {} covered samples",
-        r.file, r.size[0], r.size[1], r.size[2], r.layout, r.bytes_per_sample, e.covered_samples
+        row.file, r.size[0], r.size[1], r.size[2], r.layout, r.bytes_per_sample, e.covered_samples
     )?;
     if let Some(n) = &e.normal {
         writeln!(

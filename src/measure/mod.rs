@@ -4,3 +4,4 @@ pub mod edges;
 pub mod flip;
 pub mod gbuffer;
 pub mod image;
+pub mod roundtrip;
