@@ -340,7 +340,15 @@ pub fn markdown_table() -> String {
 /// deferred-quad models, in 10⁶ bytes per frame.
 #[must_use]
 pub fn bandwidth(gb: &GBuffer, bytes: u32, quad_light_fragments: Option<u64>) -> Bandwidth {
-    let n = Counts { light_pairs: quad_light_fragments.map(|l| l as f64), ..Counts::of(gb, bytes) };
+    // Only the counts these two models use (no pass over the coverage for covered pixels: this runs per sweep row).
+    let n = Counts {
+        pixels: gb.pixel_count() as f64,
+        samples: f64::from(gb.samples),
+        covered: (gb.len() - gb.background_samples()) as f64,
+        bytes: f64::from(bytes),
+        light_pairs: quad_light_fragments.map(|l| l as f64),
+        ..Counts::default()
+    };
     let tiled = Pipeline::TiledDeferred.traffic(&n).unwrap_or(f64::NAN);
     let quad = Pipeline::DeferredQuad.traffic(&n).map(|x| x / 1e6);
     Bandwidth { tiled: tiled / 1e6, quad, quad_light_fragments }
@@ -387,6 +395,20 @@ mod tests {
         let unknown = Counts { light_pairs: None, ..n };
         assert_eq!(Pipeline::DeferredQuad.traffic(&unknown), None);
         assert!(Pipeline::TiledDeferred.traffic(&unknown).is_some());
+    }
+
+    /// The counts of a frame, and the sweep's bandwidth from the same models.
+    #[test]
+    fn counts_of_a_frame_and_its_bandwidth() {
+        let gb = crate::scene::render(crate::scene::SceneName::Room, 24, 16, 4).unwrap();
+        let n = Counts::of(&gb, 20);
+        let covered = gb.coverage.iter().filter(|c| **c).count() as f64;
+        assert_eq!((n.pixels, n.samples, n.covered, n.bytes), (384.0, 4.0, covered, 20.0));
+        assert!(n.covered_pixels >= (covered / 4.0).ceil() && n.covered_pixels <= covered.min(384.0));
+        let bw = bandwidth(&gb, 20, Some(1000));
+        assert_eq!(bw.tiled, Pipeline::TiledDeferred.traffic(&n).unwrap() / 1e6);
+        assert_eq!(bw.quad, Some((20.0 * covered + 1000.0 * 36.0) / 1e6));
+        assert_eq!(bandwidth(&gb, 20, None).quad, None);
     }
 
     /// The formulas print every term, the base pipeline by name, and the legend names every symbol used.
