@@ -448,3 +448,32 @@ fn errors_that_guide() {
     let err = gbuf::io::load(dir.path(), &LoadOptions::default()).unwrap_err().to_string();
     assert!(err.contains("ALBEDO.exr") && err.contains("4×4"), "{err}");
 }
+
+/// A LuxCore folder with the film outputs a user typically enables beside the six gbuf reads (AVG_SHADING_NORMAL,
+/// RGB, RGBA, RGB_IMAGEPIPELINE, MATERIAL_ID_COLOR, UV, ALPHA, SAMPLECOUNT) loads with no flags, as the same
+/// G-buffer: `AVG_SHADING_NORMAL` is its own buffer, not a second `SHADING_NORMAL` (a suffix match once made the
+/// folder "not a recognised file set").
+#[test]
+fn a_luxcore_folder_with_every_film_output_loads_as_the_six_buffers() {
+    let dir = tempfile::tempdir().unwrap();
+    for f in std::fs::read_dir(lux()).unwrap() {
+        let f = f.unwrap().path();
+        std::fs::copy(&f, dir.path().join(f.file_name().unwrap())).unwrap();
+    }
+    for (from, to) in [
+        ("SHADING_NORMAL.exr", "AVG_SHADING_NORMAL.exr"),
+        ("RGB_IMAGEPIPELINE.png", "RGB.png"),
+        ("RGB_IMAGEPIPELINE.png", "RGBA.png"),
+        ("MATERIAL_ID.png", "MATERIAL_ID_COLOR.png"),
+        ("ALBEDO.exr", "UV.exr"),
+        ("DEPTH.exr", "ALPHA.exr"),
+        ("DEPTH.exr", "SAMPLECOUNT.exr"),
+    ] {
+        std::fs::copy(lux().join(from), dir.path().join(to)).unwrap();
+    }
+    // The longer name is read as its own buffer: a different AVG_SHADING_NORMAL must not change the normals.
+    std::fs::copy(lux().join("GEOMETRY_NORMAL.exr"), dir.path().join("AVG_SHADING_NORMAL.exr")).unwrap();
+    let want = gbuf::io::load(&lux(), &LoadOptions::default()).unwrap().gbuffer;
+    let got = gbuf::io::load(dir.path(), &LoadOptions::default()).unwrap().gbuffer;
+    assert!(got == want, "the folder with every output loads as the fixture's six buffers");
+}

@@ -170,6 +170,34 @@ fn stem_matches(stem: &str, name: &str) -> bool {
             .any(|&sep| s.len() > n.len() && s.ends_with(&n) && s.as_bytes()[s.len() - n.len() - 1] == sep)
 }
 
+/// Buffers the tools write beside the ones the presets read, whose names end with a preset's name: a file named
+/// after one of these is that buffer, not the shorter one (`AVG_SHADING_NORMAL.exr` is not `SHADING_NORMAL`).
+/// LuxCoreRender's film outputs (`Film.Save()`, one file per output type).
+pub const OTHER_BUFFERS: &[&str] = &[
+    "AVG_SHADING_NORMAL",
+    "RGB_IMAGEPIPELINE",
+    "RGBA_IMAGEPIPELINE",
+    "MATERIAL_ID_COLOR",
+    "MATERIAL_ID_MASK",
+    "OBJECT_ID_MASK",
+    "BY_MATERIAL_ID",
+    "BY_OBJECT_ID",
+    "DIRECT_SHADOW_MASK",
+    "INDIRECT_SHADOW_MASK",
+];
+
+/// Does `stem` name buffer `name`, and not a longer buffer whose name ends with it (one of [`OTHER_BUFFERS`] or
+/// another preset's name)?
+fn names_buffer(stem: &str, name: &str) -> bool {
+    let longer = |m: &str| m.len() > name.len() && m.to_ascii_lowercase().ends_with(&name.to_ascii_lowercase());
+    stem_matches(stem, name)
+        && !OTHER_BUFFERS
+            .iter()
+            .copied()
+            .chain(PRESETS.iter().flat_map(|p| p.files.iter().flat_map(|f| f.names.iter().copied())))
+            .any(|m| longer(m) && stem_matches(stem, m))
+}
+
 /// The files of `files` that preset `p` reads, per attribute (the first accepted name found wins). Errors when
 /// one buffer matches several files (several frames in one directory).
 fn assign(p: &Preset, files: &[PathBuf]) -> Result<Vec<(PresetFile, PathBuf)>> {
@@ -178,7 +206,7 @@ fn assign(p: &Preset, files: &[PathBuf]) -> Result<Vec<(PresetFile, PathBuf)>> {
         'names: for name in pf.names {
             let hits: Vec<&PathBuf> = files
                 .iter()
-                .filter(|f| f.file_stem().and_then(|s| s.to_str()).is_some_and(|s| stem_matches(s, name)))
+                .filter(|f| f.file_stem().and_then(|s| s.to_str()).is_some_and(|s| names_buffer(s, name)))
                 .collect();
             match hits.len() {
                 0 => continue,
