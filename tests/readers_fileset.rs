@@ -407,6 +407,21 @@ fn unreal_and_blender_file_output_laid_out_by_their_documentation() {
     let l = gbuf::io::load(dir.path(), &opts).unwrap();
     assert_eq!(l.reading.as_ref().unwrap().preset.as_deref(), Some("unreal"));
     assert_same(&l.gbuffer, &gb, "unreal");
+    // The same buffers named the way a HighResShot with a frame number names them:
+    // `HighResScreenshot_<Buffer>_00001.exr`.
+    let named = tempfile::tempdir().unwrap();
+    for f in std::fs::read_dir(dir.path()).unwrap() {
+        let f = f.unwrap().path();
+        let name = f.file_name().unwrap().to_string_lossy().to_string();
+        let name = match name.strip_prefix("HighresScreenshot00000_").and_then(|n| n.strip_suffix(".exr")) {
+            Some(buffer) => format!("HighResScreenshot_{buffer}_00001.exr"),
+            None => name,
+        };
+        std::fs::copy(&f, named.path().join(name)).unwrap();
+    }
+    let l = gbuf::io::load(named.path(), &opts).unwrap();
+    assert_eq!(l.reading.as_ref().unwrap().preset.as_deref(), Some("unreal"));
+    assert_same(&l.gbuffer, &gb, "unreal, frame-numbered names");
 
     // Blender File Output: `<slot><frame>.exr`, Depth = view-axis distance (1e10 for sky), world normals and
     // positions, IndexMA as float.
