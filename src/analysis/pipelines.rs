@@ -205,6 +205,50 @@ fn fmt_bytes(bytes: u64) -> String {
     }
 }
 
+/// Each MSAA schedule run by the tiled resolve on `mask` (the packed schedule's run reused from `tiled` when the
+/// caller has it), with its work and whether its image equals the first schedule's.
+fn schedule_runs(
+    gb: &GBuffer,
+    lights: &[Light],
+    mask: &EdgeMask,
+    resolve_cfg: &ResolveConfig,
+    tiled: Option<&(resolve::Resolved, f64)>,
+    gbuffer_bytes: u32,
+) -> Result<Vec<ScheduleRun>> {
+    let mut schedules: Vec<ScheduleRun> = Vec::new();
+    let mut first_image: Option<HdrImage> = None;
+    for sched in MsaaSchedule::ALL {
+        let (r, ms) = match (tiled, sched) {
+            (Some((r, ms)), MsaaSchedule::Packed) => (r.clone(), *ms),
+            _ => {
+                let rc = ResolveConfig {
+                    culling: Culling::Tiled,
+                    schedule: Schedule::Deferred,
+                    msaa: sched,
+                    ..*resolve_cfg
+                };
+                let t = Instant::now();
+                let r = resolve::resolve(gb, lights, mask, &rc)?;
+                (r, t.elapsed().as_secs_f64() * 1e3)
+            }
+        };
+        let same_image = first_image.as_ref().is_none_or(|p| p.rgb == r.image.rgb);
+        schedules.push(ScheduleRun {
+            schedule: sched,
+            ms,
+            evaluations: r.stats.shading_evaluations,
+            lane_steps: r.stats.lane_steps,
+            light_pairs: r.stats.light_pairs_tested,
+            bytes_read: r.stats.shading_evaluations * u64::from(gbuffer_bytes),
+            same_image,
+        });
+        if first_image.is_none() {
+            first_image = Some(r.image);
+        }
+    }
+    Ok(schedules)
+}
+
 /// Lights surviving each tile's culling, row-major over tiles: from a tiled resolve shading one sample per pixel,
 /// where each pixel's light tests are its tile's list length.
 fn tile_light_counts(heat: &[u32], width: u32, height: u32, ts: u32) -> Vec<u32> {
@@ -618,33 +662,7 @@ pub fn pipelines_with(
     if rows.is_empty() {
         return Err(Error::Argument("no pipeline could be measured".into()));
     }
-    let mut schedules: Vec<ScheduleRun> = Vec::new();
-    let mut packed_image = None;
-    for sched in MsaaSchedule::ALL {
-        let (r, ms) = match (&tiled, sched) {
-            (Some((r, ms)), MsaaSchedule::Packed) => (r.clone(), *ms),
-            _ => {
-                let rc =
-                    ResolveConfig { culling: Culling::Tiled, schedule: Schedule::Deferred, msaa: sched, ..cfg.resolve };
-                let t = Instant::now();
-                let r = resolve::resolve(gb, lights, &mask, &rc)?;
-                (r, t.elapsed().as_secs_f64() * 1e3)
-            }
-        };
-        let same_image = packed_image.as_ref().is_none_or(|p: &HdrImage| p.rgb == r.image.rgb);
-        schedules.push(ScheduleRun {
-            schedule: sched,
-            ms,
-            evaluations: r.stats.shading_evaluations,
-            lane_steps: r.stats.lane_steps,
-            light_pairs: r.stats.light_pairs_tested,
-            bytes_read: r.stats.shading_evaluations * u64::from(b),
-            same_image,
-        });
-        if packed_image.is_none() {
-            packed_image = Some(r.image);
-        }
-    }
+    let schedules = schedule_runs(gb, lights, &mask, &cfg.resolve, tiled.as_ref(), b)?;
     let mut utilisation = Vec::new();
     for &warp in &cfg.warps {
         for sched in MsaaSchedule::ALL {
