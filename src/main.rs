@@ -1,6 +1,6 @@
 //! `gbuf`: the command-line front end. Flags and glue only; every stage is a library call.
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::process::ExitCode;
 
 mod cli;
@@ -44,8 +44,23 @@ enum Command {
     Merge(cli::merge::Args),
 }
 
+/// Commands that read a dump and have no layout flag of their own: there `--layout` names the layout of packed
+/// render targets (`--input-layout` everywhere, since `pack`, `resolve`, `roundtrip` and `pipelines` use
+/// `--layout` for the layout they apply).
+const INPUT_LAYOUT_IS_LAYOUT: [&str; 4] = ["info", "edges", "budget", "report"];
+
+/// The command line, with `--layout` as the spelling of `--input-layout` where it is free.
+fn parse() -> Cli {
+    let mut cmd = Cli::command();
+    for name in INPUT_LAYOUT_IS_LAYOUT {
+        cmd = cmd.mut_subcommand(name, |c| c.mut_arg("input_layout", |a| a.visible_alias("layout")));
+    }
+    let matches = cmd.get_matches();
+    Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = parse();
     let result = match cli.command {
         Command::Demo(a) => cli::demo::run(a),
         Command::Scene(a) => cli::scene::run(a),

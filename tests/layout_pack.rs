@@ -2,6 +2,7 @@
 //! by hand; the reference layout is lossless; byte sizes add up; material indirection; hostile input.
 
 use gbuf::codec;
+use gbuf::codec::DepthCodec as _;
 use gbuf::gbuffer::{Attribute, GBuffer};
 use gbuf::layout::{pack::field_code, Layout, LayoutSpec, Slot};
 use gbuf::util::SplitMix64;
@@ -188,11 +189,24 @@ fn unpack_is_bit_exact_across_parallel_row_blocks() {
                 );
             }
         }
-        // Background texels are cleared in every target.
+        // Background texels are cleared in every target: zero, but a depth field holds its codec's clear code
+        // (the far plane), so the coverage read back from the depth field is the G-buffer's.
         let bg: Vec<usize> = (0..gb.len()).filter(|&i| !gb.coverage[i]).collect();
-        for t in &packed.targets {
+        let [n, f] = packed.depth_range;
+        for (ti, t) in packed.targets.iter().enumerate() {
             let size = t.format.bytes();
-            assert!(bg.iter().all(|&i| t.bytes[i * size..(i + 1) * size].iter().all(|b| *b == 0)), "{}", t.name);
+            let mut clear = [0u8; 16];
+            for field in layout.fields().iter().filter(|x| x.target == ti && x.slot == Slot::Whole(Attribute::Depth)) {
+                let code = codec::depth_codec(&field.codec, n, f).unwrap().clear_code();
+                let word = u128::from(code) << field.offset;
+                clear = word.to_le_bytes();
+            }
+            let ok = bg.iter().all(|&i| t.bytes[i * size..(i + 1) * size] == clear[..size]);
+            assert!(ok, "{}: {}", layout.name(), t.name);
+        }
+        if layout.stores(Attribute::Depth) {
+            let cov = layout.coverage_from_depth(&packed.targets, packed.depth_range).unwrap().unwrap();
+            assert_eq!(cov, gb.coverage, "{}: coverage from the depth field", layout.name());
         }
     }
 }

@@ -600,6 +600,7 @@ impl SidecarIn {
                     metallic: m.4.map(Val::f32),
                 })
                 .collect(),
+            sample_positions: None,
         };
         serde_json::to_string(&s).unwrap_or_default()
     }

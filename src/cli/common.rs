@@ -55,9 +55,35 @@ pub struct ReadArgs {
     /// Decode DWAA/DWAB-compressed EXRs (lossy; the decoder is less hardened).
     #[arg(long)]
     pub allow_dwa: bool,
+    /// The input is the packed render targets of this layout (a built-in name or a layout file): a folder of
+    /// `<target>.dds|bin|png|exr` (RenderDoc DDS saves with samples as array slices; `gbuf pack` output). A folder
+    /// holding `layout.toml` needs no flag. Spelled `--layout` on commands without a layout of their own.
+    #[arg(long = "input-layout", value_name = "NAME|PATH")]
+    pub input_layout: Option<String>,
+    /// A packed target's file, when it is not `<target>.<ext>` in the folder: `--target gbuffer_a=cap/rt1.dds`
+    /// (also `coverage=FILE`, `material_table=FILE`). Repeat per target.
+    #[arg(long = "target", value_name = "NAME=FILE")]
+    pub targets: Vec<String>,
 }
 
 impl ReadArgs {
+    /// How to read packed render targets (`--input-layout`/`--layout`, `--target`).
+    pub fn packed(&self) -> anyhow::Result<gbuf::layout::targets::PackedInput> {
+        let layout = self.input_layout.as_deref().map(gbuf::layout::Layout::by_name_or_path).transpose()?;
+        let mut targets = Vec::new();
+        for t in &self.targets {
+            let (name, file) =
+                t.split_once('=').with_context(|| format!("--target {t:?}: write NAME=FILE (e.g. gbuffer_a=a.dds)"))?;
+            targets.push((name.trim().to_string(), PathBuf::from(file.trim())));
+        }
+        Ok(gbuf::layout::targets::PackedInput { layout, targets })
+    }
+
+    /// Loads one dump (packed render targets when asked for or named by the folder's `layout.toml`).
+    pub fn load(&self, path: &std::path::Path) -> anyhow::Result<Loaded> {
+        Ok(gbuf::layout::targets::load(path, &self.packed()?, &self.options()?)?)
+    }
+
     /// Library load options from the flags.
     pub fn options(&self) -> anyhow::Result<LoadOptions> {
         let mut map = Vec::new();
@@ -141,15 +167,14 @@ impl InputArgs {
 
     /// Loads the dump and prints its plausibility warnings on stderr.
     pub fn load(&self) -> anyhow::Result<Loaded> {
-        let opts = self.options()?;
-        let loaded = gbuf::io::load(&self.file, &opts)?;
+        let loaded = self.read.load(&self.file)?;
         print_warnings(&self.file, &loaded);
         Ok(loaded)
     }
 
     /// Reads another file (a companion of the dump) with the same flags.
     pub fn load_path(&self, path: &std::path::Path) -> anyhow::Result<Loaded> {
-        let loaded = gbuf::io::load(path, &self.options()?)?;
+        let loaded = self.read.load(path)?;
         print_warnings(path, &loaded);
         Ok(loaded)
     }
@@ -179,7 +204,10 @@ impl FramesArgs {
         let mut out: Vec<PathBuf> = Vec::new();
         for p in &self.files {
             let text = p.to_string_lossy();
-            if p.is_dir() && gbuf::io::fileset::looks_like_file_set(p) {
+            let packed = |d: &std::path::Path| {
+                gbuf::layout::targets::is_packed_dir(d) || (self.read.input_layout.is_some() && holds_targets(d))
+            };
+            if p.is_dir() && (gbuf::io::fileset::looks_like_file_set(p) || packed(p)) {
                 out.push(p.clone());
             } else if p.is_dir() {
                 let mut found: Vec<PathBuf> = std::fs::read_dir(p)
@@ -189,7 +217,7 @@ impl FramesArgs {
                         (f.is_file()
                             && f.extension()
                                 .is_some_and(|e| e.eq_ignore_ascii_case("exr") || e.eq_ignore_ascii_case("bin")))
-                            || (f.is_dir() && gbuf::io::fileset::looks_like_file_set(f))
+                            || (f.is_dir() && (gbuf::io::fileset::looks_like_file_set(f) || packed(f)))
                     })
                     .collect();
                 found.sort();
@@ -228,11 +256,18 @@ impl FramesArgs {
 
     /// Loads one of the dumps.
     pub fn load(&self, path: &std::path::Path) -> anyhow::Result<Loaded> {
-        let opts = self.read.options()?;
-        let loaded = gbuf::io::load(path, &opts).with_context(|| format!("loading {}", path.display()))?;
+        let loaded = self.read.load(path).with_context(|| format!("loading {}", path.display()))?;
         print_warnings(path, &loaded);
         Ok(loaded)
     }
+}
+
+/// True when `dir` holds a file named like a render target (`*.dds`): with `--input-layout`, such a folder is one
+/// frame of packed targets.
+fn holds_targets(dir: &std::path::Path) -> bool {
+    std::fs::read_dir(dir).is_ok_and(|mut it| {
+        it.any(|e| e.is_ok_and(|e| e.path().extension().is_some_and(|x| x.eq_ignore_ascii_case("dds"))))
+    })
 }
 
 /// Prints a value as pretty JSON on stdout.

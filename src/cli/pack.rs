@@ -1,9 +1,12 @@
 //! `gbuf pack DUMP --layout L -o DIR`: the dump packed with a layout, written as the render targets an engine would
-//! hold: one DDS per target in its DXGI format, MSAA samples as array slices, and the material table as JSON.
+//! hold: one DDS per target in its DXGI format, MSAA samples as array slices, and the material table as JSON; with
+//! the layout (`layout.toml`) and the sidecar (`scene.json`) beside them, so every command reads the folder back
+//! with no flags.
 
 use super::common::InputArgs;
 use anyhow::Context;
-use gbuf::layout::dds::{write_targets, WrittenTarget};
+use gbuf::layout::dds::WrittenTarget;
+use gbuf::layout::targets;
 use gbuf::layout::Layout;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -17,7 +20,8 @@ pub struct Args {
     /// Layout: a built-in name (see `gbuf layouts`) or a TOML/JSON layout file.
     #[arg(long, value_name = "NAME|PATH")]
     pub layout: String,
-    /// The folder to write `<target>.dds` (`.bin` for formats with no DXGI twin) and `material_table.json` into.
+    /// The folder to write `<target>.dds` (`.bin` for formats with no DXGI twin), `material_table.json`,
+    /// `layout.toml` and `scene.json` into (created if missing; every file written atomically).
     #[arg(short = 'o', long = "out", value_name = "DIR")]
     pub out: PathBuf,
     /// Machine-readable output on stdout.
@@ -31,6 +35,8 @@ struct Output<'a> {
     layout: &'a str,
     size: [u32; 3],
     bytes_per_sample: usize,
+    /// True when the input was packed targets of the same layout and their codes were copied, not re-encoded.
+    codes_copied: bool,
     files: &'a [WrittenTarget],
 }
 
@@ -40,13 +46,32 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let file = args.input.file.display().to_string();
     let loaded = args.input.load().with_context(|| format!("loading {file}"))?;
     let gb = &loaded.gbuffer;
-    let packed = layout.pack(gb).with_context(|| format!("{file}: packing with layout {}", layout.name()))?;
-    let files = write_targets(&packed, &args.out).with_context(|| format!("writing {}", args.out.display()))?;
+    let lights = loaded.lights.as_deref().unwrap_or_default();
+    // A packed frame repacked with its own layout keeps its codes: decoding and encoding again need not give the
+    // same code (a normal codec that normalises on decode; a material index re-keyed), and the engine's bits are
+    // the data.
+    let input = args.input.read.packed()?;
+    let own = match &input.layout {
+        Some(l) => Some(l.clone()),
+        None if targets::is_packed_dir(&args.input.file) => {
+            Some(Layout::load(&args.input.file.join(targets::LAYOUT_FILE))?)
+        }
+        None => None,
+    };
+    let context = || format!("{file}: packing with layout {} into {}", layout.name(), args.out.display());
+    let copied = own.as_ref() == Some(&layout);
+    let files = if copied {
+        let frame = targets::read_frame(&args.input.file, &layout, &input.targets, &args.input.options()?)?;
+        targets::write_packed(&layout, &frame.packed, gb, lights, &args.out).with_context(context)?
+    } else {
+        targets::write_frame(&layout, gb, lights, &args.out).with_context(context)?
+    };
     let out = Output {
         file,
         layout: layout.name(),
         size: [gb.width, gb.height, gb.samples],
         bytes_per_sample: layout.bytes_per_sample(),
+        codes_copied: copied,
         files: &files,
     };
     if args.json {
@@ -59,6 +84,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "{}: {}×{}×{} packed with {} ({} B/sample)",
         out.file, out.size[0], out.size[1], out.size[2], out.layout, out.bytes_per_sample
     )?;
+    if copied {
+        writeln!(o, "  (the input holds this layout's targets: their codes are copied, not decoded and re-encoded)")?;
+    }
     for f in &files {
         let dxgi = f.dxgi_format.map_or_else(String::new, |d| format!(" (DXGI format {d})"));
         writeln!(o, "  {:<16} {:<12} {:>10} B  {}{dxgi}", f.target, f.format, f.bytes, f.path.display())?;

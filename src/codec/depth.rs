@@ -262,11 +262,25 @@ impl DepthCodec for PostProjection {
         let e = (self.z_of(d - h) - z).abs().max((self.z_of(d + h) - z).abs());
         (e + z * 2f64.powi(-23)) as f32
     }
+    fn clear_code(&self) -> u64 {
+        self.encode(f32::INFINITY)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn clear_codes_are_the_far_plane_or_zero() {
+        let code = |n: &str| depth_codec(n, 0.1, 100.0).unwrap().clear_code();
+        assert_eq!(code("unorm24"), (1 << 24) - 1);
+        assert_eq!(code("unorm16"), (1 << 16) - 1);
+        assert_eq!(code("f32-standard"), u64::from(1f32.to_bits()));
+        for n in ["unorm24-reversed", "unorm16-reversed", "f32-reversed", "f32", "f16"] {
+            assert_eq!(code(n), 0, "{n}");
+        }
+    }
 
     #[test]
     fn planes_map_to_the_ends_of_the_range() {

@@ -153,6 +153,12 @@ pub trait DepthCodec: Codec<Value = f32> {
         let _ = depth;
         f32::INFINITY
     }
+    /// The code a depth buffer holds where no surface was drawn (what it is cleared to): the far plane of a
+    /// post-projection depth (1.0 or all ones standard, 0 reversed), 0 for a linear view depth. `Layout::pack`
+    /// writes it at background samples and the packed-target reader takes it for "no surface".
+    fn clear_code(&self) -> u64 {
+        0
+    }
 }
 
 /// Like [`normal_codec`], but an unknown name is an error listing the valid ones.

@@ -42,6 +42,9 @@ pub enum SourceFormat {
     Mapped,
     /// A file set: one image per buffer (a directory, or files named with `--map attr=FILE`).
     FileSet,
+    /// The render targets of a layout (DDS, PNG, EXR or `.bin` per target), decoded by the layout
+    /// (`layout::targets`).
+    PackedTargets,
 }
 
 /// How to load a dump.
@@ -220,6 +223,9 @@ fn resolve_sidecar(path: &Path, opts: &LoadOptions) -> Result<Option<(Sidecar, P
     Ok(Some((Sidecar::load(&p)?, p)))
 }
 
+/// The file name of a packed frame's material table (`gbuf pack` writes it; never taken for a sidecar).
+pub const MATERIAL_TABLE_FILE: &str = "material_table.json";
+
 /// The sidecar of a file-set directory: `scene.json` in it, else its only `.json` file, else `<dir>.json` beside it.
 fn dir_sidecar(dir: &Path) -> Result<Option<PathBuf>> {
     let scene = dir.join("scene.json");
@@ -230,6 +236,8 @@ fn dir_sidecar(dir: &Path) -> Result<Option<PathBuf>> {
         .map_err(|e| Error::io(dir, e))?
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.is_file() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("json")))
+        // The material table of packed render targets (`gbuf pack`) is not a sidecar.
+        .filter(|p| !p.file_name().is_some_and(|n| n.eq_ignore_ascii_case(MATERIAL_TABLE_FILE)))
         .collect();
     match jsons.as_slice() {
         [one] => Ok(Some(one.clone())),
@@ -246,6 +254,20 @@ fn dir_sidecar(dir: &Path) -> Result<Option<PathBuf>> {
             ),
         )),
     }
+}
+
+/// The sidecar [`load`] would use for `path` and its path (for readers above `io`, such as the packed render
+/// targets of `layout::targets`, which need the camera before they decode).
+pub fn sidecar_for(path: &Path, opts: &LoadOptions) -> Result<Option<(Sidecar, PathBuf)>> {
+    resolve_sidecar(path, opts)
+}
+
+/// What [`load`] does after its reader, for readers above `io`: folding, the sidecar's camera, lights and
+/// materials, derived depth, sanitising, validation and the plausibility checks.
+pub fn finish_loaded(loaded: Loaded, path: &Path, opts: &LoadOptions) -> Result<Loaded> {
+    crate::util::protect_input(path);
+    let side = resolve_sidecar(path, opts)?;
+    finish(loaded, path, side.as_ref().map(|(s, p)| (s, p.as_path())), opts)
 }
 
 /// Picks the EXR reader: canonical; the `--map` reader when the map names depth or position; Blender; Mitsuba;

@@ -93,6 +93,10 @@ pub struct Sidecar {
     /// The engine's materials: parameters per material ID (material-ID indirection uses them as its table).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub materials: Vec<MaterialParams>,
+    /// Sample positions (offsets from the pixel centre in pixels, +y down), for inputs that cannot carry them
+    /// (packed render targets: `gbuf pack` writes them here); other dumps keep their own.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sample_positions: Option<Vec<[f32; 2]>>,
 }
 
 impl SidecarCamera {

@@ -15,6 +15,8 @@ pub mod material;
 pub mod pack;
 pub mod spec;
 pub mod summary;
+pub mod targets;
+pub mod texture;
 
 pub use coder::{CodecKind, Slot};
 pub use formats::{Component, ComponentKind, Format};

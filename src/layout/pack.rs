@@ -1,7 +1,8 @@
 //! Packing a G-buffer into render-target bytes and reading it back.
 //!
 //! [`Layout::pack`] encodes every sample field by field, ORs the codes into the target's texel word and writes it
-//! little-endian (background samples are a cleared texel: all zero bits). [`Layout::unpack`] reads the words
+//! little-endian (background samples are a cleared texel: all zero bits but a depth field, which holds its
+//! codec's clear code, the far plane: what a depth buffer cleared before the G-buffer pass holds). [`Layout::unpack`] reads the words
 //! back, extracts each field's bits and decodes them; it is bit-exact with calling each codec's
 //! `decode(encode(x))` by hand. Both run in parallel (rayon) over blocks of whole rows, and inside a block each
 //! field goes through its codec's slice path (`encode_slice` / `decode_slice`: vectorised, bit-identical to the
@@ -243,6 +244,7 @@ fn load_codes<W: Word, const N: usize>(bytes: &[u8], offset: u32, bits: u32, cod
 /// field through its codec's slice path.
 fn pack_target<W: Word>(
     fields: &[(&Field, &Coder, Src<'_>)],
+    clear: W,
     cov: &[bool],
     size: usize,
     row: usize,
@@ -262,7 +264,7 @@ fn pack_target<W: Word>(
         }
         // Background samples are a cleared texel.
         for (w, c) in words.iter_mut().zip(&cov[base..base + len]) {
-            *w = if *c { *w } else { W::default() };
+            *w = if *c { *w } else { clear };
         }
         match size {
             1 => store_words::<W, 1>(&words, out),
@@ -342,6 +344,34 @@ impl Layout {
         })
     }
 
+    /// The texel of target `target` at a background sample: zero but a depth field, which holds its codec's
+    /// [`crate::codec::DepthCodec::clear_code`].
+    fn clear_texel(&self, coders: &[Coder], target: usize) -> u128 {
+        let mut word = 0u128;
+        for (f, c) in self.fields().iter().zip(coders).filter(|(f, _)| f.target == target) {
+            if let Coder::Depth(d) = c {
+                insert(&mut word, f.offset, f.bits, d.clear_code());
+            }
+        }
+        word
+    }
+
+    /// The coverage of packed targets read from files (no float truth): a sample is covered unless its depth field
+    /// holds the depth codec's clear code. `None` when the layout stores no depth field.
+    pub fn coverage_from_depth(&self, targets: &[TargetPlane], depth_range: [f32; 2]) -> Result<Option<Vec<bool>>> {
+        let coders = self.coders(depth_range)?;
+        let Some((f, Coder::Depth(d))) =
+            self.fields().iter().zip(&coders).find(|(f, _)| f.slot == Slot::Whole(Attribute::Depth))
+        else {
+            return Ok(None);
+        };
+        let t = &targets[f.target];
+        let (size, clear) = (t.format.bytes(), d.clear_code());
+        Ok(Some(
+            t.bytes.par_chunks_exact(size).map(|texel| extract(load_le(texel), f.offset, f.bits) != clear).collect(),
+        ))
+    }
+
     /// The material table and every sample's index into it, when the layout uses indirection.
     fn material_index(&self, gb: &GBuffer) -> (Option<MaterialTable>, Vec<u32>) {
         match self.indirection() {
@@ -390,10 +420,11 @@ impl Layout {
                 .collect();
             // Every byte is written by `pack_target`: no clearing needed when the plane is reused.
             target.bytes.resize(range.len() * size, 0);
+            let clear = self.clear_texel(coders, ti);
             if size <= 8 {
-                pack_target::<u64>(&fields, &gb.coverage, size, row, range.start, &mut target.bytes);
+                pack_target::<u64>(&fields, clear as u64, &gb.coverage, size, row, range.start, &mut target.bytes);
             } else {
-                pack_target::<u128>(&fields, &gb.coverage, size, row, range.start, &mut target.bytes);
+                pack_target::<u128>(&fields, clear, &gb.coverage, size, row, range.start, &mut target.bytes);
             }
         }
     }

@@ -244,5 +244,6 @@ pub fn scene_sidecar(gb: &GBuffer, lights: &[Light]) -> Sidecar {
         lights: lights.iter().map(sidecar_light).collect(),
         lights_space: Some("view".into()),
         materials: gb.materials.clone(),
+        sample_positions: None,
     }
 }

@@ -1,0 +1,413 @@
+//! Packed render targets as an input: a folder holding `<target name>.<dds|bin|png|exr>` per target of a layout
+//! (what `gbuf pack` writes, or an engine's capture saved target by target, e.g. from RenderDoc with "samples to
+//! array slices"), decoded through the layout into a G-buffer, the way the engine's lighting pass would see it.
+//!
+//! What the files cannot say comes from beside them: the camera (near/far for the depth codecs, the projection for
+//! positions), the lights and the sample positions from the sidecar (`scene.json`, found as for every dump); the
+//! material table from `material_table.json`; coverage from `coverage.<ext>` (R8, nonzero = a surface) when
+//! present, else from the depth field: a sample whose depth holds the codec's clear code (the far plane: 1.0 or all
+//! ones standard, 0 reversed and linear) is background, as an engine's lighting pass tests the depth buffer. A
+//! layout that stores no depth needs the coverage file. A folder holding `layout.toml` (`gbuf pack` writes it)
+//! names its own layout; any other folder needs the layout from the caller (`--layout`).
+
+use super::texture::{self, Texture};
+use super::{Layout, MaterialTable, Packed, Slot, TargetPlane};
+use crate::error::{Error, Result};
+use crate::gbuffer::{Attribute, GBuffer};
+use crate::io::{AttributeSource, CameraSource, LoadOptions, Loaded, SourceFormat, MATERIAL_TABLE_FILE};
+use crate::layout::formats::Format;
+use glam::Vec2;
+use std::path::{Path, PathBuf};
+
+/// The layout file `gbuf pack` writes beside the targets: a folder holding it is read through it with no flag.
+pub const LAYOUT_FILE: &str = "layout.toml";
+
+/// The coverage target's name (an optional R8 file: nonzero where a surface is).
+pub const COVERAGE_TARGET: &str = "coverage";
+
+/// File extensions a target may have, in the order they are looked for.
+pub const EXTENSIONS: [&str; 4] = ["dds", "bin", "png", "exr"];
+
+/// How to read packed render targets (the CLI's `--layout`/`--input-layout` and `--target NAME=FILE`).
+#[derive(Clone, Debug, Default)]
+pub struct PackedInput {
+    /// The layout the targets were written with; `None`: the folder's `layout.toml`, if any.
+    pub layout: Option<Layout>,
+    /// Explicit files per target name (relative paths are relative to the folder).
+    pub targets: Vec<(String, PathBuf)>,
+}
+
+impl PackedInput {
+    /// True when this input asks for packed targets (a layout or a target file was given).
+    #[must_use]
+    pub fn is_given(&self) -> bool {
+        self.layout.is_some() || !self.targets.is_empty()
+    }
+}
+
+/// True when `dir` is a folder of packed targets that names its own layout (holds `layout.toml`).
+#[must_use]
+pub fn is_packed_dir(dir: &Path) -> bool {
+    dir.is_dir() && dir.join(LAYOUT_FILE).is_file()
+}
+
+/// Loads `path` as packed render targets when `input` asks for them or the folder holds `layout.toml`, else as
+/// any other dump ([`crate::io::load`]).
+pub fn load(path: &Path, input: &PackedInput, opts: &LoadOptions) -> Result<Loaded> {
+    if !input.is_given() && !is_packed_dir(path) {
+        return crate::io::load(path, opts);
+    }
+    let layout = match &input.layout {
+        Some(l) => l.clone(),
+        None => Layout::load(&path.join(LAYOUT_FILE))?,
+    };
+    load_packed(path, &layout, &input.targets, opts)
+}
+
+/// The file holding target `name` in `dir`: `<name>.<ext>` (name matched ignoring case), or the explicit one.
+fn target_file(dir: &Path, name: &str, explicit: &[(String, PathBuf)], files: &[PathBuf]) -> Result<Option<PathBuf>> {
+    if let Some((_, f)) = explicit.iter().find(|(n, _)| n.eq_ignore_ascii_case(name)) {
+        let f = if f.is_relative() && !f.exists() { dir.join(f) } else { f.clone() };
+        if !f.is_file() {
+            return Err(Error::Argument(format!("--target {name}={}: no such file", f.display())));
+        }
+        return Ok(Some(f));
+    }
+    let found: Vec<&PathBuf> = files
+        .iter()
+        .filter(|f| {
+            f.file_stem().and_then(|s| s.to_str()).is_some_and(|s| s.eq_ignore_ascii_case(name))
+                && f.extension()
+                    .and_then(|e| e.to_str())
+                    .is_some_and(|e| EXTENSIONS.iter().any(|x| x.eq_ignore_ascii_case(e)))
+        })
+        .collect();
+    match found.as_slice() {
+        [] => Ok(None),
+        [one] => Ok(Some((*one).clone())),
+        many => Err(Error::invalid(
+            dir,
+            format!(
+                "{} files hold target {name:?} ({}): keep one, or name it with --target {name}=FILE",
+                many.len(),
+                many.iter().filter_map(|p| p.file_name()?.to_str()).collect::<Vec<_>>().join(", ")
+            ),
+        )),
+    }
+}
+
+/// Texels sample-major (slice s = sample s of every pixel) → pixel-major (the samples of a pixel together).
+fn pixel_major(t: &Texture, tb: usize) -> Vec<u8> {
+    let (pixels, samples) = (t.width as usize * t.height as usize, t.slices as usize);
+    let mut out = vec![0u8; t.bytes.len()];
+    for s in 0..samples {
+        for p in 0..pixels {
+            let src = (s * pixels + p) * tb;
+            let dst = (p * samples + s) * tb;
+            out[dst..dst + tb].copy_from_slice(&t.bytes[src..src + tb]);
+        }
+    }
+    out
+}
+
+/// A packed frame read from files, before decoding.
+#[derive(Clone, Debug)]
+pub struct PackedFrame {
+    /// The targets' bytes (pixel-major, as [`Layout::pack`] makes them) and what the layout stores.
+    pub packed: Packed,
+    /// The G-buffer without planes: size, samples, sample positions, camera, coverage.
+    pub shell: GBuffer,
+    /// Per target: the file and what it stores (`DDS DXGI 24 R10G10B10A2_UNORM`, …).
+    pub files: Vec<(String, PathBuf, String)>,
+    /// Where coverage came from (`coverage file …` or `depth field … ≠ clear code …`).
+    pub coverage_from: String,
+    /// True when no sample positions were given and the standard pattern was assumed.
+    pub positions_assumed: bool,
+}
+
+/// Reads the targets of `layout` from `dir` (and the sidecar's camera and sample positions, the material table,
+/// the coverage) without decoding them.
+pub fn read_frame(
+    dir: &Path,
+    layout: &Layout,
+    explicit: &[(String, PathBuf)],
+    opts: &LoadOptions,
+) -> Result<PackedFrame> {
+    crate::util::protect_input(dir);
+    if !dir.is_dir() && explicit.is_empty() {
+        return Err(Error::invalid(
+            dir,
+            format!("packed render targets of layout {:?} are a folder of files", layout.name()),
+        ));
+    }
+    let files: Vec<PathBuf> = if dir.is_dir() {
+        let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+            .map_err(|e| Error::io(dir, e))?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.is_file())
+            .collect();
+        v.sort();
+        v
+    } else {
+        Vec::new()
+    };
+    for (n, _) in explicit {
+        let known = layout.spec().targets.iter().any(|t| t.name.eq_ignore_ascii_case(n))
+            || n.eq_ignore_ascii_case(COVERAGE_TARGET)
+            || n.eq_ignore_ascii_case("material_table");
+        if !known {
+            return Err(Error::Argument(format!(
+                "--target {n}: layout {:?} has no such target (its targets: {}; also coverage, material_table)",
+                layout.name(),
+                layout.spec().targets.iter().map(|t| t.name.as_str()).collect::<Vec<_>>().join(", ")
+            )));
+        }
+    }
+    let mut planes = Vec::new();
+    let mut read = Vec::new();
+    let mut size: Option<(u32, u32, u32, PathBuf)> = None;
+    let check = |size: &mut Option<(u32, u32, u32, PathBuf)>, t: &Texture, f: &Path| -> Result<()> {
+        match size {
+            None => *size = Some((t.width, t.height, t.slices, f.to_path_buf())),
+            Some((w, h, s, first)) if (*w, *h, *s) != (t.width, t.height, t.slices) => {
+                return Err(Error::SizeMismatch {
+                    path: f.into(),
+                    what: format!(
+                        "{}×{} texels × {} slice(s), but {} has {w}×{h} × {s}: every target of a frame has the same \
+                         size and sample count",
+                        t.width,
+                        t.height,
+                        t.slices,
+                        first.display()
+                    ),
+                })
+            }
+            Some(_) => {}
+        }
+        Ok(())
+    };
+    for (spec, &format) in layout.spec().targets.iter().zip(layout.formats()) {
+        let f = target_file(dir, &spec.name, explicit, &files)?.ok_or_else(|| {
+            Error::invalid(
+                dir,
+                format!(
+                    "no file for target {:?} of layout {:?} (looked for {}.{{{}}}; files here: {}); name it with \
+                     --target {}=FILE",
+                    spec.name,
+                    layout.name(),
+                    spec.name,
+                    EXTENSIONS.join(","),
+                    if files.is_empty() {
+                        "none".to_string()
+                    } else {
+                        files.iter().filter_map(|p| p.file_name()?.to_str()).collect::<Vec<_>>().join(", ")
+                    },
+                    spec.name
+                ),
+            )
+        })?;
+        let t = texture::read(&f, format, &opts.limits)?;
+        check(&mut size, &t, &f)?;
+        planes.push(TargetPlane { name: spec.name.clone(), format, bytes: pixel_major(&t, format.bytes()) });
+        read.push((spec.name.clone(), f, t.stored_as));
+    }
+    let (width, height, samples, _) = size.clone().ok_or_else(|| Error::invalid(dir, "the layout has no targets"))?;
+    let side = crate::io::sidecar_for(dir, opts)?;
+    let mut shell = GBuffer::new(width, height, samples).map_err(|e| Error::invalid(dir, format!("{e}")))?;
+    let mut positions_assumed = samples > 1;
+    if let Some((s, sp)) = &side {
+        if let Some(c) = &s.camera {
+            shell.camera = Some(c.to_camera_for(width, height));
+        }
+        if let Some(p) = &s.sample_positions {
+            if p.len() != samples as usize {
+                return Err(Error::Parse {
+                    path: sp.clone(),
+                    what: format!("{} sample positions for targets of {samples} samples", p.len()),
+                });
+            }
+            shell.sample_positions = p.iter().map(|&[x, y]| Vec2::new(x, y)).collect();
+            positions_assumed = false;
+        }
+    }
+    let depth_range = layout.depth_range_for(&shell);
+    // Coverage: the coverage file, else the depth field's clear code.
+    let cov_file = target_file(dir, COVERAGE_TARGET, explicit, &files)?;
+    let coverage_from = if let Some(f) = cov_file {
+        let t = texture::read(&f, Format::R8, &opts.limits)?;
+        check(&mut size, &t, &f)?;
+        shell.coverage = pixel_major(&t, 1).iter().map(|&b| b != 0).collect();
+        format!("{} (nonzero = a surface)", f.display())
+    } else {
+        let packed_targets = &planes;
+        match layout.coverage_from_depth(packed_targets, depth_range)? {
+            Some(c) => {
+                shell.coverage = c;
+                let f = layout.fields().iter().find(|f| f.slot == Slot::Whole(Attribute::Depth));
+                format!(
+                    "the depth field ({}): a sample holding the clear code (the far plane) is background",
+                    f.map_or_else(String::new, |f| format!("{} {}", layout.spec().targets[f.target].name, f.codec))
+                )
+            }
+            None => {
+                return Err(Error::invalid(
+                    dir,
+                    format!(
+                        "layout {:?} stores no depth, so nothing tells a surface from the background: add \
+                         coverage.dds (R8, nonzero = a surface) or --target coverage=FILE",
+                        layout.name()
+                    ),
+                ))
+            }
+        }
+    };
+    let material_table = match layout.indirection() {
+        None => None,
+        Some(_) => {
+            let f = explicit
+                .iter()
+                .find(|(n, _)| n.eq_ignore_ascii_case("material_table"))
+                .map(|(_, f)| if f.is_relative() && !f.exists() { dir.join(f) } else { f.clone() })
+                .unwrap_or_else(|| dir.join(MATERIAL_TABLE_FILE));
+            let text = std::fs::read(&f).map_err(|e| {
+                Error::invalid(&f, format!("layout {:?} indexes a material table; reading it: {e}", layout.name()))
+            })?;
+            let table: MaterialTable = serde_json::from_slice(&text)
+                .map_err(|e| Error::Parse { path: f.clone(), what: format!("material table: {e}") })?;
+            Some(table)
+        }
+    };
+    let packed = Packed {
+        layout: layout.name().to_string(),
+        width,
+        height,
+        samples,
+        targets: planes,
+        material_table,
+        depth_range,
+        present: layout.stored_attributes(),
+    };
+    Ok(PackedFrame { packed, shell, files: read, coverage_from, positions_assumed })
+}
+
+/// Reads and decodes the targets of `layout` in `dir`: the G-buffer the engine's lighting pass would see, then
+/// what [`crate::io::load`] does after every reader (sidecar lights, sanitising, validation, plausibility).
+pub fn load_packed(dir: &Path, layout: &Layout, explicit: &[(String, PathBuf)], opts: &LoadOptions) -> Result<Loaded> {
+    let frame = read_frame(dir, layout, explicit, opts)?;
+    let gbuffer = layout.unpack(&frame.packed, &frame.shell).map_err(|e| Error::invalid(dir, e.to_string()))?;
+    if !gbuffer.coverage.iter().any(|&c| c) {
+        return Err(Error::invalid(dir, format!("no sample holds a surface (coverage from {})", frame.coverage_from)));
+    }
+    let mut sources = Vec::new();
+    for f in layout.fields() {
+        let Some(a) = f.slot.attribute() else { continue };
+        let (name, _, stored) = &frame.files[f.target];
+        sources.push(AttributeSource {
+            attribute: a.name(),
+            channels: vec![format!("{name}[{}..{}]", f.offset, f.offset + f.bits)],
+            file_type: stored.clone(),
+            note: Some(format!(
+                "{} through layout {}",
+                if f.codec.is_empty() { "stored" } else { &f.codec },
+                layout.name()
+            )),
+        });
+    }
+    if let Some(ind) = layout.indirection() {
+        for a in &ind.parameters {
+            sources.push(AttributeSource {
+                attribute: a.name(),
+                channels: vec!["material_index".into()],
+                file_type: "material table".into(),
+                note: Some(format!("through layout {}'s material table", layout.name())),
+            });
+        }
+    }
+    let camera_source = if gbuffer.camera.is_some() { CameraSource::Sidecar } else { CameraSource::Unknown };
+    let loaded = Loaded {
+        gbuffer,
+        format: SourceFormat::PackedTargets,
+        sources,
+        lights: None,
+        camera_source,
+        compression: None,
+        sanitized: Vec::new(),
+        warnings: Vec::new(),
+        reading: None,
+        positions_assumed: frame.positions_assumed,
+    };
+    crate::io::finish_loaded(loaded, dir, opts)
+}
+
+/// Writes `gb` packed with `layout` into `dir` as a frame [`load`] reads back with no flags: every target
+/// ([`super::dds::write_targets`]: `<target>.dds`/`.bin`, `material_table.json`), the layout as `layout.toml`, the
+/// sidecar as `scene.json` (camera, `lights` in view space, sample positions, materials) and, for a layout that
+/// stores no depth, `coverage.dds` (R8_UNORM, 255 = a surface). Reading it back gives `layout.unpack(pack(gb))`
+/// bit for bit (tested).
+pub fn write_frame(
+    layout: &Layout,
+    gb: &GBuffer,
+    lights: &[crate::light::Light],
+    dir: &Path,
+) -> Result<Vec<super::dds::WrittenTarget>> {
+    write_packed(layout, &layout.pack(gb)?, gb, lights, dir)
+}
+
+/// [`write_frame`] of targets already packed (`packed`, e.g. read by [`read_frame`]: repacking a packed frame
+/// with its own layout copies its codes), with the coverage, camera, sample positions and materials of `gb`.
+pub fn write_packed(
+    layout: &Layout,
+    packed: &Packed,
+    gb: &GBuffer,
+    lights: &[crate::light::Light],
+    dir: &Path,
+) -> Result<Vec<super::dds::WrittenTarget>> {
+    if packed.layout != layout.name()
+        || (packed.width, packed.height, packed.samples) != (gb.width, gb.height, gb.samples)
+    {
+        return Err(Error::Argument(format!(
+            "targets of layout {:?} ({}×{}×{}) written as layout {:?} for a {}×{}×{} G-buffer",
+            packed.layout,
+            packed.width,
+            packed.height,
+            packed.samples,
+            layout.name(),
+            gb.width,
+            gb.height,
+            gb.samples
+        )));
+    }
+    let mut out = super::dds::write_targets(packed, dir)?;
+    let mut extra = |target: &str, format: &str, path: PathBuf| -> Result<()> {
+        let bytes = std::fs::metadata(&path).map_err(|e| Error::io(&path, e))?.len() as usize;
+        out.push(super::dds::WrittenTarget {
+            target: target.into(),
+            format: format.into(),
+            dxgi_format: None,
+            path,
+            bytes,
+        });
+        Ok(())
+    };
+    if !layout.fields().iter().any(|f| f.slot == Slot::Whole(Attribute::Depth)) {
+        let plane = TargetPlane {
+            name: COVERAGE_TARGET.into(),
+            format: Format::R8,
+            bytes: gb.coverage.iter().map(|&c| if c { 255 } else { 0 }).collect(),
+        };
+        let path = dir.join(format!("{COVERAGE_TARGET}.dds"));
+        crate::util::write_bytes_atomic(&path, &super::dds::dds_bytes(&plane, gb.width, gb.height, gb.samples)?)?;
+        extra(COVERAGE_TARGET, "r8", path)?;
+    }
+    let path = dir.join(LAYOUT_FILE);
+    layout.save(&path)?;
+    extra("layout", "toml", path)?;
+    let mut side = crate::scene::scene_sidecar(gb, lights);
+    side.sample_positions = Some(gb.sample_positions.iter().map(|p| [p.x, p.y]).collect());
+    let mut text = serde_json::to_vec_pretty(&side).map_err(|e| Error::Argument(format!("sidecar: {e}")))?;
+    text.push(b'\n');
+    let path = dir.join("scene.json");
+    crate::util::write_bytes_atomic(&path, &text)?;
+    extra("scene", "json", path)?;
+    Ok(out)
+}
