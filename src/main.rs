@@ -30,6 +30,9 @@ enum Command {
     /// Write a dump packed with a layout as render-target files: DDS in the exact DXGI formats, MSAA samples as
     /// array slices, the material table as JSON.
     Pack(cli::pack::Args),
+    /// Write any input gbuf reads (file sets, packed render targets, Blender, Mitsuba, ISPC) as the canonical EXR
+    /// plus its sidecar.
+    Convert(cli::convert::Args),
     /// Run an MSAA edge detector and evaluate it against ground truth.
     Edges(cli::edges::Args),
     /// Light a (packed) G-buffer on the CPU and measure its error against the reference.
@@ -47,7 +50,7 @@ enum Command {
 /// Commands that read a dump and have no layout flag of their own: there `--layout` names the layout of packed
 /// render targets (`--input-layout` everywhere, since `pack`, `resolve`, `roundtrip` and `pipelines` use
 /// `--layout` for the layout they apply).
-const INPUT_LAYOUT_IS_LAYOUT: [&str; 4] = ["info", "edges", "budget", "report"];
+const INPUT_LAYOUT_IS_LAYOUT: [&str; 5] = ["info", "edges", "budget", "report", "convert"];
 
 /// The command line, with `--layout` as the spelling of `--input-layout` where it is free.
 fn parse() -> Cli {
@@ -69,6 +72,7 @@ fn main() -> ExitCode {
         Command::Layouts(a) => cli::layouts::run(a),
         Command::Roundtrip(a) => cli::roundtrip::run(a),
         Command::Pack(a) => cli::pack::run(a),
+        Command::Convert(a) => cli::convert::run(a),
         Command::Edges(a) => cli::edges::run(a),
         Command::Resolve(a) => cli::resolve::run(a),
         Command::Report(a) => cli::report::run(a),

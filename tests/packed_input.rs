@@ -128,6 +128,16 @@ fn the_cli_repacks_a_packed_frame_byte_for_byte() {
     assert!(o.status.success(), "{}", stderr(&o));
     let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(j["format"], "packed-targets", "{j}");
+    // `gbuf convert` writes the decoded frame as the canonical EXR: it reads back as the same G-buffer.
+    let exr = dir.path().join("converted.exr");
+    let o = gbuf(dir.path(), &["convert", a.to_str().unwrap(), "--layout", "unreal-like", "-o", exr.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let layout = Layout::by_name("unreal-like").unwrap();
+    let input = PackedInput { layout: Some(layout), targets: Vec::new() };
+    let packed = targets::load(&a, &input, &LoadOptions::default()).unwrap();
+    let converted = load_dump(&exr, &LoadOptions::default()).unwrap();
+    support::io::assert_bit_exact(&packed.gbuffer, &converted.gbuffer);
+    assert_eq!(converted.lights.map(|l| l.len()), packed.lights.map(|l| l.len()));
     // Without the layout the folder is not a dump gbuf recognises: an error, not a guess.
     let o = gbuf(dir.path(), &["info", a.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));

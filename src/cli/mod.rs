@@ -3,6 +3,7 @@
 pub mod budget;
 pub mod codecs;
 pub mod common;
+pub mod convert;
 pub mod demo;
 pub mod edges;
 pub mod info;

@@ -79,7 +79,7 @@ struct Summary {
 }
 
 /// The sidecar path for `out`, refusing paths where the two files would collide.
-fn sidecar_path(out: &Path) -> anyhow::Result<PathBuf> {
+pub fn sidecar_path(out: &Path) -> anyhow::Result<PathBuf> {
     if out.file_name().is_none() || out.as_os_str().to_string_lossy().ends_with('/') {
         anyhow::bail!("{}: the output must be a file name", out.display());
     }
