@@ -2,7 +2,6 @@
 //! by hand; the reference layout is lossless; byte sizes add up; material indirection; hostile input.
 
 use gbuf::codec;
-use gbuf::codec::DepthCodec as _;
 use gbuf::gbuffer::{Attribute, GBuffer};
 use gbuf::layout::{pack::field_code, Layout, LayoutSpec, Slot};
 use gbuf::util::SplitMix64;
