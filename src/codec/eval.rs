@@ -216,7 +216,7 @@ pub fn cell_sweep<P: Projection + std::fmt::Debug>(codec: &Planar<P>, seed: u64)
     let q = codec.quant();
     let k = q.bits();
     let (lo, hi) = match q {
-        Quant::Snorm(_) => (-1.0f32, 1.0f32),
+        Quant::Snorm(_) | Quant::UnormSigned(_) => (-1.0f32, 1.0f32),
         Quant::Unorm(_) => (0.0, 1.0),
         Quant::F16 => return None,
     };

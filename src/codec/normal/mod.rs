@@ -82,6 +82,11 @@ pub enum NormalScheme {
     OctPrecise,
     /// Octahedral in half floats (32 bits).
     OctF16,
+    /// Octahedral stored as unorm `p·0.5 + 0.5` ([`Quant::UnormSigned`]): Cigolle et al. 2014's GLSL and the
+    /// engines' form (e.g. an RGB10A2 target's R and G).
+    OctUnorm,
+    /// Lambert azimuthal equal-area stored as unorm `p·0.5 + 0.5`.
+    LambertUnorm,
 }
 
 crate::named!(NormalScheme: "normal scheme" {
@@ -103,6 +108,8 @@ crate::named!(NormalScheme: "normal scheme" {
     Oct => "oct",
     OctPrecise => "oct-precise",
     OctF16 => "oct-f16",
+    OctUnorm => "oct-unorm",
+    LambertUnorm => "lambert-unorm",
 });
 
 impl NormalScheme {
@@ -162,6 +169,7 @@ impl NormalScheme {
         let k = bits / self.components();
         let q = if self.is_f16() { Quant::F16 } else { Quant::Snorm(k) };
         let qu = if self.is_f16() { Quant::F16 } else { Quant::Unorm(k) };
+        let qs = Quant::UnormSigned(k);
         Some(match self {
             NormalScheme::XyzSnorm => Box::new(Xyz::new(XyzStorage::Snorm(k))),
             NormalScheme::XyzUnorm => Box::new(Xyz::new(XyzStorage::Unorm(k))),
@@ -177,6 +185,8 @@ impl NormalScheme {
             NormalScheme::StereoSphere => Box::new(Planar::new(StereoSphere, q)),
             NormalScheme::Oct | NormalScheme::OctF16 => Box::new(Planar::new(Oct, q)),
             NormalScheme::OctPrecise => Box::new(OctPrecise::new(k)),
+            NormalScheme::OctUnorm => Box::new(Planar::new(Oct, qs)),
+            NormalScheme::LambertUnorm => Box::new(Planar::new(Lambert, qs)),
         })
     }
 }
@@ -288,6 +298,10 @@ macro_rules! with_quantizer {
                 let $q = $crate::codec::normal::UnormQ::new(k);
                 $body
             }
+            $crate::codec::normal::Quant::UnormSigned(k) => {
+                let $q = $crate::codec::normal::UnormSignedQ::new(k);
+                $body
+            }
             $crate::codec::normal::Quant::F16 => {
                 let $q = $crate::codec::normal::F16Q;
                 $body
@@ -305,6 +319,12 @@ pub enum Quant {
     Snorm(u32),
     /// Unsigned normalized integer of k bits: value `u / (2^k − 1)`. For plane coordinates in [0, 1].
     Unorm(u32),
+    /// A coordinate in [−1, 1] stored as unorm `p·0.5 + 0.5` (k bits): value `2·u / (2^k − 1) − 1`. The form of
+    /// Cigolle et al. 2014's published GLSL and of most engines (an octahedral normal in the R and G of an
+    /// RGB10A2 or RGBA8 target). Encoding rounds `(p·0.5 + 0.5)·(2^k − 1)` to the nearest integer, as D3D and
+    /// Vulkan convert a float written to a UNORM target. Neither 0 nor the axes are exact (2^k − 1 is odd),
+    /// which is what it costs against snorm.
+    UnormSigned(u32),
     /// IEEE 754 binary16 (the `half` crate), 16 bits per coordinate; magnitudes clamp to 65504.
     F16,
 }
@@ -314,7 +334,7 @@ impl Quant {
     #[must_use]
     pub fn bits(self) -> u32 {
         match self {
-            Quant::Snorm(k) | Quant::Unorm(k) => k,
+            Quant::Snorm(k) | Quant::Unorm(k) | Quant::UnormSigned(k) => k,
             Quant::F16 => 16,
         }
     }
@@ -325,6 +345,8 @@ impl Quant {
         match self {
             Quant::Snorm(k) => 0.5 / ((1u32 << (k - 1)) - 1) as f32,
             Quant::Unorm(k) => 0.5 / ((1u64 << k) - 1) as f32,
+            // Half a unorm step, doubled by `2·u − 1`.
+            Quant::UnormSigned(k) => 1.0 / ((1u64 << k) - 1) as f32,
             // Rounding to nearest: relative error ≤ 2^-11, plus half the smallest subnormal.
             Quant::F16 => mag * 2f32.powi(-11) + 2f32.powi(-25),
         }
@@ -436,6 +458,43 @@ impl Quantizer for UnormQ {
     }
     fn dec_ops(self) -> u32 {
         3 // and, int→float, div
+    }
+}
+
+/// [`Quant::UnormSigned`] with its scale and mask.
+#[derive(Clone, Copy, Debug)]
+pub struct UnormSignedQ {
+    k: u32,
+    m: f32,
+    mask: u32,
+}
+
+impl UnormSignedQ {
+    /// Unorm `p·0.5 + 0.5` with `k` bits (1..=16).
+    #[inline(always)]
+    #[must_use]
+    pub fn new(k: u32) -> Self {
+        UnormSignedQ { k, m: mask(k) as f32, mask: mask(k) as u32 }
+    }
+}
+
+impl Quantizer for UnormSignedQ {
+    #[inline(always)]
+    fn bits(self) -> u32 {
+        self.k
+    }
+    #[inline(always)]
+    fn enc(self, v: f32) -> u32 {
+        let v = if v.is_nan() { 0.0 } else { v };
+        round_in_range((v.clamp(-1.0, 1.0) * 0.5 + 0.5) * self.m) as u32
+    }
+    #[inline(always)]
+    fn dec(self, c: u32) -> f32 {
+        // The engine's `t * 2.0 - 1.0` on the unorm value t = u / (2^k − 1).
+        ((c & self.mask) as f32 / self.m) * 2.0 - 1.0
+    }
+    fn dec_ops(self) -> u32 {
+        5 // and, int→float, div, mul, sub
     }
 }
 
@@ -553,9 +612,11 @@ pub trait Projection: Send + Sync + Copy + 'static {
     }
     /// See [`NormalCodec::is_idempotent`] (`q` is the storage). Default: exact for snorm/unorm storage; not for
     /// f16, whose resolution near 0 (down to 2^-24) is finer than the absolute f32 rounding of the projection
-    /// arithmetic, so re-encoding a decoded normal can move a tiny coordinate by an f16 ulp (within the bound).
+    /// arithmetic, so re-encoding a decoded normal can move a tiny coordinate by an f16 ulp (within the bound);
+    /// nor for unorm `p·0.5 + 0.5`, whose grid has no 0: a corner of the octahedral fold decodes to x = 0 and
+    /// re-encodes one code away (within the bound).
     fn is_idempotent(&self, q: Quant) -> bool {
-        q != Quant::F16
+        matches!(q, Quant::Snorm(_) | Quant::Unorm(_))
     }
 }
 
@@ -688,7 +749,8 @@ pub(crate) fn join_block(x: &[f32; BLOCK], y: &[f32; BLOCK], z: &[f32; BLOCK], o
 impl<P: Projection + std::fmt::Debug> Codec for Planar<P> {
     type Value = Vec3;
     fn name(&self) -> String {
-        format!("{}-{}", self.proj.scheme_name(self.quant), self.bits())
+        let storage = if matches!(self.quant, Quant::UnormSigned(_)) { "-unorm" } else { "" };
+        format!("{}{storage}-{}", self.proj.scheme_name(self.quant), self.bits())
     }
     fn bits(&self) -> u32 {
         2 * self.quant.bits()
