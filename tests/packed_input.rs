@@ -323,3 +323,52 @@ fn copy_dir(from: &Path, to: &Path) {
         std::fs::copy(&p, to.join(p.file_name().unwrap())).unwrap();
     }
 }
+
+/// The code-space report runs on every fixture: its counts agree with the G-buffer's own distinct values (object
+/// IDs through visibility-8's 8-bit field, which saturates at 255), extremes bound every code, and the bits it calls
+/// constant are the same in the smallest and the largest code.
+#[test]
+fn the_code_space_report_runs_on_every_fixture() {
+    use gbuf::layout::codespace::code_space;
+    let fixtures = [
+        "raster_4x.exr",
+        "raster_1x.exr",
+        "room_1x.exr",
+        "room_4x.exr",
+        "blender_gbuffer.exr",
+        "mitsuba_gbuffer.exr",
+        "mitsuba_16x.exr",
+        "ispc_deferred.bin",
+        "luxcore",
+    ];
+    let vis = Layout::by_name("visibility-8").unwrap();
+    let unreal = Layout::by_name("unreal-like").unwrap();
+    for name in fixtures {
+        let gb = load_dump(&fixture(name), &LoadOptions::default()).unwrap_or_else(|e| panic!("{name}: {e}")).gbuffer;
+        for layout in [&vis, &unreal] {
+            let packed = layout.pack(&gb).unwrap();
+            let rows = code_space(layout, &packed, &gb.coverage);
+            assert_eq!(rows.len(), layout.fields().len(), "{name}");
+            let covered = gb.coverage.iter().filter(|&&c| c).count() as u64;
+            for r in &rows {
+                assert_eq!(r.samples, covered, "{name} {}", r.field);
+                assert!(r.distinct >= 1 && r.distinct <= r.samples && r.min <= r.max, "{name}: {r:?}");
+                assert_eq!((r.min ^ r.max) & r.constant_bits, 0, "{name}: {r:?}");
+                assert!(r.max >> r.bits == 0, "{name}: {r:?}");
+            }
+            if let (Some(ids), true) = (&gb.object_id, std::ptr::eq(layout, &vis)) {
+                let want: std::collections::HashSet<u32> =
+                    ids.iter().zip(&gb.coverage).filter(|(_, &c)| c).map(|(&i, _)| i.min(255)).collect();
+                let r = rows.iter().find(|r| r.field == "object_id").unwrap();
+                assert_eq!(r.distinct, want.len() as u64, "{name}: distinct object IDs");
+            }
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let o =
+        gbuf(dir.path(), &["roundtrip", fixture("room_1x.exr").to_str().unwrap(), "--layout", "destiny-96", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let rows = j["code_space"].as_array().unwrap();
+    assert!(rows.iter().any(|r| r["field"] == "material_index" && r["distinct"].as_u64().unwrap() > 1), "{j}");
+}

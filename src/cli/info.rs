@@ -20,6 +20,9 @@ struct WithNeeds<'a> {
     #[serde(flatten)]
     info: &'a gbuf::io::stats::Info,
     needs: gbuf::analysis::needs::Needs,
+    /// For packed render targets: how much of each field's code space the frame uses.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    code_space: Option<Vec<gbuf::layout::codespace::FieldCodes>>,
 }
 
 /// Runs `gbuf info`.
@@ -27,13 +30,32 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let loaded = args.input.load().with_context(|| format!("cannot load {}", args.input.file.display()))?;
     let info = gbuf::io::stats::info(&loaded, &args.input.file);
     let needs = gbuf::analysis::needs_with_pruned_layout(&loaded.gbuffer);
+    let code_space = if loaded.format == gbuf::io::SourceFormat::PackedTargets {
+        let input = args.input.read.packed()?;
+        let path = &args.input.file;
+        let layout = match input.layout {
+            Some(l) => l,
+            None => gbuf::layout::Layout::load(&path.join(gbuf::layout::targets::LAYOUT_FILE))?,
+        };
+        let frame = gbuf::layout::targets::read_frame(path, &layout, &input.targets, &args.input.options()?)?;
+        Some((
+            layout.name().to_string(),
+            gbuf::layout::codespace::code_space(&layout, &frame.packed, &loaded.gbuffer.coverage),
+        ))
+    } else {
+        None
+    };
     if args.json {
-        print_json(&WithNeeds { info: &info, needs })
+        print_json(&WithNeeds { info: &info, needs, code_space: code_space.map(|c| c.1) })
     } else {
         use std::io::Write;
         let mut out = std::io::stdout().lock();
         out.write_all(info.to_text().as_bytes())?;
         out.write_all(needs.to_text().as_bytes())?;
+        if let Some((name, rows)) = &code_space {
+            writeln!(out, "code space  of layout {name}'s fields over the covered samples (no float truth: the codes are the data)")?;
+            out.write_all(gbuf::layout::codespace::text(rows).as_bytes())?;
+        }
         Ok(())
     }
 }

@@ -27,6 +27,8 @@ struct Row {
     file: String,
     #[serde(flatten)]
     roundtrip: Roundtrip,
+    /// How much of each field's code space the packed frame uses (covered samples).
+    code_space: Vec<gbuf::layout::codespace::FieldCodes>,
 }
 
 /// Runs `gbuf roundtrip`.
@@ -35,7 +37,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let loaded = args.input.load().with_context(|| format!("loading {}", args.input.file.display()))?;
     let file = args.input.file.display().to_string();
     let roundtrip = roundtrip(&loaded.gbuffer, &layout).with_context(|| format!("{file}: layout {}", layout.name()))?;
-    let row = Row { file, roundtrip };
+    let packed = layout.pack(&loaded.gbuffer).with_context(|| format!("{file}: layout {}", layout.name()))?;
+    let code_space = gbuf::layout::codespace::code_space(&layout, &packed, &loaded.gbuffer.coverage);
+    drop(packed);
+    let row = Row { file, roundtrip, code_space };
     if args.json {
         return super::common::print_json(&row);
     }
@@ -134,5 +139,7 @@ fn print_text(row: &Row) -> anyhow::Result<()> {
     if e.nonfinite > 0 {
         writeln!(out, "  {} non-finite values skipped", e.nonfinite)?;
     }
+    writeln!(out, "  code space used per field (covered samples):")?;
+    out.write_all(gbuf::layout::codespace::text(&row.code_space).as_bytes())?;
     Ok(())
 }

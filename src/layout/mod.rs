@@ -9,6 +9,7 @@
 pub mod bits;
 pub mod builtin;
 pub mod coder;
+pub mod codespace;
 pub mod dds;
 pub mod formats;
 pub mod material;

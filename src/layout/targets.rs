@@ -22,6 +22,9 @@ use std::path::{Path, PathBuf};
 /// The layout file `gbuf pack` writes beside the targets: a folder holding it is read through it with no flag.
 pub const LAYOUT_FILE: &str = "layout.toml";
 
+/// The warning every packed input carries ([`crate::io::plausible::Warning::code`]): no float truth.
+pub const NO_FLOAT_TRUTH: &str = "no-float-truth";
+
 /// The coverage target's name (an optional R8 file: nonzero where a surface is).
 pub const COVERAGE_TARGET: &str = "coverage";
 
@@ -324,6 +327,18 @@ pub fn load_packed(dir: &Path, layout: &Layout, explicit: &[(String, PathBuf)], 
         }
     }
     let camera_source = if gbuffer.camera.is_some() { CameraSource::Sidecar } else { CameraSource::Unknown };
+    let covered = gbuffer.coverage.iter().filter(|&&c| c).count() as u64;
+    let no_truth = crate::io::plausible::Warning {
+        code: NO_FLOAT_TRUTH,
+        count: covered,
+        of: covered,
+        message: format!(
+            "decoded from the packed targets of layout {}: there is no float truth, so every error gbuf measures on \
+             this frame is against the engine's decoded frame (what its lighting pass sees), not against the \
+             surfaces it rendered",
+            layout.name()
+        ),
+    };
     let loaded = Loaded {
         gbuffer,
         format: SourceFormat::PackedTargets,
@@ -332,7 +347,7 @@ pub fn load_packed(dir: &Path, layout: &Layout, explicit: &[(String, PathBuf)], 
         camera_source,
         compression: None,
         sanitized: Vec::new(),
-        warnings: Vec::new(),
+        warnings: vec![no_truth],
         reading: None,
         positions_assumed: frame.positions_assumed,
     };
