@@ -53,6 +53,10 @@ pub struct Args {
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
+    /// The winning layout as shader code (glsl): on stdout instead of the table, or beside `-o LAYOUT.toml` as
+    /// `LAYOUT.<lang>`.
+    #[arg(long, value_name = "LANG", conflicts_with = "json")]
+    pub emit: Option<gbuf::layout::shader::Lang>,
 }
 
 #[derive(Serialize)]
@@ -92,6 +96,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let layout = Layout::from_spec(res.winner.spec.clone())?;
     if let Some(path) = &args.out {
         layout.save(path).with_context(|| format!("writing the layout to {}", path.display()))?;
+    }
+    if let Some(lang) = args.emit {
+        match &args.out {
+            Some(path) => super::layouts::emit(&layout, lang, Some(&path.with_extension(lang.name())))?,
+            None => return super::layouts::emit(&layout, lang, None),
+        }
     }
     let footprint = layout.footprint_bytes(rw, rh, msaa);
     if args.json {

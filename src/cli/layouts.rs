@@ -18,10 +18,40 @@ pub struct Args {
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
+    /// Print the one layout named as shader code instead (glsl): `GbufSurface`, `gbuf_pack_<target>`,
+    /// `gbuf_unpack`, bit for bit what gbuf packs (docs/SHADERS.md).
+    #[arg(long, value_name = "LANG")]
+    pub emit: Option<gbuf::layout::shader::Lang>,
+    /// With `--emit`: write the code to this file instead of stdout.
+    #[arg(short = 'o', long = "out", value_name = "FILE", requires = "emit")]
+    pub out: Option<std::path::PathBuf>,
+}
+
+/// Writes `layout` as shader code in `lang` to `out` (atomically) or stdout.
+pub fn emit(layout: &Layout, lang: gbuf::layout::shader::Lang, out: Option<&std::path::Path>) -> anyhow::Result<()> {
+    let code = gbuf::layout::shader::emit(layout, lang)?;
+    match out {
+        Some(p) => {
+            gbuf::util::write_bytes_atomic(p, code.as_bytes()).with_context(|| format!("writing {}", p.display()))?
+        }
+        None => {
+            use std::io::Write;
+            std::io::stdout().lock().write_all(code.as_bytes())?;
+        }
+    }
+    Ok(())
 }
 
 /// Runs `gbuf layouts`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if let Some(lang) = args.emit {
+        if args.layouts.len() != 1 {
+            crate::usage!("--emit writes one layout's code: name exactly one layout (got {})", args.layouts.len());
+        }
+        let layout =
+            Layout::by_name_or_path(&args.layouts[0]).with_context(|| format!("layout {:?}", args.layouts[0]))?;
+        return emit(&layout, lang, args.out.as_deref());
+    }
     let detailed = !args.layouts.is_empty();
     let layouts: Vec<Layout> = if detailed {
         args.layouts

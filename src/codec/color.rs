@@ -162,6 +162,29 @@ impl Codec for UnormRgb {
         // table lookup (sRGB): 2 + 3 × 3
         11
     }
+    fn recipe(&self) -> Option<super::Recipe> {
+        if !self.srgb {
+            return Some(super::Recipe::ColorUnorm { bits: self.bits });
+        }
+        // The smallest value of each code: bisect the clamped [0, 1] over f32 bit patterns (monotonic there).
+        let code = |v: f32| (self.encode(Vec3::splat(v)) & 0xff) as u32;
+        let thresholds = (1..=255u32)
+            .map(|c| {
+                let (mut lo, mut hi) = (0u32, 1f32.to_bits());
+                while lo < hi {
+                    let mid = lo + (hi - lo) / 2;
+                    if code(f32::from_bits(mid)) >= c {
+                        hi = mid;
+                    } else {
+                        lo = mid + 1;
+                    }
+                }
+                f32::from_bits(lo)
+            })
+            .collect();
+        let decoded = srgb8_decode_table().to_vec();
+        Some(super::Recipe::ColorSrgb8 { thresholds, decoded })
+    }
     fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
         assert_eq!(input.len(), out.len(), "encode_slice: {} colours into {} codes", input.len(), out.len());
         // One loop per curve, so the linear one has no libm call in it and vectorises.
@@ -367,6 +390,9 @@ impl Codec for RgbF16 {
         // two shifts; per channel and, f16_to_finite
         2 + 3 * (1 + F16_TO_FINITE_OPS)
     }
+    fn recipe(&self) -> Option<super::Recipe> {
+        Some(super::Recipe::ColorF16)
+    }
 }
 
 impl ColorCodec for RgbF16 {
@@ -402,6 +428,9 @@ impl Codec for RgbF32 {
     fn decode_ops(&self) -> u32 {
         // two shifts (from_bits is free); per channel NaN compare, select, clamp
         2 + 3 * 3
+    }
+    fn recipe(&self) -> Option<super::Recipe> {
+        Some(super::Recipe::ColorF32)
     }
 }
 

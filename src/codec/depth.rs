@@ -97,6 +97,9 @@ impl Codec for LinearF32 {
         // from_bits is free; NaN compare, select, clamp
         3
     }
+    fn recipe(&self) -> Option<super::Recipe> {
+        Some(super::Recipe::DepthLinearF32)
+    }
 }
 
 impl DepthCodec for LinearF32 {
@@ -133,6 +136,9 @@ impl Codec for LinearF16 {
     fn decode_ops(&self) -> u32 {
         // and, f16_to_finite, clamp
         2 + F16_TO_FINITE_OPS
+    }
+    fn recipe(&self) -> Option<super::Recipe> {
+        Some(super::Recipe::DepthLinearF16)
     }
 }
 
@@ -248,6 +254,9 @@ impl Codec for PostProjection {
         // unorm: and, int→f64, div (3); f32: NaN compare, select, f32→f64 (3; d_of(f) is a constant);
         // z_of: clamp, mul, add or sub, div (n·f and f − n are constants), clamp (5); f64→f32 (1)
         9
+    }
+    fn recipe(&self) -> Option<super::Recipe> {
+        Some(super::Recipe::DepthPost { storage: self.storage, reversed: self.reversed })
     }
 }
 

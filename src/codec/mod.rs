@@ -57,6 +57,11 @@ pub trait Codec: Send + Sync {
     /// shift, and, or, int↔float conversion and table lookup; [`TRANSCENDENTAL_OPS`] per exp2, log2, pow, sin,
     /// cos, atan2, …. No default: every codec states its own count.
     fn decode_ops(&self) -> u32;
+    /// What a shader needs to reproduce this codec bit for bit (`layout::shader` emits it); `None` for codecs
+    /// gbuf does not emit yet.
+    fn recipe(&self) -> Option<Recipe> {
+        None
+    }
     /// Encodes a slice on the calling thread with the widest instruction set this CPU has ([`Isa::detect`]);
     /// bit-identical to [`Self::encode`] element by element. Panics if `out.len() != input.len()`. For all
     /// threads see [`simd::par_encode`].
@@ -103,6 +108,71 @@ pub trait NormalCodec: Codec<Value = Vec3> {
     fn is_idempotent(&self) -> bool {
         true
     }
+}
+
+/// A codec as the shader emitter sees it: the family and its constants, from which `layout::shader` writes code
+/// that gives the codec's bits (encode) and values (decode) exactly, arithmetic for arithmetic.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Recipe {
+    /// Scalar unorm over [lo, hi], f64 arithmetic (`scalar::Unorm`).
+    ScalarUnorm {
+        /// Bits.
+        bits: u32,
+        /// Value of code 0.
+        lo: f32,
+        /// Value of the largest code.
+        hi: f32,
+    },
+    /// Scalar snorm over [−range, range], f64 arithmetic (`scalar::Snorm`).
+    ScalarSnorm {
+        /// Bits.
+        bits: u32,
+        /// Value of the largest code.
+        range: f32,
+    },
+    /// A half float (NaN → 0, clamped to ±65504).
+    ScalarF16,
+    /// An IEEE single (NaN → 0, ±Inf → ±f32::MAX).
+    ScalarF32,
+    /// Three linear unorm channels of `bits` bits, f32 arithmetic.
+    ColorUnorm {
+        /// Bits per channel.
+        bits: u32,
+    },
+    /// srgb8: encode by its 255 thresholds (code = how many are ≤ the clamped value), decode by its 256 values.
+    ColorSrgb8 {
+        /// Smallest value of each code 1..=255.
+        thresholds: Vec<f32>,
+        /// The decoded value of each code.
+        decoded: Vec<f32>,
+    },
+    /// Three half floats.
+    ColorF16,
+    /// Three IEEE singles.
+    ColorF32,
+    /// Octahedral normal, plane coordinates stored as `quant`.
+    NormalOct {
+        /// Storage of each plane coordinate.
+        quant: normal::Quant,
+    },
+    /// xyz normal: three coordinates stored as `quant` (`unorm`: `n·0.5 + 0.5`).
+    NormalXyz {
+        /// Storage of each coordinate.
+        quant: normal::Quant,
+        /// Unorm storage of `n·0.5 + 0.5`.
+        unorm: bool,
+    },
+    /// Linear view depth as an IEEE single (NaN → far plane).
+    DepthLinearF32,
+    /// Linear view depth as a half float.
+    DepthLinearF16,
+    /// Post-projection depth with the camera's near/far, f64 arithmetic.
+    DepthPost {
+        /// Storage.
+        storage: depth::DepthStorage,
+        /// Reversed Z (1 at the near plane).
+        reversed: bool,
+    },
 }
 
 /// A scalar encoding (specular, roughness, metallic, AO, specular power): [`Codec`] over `f32`.

@@ -140,6 +140,9 @@ impl Codec for Snorm {
         // and, shl, sar (sign-extend), int→f64, div, max(−1), mul by R, f64→f32
         8
     }
+    fn recipe(&self) -> Option<super::Recipe> {
+        Some(super::Recipe::ScalarSnorm { bits: self.bits, range: self.range })
+    }
 }
 
 impl ScalarCodec for Snorm {
@@ -174,6 +177,9 @@ impl Codec for Unorm {
     fn decode_ops(&self) -> u32 {
         // and, int→f64, div, mul, add, f64→f32 (the scale and offset are per-codec constants)
         6
+    }
+    fn recipe(&self) -> Option<super::Recipe> {
+        Some(super::Recipe::ScalarUnorm { bits: self.bits, lo: self.lo, hi: self.hi })
     }
 }
 
@@ -281,6 +287,9 @@ impl Codec for ScalarF16 {
         // and, f16_to_finite
         1 + F16_TO_FINITE_OPS
     }
+    fn recipe(&self) -> Option<super::Recipe> {
+        Some(super::Recipe::ScalarF16)
+    }
 }
 
 impl ScalarCodec for ScalarF16 {
@@ -321,6 +330,9 @@ impl Codec for ScalarF32 {
     fn decode_ops(&self) -> u32 {
         // from_bits is free; NaN compare, select, clamp
         3
+    }
+    fn recipe(&self) -> Option<super::Recipe> {
+        Some(super::Recipe::ScalarF32)
     }
 }
 

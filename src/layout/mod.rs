@@ -14,6 +14,7 @@ pub mod dds;
 pub mod formats;
 pub mod material;
 pub mod pack;
+pub mod shader;
 pub mod spec;
 pub mod summary;
 pub mod targets;

@@ -605,6 +605,10 @@ pub trait Projection: Send + Sync + Copy + 'static {
     fn plane_extent(&self) -> f32 {
         1.0
     }
+    /// True for the octahedral map ([`Oct`]): the projection `layout::shader` emits.
+    fn is_octahedral(&self) -> bool {
+        false
+    }
     /// Where the bound holds.
     fn in_domain(&self, n: Vec3) -> bool {
         let _ = n;
@@ -766,6 +770,9 @@ impl<P: Projection + std::fmt::Debug> Codec for Planar<P> {
     fn decode_ops(&self) -> u32 {
         // A shift splits the code, two coordinates dequantize, the projection inverts, `finish` normalises.
         1 + 2 * self.quant.decode_ops() + self.proj.decode_ops() + FINISH_OPS
+    }
+    fn recipe(&self) -> Option<crate::codec::Recipe> {
+        self.proj.is_octahedral().then_some(crate::codec::Recipe::NormalOct { quant: self.quant })
     }
     fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
         assert_eq!(input.len(), out.len(), "encode_slice: {} normals into {} codes", input.len(), out.len());

@@ -76,6 +76,9 @@ impl Projection for Oct {
     fn bound_rad(&self, hx: f32, hy: f32, _q: Quant) -> f32 {
         OCT_MAX_STRETCH * hx.hypot(hy)
     }
+    fn is_octahedral(&self) -> bool {
+        true
+    }
 }
 
 /// The octahedral fold, shared with the full-sphere azimuthal maps ([`super::LambertSphere`],

@@ -188,6 +188,9 @@ impl Codec for Xyz {
         let per_component = self.quant.decode_ops() + if self.is_unorm() { 2 } else { 0 };
         2 + 3 * per_component + FINISH_OPS
     }
+    fn recipe(&self) -> Option<crate::codec::Recipe> {
+        Some(crate::codec::Recipe::NormalXyz { quant: self.quant, unorm: self.is_unorm() })
+    }
     fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
         assert_eq!(input.len(), out.len(), "encode_slice: {} normals into {} codes", input.len(), out.len());
         let unorm = self.is_unorm();

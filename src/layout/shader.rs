@@ -1,0 +1,592 @@
+//! A layout as shader code: GLSL 4.50 that packs a surface into the layout's render-target words and unpacks
+//! them, bit for bit what [`Layout::pack`] and [`Layout::unpack`] do (docs/SHADERS.md has the ABI; the proof runs
+//! the code on Mesa's llvmpipe in `tests/shader_glsl.rs`).
+//!
+//! Every codec states its arithmetic as a [`Recipe`]; this module writes one function per field from it,
+//! operation for operation as the CPU codec does (f64 where it uses f64, `precise` so no multiply-add is fused,
+//! integer code for half floats and the rounding rule), so the GPU reproduces the CPU's bits rather than
+//! approximating them. Codecs without a recipe (the transcendental ones, `log2-unorm`, the spheremap, the
+//! hemisphere and the other projections) and material-ID indirection are refused with an error naming them.
+
+use super::coder::Slot;
+use super::{Field, Layout};
+use crate::codec::depth::DepthStorage;
+use crate::codec::normal::Quant;
+use crate::codec::Recipe;
+use crate::error::{Error, Result};
+use crate::gbuffer::Attribute;
+use std::fmt::Write as _;
+
+/// The shading languages gbuf can emit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Lang {
+    /// GLSL 4.50 (core; needs `double`, core since 4.00).
+    Glsl,
+}
+
+crate::named!(Lang: "shading language" {
+    Glsl => "glsl",
+});
+
+/// The attributes of `GbufSurface`, in ABI order, with their GLSL types.
+const SURFACE: [(&str, &str); 12] = [
+    ("depth", "float"),
+    ("position", "vec3"),
+    ("normal", "vec3"),
+    ("albedo", "vec3"),
+    ("specular", "float"),
+    ("specular_power", "float"),
+    ("roughness", "float"),
+    ("metallic", "float"),
+    ("motion", "vec2"),
+    ("material_id", "uint"),
+    ("object_id", "uint"),
+    ("primitive_id", "uint"),
+];
+
+/// The helpers every emitted file starts with (rounding, half floats, IEEE singles, bit fields).
+const HELPERS: &str = r"
+// ---- helpers (gbuf's rounding and conversions, integer-exact) ----
+
+// Round half away from zero of a value clamped to ±2^24 (NaN → 0): truncate, then step by the fraction, which
+// v − trunc(v) gives exactly. The rule of gbuf's codecs (and D3D's float → UNORM/SNORM conversion).
+int gbuf_round(float v) {
+    precise float c = isnan(v) ? 0.0 : clamp(v, -16777216.0, 16777216.0);
+    int t = int(c);
+    precise float f = c - float(t);
+    return t + int(f >= 0.5) - int(f <= -0.5);
+}
+
+int gbuf_round_d(double v) {
+    precise double c = clamp(v, -16777216.0lf, 16777216.0lf);
+    int t = int(c);
+    precise double f = c - double(t);
+    return t + int(f >= 0.5lf) - int(f <= -0.5lf);
+}
+
+// IEEE single → half bits, round to nearest even; beyond the range → ±Inf, NaN → a quiet NaN.
+uint gbuf_f16_bits(float v) {
+    uint b = floatBitsToUint(v);
+    uint sign = (b >> 16) & 0x8000u;
+    uint a = b & 0x7fffffffu;
+    if (a > 0x7f800000u) return sign | 0x7e00u;
+    if (a >= 0x477ff000u) return sign | 0x7c00u;
+    if (a >= 0x38800000u) {
+        uint r = a - 0x38000000u;
+        return sign | ((r + 0xfffu + ((r >> 13) & 1u)) >> 13);
+    }
+    uint e = a >> 23;
+    if (e < 102u) return sign;
+    uint m = (a & 0x7fffffu) | 0x800000u;
+    uint s = 126u - e;
+    uint q = m >> s;
+    uint rest = m & ((1u << s) - 1u);
+    uint half_ = 1u << (s - 1u);
+    q += uint(rest > half_ || (rest == half_ && (q & 1u) == 1u));
+    return sign | q;
+}
+
+// Half bits → a finite single, exactly: NaN → 0, ±Inf → ±65504.
+float gbuf_f16_value(uint h) {
+    uint sign = (h & 0x8000u) << 16;
+    uint e = (h >> 10) & 0x1fu;
+    uint m = h & 0x3ffu;
+    if (e == 31u) return m != 0u ? 0.0 : uintBitsToFloat(sign | 0x477fe000u);
+    if (e == 0u) {
+        precise float v = float(m) * 5.9604644775390625e-8;
+        return sign != 0u ? -v : v;
+    }
+    return uintBitsToFloat(sign | ((e + 112u) << 23) | (m << 13));
+}
+
+// A single's bits with NaN → 0 and ±Inf → ±f32::MAX (gbuf's f32 codecs), in the integer domain.
+uint gbuf_f32_clean(uint b) {
+    uint a = b & 0x7fffffffu;
+    if (a > 0x7f800000u) return 0u;
+    if (a == 0x7f800000u) return (b & 0x80000000u) | 0x7f7fffffu;
+    return b;
+}
+uint gbuf_f32_bits(float v) {
+    return gbuf_f32_clean(floatBitsToUint(v));
+}
+float gbuf_f32_value(uint b) {
+    return uintBitsToFloat(gbuf_f32_clean(b));
+}
+
+// Clamp to [lo, hi] with NaN → clamp(0) (gbuf's `clean`).
+float gbuf_clean(float v, float lo, float hi) {
+    return isnan(v) ? clamp(0.0, lo, hi) : clamp(v, lo, hi);
+}
+
+// The field of `bits` bits at bit `offset` of a texel's little-endian 32-bit words (it may span two words).
+uvec4 gbuf_put(uvec4 w, uint offset, uint bits, uint code) {
+    uint i = offset >> 5u;
+    uint s = offset & 31u;
+    code &= bits >= 32u ? 0xffffffffu : ((1u << bits) - 1u);
+    w[i] |= code << s;
+    if (s + bits > 32u) w[i + 1u] |= code >> (32u - s);
+    return w;
+}
+uint gbuf_get(uvec4 w, uint offset, uint bits) {
+    uint i = offset >> 5u;
+    uint s = offset & 31u;
+    uint v = w[i] >> s;
+    if (s + bits > 32u) v |= w[i + 1u] << (32u - s);
+    return bits >= 32u ? v : v & ((1u << bits) - 1u);
+}
+
+// A unit vector as gbuf's normal codecs see it: NaN → +Z, infinite components carry the direction, divided by
+// the largest magnitude first, then by the length.
+vec3 gbuf_sanitize(vec3 n) {
+    bool nan_ = isnan(n.x) || isnan(n.y) || isnan(n.z);
+    bool finite = !(isinf(n.x) || isinf(n.y) || isinf(n.z)) && !nan_;
+    precise vec3 d = vec3(isinf(n.x) ? sign(n.x) : 0.0, isinf(n.y) ? sign(n.y) : 0.0, isinf(n.z) ? sign(n.z) : 0.0);
+    precise vec3 u = finite ? n : d;
+    precise float m = max(max(abs(u.x), abs(u.y)), abs(u.z));
+    precise vec3 v = vec3(u.x / m, u.y / m, u.z / m);
+    precise float len = sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
+    precise vec3 r = vec3(v.x / len, v.y / len, v.z / len);
+    return (nan_ || m == 0.0) ? vec3(0.0, 0.0, 1.0) : r;
+}
+
+// Normalise a decoded vector; a zero or non-finite one reads as +Z.
+vec3 gbuf_finish(vec3 v) {
+    precise float l2 = v.x * v.x + v.y * v.y + v.z * v.z;
+    precise float l = sqrt(l2);
+    precise vec3 u = vec3(v.x / l, v.y / l, v.z / l);
+    return (l2 > 0.0 && !isinf(l2) && !isnan(l2)) ? u : vec3(0.0, 0.0, 1.0);
+}
+
+float gbuf_sign_not_zero(float v) {
+    return v >= 0.0 ? 1.0 : -1.0;
+}
+
+// Octahedral map (Meyer et al. 2010; Cigolle et al. 2014, `float32x3_to_oct` / `oct_to_float32x3`).
+vec2 gbuf_oct_project(vec3 n) {
+    precise float l1 = abs(n.x) + abs(n.y) + abs(n.z);
+    precise vec2 p = vec2(n.x / l1, n.y / l1);
+    precise vec2 f = vec2((1.0 - abs(p.y)) * gbuf_sign_not_zero(p.x), (1.0 - abs(p.x)) * gbuf_sign_not_zero(p.y));
+    return n.z >= 0.0 ? p : f;
+}
+vec3 gbuf_oct_unproject(vec2 q) {
+    precise vec2 p = clamp(q, vec2(-1.0), vec2(1.0));
+    precise float z = 1.0 - abs(p.x) - abs(p.y);
+    precise vec3 f = vec3((1.0 - abs(p.y)) * gbuf_sign_not_zero(p.x), (1.0 - abs(p.x)) * gbuf_sign_not_zero(p.y), z);
+    return z >= 0.0 ? vec3(p, z) : f;
+}
+";
+
+/// GLSL float literal with the exact bits of `v` (`uintBitsToFloat(0x…u)` keeps every bit).
+fn lit(v: f32) -> String {
+    format!("uintBitsToFloat({:#010x}u)", v.to_bits())
+}
+
+/// GLSL double literal holding `v` exactly (an f32 widened).
+fn lit_d(v: f32) -> String {
+    format!("double({})", lit(v))
+}
+
+/// Encode/decode expressions of one quantized coordinate (`Quant`), as GLSL functions named by storage.
+fn quant_fns(q: Quant, name: &str, out: &mut String) {
+    match q {
+        Quant::Snorm(k) => {
+            let m = (1u32 << (k - 1)) - 1;
+            let _ = write!(
+                out,
+                "uint {name}_enc(float v) {{ return uint(gbuf_round(clamp(isnan(v) ? 0.0 : v, -1.0, 1.0) * {m}.0)) & {mask}u; }}\n\
+                 float {name}_dec(uint c) {{ int s = int((c & {mask}u) << {sh}) >> {sh}; precise float v = float(s) / {m}.0; return max(v, -1.0); }}\n",
+                mask = (1u64 << k) - 1,
+                sh = 32 - k
+            );
+        }
+        Quant::Unorm(k) => {
+            let m = (1u64 << k) - 1;
+            let _ = write!(
+                out,
+                "uint {name}_enc(float v) {{ return uint(gbuf_round(clamp(isnan(v) ? 0.0 : v, 0.0, 1.0) * {m}.0)); }}\n\
+                 float {name}_dec(uint c) {{ precise float v = float(c & {m}u) / {m}.0; return v; }}\n"
+            );
+        }
+        Quant::UnormSigned(k) => {
+            let m = (1u64 << k) - 1;
+            let _ = write!(
+                out,
+                "// unorm p·0.5 + 0.5 (Cigolle et al. 2014's GLSL; the engines' RGB10A2 normals)\n\
+                 uint {name}_enc(float v) {{ precise float t = clamp(isnan(v) ? 0.0 : v, -1.0, 1.0) * 0.5 + 0.5; precise float s = t * {m}.0; return uint(gbuf_round(s)); }}\n\
+                 float {name}_dec(uint c) {{ precise float t = float(c & {m}u) / {m}.0; precise float v = t * 2.0 - 1.0; return v; }}\n"
+            );
+        }
+        Quant::F16 => {
+            let _ = write!(
+                out,
+                "uint {name}_enc(float v) {{ return gbuf_f16_bits(clamp(isnan(v) ? 0.0 : v, -65504.0, 65504.0)); }}\n\
+                 float {name}_dec(uint c) {{ return gbuf_f16_value(c & 0xffffu); }}\n"
+            );
+        }
+    }
+}
+
+/// The GLSL expression of an attribute (or component) of the surface `s`.
+fn member(slot: Slot) -> Option<String> {
+    Some(match slot {
+        Slot::Whole(a) => format!("s.{}", a.name()),
+        Slot::Component(a, k) => format!("s.{}.{}", a.name(), ["x", "y", "z"][k]),
+        _ => return None,
+    })
+}
+
+/// A field's codec functions: `uint[] enc(value)` written as `uvec3 <f>_enc(...)` returning component codes, and
+/// `<type> <f>_dec(uvec3 codes)`; `k` is each component's width.
+struct FieldCode {
+    /// Component width in bits and component count.
+    k: u32,
+    n: u32,
+    /// The functions.
+    text: String,
+    /// Needs `gbuf_znear`/`gbuf_zfar`.
+    camera: bool,
+}
+
+fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) -> Result<FieldCode> {
+    let unsupported = |why: &str| {
+        Error::Argument(format!(
+            "layout {:?}: field {} ({}): {why}; gbuf emits shader code for the uint-N IDs, the unorm/snorm/f16/f32 \
+             scalars, unorm8/unorm-N/srgb8/f16/f32 colours, the oct, oct-unorm, xyz normals and every depth codec",
+            layout.name(),
+            f.slot.name(),
+            f.codec
+        ))
+    };
+    let mut t = String::new();
+    let mut camera = false;
+    let (k, n) = match (&f.slot, recipe) {
+        (Slot::Whole(a), _) if a.is_id() => {
+            let m = if f.bits >= 32 { u32::MAX } else { (1u32 << f.bits) - 1 };
+            let _ = write!(
+                t,
+                "// {a}: the low {b} bits, saturating at 2^{b} − 1\n\
+                 uvec3 {name}_enc(uint v) {{ return uvec3(min(v, {m}u), 0u, 0u); }}\n\
+                 uint {name}_dec(uvec3 c) {{ return c.x; }}\n",
+                a = a.name(),
+                b = f.bits
+            );
+            (f.bits, 1)
+        }
+        (_, Some(Recipe::ScalarUnorm { bits, lo, hi })) => {
+            let m = (1u64 << bits) - 1;
+            let _ = write!(
+                t,
+                "// unorm over [{lo}, {hi}], {bits} bits (f64 so that wide codes round exactly)\n\
+                 uvec3 {name}_enc(float v) {{ precise float u = (v - {l}) / ({h} - {l}); precise float c = isnan(v) ? 0.0 : clamp(u, 0.0, 1.0); \
+                 return uvec3(uint(gbuf_round_d(double(c) * {m}.0lf)), 0u, 0u); }}\n\
+                 float {name}_dec(uvec3 c) {{ precise double t = double(int(c.x & {m}u)) / {m}.0lf; precise float w = {h} - {l}; \
+                 precise double v = {ld} + t * double(w); return float(v); }}\n",
+                l = lit(lo),
+                h = lit(hi),
+                ld = lit_d(lo)
+            );
+            (bits, 1)
+        }
+        (_, Some(Recipe::ScalarSnorm { bits, range })) => {
+            let m = (1u64 << (bits - 1)) - 1;
+            let mask = (1u64 << bits) - 1;
+            let _ = write!(
+                t,
+                "// snorm over [−{range}, {range}], {bits} bits (f64)\n\
+                 uvec3 {name}_enc(float v) {{ precise float u = v / {r}; precise float c = isnan(v) ? 0.0 : clamp(u, -1.0, 1.0); \
+                 return uvec3(uint(gbuf_round_d(double(c) * {m}.0lf)) & {mask}u, 0u, 0u); }}\n\
+                 float {name}_dec(uvec3 c) {{ int s = int((c.x & {mask}u) << {sh}) >> {sh}; precise double t = max(double(s) / {m}.0lf, -1.0lf); \
+                 precise double v = t * {rd}; return float(v); }}\n",
+                r = lit(range),
+                rd = lit_d(range),
+                sh = 32 - bits
+            );
+            (bits, 1)
+        }
+        (_, Some(Recipe::ScalarF16)) => {
+            let _ = write!(
+                t,
+                "uvec3 {name}_enc(float v) {{ return uvec3(gbuf_f16_bits(clamp(isnan(v) ? 0.0 : v, -65504.0, 65504.0)), 0u, 0u); }}\n\
+                 float {name}_dec(uvec3 c) {{ return gbuf_f16_value(c.x & 0xffffu); }}\n"
+            );
+            (16, 1)
+        }
+        (_, Some(Recipe::ScalarF32)) => {
+            let _ = write!(
+                t,
+                "uvec3 {name}_enc(float v) {{ return uvec3(gbuf_f32_bits(v), 0u, 0u); }}\n\
+                 float {name}_dec(uvec3 c) {{ return gbuf_f32_value(c.x); }}\n"
+            );
+            (32, 1)
+        }
+        (_, Some(Recipe::ColorUnorm { bits })) => {
+            let m = (1u64 << bits) - 1;
+            let _ = write!(
+                t,
+                "// linear unorm, {bits} bits per channel\n\
+                 uint {name}_q(float v) {{ precise float s = gbuf_clean(v, 0.0, 1.0) * {m}.0; return uint(gbuf_round(s)); }}\n\
+                 uvec3 {name}_enc(vec3 v) {{ return uvec3({name}_q(v.x), {name}_q(v.y), {name}_q(v.z)); }}\n\
+                 vec3 {name}_dec(uvec3 c) {{ precise vec3 v = vec3(float(c.x & {m}u) / {m}.0, float(c.y & {m}u) / {m}.0, float(c.z & {m}u) / {m}.0); return v; }}\n"
+            );
+            (bits, 3)
+        }
+        (_, Some(Recipe::ColorSrgb8 { thresholds, decoded })) => {
+            let th: Vec<String> = thresholds.iter().map(|v| format!("{:#010x}u", v.to_bits())).collect();
+            let de: Vec<String> = decoded.iter().map(|v| format!("{:#010x}u", v.to_bits())).collect();
+            let _ = write!(
+                t,
+                "// srgb8 (IEC 61966-2-1): encode by the smallest value of each code 1..255, decode by the value of each\n\
+                 // code; both tables are gbuf's own, so the bits match without a pow().\n\
+                 const uint {name}_T[255] = uint[255]({th});\n\
+                 const uint {name}_D[256] = uint[256]({de});\n\
+                 uint {name}_q(float v) {{ float c = gbuf_clean(v, 0.0, 1.0); uint lo = 0u; \
+                 for (uint step = 128u; step > 0u; step >>= 1) {{ if (lo + step <= 255u && c >= uintBitsToFloat({name}_T[lo + step - 1u])) lo += step; }} return lo; }}\n\
+                 uvec3 {name}_enc(vec3 v) {{ return uvec3({name}_q(v.x), {name}_q(v.y), {name}_q(v.z)); }}\n\
+                 vec3 {name}_dec(uvec3 c) {{ return vec3(uintBitsToFloat({name}_D[c.x & 255u]), uintBitsToFloat({name}_D[c.y & 255u]), uintBitsToFloat({name}_D[c.z & 255u])); }}\n",
+                th = th.join(", "),
+                de = de.join(", ")
+            );
+            (8, 3)
+        }
+        (_, Some(Recipe::ColorF16)) => {
+            let _ = write!(
+                t,
+                "uint {name}_q(float v) {{ return gbuf_f16_bits(gbuf_clean(v, -65504.0, 65504.0)); }}\n\
+                 uvec3 {name}_enc(vec3 v) {{ return uvec3({name}_q(v.x), {name}_q(v.y), {name}_q(v.z)); }}\n\
+                 vec3 {name}_dec(uvec3 c) {{ return vec3(gbuf_f16_value(c.x & 0xffffu), gbuf_f16_value(c.y & 0xffffu), gbuf_f16_value(c.z & 0xffffu)); }}\n"
+            );
+            (16, 3)
+        }
+        (_, Some(Recipe::ColorF32)) => {
+            let _ = write!(
+                t,
+                "uvec3 {name}_enc(vec3 v) {{ return uvec3(gbuf_f32_bits(v.x), gbuf_f32_bits(v.y), gbuf_f32_bits(v.z)); }}\n\
+                 vec3 {name}_dec(uvec3 c) {{ return vec3(gbuf_f32_value(c.x), gbuf_f32_value(c.y), gbuf_f32_value(c.z)); }}\n"
+            );
+            (32, 3)
+        }
+        (_, Some(Recipe::NormalOct { quant })) => {
+            quant_fns(quant, &format!("{name}_c"), &mut t);
+            let _ = write!(
+                t,
+                "// octahedral normal ({})\n\
+                 uvec3 {name}_enc(vec3 n) {{ vec2 p = gbuf_oct_project(gbuf_sanitize(n)); return uvec3({name}_c_enc(p.x), {name}_c_enc(p.y), 0u); }}\n\
+                 vec3 {name}_dec(uvec3 c) {{ return gbuf_finish(gbuf_oct_unproject(vec2({name}_c_dec(c.x), {name}_c_dec(c.y)))); }}\n",
+                f.codec
+            );
+            (quant.bits(), 2)
+        }
+        (_, Some(Recipe::NormalXyz { quant, unorm })) => {
+            quant_fns(quant, &format!("{name}_c"), &mut t);
+            let (to, from) = if unorm { (" * 0.5 + 0.5", " * 2.0 - 1.0") } else { ("", "") };
+            let _ = write!(
+                t,
+                "// xyz normal ({})\n\
+                 uint {name}_e(float v) {{ precise float t = v{to}; return {name}_c_enc(t); }}\n\
+                 float {name}_d(uint c) {{ precise float v = {name}_c_dec(c){from}; return v; }}\n\
+                 uvec3 {name}_enc(vec3 n) {{ vec3 u = gbuf_sanitize(n); return uvec3({name}_e(u.x), {name}_e(u.y), {name}_e(u.z)); }}\n\
+                 vec3 {name}_dec(uvec3 c) {{ return gbuf_finish(vec3({name}_d(c.x), {name}_d(c.y), {name}_d(c.z))); }}\n",
+                f.codec
+            );
+            (quant.bits(), 3)
+        }
+        (_, Some(Recipe::DepthLinearF32)) => {
+            camera = true;
+            let _ = write!(
+                t,
+                "// linear view depth, IEEE single (NaN → the far plane)\n\
+                 uvec3 {name}_enc(float z) {{ float c = isnan(z) ? gbuf_zfar : clamp(z, {lo}, {hi}); return uvec3(floatBitsToUint(c), 0u, 0u); }}\n\
+                 float {name}_dec(uvec3 c) {{ uint a = c.x & 0x7fffffffu; float z = uintBitsToFloat(c.x); \
+                 return a > 0x7f800000u ? gbuf_zfar : clamp(z, {lo}, {hi}); }}\n",
+                lo = lit(f32::MIN_POSITIVE),
+                hi = lit(f32::MAX)
+            );
+            (32, 1)
+        }
+        (_, Some(Recipe::DepthLinearF16)) => {
+            camera = true;
+            let _ = write!(
+                t,
+                "// linear view depth, half float\n\
+                 uvec3 {name}_enc(float z) {{ float c = isnan(z) ? gbuf_zfar : z; return uvec3(gbuf_f16_bits(clamp(c, {lo}, 65504.0)), 0u, 0u); }}\n\
+                 float {name}_dec(uvec3 c) {{ return clamp(gbuf_f16_value(c.x & 0xffffu), {lo}, 65504.0); }}\n",
+                lo = lit(2f32.powi(-24))
+            );
+            (16, 1)
+        }
+        (_, Some(Recipe::DepthPost { storage, reversed })) => {
+            camera = true;
+            let d_of = if reversed { "n / (f - n) * (f / z - 1.0lf)" } else { "f / (f - n) * (1.0lf - n / z)" };
+            let z_of = if reversed { "n * f / (n + d * (f - n))" } else { "n * f / (f - d * (f - n))" };
+            let (bits, store, load) = match storage {
+                DepthStorage::Unorm(k) => {
+                    let m = (1u64 << k) - 1;
+                    (k, format!("uint(gbuf_round_d(d * {m}.0lf))"), format!("double(int(c.x & {m}u)) / {m}.0lf"))
+                }
+                DepthStorage::F32 => (
+                    32,
+                    "floatBitsToUint(float(d))".to_string(),
+                    "((c.x & 0x7fffffffu) > 0x7f800000u ? DEPTH_D(f, n, f) : double(uintBitsToFloat(c.x)))".to_string(),
+                ),
+            };
+            let _ = write!(
+                t,
+                "// post-projection depth d ∈ [0, 1] of the camera's near/far ({}), f64 arithmetic\n\
+                 uvec3 {name}_enc(float depth) {{ precise double n = double(gbuf_znear); precise double f = double(gbuf_zfar); \
+                 precise double z = isnan(depth) ? f : clamp(double(depth), n, f); precise double d = DEPTH_D(z, n, f); \
+                 return uvec3({store}, 0u, 0u); }}\n\
+                 float {name}_dec(uvec3 c) {{ precise double n = double(gbuf_znear); precise double f = double(gbuf_zfar); \
+                 precise double d = clamp({load}, 0.0lf, 1.0lf); precise double z = {z_of}; return float(clamp(z, n, f)); }}\n",
+                if reversed { "reversed Z" } else { "standard Z" },
+            );
+            // The d of a depth is shared by both directions; emitted once per field under its own name.
+            let fun = format!(
+                "double DEPTH_D(double z, double n, double f) {{ precise double d = {d_of}; return clamp(d, 0.0lf, 1.0lf); }}\n"
+            );
+            t = (fun + &t).replace("DEPTH_D", &format!("{name}_d"));
+            (bits, 1)
+        }
+        (_, None) => return Err(unsupported("no shader recipe for this codec yet")),
+    };
+    Ok(FieldCode { k, n, text: t, camera })
+}
+
+/// The recipe of field `f`'s codec (IDs and reserved bits have none).
+fn recipe_of(f: &Field, layout: &Layout) -> Result<Option<Recipe>> {
+    use super::coder::Coder;
+    let [n, far] = layout.spec().depth_range.unwrap_or(super::DEFAULT_DEPTH_RANGE);
+    let coder = Coder::build(f.slot, &f.codec, n, far).map_err(Error::Argument)?;
+    Ok(match coder {
+        Coder::Normal(c) => c.recipe(),
+        Coder::Depth(c) => c.recipe(),
+        Coder::Color(c) => c.recipe(),
+        Coder::Scalar(c) => c.recipe(),
+        Coder::Id(_) | Coder::None => None,
+    })
+}
+
+fn ident(s: &str) -> String {
+    s.chars().map(|c| if c.is_ascii_alphanumeric() { c.to_ascii_lowercase() } else { '_' }).collect()
+}
+
+/// The layout as GLSL 4.50: `struct GbufSurface`, per target `uvec4 gbuf_pack_<target>(GbufSurface s)` and
+/// `GbufSurface gbuf_unpack(uvec4 <target>, …)` (docs/SHADERS.md). Errors name a codec or feature gbuf does not
+/// emit yet.
+pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
+    let Lang::Glsl = lang;
+    if layout.indirection().is_some() {
+        return Err(Error::Argument(format!(
+            "layout {:?} uses material-ID indirection, which gbuf does not emit as shader code yet",
+            layout.name()
+        )));
+    }
+    let mut fields = Vec::new();
+    let mut camera = false;
+    for (i, f) in layout.fields().iter().enumerate() {
+        if matches!(f.slot, Slot::Reserved | Slot::MaterialIndex) {
+            continue;
+        }
+        let target = &layout.spec().targets[f.target].name;
+        let name = format!("gbuf_{}_{}", ident(target), ident(&f.slot.name()));
+        let code = field_code(f, recipe_of(f, layout)?, &name, layout)?;
+        camera |= code.camera;
+        fields.push((i, f, name, code));
+    }
+    let mut o = String::new();
+    let _ = writeln!(o, "// gbuf layout {:?}: {}", layout.name(), layout.spec().description);
+    let _ = writeln!(
+        o,
+        "// GLSL 4.50, generated by gbuf {} (`gbuf layouts {} --emit glsl`). ABI: docs/SHADERS.md. Everything here is\n\
+         // named gbuf_*/Gbuf*; paste it into any shader. Packing and unpacking give gbuf's bits exactly (tested on\n\
+         // Mesa llvmpipe).",
+        env!("CARGO_PKG_VERSION"),
+        layout.name()
+    );
+    o.push_str("\nstruct GbufSurface {\n");
+    for (n, t) in SURFACE {
+        let _ = writeln!(o, "    {t} {n};");
+    }
+    o.push_str("};\n");
+    if camera {
+        o.push_str("\n// The camera's near and far planes (the depth codec's projection).\nuniform float gbuf_znear;\nuniform float gbuf_zfar;\n");
+    }
+    o.push_str(HELPERS);
+    o.push_str("\n// ---- one encode/decode pair per field ----\n");
+    for (_, f, _, code) in &fields {
+        let _ = writeln!(
+            o,
+            "\n// {} bits {}..{}: {} ({})",
+            layout.spec().targets[f.target].name,
+            f.offset,
+            f.offset + f.bits,
+            f.slot.name(),
+            if f.codec.is_empty() { "id" } else { &f.codec }
+        );
+        o.push_str(&code.text);
+    }
+    // Packing: one function per target.
+    for (ti, t) in layout.spec().targets.iter().enumerate() {
+        let _ = writeln!(
+            o,
+            "\n// Target {:?} ({}): the texel's bits as little-endian 32-bit words, unused words 0.\nuvec4 gbuf_pack_{}(GbufSurface s) {{\n    uvec4 w = uvec4(0u);",
+            t.name,
+            layout.formats()[ti],
+            ident(&t.name)
+        );
+        for (_, f, name, code) in fields.iter().filter(|x| x.1.target == ti) {
+            let m = member(f.slot).unwrap_or_default();
+            let _ = writeln!(o, "    uvec3 c_{name} = {name}_enc({m});");
+            for j in 0..code.n {
+                let _ = writeln!(o, "    w = gbuf_put(w, {}u, {}u, c_{name}[{j}]);", f.offset + j * code.k, code.k);
+            }
+        }
+        o.push_str("    return w;\n}\n");
+    }
+    // Unpacking.
+    let params: Vec<String> = layout.spec().targets.iter().map(|t| format!("uvec4 {}", ident(&t.name))).collect();
+    let _ = writeln!(
+        o,
+        "\n// The surface a lighting pass reads: what Layout::unpack gives. Attributes the layout does not store hold\n\
+         // its constants or 0 (a position the layout does not store is left to the lighting, which rebuilds it\n\
+         // from depth and its camera).\nGbufSurface gbuf_unpack({}) {{",
+        params.join(", ")
+    );
+    o.push_str("    GbufSurface s;\n");
+    for (n, t) in SURFACE {
+        let zero = match t {
+            "float" => "0.0",
+            "uint" => "0u",
+            "vec2" => "vec2(0.0)",
+            _ => "vec3(0.0)",
+        };
+        let _ = writeln!(o, "    s.{n} = {zero};");
+    }
+    for (a, vals) in layout.constants() {
+        let v: Vec<String> = vals.iter().map(|v| lit(*v)).collect();
+        let value = match vals.len() {
+            1 if a.is_id() => format!("{}u", vals[0] as u32),
+            1 => v[0].clone(),
+            n => format!("vec{n}({})", v.join(", ")),
+        };
+        let _ = writeln!(o, "    s.{} = {value}; // the layout's constant", a.name());
+    }
+    for (_, f, name, code) in &fields {
+        let src = ident(&layout.spec().targets[f.target].name);
+        let comps: Vec<String> = (0..3)
+            .map(|j| {
+                if j < code.n {
+                    format!("gbuf_get({src}, {}u, {}u)", f.offset + j * code.k, code.k)
+                } else {
+                    "0u".into()
+                }
+            })
+            .collect();
+        let m = member(f.slot).unwrap_or_default();
+        let _ = writeln!(o, "    {m} = {name}_dec(uvec3({}));", comps.join(", "));
+    }
+    if layout.stores(Attribute::Position) && !layout.stores(Attribute::Depth) {
+        o.push_str("    s.depth = -s.position.z; // depth derived from position\n");
+    }
+    o.push_str("    return s;\n}\n");
+    Ok(o)
+}

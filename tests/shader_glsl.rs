@@ -1,0 +1,326 @@
+//! The GLSL that `gbuf layouts L --emit glsl` writes reproduces gbuf on a real GPU driver: on Mesa's llvmpipe
+//! (moderngl, headless EGL), a compute shader feeds every covered sample's exact attributes to the emitted
+//! `gbuf_pack_<target>` and compares nothing itself: it writes the words back, and this test checks them against
+//! `Layout::pack`'s bytes bit for bit; it feeds `Layout::pack`'s words to `gbuf_unpack` and the attributes must
+//! be `Layout::unpack`'s bits. Every built-in layout the emitter supports, the engine convention `oct-unorm`, and
+//! each supported codec family at three bit widths, on the llvmpipe 4× fixture and a frame with every attribute.
+//!
+//! Required in CI (`.ci/run` installs Mesa and moderngl): a missing driver is a failure, not a skip.
+
+mod support;
+
+use gbuf::gbuffer::{Attribute, GBuffer, PlaneRef};
+use gbuf::io::{load, LoadOptions};
+use gbuf::layout::shader::{emit, Lang};
+use gbuf::layout::{Layout, LayoutSpec};
+use std::path::Path;
+use std::process::Command;
+
+/// Words per sample of `GbufSurface` in the harness buffers, in ABI order.
+const SURFACE_WORDS: usize = 19;
+
+/// The attribute words of sample `i` (f32 bits, u32 IDs; 0 where the G-buffer has no plane).
+fn surface_words(gb: &GBuffer, i: usize) -> [u32; SURFACE_WORDS] {
+    let mut w = [0u32; SURFACE_WORDS];
+    let mut at = 0;
+    for a in [
+        Attribute::Depth,
+        Attribute::Position,
+        Attribute::Normal,
+        Attribute::Albedo,
+        Attribute::Specular,
+        Attribute::SpecularPower,
+        Attribute::Roughness,
+        Attribute::Metallic,
+        Attribute::Motion,
+        Attribute::MaterialId,
+        Attribute::ObjectId,
+        Attribute::PrimitiveId,
+    ] {
+        let n = a.components();
+        match gb.plane(a) {
+            Some(PlaneRef::F32(v)) => w[at] = v[i].to_bits(),
+            Some(PlaneRef::U32(v)) => w[at] = v[i],
+            Some(PlaneRef::Vec2(v)) => {
+                w[at] = v[i].x.to_bits();
+                w[at + 1] = v[i].y.to_bits();
+            }
+            Some(PlaneRef::Vec3(v)) => {
+                w[at] = v[i].x.to_bits();
+                w[at + 1] = v[i].y.to_bits();
+                w[at + 2] = v[i].z.to_bits();
+            }
+            None => {}
+        }
+        at += n;
+    }
+    w
+}
+
+/// The harness: reads the attributes and gbuf's packed words, runs pack and unpack per sample.
+fn harness(code: &str, layout: &Layout) -> String {
+    let t = layout.spec().targets.len();
+    let names: Vec<String> = layout
+        .spec()
+        .targets
+        .iter()
+        .map(|x| x.name.chars().map(|c| if c.is_ascii_alphanumeric() { c.to_ascii_lowercase() } else { '_' }).collect())
+        .collect();
+    let mut main = format!(
+        "#version 450\nlayout(local_size_x = 64) in;\n\
+         layout(std430, binding = 0) readonly buffer In {{ uint inp[]; }};\n\
+         layout(std430, binding = 1) readonly buffer Words {{ uint words[]; }};\n\
+         layout(std430, binding = 2) writeonly buffer Packed {{ uint packed_out[]; }};\n\
+         layout(std430, binding = 3) writeonly buffer Unpacked {{ uint unpacked_out[]; }};\n\
+         uniform uint n_samples;\n{code}\n\
+         void main() {{\n  uint i = gl_GlobalInvocationID.x;\n  if (i >= n_samples) return;\n  uint b = i * {SURFACE_WORDS}u;\n\
+           GbufSurface s;\n  s.depth = uintBitsToFloat(inp[b]);\n\
+           s.position = vec3(uintBitsToFloat(inp[b + 1u]), uintBitsToFloat(inp[b + 2u]), uintBitsToFloat(inp[b + 3u]));\n\
+           s.normal = vec3(uintBitsToFloat(inp[b + 4u]), uintBitsToFloat(inp[b + 5u]), uintBitsToFloat(inp[b + 6u]));\n\
+           s.albedo = vec3(uintBitsToFloat(inp[b + 7u]), uintBitsToFloat(inp[b + 8u]), uintBitsToFloat(inp[b + 9u]));\n\
+           s.specular = uintBitsToFloat(inp[b + 10u]);\n  s.specular_power = uintBitsToFloat(inp[b + 11u]);\n\
+           s.roughness = uintBitsToFloat(inp[b + 12u]);\n  s.metallic = uintBitsToFloat(inp[b + 13u]);\n\
+           s.motion = vec2(uintBitsToFloat(inp[b + 14u]), uintBitsToFloat(inp[b + 15u]));\n\
+           s.material_id = inp[b + 16u];\n  s.object_id = inp[b + 17u];\n  s.primitive_id = inp[b + 18u];\n"
+    );
+    for (k, name) in names.iter().enumerate() {
+        main.push_str(&format!(
+            "  {{ uvec4 w = gbuf_pack_{name}(s); for (uint j = 0u; j < 4u; j++) packed_out[(i * {t}u + {k}u) * 4u + j] = w[j]; }}\n"
+        ));
+    }
+    let args: Vec<String> = (0..t)
+        .map(|k| format!("uvec4(words[(i * {t}u + {k}u) * 4u], words[(i * {t}u + {k}u) * 4u + 1u], words[(i * {t}u + {k}u) * 4u + 2u], words[(i * {t}u + {k}u) * 4u + 3u])"))
+        .collect();
+    main.push_str(&format!(
+        "  GbufSurface u = gbuf_unpack({});\n  uint o = i * {SURFACE_WORDS}u;\n\
+           unpacked_out[o] = floatBitsToUint(u.depth);\n\
+           for (int j = 0; j < 3; j++) {{ unpacked_out[o + 1u + uint(j)] = floatBitsToUint(u.position[j]); unpacked_out[o + 4u + uint(j)] = floatBitsToUint(u.normal[j]); unpacked_out[o + 7u + uint(j)] = floatBitsToUint(u.albedo[j]); }}\n\
+           unpacked_out[o + 10u] = floatBitsToUint(u.specular);\n  unpacked_out[o + 11u] = floatBitsToUint(u.specular_power);\n\
+           unpacked_out[o + 12u] = floatBitsToUint(u.roughness);\n  unpacked_out[o + 13u] = floatBitsToUint(u.metallic);\n\
+           unpacked_out[o + 14u] = floatBitsToUint(u.motion.x);\n  unpacked_out[o + 15u] = floatBitsToUint(u.motion.y);\n\
+           unpacked_out[o + 16u] = u.material_id;\n  unpacked_out[o + 17u] = u.object_id;\n  unpacked_out[o + 18u] = u.primitive_id;\n}}\n",
+        args.join(", ")
+    ));
+    main
+}
+
+/// Runs the shader on llvmpipe: argv = shader, inputs, words, n, targets, znear, zfar, packed out, unpacked out.
+const RUN: &str = r#"
+import sys, numpy as np, moderngl
+shader, inp, words, n, t, znear, zfar, out_p, out_u = sys.argv[1:]
+n, t = int(n), int(t)
+ctx = moderngl.create_standalone_context(backend="egl", require=450)
+renderer = ctx.info["GL_RENDERER"]
+assert "llvmpipe" in renderer, renderer
+cs = ctx.compute_shader(open(shader).read())
+cs["n_samples"].value = n
+for name, v in (("gbuf_znear", znear), ("gbuf_zfar", zfar)):
+    if name in cs:
+        cs[name].value = np.frombuffer(np.uint32(int(v)).tobytes(), dtype=np.float32)[0]
+bi = ctx.buffer(open(inp, "rb").read())
+bw = ctx.buffer(open(words, "rb").read())
+bp = ctx.buffer(reserve=max(4, n * t * 16))
+bu = ctx.buffer(reserve=max(4, n * 19 * 4))
+bi.bind_to_storage_buffer(0); bw.bind_to_storage_buffer(1); bp.bind_to_storage_buffer(2); bu.bind_to_storage_buffer(3)
+cs.run(group_x=(n + 63) // 64)
+ctx.finish()
+open(out_p, "wb").write(bp.read())
+open(out_u, "wb").write(bu.read())
+print(renderer)
+"#;
+
+/// Packs and unpacks every covered sample of `gb` with `layout` on llvmpipe and compares with gbuf, bit for bit.
+fn check(layout: &Layout, gb: &GBuffer, dir: &Path, tag: &str) {
+    let code = emit(layout, Lang::Glsl).unwrap_or_else(|e| panic!("{tag}: {e}"));
+    let packed = layout.pack(gb).unwrap();
+    let unpacked = layout.unpack(&packed, gb).unwrap();
+    let covered: Vec<usize> = (0..gb.len()).filter(|&i| gb.coverage[i]).collect();
+    let t = packed.targets.len();
+    let mut inp = Vec::with_capacity(covered.len() * SURFACE_WORDS * 4);
+    let mut words = Vec::with_capacity(covered.len() * t * 16);
+    for &i in &covered {
+        for w in surface_words(gb, i) {
+            inp.extend_from_slice(&w.to_le_bytes());
+        }
+        for p in &packed.targets {
+            let tb = p.format.bytes();
+            let mut texel = [0u8; 16];
+            texel[..tb].copy_from_slice(&p.bytes[i * tb..(i + 1) * tb]);
+            words.extend_from_slice(&texel);
+        }
+    }
+    let shader = dir.join(format!("{tag}.comp"));
+    std::fs::write(&shader, harness(&code, layout)).unwrap();
+    let (fi, fw, fp, fu) = (
+        dir.join(format!("{tag}.in")),
+        dir.join(format!("{tag}.words")),
+        dir.join(format!("{tag}.p")),
+        dir.join(format!("{tag}.u")),
+    );
+    std::fs::write(&fi, &inp).unwrap();
+    std::fs::write(&fw, &words).unwrap();
+    let run = dir.join("run.py");
+    std::fs::write(&run, RUN).unwrap();
+    let [zn, zf] = packed.depth_range;
+    let o = Command::new("python3")
+        .arg(&run)
+        .args([&shader, &fi, &fw])
+        .args([covered.len().to_string(), t.to_string(), zn.to_bits().to_string(), zf.to_bits().to_string()])
+        .args([&fp, &fu])
+        .output()
+        .expect("python3");
+    assert!(o.status.success(), "{tag}: the driver run failed:\n{}", String::from_utf8_lossy(&o.stderr));
+    let got_p = std::fs::read(&fp).unwrap();
+    let got_u = std::fs::read(&fu).unwrap();
+    let word = |b: &[u8], k: usize| u32::from_le_bytes(b[k * 4..k * 4 + 4].try_into().unwrap());
+    let mut bad = 0usize;
+    let mut first = String::new();
+    for (j, &i) in covered.iter().enumerate() {
+        for (k, p) in packed.targets.iter().enumerate() {
+            let tb = p.format.bytes();
+            let mut want = [0u8; 16];
+            want[..tb].copy_from_slice(&p.bytes[i * tb..(i + 1) * tb]);
+            let got = &got_p[(j * t + k) * 16..(j * t + k + 1) * 16];
+            if got != want {
+                bad += 1;
+                if first.is_empty() {
+                    first = format!("pack {}: sample {i}: GPU {got:02x?} gbuf {want:02x?}", p.name);
+                }
+            }
+        }
+        let want = surface_words(&unpacked, i);
+        for a in layout.stored_attributes() {
+            let (at, n) = offset_of(a);
+            for (c, &w) in want.iter().enumerate().skip(at).take(n) {
+                if word(&got_u, j * SURFACE_WORDS + c) != w {
+                    bad += 1;
+                    if first.is_empty() {
+                        first = format!(
+                            "unpack {}: sample {i} word {c}: GPU {:#010x} gbuf {:#010x}",
+                            a.name(),
+                            word(&got_u, j * SURFACE_WORDS + c),
+                            w
+                        );
+                    }
+                }
+            }
+        }
+    }
+    assert_eq!(bad, 0, "{tag}: {bad} mismatches over {} samples; first: {first}", covered.len());
+}
+
+/// Word offset and count of an attribute in [`surface_words`].
+fn offset_of(a: Attribute) -> (usize, usize) {
+    let order = [
+        Attribute::Depth,
+        Attribute::Position,
+        Attribute::Normal,
+        Attribute::Albedo,
+        Attribute::Specular,
+        Attribute::SpecularPower,
+        Attribute::Roughness,
+        Attribute::Metallic,
+        Attribute::Motion,
+        Attribute::MaterialId,
+        Attribute::ObjectId,
+        Attribute::PrimitiveId,
+    ];
+    let mut at = 0;
+    for b in order {
+        if b == a {
+            return (at, b.components());
+        }
+        at += b.components();
+    }
+    unreachable!()
+}
+
+fn fixture() -> GBuffer {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/raster_4x.exr");
+    load(&p, &LoadOptions::default()).unwrap().gbuffer
+}
+
+/// A plausible frame with every attribute (values in and out of every codec's range).
+fn every_attribute() -> GBuffer {
+    let mut gb = support::io::plausible(29, 13, 4, 3);
+    let n = gb.len();
+    let mut r = gbuf::util::SplitMix64::new(5);
+    gb.specular = Some((0..n).map(|_| r.range_f32(-0.2, 1.2)).collect());
+    gb.specular_power = Some((0..n).map(|_| r.range_f32(0.0, 300.0)).collect());
+    gb.metallic = Some((0..n).map(|_| r.next_f32()).collect());
+    gb.object_id = Some((0..n).map(|_| r.next_u64() as u32 >> 20).collect());
+    gb.primitive_id = Some((0..n).map(|_| r.next_u64() as u32).collect());
+    gb.motion = Some((0..n).map(|_| glam::Vec2::new(r.range_f32(-40.0, 40.0), r.range_f32(-1.0, 1.0))).collect());
+    gb.albedo = Some(
+        (0..n).map(|_| glam::Vec3::new(r.range_f32(-0.1, 1.1), r.next_f32(), r.range_f32(0.0, 70000.0))).collect(),
+    );
+    gb.normal = Some(
+        (0..n)
+            .map(|_| glam::Vec3::new(r.range_f32(-1.0, 1.0), r.range_f32(-1.0, 1.0), r.range_f32(-1.0, 1.0)))
+            .collect(),
+    );
+    gb.zero_background();
+    gb
+}
+
+/// Every built-in layout the emitter supports, on both frames.
+#[test]
+fn builtin_layouts_pack_and_unpack_on_llvmpipe_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let frames = [("raster", fixture()), ("every", every_attribute())];
+    let mut done = Vec::new();
+    for layout in Layout::builtins().into_iter().chain(Layout::visibility_builtins()) {
+        if emit(&layout, Lang::Glsl).is_err() {
+            continue;
+        }
+        for (tag, gb) in &frames {
+            check(&layout, gb, dir.path(), &format!("{}-{tag}", layout.name()));
+        }
+        done.push(layout.name().to_string());
+    }
+    for must in ["unreal-like", "bevy-deferred", "minimal-8", "reference-f32", "rgba16f-2x", "visibility-8"] {
+        assert!(done.iter().any(|d| d == must), "{must} was not emitted: {done:?}");
+    }
+}
+
+/// The width of codec `c` for attribute `attr`.
+fn bits_of(attr: &str, c: &str) -> u32 {
+    use gbuf::codec::{color_codec, depth_codec, normal_codec, scalar_codec};
+    match attr {
+        "normal" => normal_codec(c).unwrap().bits(),
+        "albedo" => color_codec(c).unwrap().bits(),
+        "depth" => depth_codec(c, 0.1, 100.0).unwrap().bits(),
+        _ => scalar_codec(c).unwrap().bits(),
+    }
+}
+
+/// Each codec family the emitter has, at three widths, in one layout per family (fields spanning words
+/// included).
+#[test]
+fn codec_families_at_three_widths_on_llvmpipe() {
+    let dir = tempfile::tempdir().unwrap();
+    let gb = every_attribute();
+    let families: [(&str, &str, [&str; 3]); 8] = [
+        ("normal", "rgba32ui", ["oct-16", "oct-24", "oct-32"]),
+        ("normal", "rgba32ui", ["oct-unorm-16", "oct-unorm-20", "oct-unorm-32"]),
+        ("normal", "rgba32ui", ["xyz-snorm-24", "xyz-unorm-30", "xyz-f16-48"]),
+        ("albedo", "rgba32ui", ["unorm-5", "unorm8", "unorm-16"]),
+        ("albedo", "rgba32ui", ["srgb8", "f16", "unorm-10"]),
+        ("roughness", "rgba32ui", ["unorm-4", "unorm-12", "unorm-24"]),
+        ("motion.x", "rgba32ui", ["snorm-6:40", "snorm-12:40", "snorm-24:40"]),
+        ("depth", "rgba32ui", ["unorm16", "unorm24-reversed", "f32-standard"]),
+    ];
+    for (attr, format, codecs) in families {
+        let bits: Vec<u32> = codecs.iter().map(|c| bits_of(attr, c)).collect();
+        for (c, b) in codecs.iter().zip(&bits) {
+            let spec = format!(
+                "name = \"family\"\n[[targets]]\nname = \"t\"\nformat = \"{format}\"\nfields = [\n  {{ attribute = \"{attr}\", codec = \"{c}\", offset = 3, bits = {b} }},\n]\n\
+                 [[targets]]\nname = \"z\"\nformat = \"r32f\"\nfields = [ {{ attribute = \"{}\", codec = \"f32\", offset = 0, bits = 32 }} ]\n",
+                if attr == "depth" { "roughness" } else { "depth" }
+            );
+            let layout = Layout::from_spec(LayoutSpec::parse(Path::new("family.toml"), &spec).unwrap())
+                .unwrap_or_else(|e| panic!("{c}: {e}"));
+            check(&layout, &gb, dir.path(), &format!("family-{}", c.replace(':', "_")));
+        }
+    }
+}
