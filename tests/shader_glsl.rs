@@ -58,7 +58,10 @@ fn surface_words(gb: &GBuffer, i: usize) -> [u32; SURFACE_WORDS] {
 }
 
 /// The harness: reads the attributes and gbuf's packed words, runs pack and unpack per sample.
-fn harness(code: &str, layout: &Layout) -> String {
+fn harness(code: &str, layout: &Layout, lang: Lang) -> String {
+    if lang == Lang::Hlsl {
+        return harness_hlsl(code, layout);
+    }
     let t = layout.spec().targets.len();
     let names: Vec<String> = layout
         .spec()
@@ -104,6 +107,47 @@ fn harness(code: &str, layout: &Layout) -> String {
     main
 }
 
+/// The same harness in HLSL (compiled by glslang's HLSL front end, cross-compiled back to GLSL by spirv-cross).
+fn harness_hlsl(code: &str, layout: &Layout) -> String {
+    let t = layout.spec().targets.len();
+    let names: Vec<String> = layout
+        .spec()
+        .targets
+        .iter()
+        .map(|x| x.name.chars().map(|c| if c.is_ascii_alphanumeric() { c.to_ascii_lowercase() } else { '_' }).collect())
+        .collect();
+    let f = |k: usize| format!("asfloat(inp[b + {k}u])");
+    let mut main = format!(
+        "{code}\nStructuredBuffer<uint> inp : register(t0);\nStructuredBuffer<uint> words : register(t1);\n\
+         RWStructuredBuffer<uint> packed_out : register(u2);\nRWStructuredBuffer<uint> unpacked_out : register(u3);\n\
+         cbuffer Harness : register(b1) {{ uint n_samples; }};\n\
+         [numthreads(64, 1, 1)]\nvoid main(uint3 id : SV_DispatchThreadID) {{\n  uint i = id.x;\n  if (i >= n_samples) return;\n\
+           uint b = i * {SURFACE_WORDS}u;\n  GbufSurface s;\n  s.depth = {};\n  s.position = float3({}, {}, {});\n\
+           s.normal = float3({}, {}, {});\n  s.albedo = float3({}, {}, {});\n  s.specular = {};\n  s.specular_power = {};\n\
+           s.roughness = {};\n  s.metallic = {};\n  s.motion = float2({}, {});\n  s.material_id = inp[b + 16u];\n\
+           s.object_id = inp[b + 17u];\n  s.primitive_id = inp[b + 18u];\n",
+        f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7), f(8), f(9), f(10), f(11), f(12), f(13), f(14), f(15)
+    );
+    for (k, name) in names.iter().enumerate() {
+        main.push_str(&format!(
+            "  {{ uint4 w = gbuf_pack_{name}(s); for (uint j = 0u; j < 4u; j++) packed_out[(i * {t}u + {k}u) * 4u + j] = w[j]; }}\n"
+        ));
+    }
+    let args: Vec<String> = (0..t)
+        .map(|k| format!("uint4(words[(i * {t}u + {k}u) * 4u], words[(i * {t}u + {k}u) * 4u + 1u], words[(i * {t}u + {k}u) * 4u + 2u], words[(i * {t}u + {k}u) * 4u + 3u])"))
+        .collect();
+    main.push_str(&format!(
+        "  GbufSurface u = gbuf_unpack({});\n  uint o = i * {SURFACE_WORDS}u;\n  unpacked_out[o] = asuint(u.depth);\n\
+           for (uint j = 0u; j < 3u; j++) {{ unpacked_out[o + 1u + j] = asuint(u.position[j]); unpacked_out[o + 4u + j] = asuint(u.normal[j]); unpacked_out[o + 7u + j] = asuint(u.albedo[j]); }}\n\
+           unpacked_out[o + 10u] = asuint(u.specular);\n  unpacked_out[o + 11u] = asuint(u.specular_power);\n\
+           unpacked_out[o + 12u] = asuint(u.roughness);\n  unpacked_out[o + 13u] = asuint(u.metallic);\n\
+           unpacked_out[o + 14u] = asuint(u.motion.x);\n  unpacked_out[o + 15u] = asuint(u.motion.y);\n\
+           unpacked_out[o + 16u] = u.material_id;\n  unpacked_out[o + 17u] = u.object_id;\n  unpacked_out[o + 18u] = u.primitive_id;\n}}\n",
+        args.join(", ")
+    ));
+    main
+}
+
 /// Runs the shader on llvmpipe: argv = shader, inputs, words, n, targets, znear, zfar, packed out, unpacked out.
 const RUN: &str = r#"
 import sys, numpy as np, moderngl
@@ -112,16 +156,30 @@ n, t = int(n), int(t)
 ctx = moderngl.create_standalone_context(backend="egl", require=450)
 renderer = ctx.info["GL_RENDERER"]
 assert "llvmpipe" in renderer, renderer
-cs = ctx.compute_shader(open(shader).read())
-cs["n_samples"].value = n
-for name, v in (("gbuf_znear", znear), ("gbuf_zfar", zfar)):
-    if name in cs:
-        cs[name].value = np.frombuffer(np.uint32(int(v)).tobytes(), dtype=np.float32)[0]
+import re, struct
+src = open(shader).read()
+cs = ctx.compute_shader(src)
+# Bindings by block name (spirv-cross output of the HLSL harness); the GLSL harness uses 0..3 and plain uniforms.
+bind = {m.group(2): int(m.group(1)) for m in re.finditer(r"layout\(binding = (\d+), std\d+\) (?:readonly |writeonly |restrict )*(?:buffer|uniform) (\w+)", src)}
+zn = struct.unpack("<f", struct.pack("<I", int(znear)))[0]
+zf = struct.unpack("<f", struct.pack("<I", int(zfar)))[0]
+keep = []
+if "Harness" in bind:
+    ub = ctx.buffer(struct.pack("<I12x", n)); ub.bind_to_uniform_block(bind["Harness"]); keep.append(ub)
+else:
+    cs["n_samples"].value = n
+if "GbufCamera" in bind:
+    cb = ctx.buffer(struct.pack("<ff8x", zn, zf)); cb.bind_to_uniform_block(bind["GbufCamera"]); keep.append(cb)
+else:
+    for name, v in (("gbuf_znear", zn), ("gbuf_zfar", zf)):
+        if name in cs:
+            cs[name].value = v
 bi = ctx.buffer(open(inp, "rb").read())
 bw = ctx.buffer(open(words, "rb").read())
 bp = ctx.buffer(reserve=max(4, n * t * 16))
 bu = ctx.buffer(reserve=max(4, n * 19 * 4))
-bi.bind_to_storage_buffer(0); bw.bind_to_storage_buffer(1); bp.bind_to_storage_buffer(2); bu.bind_to_storage_buffer(3)
+for buf, name, default in ((bi, "inp", 0), (bw, "words", 1), (bp, "packed_out", 2), (bu, "unpacked_out", 3)):
+    buf.bind_to_storage_buffer(bind.get(name, default))
 cs.run(group_x=(n + 63) // 64)
 ctx.finish()
 open(out_p, "wb").write(bp.read())
@@ -130,8 +188,9 @@ print(renderer)
 "#;
 
 /// Packs and unpacks every covered sample of `gb` with `layout` on llvmpipe and compares with gbuf, bit for bit.
-fn check(layout: &Layout, gb: &GBuffer, dir: &Path, tag: &str) {
-    let code = emit(layout, Lang::Glsl).unwrap_or_else(|e| panic!("{tag}: {e}"));
+fn check(layout: &Layout, gb: &GBuffer, dir: &Path, tag: &str, lang: Lang) {
+    let code = emit(layout, lang).unwrap_or_else(|e| panic!("{tag}: {e}"));
+    let tag = &format!("{tag}-{}", lang.name());
     let packed = layout.pack(gb).unwrap();
     let unpacked = layout.unpack(&packed, gb).unwrap();
     let covered: Vec<usize> = (0..gb.len()).filter(|&i| gb.coverage[i]).collect();
@@ -150,7 +209,10 @@ fn check(layout: &Layout, gb: &GBuffer, dir: &Path, tag: &str) {
         }
     }
     let shader = dir.join(format!("{tag}.comp"));
-    std::fs::write(&shader, harness(&code, layout)).unwrap();
+    match lang {
+        Lang::Glsl => std::fs::write(&shader, harness(&code, layout, lang)).unwrap(),
+        _ => hlsl_to_glsl(&harness(&code, layout, lang), dir, tag, &shader),
+    }
     let (fi, fw, fp, fu) = (
         dir.join(format!("{tag}.in")),
         dir.join(format!("{tag}.words")),
@@ -207,6 +269,28 @@ fn check(layout: &Layout, gb: &GBuffer, dir: &Path, tag: &str) {
         }
     }
     assert_eq!(bad, 0, "{tag}: {bad} mismatches over {} samples; first: {first}", covered.len());
+}
+
+/// HLSL → SPIR-V (glslangValidator's HLSL front end) → GLSL 4.50 (spirv-cross), the way a Vulkan engine ships
+/// HLSL; the GLSL then runs on llvmpipe.
+fn hlsl_to_glsl(hlsl: &str, dir: &Path, tag: &str, out: &Path) {
+    let src = dir.join(format!("{tag}.hlsl"));
+    let spv = dir.join(format!("{tag}.spv"));
+    std::fs::write(&src, hlsl).unwrap();
+    let o = Command::new("glslangValidator")
+        .args(["-D", "-e", "main", "-S", "comp", "-V", "--auto-map-bindings", "-o"])
+        .arg(&spv)
+        .arg(&src)
+        .output()
+        .expect("glslangValidator (Debian glslang-tools) is required");
+    assert!(o.status.success(), "{tag}: glslang:\n{}", String::from_utf8_lossy(&o.stdout));
+    let o = Command::new("spirv-cross")
+        .args(["--version", "450", "--output"])
+        .arg(out)
+        .arg(&spv)
+        .output()
+        .expect("spirv-cross (Debian spirv-cross) is required");
+    assert!(o.status.success(), "{tag}: spirv-cross:\n{}", String::from_utf8_lossy(&o.stderr));
 }
 
 /// Word offset and count of an attribute in [`surface_words`].
@@ -274,7 +358,9 @@ fn builtin_layouts_pack_and_unpack_on_llvmpipe_bit_for_bit() {
             continue;
         }
         for (tag, gb) in &frames {
-            check(&layout, gb, dir.path(), &format!("{}-{tag}", layout.name()));
+            for lang in [Lang::Glsl, Lang::Hlsl] {
+                check(&layout, gb, dir.path(), &format!("{}-{tag}", layout.name()), lang);
+            }
         }
         done.push(layout.name().to_string());
     }
@@ -320,7 +406,9 @@ fn codec_families_at_three_widths_on_llvmpipe() {
             );
             let layout = Layout::from_spec(LayoutSpec::parse(Path::new("family.toml"), &spec).unwrap())
                 .unwrap_or_else(|e| panic!("{c}: {e}"));
-            check(&layout, &gb, dir.path(), &format!("family-{}", c.replace(':', "_")));
+            for lang in [Lang::Glsl, Lang::Hlsl] {
+                check(&layout, &gb, dir.path(), &format!("family-{}", c.replace(':', "_")), lang);
+            }
         }
     }
 }

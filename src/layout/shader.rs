@@ -22,11 +22,76 @@ use std::fmt::Write as _;
 pub enum Lang {
     /// GLSL 4.50 (core; needs `double`, core since 4.00).
     Glsl,
+    /// HLSL, Shader Model 6 (`double` needs the device's double-precision support, as in D3D12's
+    /// `DoublePrecisionFloatShaderOps`).
+    Hlsl,
 }
 
 crate::named!(Lang: "shading language" {
     Glsl => "glsl",
+    Hlsl => "hlsl",
 });
+
+/// GLSL → HLSL for the code this module writes (a closed vocabulary, so a token map suffices): vector types,
+/// bit casts, `lf` double literals as casts, constant arrays as initialiser lists.
+fn to_hlsl(glsl: &str) -> String {
+    const WORDS: [(&str, &str); 8] = [
+        ("vec2", "float2"),
+        ("vec3", "float3"),
+        ("vec4", "float4"),
+        ("uvec2", "uint2"),
+        ("uvec3", "uint3"),
+        ("uvec4", "uint4"),
+        ("floatBitsToUint", "asuint"),
+        ("uintBitsToFloat", "asfloat"),
+    ];
+    let mut out = String::with_capacity(glsl.len() + glsl.len() / 8);
+    for line in glsl.lines() {
+        // `const uint X[N] = uint[N](a, b);` → `static const uint X[N] = { a, b };`
+        let line = match line.strip_prefix("const uint ") {
+            Some(rest) if rest.contains("] = uint[") => {
+                let (head, tail) = rest.split_once(" = ").unwrap_or((rest, ""));
+                let body = tail.split_once('(').map_or("", |x| x.1).trim_end_matches(");");
+                format!("static const uint {head} = {{ {body} }};")
+            }
+            _ => line.to_string(),
+        };
+        let b = line.as_bytes();
+        let mut i = 0;
+        while i < b.len() {
+            if b[i].is_ascii_alphabetic() || b[i] == b'_' {
+                let start = i;
+                while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
+                    i += 1;
+                }
+                let w = &line[start..i];
+                out.push_str(WORDS.iter().find(|(g, _)| *g == w).map_or(w, |(_, h)| h));
+            } else if b[i].is_ascii_digit() {
+                let start = i;
+                while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'.') {
+                    i += 1;
+                }
+                let n = &line[start..i];
+                match n.strip_suffix("lf") {
+                    Some(v) => {
+                        let _ = write!(out, "((double){v})");
+                    }
+                    None => out.push_str(n),
+                }
+            } else {
+                // Copy everything else (operators, spaces, UTF-8 in comments) up to the next token unchanged.
+                let start = i;
+                i += 1;
+                while i < b.len() && !(b[i].is_ascii_alphanumeric() || b[i] == b'_') {
+                    i += 1;
+                }
+                out.push_str(&line[start..i]);
+            }
+        }
+        out.push('\n');
+    }
+    out
+}
 
 /// The attributes of `GbufSurface`, in ABI order, with their GLSL types.
 const SURFACE: [(&str, &str); 12] = [
@@ -57,8 +122,13 @@ int gbuf_round(float v) {
     return t + int(f >= 0.5) - int(f <= -0.5);
 }
 
+// clamp() and max() on doubles, written out: HLSL compilers may resolve those intrinsics to float.
+double gbuf_clamp_d(double v, double lo, double hi) {
+    return v < lo ? lo : (v > hi ? hi : v);
+}
+
 int gbuf_round_d(double v) {
-    precise double c = clamp(v, -16777216.0lf, 16777216.0lf);
+    precise double c = gbuf_clamp_d(v, -16777216.0lf, 16777216.0lf);
     int t = int(c);
     precise double f = c - double(t);
     return t + int(f >= 0.5lf) - int(f <= -0.5lf);
@@ -140,7 +210,8 @@ uint gbuf_get(uvec4 w, uint offset, uint bits) {
 vec3 gbuf_sanitize(vec3 n) {
     bool nan_ = isnan(n.x) || isnan(n.y) || isnan(n.z);
     bool finite = !(isinf(n.x) || isinf(n.y) || isinf(n.z)) && !nan_;
-    precise vec3 d = vec3(isinf(n.x) ? sign(n.x) : 0.0, isinf(n.y) ? sign(n.y) : 0.0, isinf(n.z) ? sign(n.z) : 0.0);
+    precise vec3 d = vec3(isinf(n.x) ? (n.x > 0.0 ? 1.0 : -1.0) : 0.0, isinf(n.y) ? (n.y > 0.0 ? 1.0 : -1.0) : 0.0,
+        isinf(n.z) ? (n.z > 0.0 ? 1.0 : -1.0) : 0.0);
     precise vec3 u = finite ? n : d;
     precise float m = max(max(abs(u.x), abs(u.y)), abs(u.z));
     precise vec3 v = vec3(u.x / m, u.y / m, u.z / m);
@@ -169,7 +240,7 @@ vec2 gbuf_oct_project(vec3 n) {
     return n.z >= 0.0 ? p : f;
 }
 vec3 gbuf_oct_unproject(vec2 q) {
-    precise vec2 p = clamp(q, vec2(-1.0), vec2(1.0));
+    precise vec2 p = clamp(q, vec2(-1.0, -1.0), vec2(1.0, 1.0));
     precise float z = 1.0 - abs(p.x) - abs(p.y);
     precise vec3 f = vec3((1.0 - abs(p.y)) * gbuf_sign_not_zero(p.x), (1.0 - abs(p.x)) * gbuf_sign_not_zero(p.y), z);
     return z >= 0.0 ? vec3(p, z) : f;
@@ -295,7 +366,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
                 "// snorm over [−{range}, {range}], {bits} bits (f64)\n\
                  uvec3 {name}_enc(float v) {{ precise float u = v / {r}; precise float c = isnan(v) ? 0.0 : clamp(u, -1.0, 1.0); \
                  return uvec3(uint(gbuf_round_d(double(c) * {m}.0lf)) & {mask}u, 0u, 0u); }}\n\
-                 float {name}_dec(uvec3 c) {{ int s = int((c.x & {mask}u) << {sh}) >> {sh}; precise double t = max(double(s) / {m}.0lf, -1.0lf); \
+                 float {name}_dec(uvec3 c) {{ int s = int((c.x & {mask}u) << {sh}) >> {sh}; precise double q = double(s) / {m}.0lf; precise double t = q < -1.0lf ? -1.0lf : q; \
                  precise double v = t * {rd}; return float(v); }}\n",
                 r = lit(range),
                 rd = lit_d(range),
@@ -340,7 +411,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
                  const uint {name}_T[255] = uint[255]({th});\n\
                  const uint {name}_D[256] = uint[256]({de});\n\
                  uint {name}_q(float v) {{ float c = gbuf_clean(v, 0.0, 1.0); uint lo = 0u; \
-                 for (uint step = 128u; step > 0u; step >>= 1) {{ if (lo + step <= 255u && c >= uintBitsToFloat({name}_T[lo + step - 1u])) lo += step; }} return lo; }}\n\
+                 for (uint stride = 128u; stride > 0u; stride >>= 1) {{ if (lo + stride <= 255u && c >= uintBitsToFloat({name}_T[lo + stride - 1u])) lo += stride; }} return lo; }}\n\
                  uvec3 {name}_enc(vec3 v) {{ return uvec3({name}_q(v.x), {name}_q(v.y), {name}_q(v.z)); }}\n\
                  vec3 {name}_dec(uvec3 c) {{ return vec3(uintBitsToFloat({name}_D[c.x & 255u]), uintBitsToFloat({name}_D[c.y & 255u]), uintBitsToFloat({name}_D[c.z & 255u])); }}\n",
                 th = th.join(", "),
@@ -433,15 +504,15 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
                 t,
                 "// post-projection depth d ∈ [0, 1] of the camera's near/far ({}), f64 arithmetic\n\
                  uvec3 {name}_enc(float depth) {{ precise double n = double(gbuf_znear); precise double f = double(gbuf_zfar); \
-                 precise double z = isnan(depth) ? f : clamp(double(depth), n, f); precise double d = DEPTH_D(z, n, f); \
+                 precise double z = isnan(depth) ? f : gbuf_clamp_d(double(depth), n, f); precise double d = DEPTH_D(z, n, f); \
                  return uvec3({store}, 0u, 0u); }}\n\
                  float {name}_dec(uvec3 c) {{ precise double n = double(gbuf_znear); precise double f = double(gbuf_zfar); \
-                 precise double d = clamp({load}, 0.0lf, 1.0lf); precise double z = {z_of}; return float(clamp(z, n, f)); }}\n",
+                 precise double d = gbuf_clamp_d({load}, 0.0lf, 1.0lf); precise double z = {z_of}; return float(gbuf_clamp_d(z, n, f)); }}\n",
                 if reversed { "reversed Z" } else { "standard Z" },
             );
             // The d of a depth is shared by both directions; emitted once per field under its own name.
             let fun = format!(
-                "double DEPTH_D(double z, double n, double f) {{ precise double d = {d_of}; return clamp(d, 0.0lf, 1.0lf); }}\n"
+                "double DEPTH_D(double z, double n, double f) {{ precise double d = {d_of}; return gbuf_clamp_d(d, 0.0lf, 1.0lf); }}\n"
             );
             t = (fun + &t).replace("DEPTH_D", &format!("{name}_d"));
             (bits, 1)
@@ -473,7 +544,6 @@ fn ident(s: &str) -> String {
 /// `GbufSurface gbuf_unpack(uvec4 <target>, …)` (docs/SHADERS.md). Errors name a codec or feature gbuf does not
 /// emit yet.
 pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
-    let Lang::Glsl = lang;
     if layout.indirection().is_some() {
         return Err(Error::Argument(format!(
             "layout {:?} uses material-ID indirection, which gbuf does not emit as shader code yet",
@@ -496,11 +566,20 @@ pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
     let _ = writeln!(o, "// gbuf layout {:?}: {}", layout.name(), layout.spec().description);
     let _ = writeln!(
         o,
-        "// GLSL 4.50, generated by gbuf {} (`gbuf layouts {} --emit glsl`). ABI: docs/SHADERS.md. Everything here is\n\
+        "// {}, generated by gbuf {} (`gbuf layouts {} --emit {}`). ABI: docs/SHADERS.md. Everything here is\n\
          // named gbuf_*/Gbuf*; paste it into any shader. Packing and unpacking give gbuf's bits exactly (tested on\n\
-         // Mesa llvmpipe).",
+         // Mesa llvmpipe{}).",
+        match lang {
+            Lang::Glsl => "GLSL 4.50",
+            Lang::Hlsl => "HLSL (Shader Model 6)",
+        },
         env!("CARGO_PKG_VERSION"),
-        layout.name()
+        layout.name(),
+        lang.name(),
+        match lang {
+            Lang::Glsl => "",
+            Lang::Hlsl => ", compiled by glslang's HLSL front end to SPIR-V",
+        }
     );
     o.push_str("\nstruct GbufSurface {\n");
     for (n, t) in SURFACE {
@@ -508,7 +587,11 @@ pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
     }
     o.push_str("};\n");
     if camera {
-        o.push_str("\n// The camera's near and far planes (the depth codec's projection).\nuniform float gbuf_znear;\nuniform float gbuf_zfar;\n");
+        o.push_str("\n// The camera's near and far planes (the depth codec's projection).\n");
+        o.push_str(match lang {
+            Lang::Glsl => "uniform float gbuf_znear;\nuniform float gbuf_zfar;\n",
+            Lang::Hlsl => "cbuffer GbufCamera {\n    float gbuf_znear;\n    float gbuf_zfar;\n};\n",
+        });
     }
     o.push_str(HELPERS);
     o.push_str("\n// ---- one encode/decode pair per field ----\n");
@@ -528,7 +611,7 @@ pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
     for (ti, t) in layout.spec().targets.iter().enumerate() {
         let _ = writeln!(
             o,
-            "\n// Target {:?} ({}): the texel's bits as little-endian 32-bit words, unused words 0.\nuvec4 gbuf_pack_{}(GbufSurface s) {{\n    uvec4 w = uvec4(0u);",
+            "\n// Target {:?} ({}): the texel's bits as little-endian 32-bit words, unused words 0.\nuvec4 gbuf_pack_{}(GbufSurface s) {{\n    uvec4 w = uvec4(0u, 0u, 0u, 0u);",
             t.name,
             layout.formats()[ti],
             ident(&t.name)
@@ -556,8 +639,8 @@ pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
         let zero = match t {
             "float" => "0.0",
             "uint" => "0u",
-            "vec2" => "vec2(0.0)",
-            _ => "vec3(0.0)",
+            "vec2" => "vec2(0.0, 0.0)",
+            _ => "vec3(0.0, 0.0, 0.0)",
         };
         let _ = writeln!(o, "    s.{n} = {zero};");
     }
@@ -588,5 +671,20 @@ pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
         o.push_str("    s.depth = -s.position.z; // depth derived from position\n");
     }
     o.push_str("    return s;\n}\n");
-    Ok(o)
+    Ok(match lang {
+        Lang::Glsl => o,
+        Lang::Hlsl => {
+            // The header and the camera block are written for HLSL already; translate the rest.
+            let cut = o.find("\nstruct GbufSurface").unwrap_or(0);
+            let (head, body) = o.split_at(cut);
+            let cam = "cbuffer GbufCamera {";
+            match body.find(cam) {
+                Some(a) => {
+                    let b = a + body[a..].find("};").unwrap_or(0) + 2;
+                    format!("{head}{}{}{}", to_hlsl(&body[..a]), &body[a..b], to_hlsl(&body[b..]))
+                }
+                None => format!("{head}{}", to_hlsl(body)),
+            }
+        }
+    })
 }
