@@ -372,3 +372,61 @@ fn the_code_space_report_runs_on_every_fixture() {
     let rows = j["code_space"].as_array().unwrap();
     assert!(rows.iter().any(|r| r["field"] == "material_index" && r["distinct"].as_u64().unwrap() > 1), "{j}");
 }
+
+/// The llvmpipe engine capture (fixtures/engine_4x: Cigolle octahedral normals as unorm in RGB10A2, sRGB albedo,
+/// UNORM roughness/metallic/material ID, reversed-Z D32F, 4× MSAA saved as DDS arrays) read with nothing but its
+/// layout gives the float truth of the same render, sample for sample, within each field's codec bound: IDs and
+/// coverage exact; albedo, roughness, metallic within the codec bound; depth within the codec bound plus the GPU's
+/// f32 arithmetic of d (2e-6 relative measured; 1e-5 allowed); normals within two codec bounds, because llvmpipe
+/// converts a float written to a 10-bit UNORM target as `rne(v·65535) >> 6`, which lands one code off the nearest
+/// for 1.8 % of components (fixtures/README.md): the bound of a one-code error.
+#[test]
+fn the_llvmpipe_engine_capture_decodes_to_its_float_truth() {
+    use gbuf::codec::{color_codec, depth_codec, normal_codec, scalar_codec};
+    let dir = fixture("engine_4x");
+    let layout = Layout::load(&dir.join("engine.toml")).unwrap();
+    let input = PackedInput { layout: Some(layout), targets: Vec::new() };
+    let got = targets::load(&dir, &input, &LoadOptions::default()).unwrap();
+    let truth = load_dump(&dir.join("truth.exr"), &LoadOptions::default()).unwrap().gbuffer;
+    let gb = &got.gbuffer;
+    assert_eq!((gb.width, gb.height, gb.samples), (truth.width, truth.height, truth.samples));
+    assert_eq!(gb.coverage, truth.coverage, "coverage from the reversed-Z clear value");
+    assert_eq!(gb.sample_positions, truth.sample_positions);
+    let cam = gb.camera.expect("the sidecar's camera");
+    let normal = normal_codec("oct-unorm-20").unwrap();
+    let srgb = color_codec("srgb8").unwrap();
+    let unorm8 = scalar_codec("unorm-8").unwrap();
+    let depth = depth_codec("f32-reversed", cam.znear, cam.zfar).unwrap();
+    let (mut worst_n, mut worst_z) = (0f32, 0f32);
+    for i in (0..gb.len()).filter(|&i| gb.coverage[i]) {
+        assert_eq!(gb.material_id.as_ref().unwrap()[i], truth.material_id.as_ref().unwrap()[i], "material ID at {i}");
+        let (n, tn) = (gb.normal.as_ref().unwrap()[i], truth.normal.as_ref().unwrap()[i]);
+        worst_n = worst_n.max(gbuf::codec::angle_deg(n, tn));
+        let (a, ta) = (gb.albedo.as_ref().unwrap()[i], truth.albedo.as_ref().unwrap()[i]);
+        let bound = srgb.error_bound(ta) + glam::Vec3::splat(1e-6);
+        assert!((a - ta).abs().cmple(bound).all(), "albedo at {i}: {a} vs {ta} (bound {bound})");
+        for (p, tp) in [(&gb.roughness, &truth.roughness), (&gb.metallic, &truth.metallic)] {
+            let (v, tv) = (p.as_ref().unwrap()[i], tp.as_ref().unwrap()[i]);
+            assert!((v - tv).abs() <= unorm8.error_bound(tv) + 1e-6, "roughness/metallic at {i}: {v} vs {tv}");
+        }
+        let (z, tz) = (gb.depth.as_ref().unwrap()[i], truth.depth.as_ref().unwrap()[i]);
+        assert!((z - tz).abs() <= depth.error_bound(tz) + 1e-5 * tz, "depth at {i}: {z} vs {tz}");
+        worst_z = worst_z.max((z - tz).abs() / tz);
+    }
+    assert!(worst_n <= 2.0 * normal.max_error_deg(), "normal {worst_n}° > 2 × {}°", normal.max_error_deg());
+    assert!(worst_z < 1e-5, "depth relative {worst_z}");
+    // With no flag but its layout, the CLI reads it too, says there is no float truth, and converts it.
+    let tmp = tempfile::tempdir().unwrap();
+    let toml = dir.join("engine.toml");
+    let o = gbuf(tmp.path(), &["info", dir.to_str().unwrap(), "--layout", toml.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no float truth"), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("code space"));
+    let exr = tmp.path().join("engine.exr");
+    let o = gbuf(
+        tmp.path(),
+        &["convert", dir.to_str().unwrap(), "--layout", toml.to_str().unwrap(), "-o", exr.to_str().unwrap()],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    support::io::assert_bit_exact(gb, &load_dump(&exr, &LoadOptions::default()).unwrap().gbuffer);
+}
