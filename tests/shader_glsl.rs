@@ -364,7 +364,7 @@ fn builtin_layouts_pack_and_unpack_on_llvmpipe_bit_for_bit() {
         }
         done.push(layout.name().to_string());
     }
-    for must in ["unreal-like", "bevy-deferred", "minimal-8", "reference-f32", "rgba16f-2x", "visibility-8"] {
+    for must in ["unreal-like", "bevy-deferred", "minimal-8", "reference-f32", "rgba16f-2x", "visibility-8", "fat-20"] {
         assert!(done.iter().any(|d| d == must), "{must} was not emitted: {done:?}");
     }
 }
@@ -386,7 +386,9 @@ fn bits_of(attr: &str, c: &str) -> u32 {
 fn codec_families_at_three_widths_on_llvmpipe() {
     let dir = tempfile::tempdir().unwrap();
     let gb = every_attribute();
-    let families: [(&str, &str, [&str; 3]); 8] = [
+    let families: [(&str, &str, [&str; 3]); 10] = [
+        ("normal", "rgba32ui", ["xy-hemi-16", "xy-hemi-24", "xy-hemi-f16-32"]),
+        ("specular_power", "rgba32ui", ["log2-unorm-4", "log2-unorm-8", "log2-unorm-12"]),
         ("normal", "rgba32ui", ["oct-16", "oct-24", "oct-32"]),
         ("normal", "rgba32ui", ["oct-unorm-16", "oct-unorm-20", "oct-unorm-32"]),
         ("normal", "rgba32ui", ["xyz-snorm-24", "xyz-unorm-30", "xyz-f16-48"]),

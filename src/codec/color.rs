@@ -166,22 +166,7 @@ impl Codec for UnormRgb {
         if !self.srgb {
             return Some(super::Recipe::ColorUnorm { bits: self.bits });
         }
-        // The smallest value of each code: bisect the clamped [0, 1] over f32 bit patterns (monotonic there).
-        let code = |v: f32| (self.encode(Vec3::splat(v)) & 0xff) as u32;
-        let thresholds = (1..=255u32)
-            .map(|c| {
-                let (mut lo, mut hi) = (0u32, 1f32.to_bits());
-                while lo < hi {
-                    let mid = lo + (hi - lo) / 2;
-                    if code(f32::from_bits(mid)) >= c {
-                        hi = mid;
-                    } else {
-                        lo = mid + 1;
-                    }
-                }
-                f32::from_bits(lo)
-            })
-            .collect();
+        let thresholds = super::code_thresholds(8, 0.0, 1.0, |v| self.encode(Vec3::splat(v)) & 0xff);
         let decoded = srgb8_decode_table().to_vec();
         Some(super::Recipe::ColorSrgb8 { thresholds, decoded })
     }

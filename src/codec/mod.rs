@@ -150,8 +150,26 @@ pub enum Recipe {
     ColorF16,
     /// Three IEEE singles.
     ColorF32,
-    /// Octahedral normal, plane coordinates stored as `quant`.
-    NormalOct {
+    /// A monotonic scalar codec of at most [`TABLE_RECIPE_BITS`] bits through tables: encode counts the
+    /// thresholds at or below the value (after `lo`/`hi` clamping, NaN as `nan`), decode looks the value up.
+    ScalarTable {
+        /// Bits.
+        bits: u32,
+        /// Inputs are clamped to [lo, hi] first.
+        lo: f32,
+        /// Upper clamp.
+        hi: f32,
+        /// What NaN encodes as.
+        nan: f32,
+        /// Smallest input of each code 1..2^bits.
+        thresholds: Vec<f32>,
+        /// The decoded value of each code.
+        decoded: Vec<f32>,
+    },
+    /// Two-component normal: a plane map, its coordinates stored as `quant`.
+    NormalPlanar {
+        /// The map from the sphere to the plane.
+        map: normal::PlaneMap,
         /// Storage of each plane coordinate.
         quant: normal::Quant,
     },
@@ -173,6 +191,33 @@ pub enum Recipe {
         /// Reversed Z (1 at the near plane).
         reversed: bool,
     },
+}
+
+/// Widest codec [`Recipe::ScalarTable`] describes (a table of 2^12 values).
+pub const TABLE_RECIPE_BITS: u32 = 12;
+
+/// The smallest input of each code 1..2^bits of a codec monotonic on [lo, hi] (bisection over the f32 bit
+/// patterns, which order like the values on [0, ∞)): what [`Recipe::ScalarTable`] and sRGB encode with.
+#[must_use]
+pub fn code_thresholds(bits: u32, lo: f32, hi: f32, code: impl Fn(f32) -> u64) -> Vec<f32> {
+    assert!(lo >= 0.0 && hi >= lo, "thresholds are bisected over non-negative f32 bit patterns");
+    (1..1u64 << bits)
+        .map(|c| {
+            let (mut a, mut b) = (lo.to_bits(), hi.to_bits());
+            if code(hi) < c {
+                return f32::INFINITY;
+            }
+            while a < b {
+                let mid = a + (b - a) / 2;
+                if code(f32::from_bits(mid)) >= c {
+                    b = mid;
+                } else {
+                    a = mid + 1;
+                }
+            }
+            f32::from_bits(a)
+        })
+        .collect()
 }
 
 /// A scalar encoding (specular, roughness, metallic, AO, specular power): [`Codec`] over `f32`.
@@ -292,6 +337,29 @@ pub(crate) const fn mask(bits: u32) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The table recipes are the codec: each threshold is the first input of its code (the input one ulp below
+    /// encodes to the code before), and the decoded values are `decode` of every code.
+    #[test]
+    fn table_recipes_are_exactly_the_codec() {
+        for name in ["log2-unorm-4", "log2-unorm-8", "log2-unorm-12"] {
+            let c = scalar_codec(name).unwrap();
+            let Some(Recipe::ScalarTable { thresholds, decoded, .. }) = c.recipe() else { panic!("{name}") };
+            for (i, &t) in thresholds.iter().enumerate() {
+                let code = i as u64 + 1;
+                assert_eq!(c.encode(t), code, "{name}: threshold of {code}");
+                assert_eq!(c.encode(f32::from_bits(t.to_bits() - 1)), code - 1, "{name}: below {code}");
+            }
+            assert!(decoded.iter().enumerate().all(|(k, v)| v.to_bits() == c.decode(k as u64).to_bits()), "{name}");
+        }
+        let srgb = color_codec("srgb8").unwrap();
+        let Some(Recipe::ColorSrgb8 { thresholds, .. }) = srgb.recipe() else { panic!("srgb8") };
+        for (i, &t) in thresholds.iter().enumerate() {
+            let code = i as u64 + 1;
+            assert_eq!(srgb.encode(glam::Vec3::splat(t)) & 0xff, code);
+            assert_eq!(srgb.encode(glam::Vec3::splat(f32::from_bits(t.to_bits() - 1))) & 0xff, code - 1);
+        }
+    }
 
     #[test]
     fn unknown_names_are_errors_listing_valid_names() {

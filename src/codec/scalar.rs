@@ -221,6 +221,21 @@ impl Codec for Log2Unorm {
         // the unorm decode, mul by 12, exp2, clamp
         self.inner.decode_ops() + 2 + TRANSCENDENTAL_OPS
     }
+    fn recipe(&self) -> Option<super::Recipe> {
+        let bits = self.inner.bits;
+        if bits > super::TABLE_RECIPE_BITS {
+            return None;
+        }
+        // exp2/log2 differ between libm and GPUs: tables keep the bits exact (encode is monotonic on [1, 4096]).
+        Some(super::Recipe::ScalarTable {
+            bits,
+            lo: 1.0,
+            hi: MAX_SPECULAR_POWER,
+            nan: 1.0,
+            thresholds: super::code_thresholds(bits, 1.0, MAX_SPECULAR_POWER, |v| self.encode(v)),
+            decoded: (0..1u64 << bits).map(|c| self.decode(c)).collect(),
+        })
+    }
     /// Up to [`LOG2_TABLE_BITS`] bits, a table of every code's [`Codec::decode`] (built once per bit count): the
     /// same values, without a libm `exp2f` per sample (9% of a `fat-20` roundtrip in `perf`).
     fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [f32]) {

@@ -11,7 +11,7 @@
 use super::coder::Slot;
 use super::{Field, Layout};
 use crate::codec::depth::DepthStorage;
-use crate::codec::normal::Quant;
+use crate::codec::normal::{PlaneMap, Quant};
 use crate::codec::Recipe;
 use crate::error::{Error, Result};
 use crate::gbuffer::Attribute;
@@ -239,6 +239,17 @@ vec2 gbuf_oct_project(vec3 n) {
     precise vec2 f = vec2((1.0 - abs(p.y)) * gbuf_sign_not_zero(p.x), (1.0 - abs(p.x)) * gbuf_sign_not_zero(p.y));
     return n.z >= 0.0 ? p : f;
 }
+// The hemisphere map: x and y as they are, z = √max(1 − x² − y², 0) (z ≥ 0 only).
+vec2 gbuf_hemi_project(vec3 n) {
+    return vec2(n.x, n.y);
+}
+vec3 gbuf_hemi_unproject(vec2 q) {
+    precise vec2 p = clamp(q, vec2(-1.0, -1.0), vec2(1.0, 1.0));
+    precise float l2 = p.x * p.x + p.y * p.y;
+    precise float z = sqrt(max(1.0 - l2, 0.0));
+    return vec3(p, z);
+}
+
 vec3 gbuf_oct_unproject(vec2 q) {
     precise vec2 p = clamp(q, vec2(-1.0, -1.0), vec2(1.0, 1.0));
     precise float z = 1.0 - abs(p.x) - abs(p.y);
@@ -322,7 +333,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
     let unsupported = |why: &str| {
         Error::Argument(format!(
             "layout {:?}: field {} ({}): {why}; gbuf emits shader code for the uint-N IDs, the unorm/snorm/f16/f32 \
-             scalars, unorm8/unorm-N/srgb8/f16/f32 colours, the oct, oct-unorm, xyz normals and every depth codec",
+             scalars, unorm8/unorm-N/srgb8/f16/f32 colours, the oct, oct-unorm, xy-hemi, xyz normals, log2-unorm up to 12 bits and every depth codec",
             layout.name(),
             f.slot.name(),
             f.codec
@@ -436,16 +447,45 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             );
             (32, 3)
         }
-        (_, Some(Recipe::NormalOct { quant })) => {
+        (_, Some(Recipe::NormalPlanar { map, quant })) => {
             quant_fns(quant, &format!("{name}_c"), &mut t);
+            let (project, unproject) = match map {
+                PlaneMap::Oct => ("gbuf_oct_project", "gbuf_oct_unproject"),
+                PlaneMap::XyHemi => ("gbuf_hemi_project", "gbuf_hemi_unproject"),
+            };
             let _ = write!(
                 t,
-                "// octahedral normal ({})\n\
-                 uvec3 {name}_enc(vec3 n) {{ vec2 p = gbuf_oct_project(gbuf_sanitize(n)); return uvec3({name}_c_enc(p.x), {name}_c_enc(p.y), 0u); }}\n\
-                 vec3 {name}_dec(uvec3 c) {{ return gbuf_finish(gbuf_oct_unproject(vec2({name}_c_dec(c.x), {name}_c_dec(c.y)))); }}\n",
+                "// two-component normal ({})\n\
+                 uvec3 {name}_enc(vec3 n) {{ vec2 p = {project}(gbuf_sanitize(n)); return uvec3({name}_c_enc(p.x), {name}_c_enc(p.y), 0u); }}\n\
+                 vec3 {name}_dec(uvec3 c) {{ return gbuf_finish({unproject}(vec2({name}_c_dec(c.x), {name}_c_dec(c.y)))); }}\n",
                 f.codec
             );
             (quant.bits(), 2)
+        }
+        (_, Some(Recipe::ScalarTable { bits, lo, hi, nan, thresholds, decoded })) => {
+            let th: Vec<String> = thresholds.iter().map(|v| format!("{:#010x}u", v.to_bits())).collect();
+            let de: Vec<String> = decoded.iter().map(|v| format!("{:#010x}u", v.to_bits())).collect();
+            let (n_th, n_de) = (th.len(), de.len());
+            let _ = write!(
+                t,
+                "// {codec}: monotonic, so encode counts the thresholds at or below the value and decode looks the\n\
+                 // value up (gbuf's own tables: the bits match without the driver's exp2/log2)\n\
+                 const uint {name}_T[{n_th}] = uint[{n_th}]({th});\n\
+                 const uint {name}_D[{n_de}] = uint[{n_de}]({de});\n\
+                 uvec3 {name}_enc(float v) {{ float c = isnan(v) ? {nan} : clamp(v, {lo}, {hi}); uint k = 0u; \
+                 for (uint stride = {top}u; stride > 0u; stride >>= 1) {{ if (k + stride <= {n_th}u && c >= uintBitsToFloat({name}_T[k + stride - 1u])) k += stride; }} \
+                 return uvec3(k, 0u, 0u); }}\n\
+                 float {name}_dec(uvec3 c) {{ return uintBitsToFloat({name}_D[c.x & {m}u]); }}\n",
+                codec = f.codec,
+                th = th.join(", "),
+                de = de.join(", "),
+                nan = lit(nan),
+                lo = lit(lo),
+                hi = lit(hi),
+                top = 1u64 << (bits - 1),
+                m = (1u64 << bits) - 1
+            );
+            (bits, 1)
         }
         (_, Some(Recipe::NormalXyz { quant, unorm })) => {
             quant_fns(quant, &format!("{name}_c"), &mut t);

@@ -50,4 +50,7 @@ impl Projection for XyHemi {
     fn is_idempotent(&self, _q: Quant) -> bool {
         false
     }
+    fn plane_map(&self) -> Option<super::PlaneMap> {
+        Some(super::PlaneMap::XyHemi)
+    }
 }

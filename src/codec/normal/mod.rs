@@ -311,6 +311,15 @@ macro_rules! with_quantizer {
 }
 pub(crate) use with_quantizer;
 
+/// The plane maps the shader emitter writes (`codec::Recipe::NormalPlanar`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlaneMap {
+    /// [`Oct`].
+    Oct,
+    /// [`XyHemi`]: x and y, z = √max(1 − x² − y², 0).
+    XyHemi,
+}
+
 /// How the plane coordinates of a projection are stored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Quant {
@@ -605,9 +614,9 @@ pub trait Projection: Send + Sync + Copy + 'static {
     fn plane_extent(&self) -> f32 {
         1.0
     }
-    /// True for the octahedral map ([`Oct`]): the projection `layout::shader` emits.
-    fn is_octahedral(&self) -> bool {
-        false
+    /// Which [`PlaneMap`] this is, for the maps `layout::shader` emits.
+    fn plane_map(&self) -> Option<PlaneMap> {
+        None
     }
     /// Where the bound holds.
     fn in_domain(&self, n: Vec3) -> bool {
@@ -772,7 +781,7 @@ impl<P: Projection + std::fmt::Debug> Codec for Planar<P> {
         1 + 2 * self.quant.decode_ops() + self.proj.decode_ops() + FINISH_OPS
     }
     fn recipe(&self) -> Option<crate::codec::Recipe> {
-        self.proj.is_octahedral().then_some(crate::codec::Recipe::NormalOct { quant: self.quant })
+        self.proj.plane_map().map(|map| crate::codec::Recipe::NormalPlanar { map, quant: self.quant })
     }
     fn encode_slice_isa(&self, isa: Isa, input: &[Vec3], out: &mut [u64]) {
         assert_eq!(input.len(), out.len(), "encode_slice: {} normals into {} codes", input.len(), out.len());

@@ -76,8 +76,8 @@ impl Projection for Oct {
     fn bound_rad(&self, hx: f32, hy: f32, _q: Quant) -> f32 {
         OCT_MAX_STRETCH * hx.hypot(hy)
     }
-    fn is_octahedral(&self) -> bool {
-        true
+    fn plane_map(&self) -> Option<super::PlaneMap> {
+        Some(super::PlaneMap::Oct)
     }
 }
 
