@@ -492,3 +492,54 @@ fn a_luxcore_folder_with_every_film_output_loads_as_the_six_buffers() {
     let got = gbuf::io::load(dir.path(), &LoadOptions::default()).unwrap().gbuffer;
     assert!(got == want, "the folder with every output loads as the fixture's six buffers");
 }
+
+/// A folder holding a sequence (`DEPTH_0001.exr`, `DEPTH_0002.exr`, … as renderers and Blender's File Output
+/// write frames): one frame is read with `--frame N` (here frame 2 has other normals), without it a single-dump
+/// command says which frames there are, `budget` reads every frame, and numbered buffers no preset reads
+/// (`RADIANCE_GROUP_0`, `_1`) do not make a one-frame folder a sequence.
+#[test]
+fn a_sequence_folder_reads_frame_by_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    for f in std::fs::read_dir(lux()).unwrap() {
+        let f = f.unwrap().path();
+        let name = f.file_name().unwrap().to_str().unwrap().to_string();
+        match name.rsplit_once('.') {
+            Some((stem, ext)) if ext == "exr" || ext == "png" => {
+                std::fs::copy(&f, dir.path().join(format!("{stem}_0001.{ext}"))).unwrap();
+                let second = if stem == "SHADING_NORMAL" { lux().join("GEOMETRY_NORMAL.exr") } else { f.clone() };
+                std::fs::copy(&second, dir.path().join(format!("{stem}_0002.{ext}"))).unwrap();
+            }
+            _ => {
+                std::fs::copy(&f, dir.path().join(&name)).unwrap();
+            }
+        }
+    }
+    assert_eq!(gbuf::io::fileset::frames_in(dir.path()).unwrap(), vec![1, 2]);
+    assert!(gbuf::io::fileset::looks_like_file_set(dir.path()));
+    let e = gbuf::io::load(dir.path(), &LoadOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("--frame") && e.contains("1, 2"), "{e}");
+    let want = gbuf::io::load(&lux(), &LoadOptions::default()).unwrap().gbuffer;
+    let one = gbuf::io::load(dir.path(), &LoadOptions { frame: Some(1), ..LoadOptions::default() }).unwrap().gbuffer;
+    assert!(one == want, "frame 1 is the fixture");
+    let two = gbuf::io::load(dir.path(), &LoadOptions { frame: Some(2), ..LoadOptions::default() }).unwrap().gbuffer;
+    assert!(two.normal != want.normal && two.depth == want.depth, "frame 2 has its own normals");
+    let e = gbuf::io::load(dir.path(), &LoadOptions { frame: Some(7), ..LoadOptions::default() }).unwrap_err();
+    assert!(e.to_string().contains("--frame 7"), "{e}");
+    let o = gbuf(dir.path(), &["budget", dir.path().to_str().unwrap(), "--max-bytes", "12", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["frame_names"].as_array().map(Vec::len), Some(2), "{}", j["frame_names"]);
+    let o = gbuf(dir.path(), &["info", dir.path().to_str().unwrap(), "--frame", "2"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // One frame with numbered outputs beside it is not a sequence.
+    let one_frame = tempfile::tempdir().unwrap();
+    for f in std::fs::read_dir(lux()).unwrap() {
+        let f = f.unwrap().path();
+        std::fs::copy(&f, one_frame.path().join(f.file_name().unwrap())).unwrap();
+    }
+    for k in 0..2 {
+        std::fs::copy(lux().join("DEPTH.exr"), one_frame.path().join(format!("RADIANCE_GROUP_{k}.exr"))).unwrap();
+    }
+    assert!(gbuf::io::fileset::frames_in(one_frame.path()).unwrap().is_empty());
+    assert!(gbuf::io::load(one_frame.path(), &LoadOptions::default()).unwrap().gbuffer == want);
+}

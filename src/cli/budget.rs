@@ -75,7 +75,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(e) = args.max_error {
         anyhow::ensure!(e.is_finite() && e >= 0.0, "--max-error must be a finite number ≥ 0, got {e}");
     }
-    let paths = args.input.paths()?;
+    let paths = args.input.frames()?;
     let cfg = BudgetConfig {
         max_bytes: args.max_bytes,
         max_error: args.max_error,
@@ -84,7 +84,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         resolve: ResolveConfig::default(),
         over: args.over,
     };
-    let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+    let names: Vec<String> = paths.iter().map(super::common::FrameRef::name).collect();
     let load = |i: usize| -> anyhow::Result<(gbuf::GBuffer, Vec<gbuf::Light>)> {
         let loaded = args.input.load(&paths[i])?;
         let (lights, _) = frame_lights(&loaded, args.lights, args.seed);

@@ -60,6 +60,10 @@ pub struct ReadArgs {
     /// holding `layout.toml` needs no flag. Spelled `--layout` on commands without a layout of their own.
     #[arg(long = "input-layout", value_name = "NAME|PATH")]
     pub input_layout: Option<String>,
+    /// For a file-set folder holding a sequence (`Depth0001.exr`, `Depth0002.exr`, …): the frame to read.
+    /// `report` and `budget` read every frame when it is not given.
+    #[arg(long, value_name = "N")]
+    pub frame: Option<u32>,
     /// A packed target's file, when it is not `<target>.<ext>` in the folder: `--target gbuffer_a=cap/rt1.dds`
     /// (also `coverage=FILE`, `material_table=FILE`). Repeat per target.
     #[arg(long = "target", value_name = "NAME=FILE")]
@@ -145,6 +149,7 @@ impl ReadArgs {
                 max_bytes: self.max_memory.map_or_else(ReadLimits::machine_max_bytes, |m| m.saturating_mul(1 << 20)),
                 allow_dwa: self.allow_dwa,
             },
+            frame: self.frame,
         })
     }
 }
@@ -187,6 +192,25 @@ pub fn print_warnings(file: &std::path::Path, loaded: &Loaded) {
     }
 }
 
+/// One frame of several: a dump, or frame `frame` of a file-set folder holding a sequence.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct FrameRef {
+    /// The dump or folder.
+    pub path: PathBuf,
+    /// The frame of a sequence folder.
+    pub frame: Option<u32>,
+}
+
+impl FrameRef {
+    /// `path` or `path (frame N)`.
+    pub fn name(&self) -> String {
+        match self.frame {
+            Some(n) => format!("{} (frame {n})", self.path.display()),
+            None => self.path.display().to_string(),
+        }
+    }
+}
+
 /// Several dumps (the frames of a capture), read one after another.
 #[derive(clap::Args, Debug, Clone)]
 pub struct FramesArgs {
@@ -199,6 +223,25 @@ pub struct FramesArgs {
 }
 
 impl FramesArgs {
+    /// The frames, expanded and checked: every path exists, none twice; a file-set folder holding a sequence is
+    /// one frame per number (or the `--frame` given).
+    pub fn frames(&self) -> anyhow::Result<Vec<FrameRef>> {
+        let mut out = Vec::new();
+        for path in self.paths()? {
+            let frames = if path.is_dir() && self.read.frame.is_none() {
+                gbuf::io::fileset::frames_in(&path).unwrap_or_default()
+            } else {
+                Vec::new()
+            };
+            if frames.is_empty() || !gbuf::io::fileset::looks_like_file_set(&path) {
+                out.push(FrameRef { path, frame: self.read.frame });
+            } else {
+                out.extend(frames.into_iter().map(|n| FrameRef { path: path.clone(), frame: Some(n) }));
+            }
+        }
+        Ok(out)
+    }
+
     /// The dump paths, expanded and checked: every one exists, none twice.
     pub fn paths(&self) -> anyhow::Result<Vec<PathBuf>> {
         let mut out: Vec<PathBuf> = Vec::new();
@@ -254,8 +297,16 @@ impl FramesArgs {
         Ok(out)
     }
 
-    /// Loads one of the dumps.
-    pub fn load(&self, path: &std::path::Path) -> anyhow::Result<Loaded> {
+    /// Loads one of the frames.
+    pub fn load(&self, frame: &FrameRef) -> anyhow::Result<Loaded> {
+        let read = ReadArgs { frame: frame.frame, ..self.read.clone() };
+        let loaded = read.load(&frame.path).with_context(|| format!("loading {}", frame.name()))?;
+        print_warnings(&frame.path, &loaded);
+        Ok(loaded)
+    }
+
+    /// Loads a companion file (e.g. `--single`) with the same flags.
+    pub fn load_file(&self, path: &std::path::Path) -> anyhow::Result<Loaded> {
         let loaded = self.read.load(path).with_context(|| format!("loading {}", path.display()))?;
         print_warnings(path, &loaded);
         Ok(loaded)

@@ -383,7 +383,7 @@ pub const DEFAULT_LIGHTS: usize = 64;
 /// Runs `gbuf report`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let cfg = args.sweep.config()?;
-    let paths = args.input.paths()?;
+    let paths = args.input.frames()?;
     if args.single.is_some() && paths.len() != 1 {
         crate::usage!("--single goes with one input frame; got {}", paths.len());
     }
@@ -393,21 +393,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let (lights, lights_source) = frame_lights(&loaded, args.sweep.lights, args.sweep.seed);
         let single = match &args.single {
             Some(s) => {
-                let one = args.input.load(s)?.gbuffer;
+                let one = args.input.load_file(s)?.gbuffer;
                 gbuf::analysis::pipelines::check_single(&loaded.gbuffer, &one)
-                    .with_context(|| format!("--single {} against {}", s.display(), p.display()))?;
+                    .with_context(|| format!("--single {} against {}", s.display(), p.name()))?;
                 Some(one)
             }
             None => None,
         };
-        Ok(FrameInput {
-            name: p.display().to_string(),
-            gbuffer: loaded.gbuffer,
-            lights,
-            lights_source,
-            single,
-            geometry: None,
-        })
+        Ok(FrameInput { name: p.name(), gbuffer: loaded.gbuffer, lights, lights_source, single, geometry: None })
     };
     run_frames(paths.len(), next, &cfg, &Assembly::of(&cfg, args.over, args.max_bytes), &args.out, args.json)?;
     Ok(())

@@ -215,17 +215,26 @@ fn assign(p: &Preset, files: &[PathBuf]) -> Result<Vec<(PresetFile, PathBuf)>> {
                     break 'names;
                 }
                 _ => {
+                    let frames: Vec<String> =
+                        hits.iter().filter_map(|h| frame_number(h)).map(|n| n.to_string()).collect();
+                    let hint = if frames.len() == hits.len() {
+                        format!(
+                            "a sequence of frames {}: choose one with --frame N (report and budget read every frame)",
+                            frames.join(", ")
+                        )
+                    } else {
+                        "one frame per directory".to_string()
+                    };
                     return Err(Error::invalid(
                         hits[0].parent().unwrap_or(Path::new(".")),
                         format!(
-                            "{} files hold the {} buffer {name} ({}): one frame per directory, or name each file \
-                             with --map {}=FILE",
+                            "{} files hold the {} buffer {name} ({}): {hint}, or name each file with --map {}=FILE",
                             hits.len(),
                             p.tool,
                             hits.iter().filter_map(|h| h.file_name()?.to_str()).collect::<Vec<_>>().join(", "),
                             pf.attr.name()
                         ),
-                    ))
+                    ));
                 }
             }
         }
@@ -233,10 +242,59 @@ fn assign(p: &Preset, files: &[PathBuf]) -> Result<Vec<(PresetFile, PathBuf)>> {
     Ok(out)
 }
 
-/// Does `dir` look like a file set of some preset (at least its depth or position file)?
+/// The frame number a file's name ends with (`Depth0001.exr` → 1, `HighResScreenshot_BaseColor_00001.exr` → 1),
+/// `None` when its stem does not end in digits.
+#[must_use]
+pub fn frame_number(path: &Path) -> Option<u32> {
+    let stem = path.file_stem()?.to_str()?;
+    let digits = stem.len() - stem.trim_end_matches(|c: char| c.is_ascii_digit()).len();
+    (digits > 0 && digits < stem.len()).then(|| stem[stem.len() - digits..].parse().ok()).flatten()
+}
+
+/// The frames of a file-set folder that holds a sequence: the distinct trailing numbers of the images some preset
+/// reads (its depth or position buffer among them), when there are at least two (sorted); empty for a folder of
+/// one frame. Numbered images no preset reads (LuxCore's `RADIANCE_GROUP_0`, …) do not make a sequence.
+pub fn frames_in(dir: &Path) -> Result<Vec<u32>> {
+    let files = images_in(dir)?;
+    for p in PRESETS {
+        let read_by = |f: &PathBuf| {
+            let stem = f.file_stem().and_then(|s| s.to_str()).unwrap_or("");
+            p.files.iter().any(|pf| pf.names.iter().any(|n| names_buffer(stem, n)))
+        };
+        let geometry = |f: &PathBuf| {
+            let stem = f.file_stem().and_then(|s| s.to_str()).unwrap_or("");
+            p.files
+                .iter()
+                .filter(|pf| matches!(pf.attr, Attribute::Depth | Attribute::Position))
+                .any(|pf| pf.names.iter().any(|n| names_buffer(stem, n)))
+        };
+        if !files.iter().any(geometry) {
+            continue;
+        }
+        let mut frames: Vec<u32> = files.iter().filter(|f| read_by(f)).filter_map(|f| frame_number(f)).collect();
+        frames.sort_unstable();
+        frames.dedup();
+        if frames.len() >= 2 {
+            return Ok(frames);
+        }
+    }
+    Ok(Vec::new())
+}
+
+/// The images of frame `frame` (their trailing number is `frame`; images without a number belong to every frame).
+fn of_frame(files: Vec<PathBuf>, frame: u32) -> Vec<PathBuf> {
+    files.into_iter().filter(|f| frame_number(f).is_none_or(|n| n == frame)).collect()
+}
+
+/// Does `dir` look like a file set of some preset (at least its depth or position file)? A sequence of frames
+/// counts when its first frame does.
 #[must_use]
 pub fn looks_like_file_set(dir: &Path) -> bool {
     let Ok(files) = images_in(dir) else { return false };
+    let files = match frames_in(dir).ok().and_then(|f| f.first().copied()) {
+        Some(first) => of_frame(files, first),
+        None => files,
+    };
     PRESETS.iter().any(|p| {
         assign(p, &files).is_ok_and(|a| a.iter().any(|(f, _)| matches!(f.attr, Attribute::Depth | Attribute::Position)))
     })
@@ -366,7 +424,37 @@ pub fn read(path: &Path, camera: Option<&SidecarCamera>, opts: &LoadOptions) -> 
     let mut entries: Vec<Entry> = Vec::new();
     let mut chosen: Option<&'static Preset> = None;
     if path.is_dir() && (opts.files.is_empty() || opts.preset.is_some()) {
-        let files = images_in(&dir)?;
+        let mut files = images_in(&dir)?;
+        if opts.frame.is_none() && opts.preset.is_none() && looks_like_file_set(&dir) {
+            let frames = frames_in(&dir)?;
+            if !frames.is_empty() {
+                return Err(Error::invalid(
+                    &dir,
+                    format!(
+                        "a sequence of {} frames ({}): choose one with --frame N (report and budget read every frame)",
+                        frames.len(),
+                        frames.iter().map(u32::to_string).collect::<Vec<_>>().join(", ")
+                    ),
+                ));
+            }
+        }
+        if let Some(n) = opts.frame {
+            files = of_frame(files, n);
+            if !files.iter().any(|f| frame_number(f) == Some(n)) {
+                let frames = frames_in(&dir)?;
+                return Err(Error::invalid(
+                    &dir,
+                    format!(
+                        "--frame {n}: no image of that frame here (frames: {})",
+                        if frames.is_empty() {
+                            "none numbered".into()
+                        } else {
+                            frames.iter().map(u32::to_string).collect::<Vec<_>>().join(", ")
+                        }
+                    ),
+                ));
+            }
+        }
         let p = detect(&dir, &files, opts.preset.as_deref())?;
         for (pf, f) in assign(p, &files)? {
             entries.push(Entry { attr: pf.attr, file: f, channels: Vec::new(), transform: pf.transform });

@@ -65,6 +65,9 @@ pub struct LoadOptions {
     pub conventions: conventions::Overrides,
     /// Header limits.
     pub limits: ReadLimits,
+    /// For a file-set folder holding a sequence (`Depth0001.exr`, `Depth0002.exr`, …): the frame to read
+    /// (`--frame`); `None` when the folder holds one frame.
+    pub frame: Option<u32>,
 }
 
 /// Where one attribute came from.
