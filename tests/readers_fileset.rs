@@ -489,8 +489,14 @@ fn a_luxcore_folder_with_every_film_output_loads_as_the_six_buffers() {
     // The longer name is read as its own buffer: a different AVG_SHADING_NORMAL must not change the normals.
     std::fs::copy(lux().join("GEOMETRY_NORMAL.exr"), dir.path().join("AVG_SHADING_NORMAL.exr")).unwrap();
     let want = gbuf::io::load(&lux(), &LoadOptions::default()).unwrap().gbuffer;
-    let got = gbuf::io::load(dir.path(), &LoadOptions::default()).unwrap().gbuffer;
-    assert!(got == want, "the folder with every output loads as the fixture's six buffers");
+    let got = gbuf::io::load(dir.path(), &LoadOptions::default()).unwrap();
+    assert!(got.gbuffer == want, "the folder with every output loads as the fixture's six buffers");
+    // The outputs it does not read are listed (in `gbuf info`), not silently dropped.
+    let ignored = &got.reading.as_ref().unwrap().ignored;
+    for f in ["AVG_SHADING_NORMAL.exr", "RGB.png", "UV.exr", "SAMPLECOUNT.exr", "GEOMETRY_NORMAL.exr"] {
+        assert!(ignored.iter().any(|i| i == f), "{f} not in {ignored:?}");
+    }
+    assert!(!ignored.iter().any(|i| i == "DEPTH.exr" || i == "SHADING_NORMAL.exr"), "{ignored:?}");
 }
 
 /// A folder holding a sequence (`DEPTH_0001.exr`, `DEPTH_0002.exr`, … as renderers and Blender's File Output

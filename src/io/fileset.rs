@@ -414,6 +414,9 @@ pub struct Reading {
     /// Where the preset's conventions come from.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub basis: Option<String>,
+    /// Images in the folder that no buffer was read from (other outputs of the tool, other frames).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub ignored: Vec<String>,
 }
 
 /// Reads the file set in directory (or file) `path`: preset by detection or `opts.preset`, entries from the
@@ -495,7 +498,25 @@ pub fn read(path: &Path, camera: Option<&SidecarCamera>, opts: &LoadOptions) -> 
         ));
     }
     let conventions = chosen.map_or_else(Conventions::default, |p| p.conventions).with(&opts.conventions);
-    read_entries(path, &entries, conventions, camera, &opts.limits, chosen)
+    let mut loaded = read_entries(path, &entries, conventions, camera, &opts.limits, chosen)?;
+    if path.is_dir() {
+        let used: Vec<&PathBuf> = entries.iter().map(|e| &e.file).collect();
+        let other_frame = |f: &PathBuf| opts.frame.is_some_and(|n| frame_number(f).is_some_and(|m| m != n));
+        let all = images_in(&dir)?;
+        let others = all.iter().filter(|f| other_frame(f)).count();
+        let mut ignored: Vec<String> = all
+            .iter()
+            .filter(|f| !used.contains(f) && !other_frame(f))
+            .filter_map(|f| f.file_name()?.to_str().map(str::to_string))
+            .collect();
+        if others > 0 {
+            ignored.push(format!("{others} files of other frames"));
+        }
+        if let Some(r) = &mut loaded.reading {
+            r.ignored = ignored;
+        }
+    }
+    Ok(loaded)
 }
 
 /// Reads `entries` and converts them with `conventions`.
@@ -614,6 +635,7 @@ fn read_entries(
             preset: chosen.map(|p| p.name.to_string()),
             conventions,
             basis: chosen.map(|p| p.basis.to_string()),
+            ignored: Vec::new(),
         }),
         positions_assumed: false,
     })

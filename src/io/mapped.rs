@@ -96,7 +96,7 @@ pub fn read(raw: &RawImage, path: &Path, camera: Option<&Camera>, opts: &LoadOpt
         compression: Some((raw.compression.clone(), raw.lossy)),
         sanitized: Vec::new(),
         warnings: Vec::new(),
-        reading: Some(super::fileset::Reading { preset: None, conventions, basis: None }),
+        reading: Some(super::fileset::Reading { preset: None, conventions, basis: None, ignored: Vec::new() }),
         positions_assumed: false,
     })
 }

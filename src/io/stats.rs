@@ -253,6 +253,9 @@ impl Info {
             if let Some(b) = &r.basis {
                 let _ = writeln!(t, "            (conventions {b})");
             }
+            if !r.ignored.is_empty() {
+                let _ = writeln!(t, "ignored     {} (not buffers gbuf reads)", r.ignored.join(", "));
+            }
         }
         for w in &self.warnings {
             let _ = writeln!(t, "WARNING     [{}] {}", w.code, w.message);
