@@ -430,3 +430,91 @@ fn the_llvmpipe_engine_capture_decodes_to_its_float_truth() {
     assert!(o.status.success(), "{}", stderr(&o));
     support::io::assert_bit_exact(gb, &load_dump(&exr, &LoadOptions::default()).unwrap().gbuffer);
 }
+
+/// RenderDoc's "slices as grid" export of a multisampled target: one image of 2×2 tiles, tile s = sample s.
+/// `--grid 2x2` (LoadOptions::grid) unfolds it, for packed targets (a DDS written here as such a mosaic) and for
+/// any dump (a canonical EXR mosaic): both give the frame back.
+#[test]
+fn slices_as_grid_mosaics_unfold_into_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    let layout = Layout::by_name("unreal-like").unwrap();
+    let gb = every_attribute(13, 7, 4);
+    let a = dir.path().join("arrays");
+    targets::write_frame(&layout, &gb, &[], &a).unwrap();
+    let want = targets::read_frame(&a, &layout, &[], &LoadOptions::default()).unwrap();
+    // The same targets as 26×14 one-slice mosaics.
+    let m = dir.path().join("mosaic");
+    std::fs::create_dir(&m).unwrap();
+    for f in std::fs::read_dir(&a).unwrap() {
+        let f = f.unwrap().path();
+        let name = f.file_name().unwrap().to_str().unwrap().to_string();
+        if !name.ends_with(".dds") {
+            std::fs::copy(&f, m.join(&name)).unwrap();
+            continue;
+        }
+        let d = std::fs::read(&f).unwrap();
+        let (h, w) =
+            (u32::from_le_bytes(d[12..16].try_into().unwrap()), u32::from_le_bytes(d[16..20].try_into().unwrap()));
+        let texels = &d[148..];
+        let tb = texels.len() / (w * h * 4) as usize;
+        let (w, h) = (w as usize, h as usize);
+        let mut mosaic = vec![0u8; texels.len()];
+        for s in 0..4 {
+            for y in 0..h {
+                for x in 0..w {
+                    let src = ((s * h + y) * w + x) * tb;
+                    let dst = (((s / 2) * h + y) * 2 * w + (s % 2) * w + x) * tb;
+                    mosaic[dst..dst + tb].copy_from_slice(&texels[src..src + tb]);
+                }
+            }
+        }
+        let mut hdr = d[..148].to_vec();
+        hdr[12..16].copy_from_slice(&(2 * h as u32).to_le_bytes());
+        hdr[16..20].copy_from_slice(&(2 * w as u32).to_le_bytes());
+        hdr[20..24].copy_from_slice(&((2 * w * tb) as u32).to_le_bytes());
+        hdr[140..144].copy_from_slice(&1u32.to_le_bytes());
+        hdr.extend(mosaic);
+        std::fs::write(m.join(&name), hdr).unwrap();
+    }
+    let opts = LoadOptions { grid: Some((2, 2)), ..LoadOptions::default() };
+    let got = targets::read_frame(&m, &layout, &[], &opts).unwrap();
+    assert_eq!(got.packed.targets, want.packed.targets, "the mosaic's tiles are the array's slices");
+    assert_eq!(got.shell.coverage, want.shell.coverage);
+    let loaded = targets::load(&m, &PackedInput::default(), &opts).unwrap();
+    assert_eq!((loaded.gbuffer.width, loaded.gbuffer.height, loaded.gbuffer.samples), (13, 7, 4));
+    // A float dump saved the same way (a canonical EXR of one sample per pixel, 2×2 tiles).
+    let mut mosaic = GBuffer::new(26, 14, 1).unwrap();
+    let at = |x: usize, y: usize, s: usize| ((s / 2) * 7 + y) * 26 + (s % 2) * 13 + x;
+    let n = mosaic.len();
+    mosaic.coverage = vec![false; n];
+    let mut depth = vec![0f32; n];
+    let mut normal = vec![glam::Vec3::ZERO; n];
+    let mut ids = vec![0u32; n];
+    for y in 0..7 {
+        for x in 0..13 {
+            for s in 0..4 {
+                let i = gb.index(x as u32, y as u32, s as u32);
+                let j = at(x, y, s);
+                mosaic.coverage[j] = gb.coverage[i];
+                depth[j] = gb.depth.as_ref().unwrap()[i];
+                normal[j] = gb.normal.as_ref().unwrap()[i];
+                ids[j] = gb.object_id.as_ref().unwrap()[i];
+            }
+        }
+    }
+    (mosaic.depth, mosaic.normal, mosaic.object_id) = (Some(depth), Some(normal), Some(ids));
+    mosaic.camera = gb.camera;
+    let exr = dir.path().join("mosaic.exr");
+    gbuf::io::canonical::write(&exr, &mosaic).unwrap();
+    let back = load_dump(&exr, &opts).unwrap().gbuffer;
+    assert_eq!((back.width, back.height, back.samples), (13, 7, 4));
+    assert_eq!(back.coverage, gb.coverage);
+    assert_eq!(plane_bits(&back, Attribute::Depth), plane_bits(&gb, Attribute::Depth));
+    assert_eq!(plane_bits(&back, Attribute::ObjectId), plane_bits(&gb, Attribute::ObjectId));
+    assert!(back.camera.is_none(), "the mosaic's own camera described the mosaic");
+    let o = gbuf(dir.path(), &["info", exr.to_str().unwrap(), "--grid", "2x2", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = gbuf(dir.path(), &["info", exr.to_str().unwrap(), "--grid", "3x2"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("multiple"), "{}", stderr(&o));
+}

@@ -60,6 +60,10 @@ pub struct ReadArgs {
     /// holding `layout.toml` needs no flag. Spelled `--layout` on commands without a layout of their own.
     #[arg(long = "input-layout", value_name = "NAME|PATH")]
     pub input_layout: Option<String>,
+    /// The images are RenderDoc "slices as grid" mosaics of a multisampled target: C×R tiles, tile s (row by
+    /// row) holding sample s of every pixel (`--grid 2x2` for 4× MSAA).
+    #[arg(long, value_name = "CxR", value_parser = parse_grid)]
+    pub grid: Option<(u32, u32)>,
     /// For a file-set folder holding a sequence (`Depth0001.exr`, `Depth0002.exr`, …): the frame to read.
     /// `report` and `budget` read every frame when it is not given.
     #[arg(long, value_name = "N")]
@@ -150,8 +154,17 @@ impl ReadArgs {
                 allow_dwa: self.allow_dwa,
             },
             frame: self.frame,
+            grid: self.grid,
         })
     }
+}
+
+/// `CxR` (also `C×R`): the tiles of a `--grid` mosaic.
+fn parse_grid(s: &str) -> Result<(u32, u32), String> {
+    let (c, r) = s.split_once(['x', 'X', '×']).ok_or_else(|| format!("{s:?}: write CxR, e.g. 2x2"))?;
+    let n =
+        |t: &str| t.trim().parse::<u32>().ok().filter(|v| *v > 0).ok_or_else(|| format!("{s:?}: write CxR, e.g. 2x2"));
+    Ok((n(c)?, n(r)?))
 }
 
 /// How to read the input dump.

@@ -37,6 +37,66 @@ pub fn fold(gb: &GBuffer, k: u32) -> Result<GBuffer> {
     Ok(gb.map_planes((w, h, k * k), ordered_grid_positions(k), coverage, &mut map))
 }
 
+/// Unfolds a mosaic of sample images, as RenderDoc saves a multisampled texture with "slices as grid": a
+/// one-sample image of `cols × rows` tiles, tile `s` (column `s % cols`, row `s / cols`, top left first) holding
+/// sample `s` of every pixel. The result has `cols · rows` samples per pixel at the standard positions for that
+/// count (D3D/Vulkan patterns; an ordered grid for other squares). A camera stored in the file described the
+/// mosaic, not the frame, and is dropped (the sidecar's applies).
+pub fn ungrid(gb: &GBuffer, cols: u32, rows: u32) -> Result<GBuffer> {
+    let s = cols.saturating_mul(rows);
+    if cols == 0 || rows == 0 || s > MAX_SAMPLES {
+        return Err(Error::Argument(format!("--grid {cols}x{rows}: 1 to {MAX_SAMPLES} tiles")));
+    }
+    if gb.samples != 1 {
+        return Err(Error::Argument(format!("--grid needs a one-sample mosaic; this one has {} samples", gb.samples)));
+    }
+    if !gb.width.is_multiple_of(cols) || !gb.height.is_multiple_of(rows) {
+        return Err(Error::Argument(format!(
+            "--grid {cols}x{rows}: the image size {}×{} is not a multiple of the tiles",
+            gb.width, gb.height
+        )));
+    }
+    gb.validate()?;
+    let (w, h) = (gb.width / cols, gb.height / rows);
+    let positions = GBuffer::new(1, 1, s)?.sample_positions;
+    let mut map =
+        GridMap { src_width: gb.width as usize, w: w as usize, h: h as usize, cols: cols as usize, s: s as usize };
+    let coverage = map.gather(&gb.coverage);
+    let mut out = gb.map_planes((w, h, s), positions, coverage, &mut map);
+    out.camera = None;
+    Ok(out)
+}
+
+/// Index mapping from the unfolded (pixel-major) order back to the mosaic.
+struct GridMap {
+    src_width: usize,
+    w: usize,
+    h: usize,
+    cols: usize,
+    s: usize,
+}
+
+impl GridMap {
+    fn gather<T: Copy>(&self, src: &[T]) -> Vec<T> {
+        let mut out = Vec::with_capacity(src.len());
+        for y in 0..self.h {
+            for x in 0..self.w {
+                for s in 0..self.s {
+                    let (tx, ty) = (s % self.cols, s / self.cols);
+                    out.push(src[(ty * self.h + y) * self.src_width + tx * self.w + x]);
+                }
+            }
+        }
+        out
+    }
+}
+
+impl PlaneMapper for GridMap {
+    fn map<T: Copy + Default + Send + Sync>(&mut self, _: Attribute, plane: &[T]) -> Option<Vec<T>> {
+        Some(self.gather(plane))
+    }
+}
+
 /// Index mapping from the folded (pixel-major) order back to the source image.
 struct FoldMap {
     src_width: usize,
@@ -105,6 +165,28 @@ mod tests {
         assert_eq!((p.x, p.y), (0.25, 0.25));
         let cam = f.camera.unwrap();
         assert!((cam.aspect - f.width as f32 / f.height as f32).abs() < 1e-6);
+    }
+
+    /// Tile s of a 2×2 mosaic is sample s: pixel (x, y) sample s comes from (x + (s % 2)·w, y + (s / 2)·h).
+    #[test]
+    fn a_grid_mosaic_unfolds_tile_by_tile() {
+        let gb = indexed(6, 4);
+        let g = ungrid(&gb, 2, 2).unwrap();
+        assert_eq!((g.width, g.height, g.samples), (3, 2, 4));
+        let ids = g.object_id.as_ref().unwrap();
+        for y in 0..2 {
+            for x in 0..3 {
+                for s in 0..4 {
+                    let src = (y + (s / 2) * 2) * 6 + x + (s % 2) * 3;
+                    assert_eq!(ids[g.index(x, y, s)], src);
+                    assert_eq!(g.coverage[g.index(x, y, s)], gb.coverage[src as usize]);
+                }
+            }
+        }
+        assert_eq!(g.sample_positions, crate::gbuffer::standard_sample_positions(4).unwrap());
+        assert!(g.camera.is_none());
+        assert!(ungrid(&gb, 4, 1).unwrap_err().to_string().contains("multiple"));
+        assert!(ungrid(&g, 1, 1).is_err(), "a multisampled input");
     }
 
     #[test]

@@ -65,6 +65,8 @@ pub struct LoadOptions {
     pub conventions: conventions::Overrides,
     /// Header limits.
     pub limits: ReadLimits,
+    /// A RenderDoc "slices as grid" mosaic (`--grid CxR`): tile s of the image is sample s ([`fold::ungrid`]).
+    pub grid: Option<(u32, u32)>,
     /// For a file-set folder holding a sequence (`Depth0001.exr`, `Depth0002.exr`, …): the frame to read
     /// (`--frame`); `None` when the folder holds one frame.
     pub frame: Option<u32>,
@@ -320,6 +322,19 @@ fn read_exr(mut raw: RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &Lo
 
 /// After any reader: fold, camera and lights from the sidecar, derived depth, sanitizing, validation.
 fn finish(mut loaded: Loaded, path: &Path, side: Option<(&Sidecar, &Path)>, opts: &LoadOptions) -> Result<Loaded> {
+    if let Some((c, r)) = opts.grid {
+        if opts.fold.is_some() {
+            return Err(Error::Argument(
+                "--grid and --fold describe two different layouts of samples: give one".into(),
+            ));
+        }
+        loaded.gbuffer = fold::ungrid(&loaded.gbuffer, c, r)
+            .map_err(|e| Error::SizeMismatch { path: path.into(), what: e.to_string() })?;
+        loaded.positions_assumed = false;
+        if loaded.camera_source == CameraSource::File {
+            loaded.camera_source = CameraSource::Unknown;
+        }
+    }
     let fold_k = opts.fold.or(side.and_then(|(s, _)| s.supersample));
     if let Some(k) = fold_k.filter(|&k| k > 1) {
         let from = match (opts.fold, side) {

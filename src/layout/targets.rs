@@ -113,6 +113,37 @@ fn pixel_major(t: &Texture, tb: usize) -> Vec<u8> {
     out
 }
 
+/// A one-slice texture holding a "slices as grid" mosaic (RenderDoc) as `cols · rows` slices: tile s (row by row)
+/// is slice s.
+fn ungrid(t: Texture, (cols, rows): (u32, u32), tb: usize, path: &Path) -> Result<Texture> {
+    if t.slices != 1 || cols == 0 || rows == 0 || !t.width.is_multiple_of(cols) || !t.height.is_multiple_of(rows) {
+        return Err(Error::SizeMismatch {
+            path: path.into(),
+            what: format!(
+                "--grid {cols}x{rows}: {}×{} texels in {} slice(s) is not such a mosaic",
+                t.width, t.height, t.slices
+            ),
+        });
+    }
+    let (w, h) = ((t.width / cols) as usize, (t.height / rows) as usize);
+    let src_w = t.width as usize;
+    let mut bytes = Vec::with_capacity(t.bytes.len());
+    for s in 0..(cols * rows) as usize {
+        let (tx, ty) = (s % cols as usize, s / cols as usize);
+        for y in 0..h {
+            let at = ((ty * h + y) * src_w + tx * w) * tb;
+            bytes.extend_from_slice(&t.bytes[at..at + w * tb]);
+        }
+    }
+    Ok(Texture {
+        width: w as u32,
+        height: h as u32,
+        slices: cols * rows,
+        stored_as: format!("{} (grid {cols}x{rows})", t.stored_as),
+        bytes,
+    })
+}
+
 /// A packed frame read from files, before decoding.
 #[derive(Clone, Debug)]
 pub struct PackedFrame {
@@ -209,7 +240,10 @@ pub fn read_frame(
                 ),
             )
         })?;
-        let t = texture::read(&f, format, &opts.limits)?;
+        let mut t = texture::read(&f, format, &opts.limits)?;
+        if let Some(g) = opts.grid {
+            t = ungrid(t, g, format.bytes(), &f)?;
+        }
         check(&mut size, &t, &f)?;
         planes.push(TargetPlane { name: spec.name.clone(), format, bytes: pixel_major(&t, format.bytes()) });
         read.push((spec.name.clone(), f, t.stored_as));
@@ -237,7 +271,10 @@ pub fn read_frame(
     // Coverage: the coverage file, else the depth field's clear code.
     let cov_file = target_file(dir, COVERAGE_TARGET, explicit, &files)?;
     let coverage_from = if let Some(f) = cov_file {
-        let t = texture::read(&f, Format::R8, &opts.limits)?;
+        let mut t = texture::read(&f, Format::R8, &opts.limits)?;
+        if let Some(g) = opts.grid {
+            t = ungrid(t, g, 1, &f)?;
+        }
         check(&mut size, &t, &f)?;
         shell.coverage = pixel_major(&t, 1).iter().map(|&b| b != 0).collect();
         format!("{} (nonzero = a surface)", f.display())
@@ -351,7 +388,9 @@ pub fn load_packed(dir: &Path, layout: &Layout, explicit: &[(String, PathBuf)], 
         reading: None,
         positions_assumed: frame.positions_assumed,
     };
-    crate::io::finish_loaded(loaded, dir, opts)
+    // The targets were unfolded already: the decoded frame is not a mosaic.
+    let opts = LoadOptions { grid: None, ..opts.clone() };
+    crate::io::finish_loaded(loaded, dir, &opts)
 }
 
 /// Writes `gb` packed with `layout` into `dir` as a frame [`load`] reads back with no flags: every target
