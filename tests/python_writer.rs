@@ -51,7 +51,7 @@ fn the_python_writer_round_trips_through_gbuf_bit_for_bit() {
     let raw = |name: &str| std::fs::read(dir.path().join(format!("{name}.raw"))).unwrap();
     let cov = raw("coverage");
     assert_eq!(gb.coverage.iter().map(|&c| u8::from(c)).collect::<Vec<_>>(), cov, "coverage");
-    assert!(cov.iter().any(|&c| c == 0) && cov.iter().any(|&c| c == 1));
+    assert!(cov.contains(&0) && cov.contains(&1));
     let words = |b: Vec<u8>| b.chunks_exact(4).map(|c| u32::from_le_bytes(c.try_into().unwrap())).collect::<Vec<u32>>();
     for a in Attribute::ALL {
         let want = words(raw(a.name()));
