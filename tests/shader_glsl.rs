@@ -364,7 +364,16 @@ fn builtin_layouts_pack_and_unpack_on_llvmpipe_bit_for_bit() {
         }
         done.push(layout.name().to_string());
     }
-    for must in ["unreal-like", "bevy-deferred", "minimal-8", "reference-f32", "rgba16f-2x", "visibility-8", "fat-20"] {
+    for must in [
+        "unreal-like",
+        "bevy-deferred",
+        "minimal-8",
+        "reference-f32",
+        "rgba16f-2x",
+        "visibility-8",
+        "fat-20",
+        "lauritzen-15",
+    ] {
         assert!(done.iter().any(|d| d == must), "{must} was not emitted: {done:?}");
     }
 }
@@ -386,7 +395,8 @@ fn bits_of(attr: &str, c: &str) -> u32 {
 fn codec_families_at_three_widths_on_llvmpipe() {
     let dir = tempfile::tempdir().unwrap();
     let gb = every_attribute();
-    let families: [(&str, &str, [&str; 3]); 10] = [
+    let families: [(&str, &str, [&str; 3]); 11] = [
+        ("normal", "rgba32ui", ["spheremap-cry-16", "spheremap-cry-24", "spheremap-cry-f16-32"]),
         ("normal", "rgba32ui", ["xy-hemi-16", "xy-hemi-24", "xy-hemi-f16-32"]),
         ("specular_power", "rgba32ui", ["log2-unorm-4", "log2-unorm-8", "log2-unorm-12"]),
         ("normal", "rgba32ui", ["oct-16", "oct-24", "oct-32"]),

@@ -250,6 +250,30 @@ vec3 gbuf_hemi_unproject(vec2 q) {
     return vec3(p, z);
 }
 
+// CryEngine 3's spheremap (Mittring 2009, Finding Next Gen): g = normalize(n.xy) · √(n.z·0.5 + 0.5).
+// normalize() with +X where it is undefined, dividing by the larger magnitude first.
+vec2 gbuf_normalize2_or_x(vec2 v) {
+    precise float m = max(abs(v.x), abs(v.y));
+    precise vec2 u = vec2(v.x / m, v.y / m);
+    precise float len = sqrt(u.x * u.x + u.y * u.y);
+    precise vec2 r = vec2(u.x / len, u.y / len);
+    return (isnan(m) || m <= 0.0 || isinf(m)) ? vec2(1.0, 0.0) : r;
+}
+vec2 gbuf_spheremap_project(vec3 n) {
+    precise float t = n.z * 0.5 + 0.5;
+    precise float s = sqrt(max(t, 0.0));
+    precise vec2 d = gbuf_normalize2_or_x(vec2(n.x, n.y));
+    return vec2(d.x * s, d.y * s);
+}
+vec3 gbuf_spheremap_unproject(vec2 g) {
+    precise float l2 = g.x * g.x + g.y * g.y;
+    precise float z = clamp(l2 * 2.0 - 1.0, -1.0, 1.0);
+    precise float r = sqrt(max(1.0 - z * z, 0.0));
+    precise vec2 d = gbuf_normalize2_or_x(g);
+    precise vec3 v = vec3(d.x * r, d.y * r, z);
+    return (g.x == 0.0 && g.y == 0.0) ? vec3(0.0, 0.0, -1.0) : v;
+}
+
 vec3 gbuf_oct_unproject(vec2 q) {
     precise vec2 p = clamp(q, vec2(-1.0, -1.0), vec2(1.0, 1.0));
     precise float z = 1.0 - abs(p.x) - abs(p.y);
@@ -333,7 +357,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
     let unsupported = |why: &str| {
         Error::Argument(format!(
             "layout {:?}: field {} ({}): {why}; gbuf emits shader code for the uint-N IDs, the unorm/snorm/f16/f32 \
-             scalars, unorm8/unorm-N/srgb8/f16/f32 colours, the oct, oct-unorm, xy-hemi, xyz normals, log2-unorm up to 12 bits and every depth codec",
+             scalars, unorm8/unorm-N/srgb8/f16/f32 colours, the oct, oct-unorm, xy-hemi, spheremap-cry, xyz normals, log2-unorm up to 12 bits and every depth codec",
             layout.name(),
             f.slot.name(),
             f.codec
@@ -452,6 +476,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             let (project, unproject) = match map {
                 PlaneMap::Oct => ("gbuf_oct_project", "gbuf_oct_unproject"),
                 PlaneMap::XyHemi => ("gbuf_hemi_project", "gbuf_hemi_unproject"),
+                PlaneMap::SpheremapCry => ("gbuf_spheremap_project", "gbuf_spheremap_unproject"),
             };
             let _ = write!(
                 t,

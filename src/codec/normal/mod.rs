@@ -318,6 +318,8 @@ pub enum PlaneMap {
     Oct,
     /// [`XyHemi`]: x and y, z = √max(1 − x² − y², 0).
     XyHemi,
+    /// [`SpheremapCry`]: CryEngine 3's spheremap (Mittring 2009).
+    SpheremapCry,
 }
 
 /// How the plane coordinates of a projection are stored.

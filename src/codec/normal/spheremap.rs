@@ -85,6 +85,9 @@ impl Projection for SpheremapCry {
     fn bound_rad(&self, hx: f32, hy: f32, _q: Quant) -> f32 {
         equal_area_bound(hx.hypot(hy))
     }
+    fn plane_map(&self) -> Option<super::PlaneMap> {
+        Some(super::PlaneMap::SpheremapCry)
+    }
 }
 
 /// ISPC's encode: the CryEngine 3 `g` remapped to [0, 1]² (`g·0.5+0.5`).
