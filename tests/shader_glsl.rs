@@ -151,7 +151,7 @@ fn harness_hlsl(code: &str, layout: &Layout) -> String {
 /// Runs the shader on llvmpipe: argv = shader, inputs, words, n, targets, znear, zfar, packed out, unpacked out.
 const RUN: &str = r#"
 import sys, numpy as np, moderngl
-shader, inp, words, n, t, znear, zfar, out_p, out_u = sys.argv[1:]
+shader, inp, words, n, t, znear, zfar, out_p, out_u, materials = sys.argv[1:]
 n, t = int(n), int(t)
 ctx = moderngl.create_standalone_context(backend="egl", require=450)
 renderer = ctx.info["GL_RENDERER"]
@@ -174,6 +174,13 @@ else:
     for name, v in (("gbuf_znear", zn), ("gbuf_zfar", zf)):
         if name in cs:
             cs[name].value = v
+if materials != "-":
+    mb = ctx.buffer(open(materials, "rb").read()); keep.append(mb)
+    if "GbufMaterials" in bind:
+        mb.bind_to_uniform_block(bind["GbufMaterials"])
+    else:
+        cs["GbufMaterials"].binding = 7
+        mb.bind_to_uniform_block(7)
 bi = ctx.buffer(open(inp, "rb").read())
 bw = ctx.buffer(open(words, "rb").read())
 bp = ctx.buffer(reserve=max(4, n * t * 16))
@@ -229,6 +236,7 @@ fn check(layout: &Layout, gb: &GBuffer, dir: &Path, tag: &str, lang: Lang) {
         .args([&shader, &fi, &fw])
         .args([covered.len().to_string(), t.to_string(), zn.to_bits().to_string(), zf.to_bits().to_string()])
         .args([&fp, &fu])
+        .arg(materials_block(layout, &packed, dir, tag))
         .output()
         .expect("python3");
     assert!(o.status.success(), "{tag}: the driver run failed:\n{}", String::from_utf8_lossy(&o.stderr));
@@ -291,6 +299,32 @@ fn hlsl_to_glsl(hlsl: &str, dir: &Path, tag: &str, out: &Path) {
         .output()
         .expect("spirv-cross (Debian spirv-cross) is required");
     assert!(o.status.success(), "{tag}: spirv-cross:\n{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// The `GbufMaterials` uniform block (std140) for a layout with indirection, from `gbuf pack`'s table: entry k's
+/// parameters in the layout's order (0 for a parameter the frame lacks), the IDs four per element, the count and
+/// the key. `-` without indirection.
+fn materials_block(layout: &Layout, packed: &gbuf::layout::Packed, dir: &Path, tag: &str) -> String {
+    let (Some(ind), Some(table)) = (layout.indirection(), packed.material_table.as_ref()) else { return "-".into() };
+    let n = 1usize << ind.bits;
+    let mut b = vec![0u8; n * 16 + n.div_ceil(4) * 16 + 16];
+    for (k, row) in table.entries.iter().enumerate() {
+        for (i, a) in ind.parameters.iter().enumerate() {
+            if let Some(col) = table.parameters.iter().position(|p| p == a.name()) {
+                b[k * 16 + i * 4..k * 16 + i * 4 + 4].copy_from_slice(&row[col].to_le_bytes());
+            }
+        }
+    }
+    for (k, id) in table.ids.iter().enumerate() {
+        let at = n * 16 + k * 4;
+        b[at..at + 4].copy_from_slice(&id.to_le_bytes());
+    }
+    let at = n * 16 + n.div_ceil(4) * 16;
+    b[at..at + 4].copy_from_slice(&(table.entries.len() as u32).to_le_bytes());
+    b[at + 4..at + 8].copy_from_slice(&u32::from(table.key == "material-id").to_le_bytes());
+    let f = dir.join(format!("{tag}.materials"));
+    std::fs::write(&f, b).unwrap();
+    f.display().to_string()
 }
 
 /// Word offset and count of an attribute in [`surface_words`].
@@ -422,5 +456,23 @@ fn codec_families_at_three_widths_on_llvmpipe() {
                 check(&layout, &gb, dir.path(), &format!("family-{}", c.replace(':', "_")), lang);
             }
         }
+    }
+}
+
+/// Material-ID indirection keyed by a palette of parameter tuples (the frame's six materials fit the table, so
+/// the palette is lossless and a surface's entry is the one with its parameters), in GLSL and HLSL.
+#[test]
+fn a_palette_keyed_material_table_on_llvmpipe() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = include_str!("../src/layout/builtin/destiny-96.toml")
+        .replace("name = \"destiny-96\"", "name = \"destiny-palette\"")
+        .replace("bits = 8\n", "bits = 8\nkey = \"palette\"\n");
+    let layout = Layout::from_spec(LayoutSpec::parse(Path::new("palette.toml"), &text).unwrap()).unwrap();
+    let gb = fixture();
+    let table = layout.pack(&gb).unwrap().material_table.unwrap();
+    assert_eq!(table.key, "palette");
+    assert!(table.lossless, "six materials fit 256 entries");
+    for lang in [Lang::Glsl, Lang::Hlsl] {
+        check(&layout, &gb, dir.path(), "palette", lang);
     }
 }

@@ -93,6 +93,50 @@ fn to_hlsl(glsl: &str) -> String {
     out
 }
 
+/// Widest material index the emitted table block holds: 2^9 entries of 16 bytes plus their IDs fit the 16 KiB
+/// every API guarantees for a uniform block.
+pub const MAX_TABLE_BITS: u32 = 9;
+
+/// The material table block and the index lookup, for a layout with indirection.
+fn material_block(layout: &Layout, lang: Lang) -> String {
+    let Some(ind) = layout.indirection() else { return String::new() };
+    let n = 1u32 << ind.bits;
+    let params: Vec<&str> = ind.parameters.iter().map(|a| a.name()).collect();
+    let decl = match lang {
+        Lang::Glsl => format!(
+            "layout(std140) uniform GbufMaterials {{\n    vec4 gbuf_material_table[{n}];\n    uvec4 gbuf_material_ids[{}];\n    \
+             uint gbuf_material_count;\n    uint gbuf_material_by_id;\n}};\n",
+            n.div_ceil(4)
+        ),
+        Lang::Hlsl => format!(
+            "cbuffer GbufMaterials {{\n    float4 gbuf_material_table[{n}];\n    uint4 gbuf_material_ids[{}];\n    \
+             uint gbuf_material_count;\n    uint gbuf_material_by_id;\n}};\n",
+            n.div_ceil(4)
+        ),
+    };
+    let cmp: Vec<String> = params.iter().enumerate().map(|(i, p)| format!("e[{i}] == s.{p}")).collect();
+    let dist: Vec<String> =
+        params.iter().enumerate().map(|(i, p)| format!("(e[{i}] - s.{p}) * (e[{i}] - s.{p})")).collect();
+    format!(
+        "\n// The material table (material-ID indirection, {bits} index bits): the engine fills it with `gbuf pack`'s\n\
+         // material_table.json. gbuf_material_table[k] holds entry k's parameters in the layout's order ({plist}),\n\
+         // gbuf_material_ids the engine material ID of each entry (four per element, key `material-id`),\n\
+         // gbuf_material_count the entries, gbuf_material_by_id 1 when the table is keyed by material ID.\n\
+         {decl}\n\
+         // The entry a surface packs: its material ID's entry (key `material-id`), else the entry whose parameters it\n\
+         // has (key `palette`; the nearest when the palette was clustered, which need not be gbuf's assignment).\n\
+         uint gbuf_material_index(GbufSurface s) {{\n    uint best = 0u;\n    float best_d = 3.0e38;\n    \
+         for (uint k = 0u; k < gbuf_material_count; k++) {{\n        \
+         if (gbuf_material_by_id != 0u) {{ if (gbuf_material_ids[k >> 2u][k & 3u] == s.material_id) return k; continue; }}\n        \
+         vec4 e = gbuf_material_table[k];\n        if ({exact}) return k;\n        \
+         precise float d = {d};\n        if (d < best_d) {{ best_d = d; best = k; }}\n    }}\n    return best;\n}}\n",
+        bits = ind.bits,
+        plist = params.join(", "),
+        exact = cmp.join(" && "),
+        d = dist.join(" + ")
+    )
+}
+
 /// The attributes of `GbufSurface`, in ABI order, with their GLSL types.
 const SURFACE: [(&str, &str); 12] = [
     ("depth", "float"),
@@ -609,11 +653,16 @@ fn ident(s: &str) -> String {
 /// `GbufSurface gbuf_unpack(uvec4 <target>, …)` (docs/SHADERS.md). Errors name a codec or feature gbuf does not
 /// emit yet.
 pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
-    if layout.indirection().is_some() {
-        return Err(Error::Argument(format!(
-            "layout {:?} uses material-ID indirection, which gbuf does not emit as shader code yet",
-            layout.name()
-        )));
+    if let Some(ind) = layout.indirection() {
+        if ind.bits > MAX_TABLE_BITS || ind.parameters.len() > 4 {
+            return Err(Error::Argument(format!(
+                "layout {:?}: a material table of {} index bits and {} parameters does not fit the emitted uniform \
+                 block (at most {MAX_TABLE_BITS} bits and 4 parameters)",
+                layout.name(),
+                ind.bits,
+                ind.parameters.len()
+            )));
+        }
     }
     let mut fields = Vec::new();
     let mut camera = false;
@@ -659,6 +708,7 @@ pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
         });
     }
     o.push_str(HELPERS);
+    o.push_str(&material_block(layout, lang));
     o.push_str("\n// ---- one encode/decode pair per field ----\n");
     for (_, f, _, code) in &fields {
         let _ = writeln!(
@@ -681,6 +731,9 @@ pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
             layout.formats()[ti],
             ident(&t.name)
         );
+        for f in layout.fields().iter().filter(|f| f.target == ti && f.slot == Slot::MaterialIndex) {
+            let _ = writeln!(o, "    w = gbuf_put(w, {}u, {}u, gbuf_material_index(s));", f.offset, f.bits);
+        }
         for (_, f, name, code) in fields.iter().filter(|x| x.1.target == ti) {
             let m = member(f.slot).unwrap_or_default();
             let _ = writeln!(o, "    uvec3 c_{name} = {name}_enc({m});");
@@ -732,6 +785,14 @@ pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
         let m = member(f.slot).unwrap_or_default();
         let _ = writeln!(o, "    {m} = {name}_dec(uvec3({}));", comps.join(", "));
     }
+    if let (Some(ind), Some(f)) = (layout.indirection(), layout.fields().iter().find(|f| f.slot == Slot::MaterialIndex))
+    {
+        let src = ident(&layout.spec().targets[f.target].name);
+        let _ = writeln!(o, "    vec4 e = gbuf_material_table[gbuf_get({src}, {}u, {}u)];", f.offset, f.bits);
+        for (i, a) in ind.parameters.iter().enumerate() {
+            let _ = writeln!(o, "    s.{} = e[{i}]; // from the material table", a.name());
+        }
+    }
     if layout.stores(Attribute::Position) && !layout.stores(Attribute::Depth) {
         o.push_str("    s.depth = -s.position.z; // depth derived from position\n");
     }
@@ -739,17 +800,18 @@ pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
     Ok(match lang {
         Lang::Glsl => o,
         Lang::Hlsl => {
-            // The header and the camera block are written for HLSL already; translate the rest.
+            // The header and the cbuffer blocks are written for HLSL already; translate the rest.
             let cut = o.find("\nstruct GbufSurface").unwrap_or(0);
-            let (head, body) = o.split_at(cut);
-            let cam = "cbuffer GbufCamera {";
-            match body.find(cam) {
-                Some(a) => {
-                    let b = a + body[a..].find("};").unwrap_or(0) + 2;
-                    format!("{head}{}{}{}", to_hlsl(&body[..a]), &body[a..b], to_hlsl(&body[b..]))
-                }
-                None => format!("{head}{}", to_hlsl(body)),
+            let (head, mut body) = o.split_at(cut);
+            let mut out = head.to_string();
+            while let Some(a) = body.find("cbuffer ") {
+                let b = a + body[a..].find("};").map_or(body.len() - a, |e| e + 2);
+                out.push_str(&to_hlsl(&body[..a]));
+                out.push_str(&body[a..b]);
+                body = &body[b..];
             }
+            out.push_str(&to_hlsl(body));
+            out
         }
     })
 }
