@@ -65,6 +65,13 @@ pub fn run_frame(
             if let Ok(text) = layout.spec().to_text(crate::layout::SpecSyntax::Toml) {
                 files.push(Attachment { name: format!("{prefix}pruned_layout.toml"), bytes: text.into_bytes() });
             }
+            // The pruned layout as shader code, when every codec it keeps has a recipe (docs/SHADERS.md).
+            for lang in [crate::layout::shader::Lang::Glsl, crate::layout::shader::Lang::Hlsl] {
+                if let Ok(code) = crate::layout::shader::emit(&layout, lang) {
+                    let name = format!("{prefix}pruned_layout.{}", lang.name());
+                    files.push(Attachment { name, bytes: code.into_bytes() });
+                }
+            }
         }
         needs.pruned_layout = Some(p);
     }

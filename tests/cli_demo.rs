@@ -59,6 +59,11 @@ fn demo_writes_the_report_folder() {
     for f in ["report.md", "report.csv", "report.json", "error_vs_bytes.svg"] {
         assert!(out.join(f).is_file(), "{f} missing");
     }
+    // The pruned layout comes with its shader code (the room's pruned layout keeps emittable codecs).
+    for ext in ["toml", "glsl", "hlsl"] {
+        let text = std::fs::read_to_string(out.join(format!("pruned_layout.{ext}"))).unwrap();
+        assert!(ext == "toml" || text.contains("GbufSurface gbuf_unpack("), "pruned_layout.{ext}");
+    }
     assert_eq!(std::fs::read_to_string(out.join("notes.txt")).unwrap(), "mine");
     assert_eq!(check_png(&out.join("error_vs_bytes.png")), gbuf::report::figures::PLOT_SIZE);
     assert_eq!(check_png(&out.join("error_vs_time.png")), gbuf::report::figures::PLOT_SIZE);
