@@ -97,6 +97,83 @@ fn to_hlsl(glsl: &str) -> String {
 /// every API guarantees for a uniform block.
 pub const MAX_TABLE_BITS: u32 = 9;
 
+/// The second entry point per target, for engines that write floats to UNORM/SNORM/sRGB/float render targets and
+/// let the hardware convert: `vec4 gbuf_target_<target>(GbufSurface s)` returns, per component of the format, the
+/// float that the D3D/GL conversion rules (round to nearest; sRGB encode; float → half round to nearest even) store
+/// as exactly the bits `gbuf_pack_<target>` gives: `code / (2^k − 1)` for unorm, `code / (2^(k−1) − 1)` for snorm,
+/// the sRGB-decoded value for sRGB, the value the bits encode for floats. Not emitted for integer, depth,
+/// shared-exponent and `rgb8` targets (no float path a render target offers).
+fn float_targets(layout: &Layout) -> String {
+    use super::formats::ComponentKind;
+    let mut o = String::new();
+    let mut srgb_table = false;
+    for (ti, t) in layout.spec().targets.iter().enumerate() {
+        let format = layout.formats()[ti];
+        let comps = format.components();
+        let ok = !format.is_depth()
+            && format != super::Format::Rgb8
+            && comps.iter().all(|c| {
+                matches!(
+                    c.kind,
+                    ComponentKind::Unorm | ComponentKind::Snorm | ComponentKind::Srgb | ComponentKind::Float
+                )
+            });
+        if !ok {
+            let _ = writeln!(
+                o,
+                "\n// (No gbuf_target_{}: a {format} target is written as bits, not floats.)",
+                ident(&t.name)
+            );
+            continue;
+        }
+        let mut vals = Vec::new();
+        for c in comps {
+            let get = format!("gbuf_get(w, {}u, {}u)", c.offset, c.bits);
+            vals.push(match (c.kind, c.bits) {
+                (ComponentKind::Unorm, k) => format!("float({get}) / {}.0", (1u64 << k) - 1),
+                (ComponentKind::Snorm, k) => {
+                    format!("max(float(int({get} << {sh}u) >> {sh}) / {}.0, -1.0)", (1u64 << (k - 1)) - 1, sh = 32 - k)
+                }
+                (ComponentKind::Srgb, _) => {
+                    srgb_table = true;
+                    format!("uintBitsToFloat(gbuf_srgb8_D[{get}])")
+                }
+                (_, 32) => format!("uintBitsToFloat({get})"),
+                (_, 16) => format!("gbuf_f16_value({get})"),
+                (_, k) => format!("gbuf_ufloat_value({get}, {}u)", k - 5),
+            });
+        }
+        while vals.len() < 4 {
+            vals.push("0.0".into());
+        }
+        let _ = writeln!(
+            o,
+            "\n// Target {:?} as floats for the hardware's conversion to {format} (see docs/SHADERS.md).\n\
+             vec4 gbuf_target_{}(GbufSurface s) {{\n    uvec4 w = gbuf_pack_{}(s);\n    precise vec4 v = vec4({});\n    return v;\n}}",
+            t.name,
+            ident(&t.name),
+            ident(&t.name),
+            vals.join(", ")
+        );
+    }
+    let mut head = String::new();
+    if srgb_table {
+        if let Some(Recipe::ColorSrgb8 { decoded, .. }) = crate::codec::color_codec("srgb8").and_then(|c| c.recipe()) {
+            let de: Vec<String> = decoded.iter().map(|v| format!("{:#010x}u", v.to_bits())).collect();
+            let _ = writeln!(head, "\n// The linear value of each sRGB code (gbuf's srgb8 table).\nconst uint gbuf_srgb8_D[256] = uint[256]({});", de.join(", "));
+        }
+    }
+    if o.contains("gbuf_ufloat_value") {
+        head.push_str(
+            "\n// An unsigned small float (R11G11B10F: 5-bit exponent, `m`-bit mantissa, no sign) as a single, exactly.\n\
+             float gbuf_ufloat_value(uint c, uint m) {\n    uint e = c >> m;\n    uint f = c & ((1u << m) - 1u);\n    \
+             if (e == 0u) return float(f) * (m == 6u ? 9.5367431640625e-7 : 1.9073486328125e-6);\n    \
+             return uintBitsToFloat(((e + 112u) << 23) | (f << (23u - m)));\n}\n",
+        );
+    }
+    head + &o
+}
+
 /// The material table block and the index lookup, for a layout with indirection.
 fn material_block(layout: &Layout, lang: Lang) -> String {
     let Some(ind) = layout.indirection() else { return String::new() };
@@ -743,6 +820,7 @@ pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
         }
         o.push_str("    return w;\n}\n");
     }
+    o.push_str(&float_targets(layout));
     // Unpacking.
     let params: Vec<String> = layout.spec().targets.iter().map(|t| format!("uvec4 {}", ident(&t.name))).collect();
     let _ = writeln!(
