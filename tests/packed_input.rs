@@ -518,3 +518,46 @@ fn slices_as_grid_mosaics_unfold_into_samples() {
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("multiple"), "{}", stderr(&o));
 }
+
+/// Hostile target files: every prefix of a DDS and of a `.bin` target, and seeded byte flips in their headers, read
+/// as an error or as texels, never a panic, and never past the memory limit (a header claiming 2^31 × 2^31 texels
+/// is refused before anything is allocated).
+#[test]
+fn hostile_target_files_are_errors_not_panics() {
+    use gbuf::io::ReadLimits;
+    use gbuf::layout::texture;
+    let dir = tempfile::tempdir().unwrap();
+    let layout = Layout::by_name("lauritzen-15").unwrap();
+    let gb = every_attribute(5, 3, 2);
+    let a = dir.path().join("a");
+    targets::write_frame(&layout, &gb, &[], &a).unwrap();
+    let limits = ReadLimits { max_bytes: 1 << 20, allow_dwa: false };
+    let mut rng = SplitMix64::new(9);
+    for (file, format) in [("depth.dds", gbuf::layout::Format::R32F), ("albedo.bin", gbuf::layout::Format::Rgb8)] {
+        let good = std::fs::read(a.join(file)).unwrap_or_else(|_| panic!("{file}"));
+        let f = dir.path().join(file);
+        for len in 0..good.len() {
+            std::fs::write(&f, &good[..len]).unwrap();
+            let _ = texture::read(&f, format, &limits);
+        }
+        for _ in 0..2000 {
+            let mut b = good.clone();
+            for _ in 0..1 + rng.next_u64() % 4 {
+                let i = (rng.next_u64() % 160.min(b.len() as u64)) as usize;
+                b[i] = rng.next_u64() as u8;
+            }
+            std::fs::write(&f, &b).unwrap();
+            if let Ok(t) = texture::read(&f, format, &limits) {
+                assert!(t.bytes.len() as u64 <= limits.max_bytes, "{file}: {} bytes", t.bytes.len());
+            }
+        }
+        let mut huge = good.clone();
+        if file.ends_with(".dds") {
+            huge[12..16].copy_from_slice(&(1u32 << 31).to_le_bytes());
+            huge[16..20].copy_from_slice(&(1u32 << 31).to_le_bytes());
+            std::fs::write(&f, &huge).unwrap();
+            let e = texture::read(&f, format, &limits).unwrap_err().to_string();
+            assert!(e.contains("limit"), "{e}");
+        }
+    }
+}

@@ -233,7 +233,8 @@ fn check_size(path: &Path, w: u32, h: u32, slices: u32, tb: usize, limits: &Read
     if w == 0 || h == 0 || slices == 0 {
         return Err(Error::invalid(path, format!("empty texture: {w}×{h}, {slices} slice(s)")));
     }
-    let bytes = u64::from(w) * u64::from(h) * u64::from(slices) * tb as u64;
+    // Saturating: a hostile header's product must not wrap under the limit.
+    let bytes = u64::from(w).saturating_mul(u64::from(h)).saturating_mul(u64::from(slices)).saturating_mul(tb as u64);
     if bytes > limits.max_bytes {
         return Err(Error::TooLarge { path: path.into(), bytes, limit: limits.max_bytes, why: limits.describe() });
     }
