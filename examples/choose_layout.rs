@@ -21,6 +21,7 @@ fn main() -> Result<(), gbuf::Error> {
         detector_config: Default::default(),
         resolve: Default::default(),
         over: Over::Worst,
+        shader_code: false,
     };
     // Each frame loaded when the search needs it (twice with several frames: propose, then measure).
     let (result, _size) = budget::search_frames(

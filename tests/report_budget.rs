@@ -15,6 +15,7 @@ fn cfg(max_bytes: u32, max_error: Option<f64>) -> BudgetConfig {
         detector_config: DetectorConfig::default(),
         resolve: ResolveConfig::default(),
         over: Default::default(),
+        shader_code: false,
     }
 }
 

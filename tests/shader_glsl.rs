@@ -624,3 +624,38 @@ fn float_entry_points_store_the_packed_bits_through_the_hardware_conversion() {
     );
     eprintln!("float entry points, texels differing: {checked:?}");
 }
+
+/// From a dump to shader code in one command: `gbuf budget DUMP --max-bytes 12 --emit hlsl` chooses among the
+/// layouts gbuf can emit and prints the winner as HLSL, which glslang's HLSL front end compiles.
+#[test]
+fn budget_emits_hlsl_in_one_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let dump = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/blender_gbuffer.exr");
+    let o = support::gbuf(dir.path(), &["budget", dump.to_str().unwrap(), "--max-bytes", "12", "--emit", "hlsl"]);
+    assert!(o.status.success(), "{}", support::stderr(&o));
+    let code = String::from_utf8(o.stdout).unwrap();
+    assert!(code.starts_with("// gbuf layout") && code.contains("GbufSurface gbuf_unpack("), "{code}");
+    let hlsl = dir.path().join("budget.hlsl");
+    std::fs::write(
+        &hlsl,
+        format!(
+            "{code}\nRWStructuredBuffer<uint> o : register(u0);\n[numthreads(1, 1, 1)] void main() {{ o[0] = 1u; }}\n"
+        ),
+    )
+    .unwrap();
+    let c = Command::new("glslangValidator")
+        .args(["-D", "-e", "main", "-S", "comp", "-V", "-o"])
+        .arg(dir.path().join("b.spv"))
+        .arg(&hlsl)
+        .output()
+        .unwrap();
+    assert!(c.status.success(), "{}", String::from_utf8_lossy(&c.stdout));
+    // With -o the layout goes to the TOML and the code beside it.
+    let toml = dir.path().join("chosen.toml");
+    let o = support::gbuf(
+        dir.path(),
+        &["budget", dump.to_str().unwrap(), "--max-bytes", "12", "-o", toml.to_str().unwrap(), "--emit", "glsl"],
+    );
+    assert!(o.status.success(), "{}", support::stderr(&o));
+    assert!(toml.is_file() && dir.path().join("chosen.glsl").is_file());
+}

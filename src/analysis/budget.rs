@@ -60,6 +60,9 @@ pub struct BudgetConfig {
     pub resolve: ResolveConfig,
     /// Over several frames: rank by each candidate's mean or worst frame.
     pub over: Over,
+    /// Only layouts gbuf can emit as shader code (`--emit`): codecs with a `codec::Recipe`, material tables of at
+    /// most `layout::shader::MAX_TABLE_BITS` index bits.
+    pub shader_code: bool,
 }
 
 /// A candidate's numbers on one frame.
@@ -505,6 +508,19 @@ struct Combo {
 }
 
 impl Space {
+    /// Drops the options gbuf cannot emit as shader code (no `codec::Recipe`) and a table too wide for the
+    /// emitted uniform block.
+    fn keep_emittable(&mut self) {
+        use crate::layout::shader::codec_emittable;
+        use crate::layout::Slot;
+        self.normal.retain(|o| codec_emittable(Slot::Whole(Attribute::Normal), &o.codec));
+        self.albedo.retain(|o| codec_emittable(Slot::Whole(Attribute::Albedo), &o.codec));
+        for (a, opts) in &mut self.scalars {
+            opts.retain(|o| codec_emittable(Slot::Whole(*a), &o.codec));
+        }
+        self.index_bits = self.index_bits.filter(|&b| b <= crate::layout::shader::MAX_TABLE_BITS);
+    }
+
     fn predicted_mse(&self, c: &Combo) -> f64 {
         let mut m = c.depth.map_or(0.0, |k| self.depth[k].1);
         m += c.normal.map_or(0.0, |k| self.normal[k].mse);
@@ -736,7 +752,10 @@ pub fn propose(gb: &GBuffer, lights: &[Light], cfg: &BudgetConfig) -> Result<Pro
     }
     let needs = needs::analyze(gb);
     let pricer = pricer(gb, lights, cfg)?;
-    let space = build_space(&pricer, &needs)?;
+    let mut space = build_space(&pricer, &needs)?;
+    if cfg.shader_code {
+        space.keep_emittable();
+    }
     let sets = target_sets();
 
     // Predict every combination that fits; keep the best few (or, under an error cap, the smallest few).
@@ -771,6 +790,12 @@ pub fn propose(gb: &GBuffer, lights: &[Light], cfg: &BudgetConfig) -> Result<Pro
                 }
             }
         }
+    }
+    if cfg.shader_code {
+        cands.retain(|c| {
+            Layout::from_spec(c.spec.clone())
+                .is_ok_and(|l| crate::layout::shader::emit(&l, crate::layout::shader::Lang::Glsl).is_ok())
+        });
     }
     Ok(Proposal { candidates: cands, combinations, option_costs: option_costs(&space), needs })
 }

@@ -83,6 +83,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         detector_config: DetectorConfig::default(),
         resolve: ResolveConfig::default(),
         over: args.over,
+        shader_code: args.emit.is_some(),
     };
     let names: Vec<String> = paths.iter().map(super::common::FrameRef::name).collect();
     let load = |i: usize| -> anyhow::Result<(gbuf::GBuffer, Vec<gbuf::Light>)> {

@@ -708,6 +708,21 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
     Ok(FieldCode { k, n, text: t, camera })
 }
 
+/// Can gbuf emit codec `codec` for `slot` as shader code (it has a recipe, or it is an ID)?
+#[must_use]
+pub fn codec_emittable(slot: Slot, codec: &str) -> bool {
+    use super::coder::Coder;
+    let [n, f] = super::DEFAULT_DEPTH_RANGE;
+    match Coder::build(slot, codec, n, f) {
+        Ok(Coder::Normal(c)) => c.recipe().is_some(),
+        Ok(Coder::Depth(c)) => c.recipe().is_some(),
+        Ok(Coder::Color(c)) => c.recipe().is_some(),
+        Ok(Coder::Scalar(c)) => c.recipe().is_some(),
+        Ok(Coder::Id(_) | Coder::None) => true,
+        Err(_) => false,
+    }
+}
+
 /// The recipe of field `f`'s codec (IDs and reserved bits have none).
 fn recipe_of(f: &Field, layout: &Layout) -> Result<Option<Recipe>> {
     use super::coder::Coder;

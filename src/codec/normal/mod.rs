@@ -87,6 +87,16 @@ pub enum NormalScheme {
     OctUnorm,
     /// Lambert azimuthal equal-area stored as unorm `p·0.5 + 0.5`.
     LambertUnorm,
+    /// xy with reconstructed z (hemisphere only), stored as unorm `p·0.5 + 0.5`.
+    XyHemiUnorm,
+    /// CryEngine 3 spheremap stored as unorm `g·0.5 + 0.5` (CryEngine's own storage).
+    SpheremapCryUnorm,
+    /// Stereographic (scaled) stored as unorm `p·0.5 + 0.5`.
+    StereoUnorm,
+    /// Full-sphere Lambert stored as unorm `p·0.5 + 0.5`.
+    LambertSphereUnorm,
+    /// Full-sphere stereographic stored as unorm `p·0.5 + 0.5`.
+    StereoSphereUnorm,
 }
 
 crate::named!(NormalScheme: "normal scheme" {
@@ -110,6 +120,11 @@ crate::named!(NormalScheme: "normal scheme" {
     OctF16 => "oct-f16",
     OctUnorm => "oct-unorm",
     LambertUnorm => "lambert-unorm",
+    XyHemiUnorm => "xy-hemi-unorm",
+    SpheremapCryUnorm => "spheremap-cry-unorm",
+    StereoUnorm => "stereo-unorm",
+    LambertSphereUnorm => "lambert-sphere-unorm",
+    StereoSphereUnorm => "stereo-sphere-unorm",
 });
 
 impl NormalScheme {
@@ -139,7 +154,7 @@ impl NormalScheme {
     /// Only meaningful on the hemisphere z ≥ 0?
     #[must_use]
     pub fn hemisphere_only(self) -> bool {
-        matches!(self, NormalScheme::XyHemi | NormalScheme::XyHemiF16)
+        matches!(self, NormalScheme::XyHemi | NormalScheme::XyHemiF16 | NormalScheme::XyHemiUnorm)
     }
 
     /// Every valid total bit count: `components × k` for k = 4..=16 bits per component, or the single f16 size.
@@ -187,6 +202,11 @@ impl NormalScheme {
             NormalScheme::OctPrecise => Box::new(OctPrecise::new(k)),
             NormalScheme::OctUnorm => Box::new(Planar::new(Oct, qs)),
             NormalScheme::LambertUnorm => Box::new(Planar::new(Lambert, qs)),
+            NormalScheme::XyHemiUnorm => Box::new(Planar::new(XyHemi, qs)),
+            NormalScheme::SpheremapCryUnorm => Box::new(Planar::new(SpheremapCry, qs)),
+            NormalScheme::StereoUnorm => Box::new(Planar::new(Stereo::SCALED, qs)),
+            NormalScheme::LambertSphereUnorm => Box::new(Planar::new(LambertSphere, qs)),
+            NormalScheme::StereoSphereUnorm => Box::new(Planar::new(StereoSphere, qs)),
         })
     }
 }
