@@ -129,6 +129,7 @@ pub fn run_frame(
         coverage: if gb.is_empty() { 0.0 } else { covered as f64 / gb.len() as f64 },
         lights: input.lights.len(),
         lights_source: input.lights_source.clone(),
+        notes: input.notes.clone(),
         reference: Some(out.reference_timing),
         sweep_seconds: out.seconds,
         stage_seconds: out.stage_seconds,

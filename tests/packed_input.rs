@@ -429,6 +429,24 @@ fn the_llvmpipe_engine_capture_decodes_to_its_float_truth() {
     );
     assert!(o.status.success(), "{}", stderr(&o));
     support::io::assert_bit_exact(gb, &load_dump(&exr, &LoadOptions::default()).unwrap().gbuffer);
+    // The report says it too, in report.md and report.json.
+    let out = tmp.path().join("report");
+    let args = [
+        "report",
+        dir.to_str().unwrap(),
+        "--layout",
+        toml.to_str().unwrap(),
+        "--layouts",
+        "minimal-8",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    let o = gbuf(tmp.path(), &args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("**Note:**") && md.contains("no float truth"), "report.md lacks the note");
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert!(json["frames"][0]["notes"][0].as_str().is_some_and(|n| n.contains("no float truth")));
 }
 
 /// RenderDoc's "slices as grid" export of a multisampled target: one image of 2×2 tiles, tile s = sample s.

@@ -263,6 +263,7 @@ fn a_frame_times_its_steps_outside_the_sweep() {
         lights_source: "default".into(),
         single: None,
         geometry: None,
+        notes: Vec::new(),
     };
     let t = std::time::Instant::now();
     let r = gbuf::study::run_frame(&input, &cfg, true, "", &mut |_, _, _| {}).unwrap();

@@ -41,6 +41,9 @@ pub struct ReportInput<'a> {
     /// The analytic scene the frame was rendered from, when it is one of gbuf's (the demo): the visibility buffer
     /// is then re-materialised from its triangles.
     pub geometry: Option<crate::scene::SceneName>,
+    /// What the reader said about the frame that every output must repeat (e.g. a packed input has no float
+    /// truth: its errors are against the engine's decoded frame).
+    pub notes: Vec<String>,
 }
 
 /// The lossless measuring baseline among the built-ins: never picked as the layout to prune when another one can

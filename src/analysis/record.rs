@@ -36,6 +36,9 @@ pub struct Frame {
     pub lights: usize,
     /// Where the lights came from.
     pub lights_source: String,
+    /// What the reader said about the frame that every output repeats (e.g. no float truth for packed targets).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
     /// Time of the reference resolve (every sample shaded, f64 accumulation).
     pub reference: Option<Timing>,
     /// Wall time of this frame's sweep in seconds.
@@ -100,6 +103,7 @@ pub(crate) fn test_report(input: &str, width: u32, height: u32, rows: Vec<Row>, 
             coverage: 0.0,
             lights: 0,
             lights_source: "none".into(),
+            notes: vec![],
             reference: None,
             sweep_seconds: 0.5,
             stage_seconds: vec![],

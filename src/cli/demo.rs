@@ -48,6 +48,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         lights,
         single,
         geometry: Some(SceneName::Room),
+        notes: Vec::new(),
     };
     run_and_write(frame, &cfg, &args.out, args.json)?;
     Ok(())

@@ -260,6 +260,8 @@ pub struct FrameInput {
     pub single: Option<gbuf::GBuffer>,
     /// The analytic scene it was rendered from (the demo).
     pub geometry: Option<gbuf::scene::SceneName>,
+    /// The reader's notes every output repeats (`no-float-truth` for packed targets).
+    pub notes: Vec<String>,
 }
 
 /// Sweeps the frames one after another (`next` yields them, so only one is in memory at a time), writes the
@@ -293,6 +295,7 @@ pub fn run_frames(
             lights_source: f.lights_source.clone(),
             single: f.single.as_ref(),
             geometry: f.geometry,
+            notes: f.notes.clone(),
         };
         let prefix =
             if count > 1 { format!("frame{:0w$}_", i + 1, w = count.to_string().len()) } else { String::new() };
@@ -400,7 +403,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             }
             None => None,
         };
-        Ok(FrameInput { name: p.name(), gbuffer: loaded.gbuffer, lights, lights_source, single, geometry: None })
+        let notes = loaded
+            .warnings
+            .iter()
+            .filter(|w| w.code == gbuf::layout::targets::NO_FLOAT_TRUTH)
+            .map(|w| w.message.clone())
+            .collect();
+        Ok(FrameInput { name: p.name(), gbuffer: loaded.gbuffer, lights, lights_source, single, geometry: None, notes })
     };
     run_frames(paths.len(), next, &cfg, &Assembly::of(&cfg, args.over, args.max_bytes), &args.out, args.json)?;
     Ok(())

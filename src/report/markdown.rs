@@ -256,6 +256,9 @@ pub fn detector_table(rows: &[DetectorAggregate]) -> String {
 }
 
 fn frame_header(s: &mut String, f: &Frame, rows: usize, runs: usize) {
+    for n in &f.notes {
+        let _ = writeln!(s, "**Note:** {n}.\n");
+    }
     let _ = writeln!(
         s,
         "{}×{} pixels, {} samples per pixel, {:.1}% of samples covered, {} lights ({}). Sweep of {rows} rows took \
