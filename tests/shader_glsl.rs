@@ -16,6 +16,22 @@ use gbuf::layout::{Layout, LayoutSpec};
 use std::path::Path;
 use std::process::Command;
 
+/// The attributes of `GbufSurface` in ABI order.
+const SURFACE_ORDER: [Attribute; 12] = [
+    Attribute::Depth,
+    Attribute::Position,
+    Attribute::Normal,
+    Attribute::Albedo,
+    Attribute::Specular,
+    Attribute::SpecularPower,
+    Attribute::Roughness,
+    Attribute::Metallic,
+    Attribute::Motion,
+    Attribute::MaterialId,
+    Attribute::ObjectId,
+    Attribute::PrimitiveId,
+];
+
 /// Words per sample of `GbufSurface` in the harness buffers, in ABI order.
 const SURFACE_WORDS: usize = 19;
 
@@ -23,20 +39,7 @@ const SURFACE_WORDS: usize = 19;
 fn surface_words(gb: &GBuffer, i: usize) -> [u32; SURFACE_WORDS] {
     let mut w = [0u32; SURFACE_WORDS];
     let mut at = 0;
-    for a in [
-        Attribute::Depth,
-        Attribute::Position,
-        Attribute::Normal,
-        Attribute::Albedo,
-        Attribute::Specular,
-        Attribute::SpecularPower,
-        Attribute::Roughness,
-        Attribute::Metallic,
-        Attribute::Motion,
-        Attribute::MaterialId,
-        Attribute::ObjectId,
-        Attribute::PrimitiveId,
-    ] {
+    for a in SURFACE_ORDER {
         let n = a.components();
         match gb.plane(a) {
             Some(PlaneRef::F32(v)) => w[at] = v[i].to_bits(),
@@ -329,22 +332,8 @@ fn materials_block(layout: &Layout, packed: &gbuf::layout::Packed, dir: &Path, t
 
 /// Word offset and count of an attribute in [`surface_words`].
 fn offset_of(a: Attribute) -> (usize, usize) {
-    let order = [
-        Attribute::Depth,
-        Attribute::Position,
-        Attribute::Normal,
-        Attribute::Albedo,
-        Attribute::Specular,
-        Attribute::SpecularPower,
-        Attribute::Roughness,
-        Attribute::Metallic,
-        Attribute::Motion,
-        Attribute::MaterialId,
-        Attribute::ObjectId,
-        Attribute::PrimitiveId,
-    ];
     let mut at = 0;
-    for b in order {
+    for b in SURFACE_ORDER {
         if b == a {
             return (at, b.components());
         }
