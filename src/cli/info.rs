@@ -27,24 +27,22 @@ struct WithNeeds<'a> {
 
 /// Runs `gbuf info`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let loaded = args.input.load().with_context(|| format!("cannot load {}", args.input.file.display()))?;
+    let input = args.input.read.packed()?;
+    let path = &args.input.file;
+    // Packed targets are read once: the decoded frame and, for the code space, their codes.
+    let (loaded, code_space) = match gbuf::layout::targets::input_layout(path, &input)? {
+        Some(layout) => {
+            let (loaded, frame) =
+                gbuf::layout::targets::load_packed_frame(path, &layout, &input.targets, &args.input.options()?)
+                    .with_context(|| format!("cannot load {}", path.display()))?;
+            super::common::print_warnings(path, &loaded);
+            let rows = gbuf::layout::codespace::code_space(&layout, &frame.packed, &loaded.gbuffer.coverage);
+            (loaded, Some((layout.name().to_string(), rows)))
+        }
+        None => (args.input.load().with_context(|| format!("cannot load {}", path.display()))?, None),
+    };
     let info = gbuf::io::stats::info(&loaded, &args.input.file);
     let needs = gbuf::analysis::needs_with_pruned_layout(&loaded.gbuffer);
-    let code_space = if loaded.format == gbuf::io::SourceFormat::PackedTargets {
-        let input = args.input.read.packed()?;
-        let path = &args.input.file;
-        let layout = match input.layout {
-            Some(l) => l,
-            None => gbuf::layout::Layout::load(&path.join(gbuf::layout::targets::LAYOUT_FILE))?,
-        };
-        let frame = gbuf::layout::targets::read_frame(path, &layout, &input.targets, &args.input.options()?)?;
-        Some((
-            layout.name().to_string(),
-            gbuf::layout::codespace::code_space(&layout, &frame.packed, &loaded.gbuffer.coverage),
-        ))
-    } else {
-        None
-    };
     if args.json {
         print_json(&WithNeeds { info: &info, needs, code_space: code_space.map(|c| c.1) })
     } else {

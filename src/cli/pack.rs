@@ -44,27 +44,27 @@ struct Output<'a> {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let layout = Layout::by_name_or_path(&args.layout)?;
     let file = args.input.file.display().to_string();
-    let loaded = args.input.load().with_context(|| format!("loading {file}"))?;
-    let gb = &loaded.gbuffer;
-    let lights = loaded.lights.as_deref().unwrap_or_default();
     // A packed frame repacked with its own layout keeps its codes: decoding and encoding again need not give the
     // same code (a normal codec that normalises on decode; a material index re-keyed), and the engine's bits are
-    // the data.
+    // the data. The targets are read once, for the frame and its codes.
     let input = args.input.read.packed()?;
-    let own = match &input.layout {
-        Some(l) => Some(l.clone()),
-        None if targets::is_packed_dir(&args.input.file) => {
-            Some(Layout::load(&args.input.file.join(targets::LAYOUT_FILE))?)
+    let path = &args.input.file;
+    let (loaded, codes) = match targets::input_layout(path, &input)? {
+        Some(own) if own == layout => {
+            let (loaded, frame) = targets::load_packed_frame(path, &layout, &input.targets, &args.input.options()?)
+                .with_context(|| format!("loading {file}"))?;
+            super::common::print_warnings(path, &loaded);
+            (loaded, Some(frame.packed))
         }
-        None => None,
+        _ => (args.input.load().with_context(|| format!("loading {file}"))?, None),
     };
+    let gb = &loaded.gbuffer;
+    let lights = loaded.lights.as_deref().unwrap_or_default();
     let context = || format!("{file}: packing with layout {} into {}", layout.name(), args.out.display());
-    let copied = own.as_ref() == Some(&layout);
-    let files = if copied {
-        let frame = targets::read_frame(&args.input.file, &layout, &input.targets, &args.input.options()?)?;
-        targets::write_packed(&layout, &frame.packed, gb, lights, &args.out).with_context(context)?
-    } else {
-        targets::write_frame(&layout, gb, lights, &args.out).with_context(context)?
+    let copied = codes.is_some();
+    let files = match &codes {
+        Some(packed) => targets::write_packed(&layout, packed, gb, lights, &args.out).with_context(context)?,
+        None => targets::write_frame(&layout, gb, lights, &args.out).with_context(context)?,
     };
     let out = Output {
         file,

@@ -333,6 +333,17 @@ pub fn read_frame(
 /// Reads and decodes the targets of `layout` in `dir`: the G-buffer the engine's lighting pass would see, then
 /// what [`crate::io::load`] does after every reader (sidecar lights, sanitising, validation, plausibility).
 pub fn load_packed(dir: &Path, layout: &Layout, explicit: &[(String, PathBuf)], opts: &LoadOptions) -> Result<Loaded> {
+    load_packed_frame(dir, layout, explicit, opts).map(|(loaded, _)| loaded)
+}
+
+/// [`load_packed`], also returning the targets as read (their codes), so a caller that needs both reads the
+/// files once (`gbuf info`'s code space, `gbuf pack`'s copy of the codes).
+pub fn load_packed_frame(
+    dir: &Path,
+    layout: &Layout,
+    explicit: &[(String, PathBuf)],
+    opts: &LoadOptions,
+) -> Result<(Loaded, PackedFrame)> {
     let frame = read_frame(dir, layout, explicit, opts)?;
     let gbuffer = layout.unpack(&frame.packed, &frame.shell).map_err(|e| Error::invalid(dir, e.to_string()))?;
     if !gbuffer.coverage.iter().any(|&c| c) {
@@ -390,7 +401,17 @@ pub fn load_packed(dir: &Path, layout: &Layout, explicit: &[(String, PathBuf)], 
     };
     // The targets were unfolded already: the decoded frame is not a mosaic.
     let opts = LoadOptions { grid: None, ..opts.clone() };
-    crate::io::finish_loaded(loaded, dir, &opts)
+    Ok((crate::io::finish_loaded(loaded, dir, &opts)?, frame))
+}
+
+/// The layout of packed targets at `path` that `input` names (or the folder's `layout.toml`), `None` when the
+/// input is not packed targets.
+pub fn input_layout(path: &Path, input: &PackedInput) -> Result<Option<Layout>> {
+    match &input.layout {
+        Some(l) => Ok(Some(l.clone())),
+        None if is_packed_dir(path) => Layout::load(&path.join(LAYOUT_FILE)).map(Some),
+        None => Ok(None),
+    }
 }
 
 /// Writes `gb` packed with `layout` into `dir` as a frame [`load`] reads back with no flags: every target
