@@ -46,3 +46,17 @@ pub fn python_has(modules: &str) -> bool {
     }
     ok
 }
+
+/// Is the command-line tool `tool` on the PATH (it can be started)? The same rule as [`python_has`]: required in
+/// CI, a noted skip elsewhere.
+pub fn tool_has(tool: &str) -> bool {
+    let ok = Command::new(tool).arg("--help").output().is_ok();
+    if !ok {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI is set but {tool} is missing: the cross-check must run in CI (.ci/run installs it)"
+        );
+        eprintln!("note: {tool} is missing; skipping the cross-check (it is required in CI)");
+    }
+    ok
+}
