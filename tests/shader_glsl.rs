@@ -61,95 +61,102 @@ fn surface_words(gb: &GBuffer, i: usize) -> [u32; SURFACE_WORDS] {
     w
 }
 
-/// The harness: reads the attributes and gbuf's packed words, runs pack and unpack per sample.
-fn harness(code: &str, layout: &Layout, lang: Lang) -> String {
-    if lang == Lang::Hlsl {
-        return harness_hlsl(code, layout);
-    }
-    let t = layout.spec().targets.len();
-    let names: Vec<String> = layout
-        .spec()
-        .targets
-        .iter()
-        .map(|x| x.name.chars().map(|c| if c.is_ascii_alphanumeric() { c.to_ascii_lowercase() } else { '_' }).collect())
-        .collect();
-    let mut main = format!(
-        "#version 450\nlayout(local_size_x = 64) in;\n\
-         layout(std430, binding = 0) readonly buffer In {{ uint inp[]; }};\n\
-         layout(std430, binding = 1) readonly buffer Words {{ uint words[]; }};\n\
-         layout(std430, binding = 2) writeonly buffer Packed {{ uint packed_out[]; }};\n\
-         layout(std430, binding = 3) writeonly buffer Unpacked {{ uint unpacked_out[]; }};\n\
-         uniform uint n_samples;\n{code}\n\
-         void main() {{\n  uint i = gl_GlobalInvocationID.x;\n  if (i >= n_samples) return;\n  uint b = i * {SURFACE_WORDS}u;\n\
-           GbufSurface s;\n  s.depth = uintBitsToFloat(inp[b]);\n\
-           s.position = vec3(uintBitsToFloat(inp[b + 1u]), uintBitsToFloat(inp[b + 2u]), uintBitsToFloat(inp[b + 3u]));\n\
-           s.normal = vec3(uintBitsToFloat(inp[b + 4u]), uintBitsToFloat(inp[b + 5u]), uintBitsToFloat(inp[b + 6u]));\n\
-           s.albedo = vec3(uintBitsToFloat(inp[b + 7u]), uintBitsToFloat(inp[b + 8u]), uintBitsToFloat(inp[b + 9u]));\n\
-           s.specular = uintBitsToFloat(inp[b + 10u]);\n  s.specular_power = uintBitsToFloat(inp[b + 11u]);\n\
-           s.roughness = uintBitsToFloat(inp[b + 12u]);\n  s.metallic = uintBitsToFloat(inp[b + 13u]);\n\
-           s.motion = vec2(uintBitsToFloat(inp[b + 14u]), uintBitsToFloat(inp[b + 15u]));\n\
-           s.material_id = inp[b + 16u];\n  s.object_id = inp[b + 17u];\n  s.primitive_id = inp[b + 18u];\n"
-    );
-    for (k, name) in names.iter().enumerate() {
-        main.push_str(&format!(
-            "  {{ uvec4 w = gbuf_pack_{name}(s); for (uint j = 0u; j < 4u; j++) packed_out[(i * {t}u + {k}u) * 4u + j] = w[j]; }}\n"
-        ));
-    }
-    let args: Vec<String> = (0..t)
-        .map(|k| format!("uvec4(words[(i * {t}u + {k}u) * 4u], words[(i * {t}u + {k}u) * 4u + 1u], words[(i * {t}u + {k}u) * 4u + 2u], words[(i * {t}u + {k}u) * 4u + 3u])"))
-        .collect();
-    main.push_str(&format!(
-        "  GbufSurface u = gbuf_unpack({});\n  uint o = i * {SURFACE_WORDS}u;\n\
-           unpacked_out[o] = floatBitsToUint(u.depth);\n\
-           for (int j = 0; j < 3; j++) {{ unpacked_out[o + 1u + uint(j)] = floatBitsToUint(u.position[j]); unpacked_out[o + 4u + uint(j)] = floatBitsToUint(u.normal[j]); unpacked_out[o + 7u + uint(j)] = floatBitsToUint(u.albedo[j]); }}\n\
-           unpacked_out[o + 10u] = floatBitsToUint(u.specular);\n  unpacked_out[o + 11u] = floatBitsToUint(u.specular_power);\n\
-           unpacked_out[o + 12u] = floatBitsToUint(u.roughness);\n  unpacked_out[o + 13u] = floatBitsToUint(u.metallic);\n\
-           unpacked_out[o + 14u] = floatBitsToUint(u.motion.x);\n  unpacked_out[o + 15u] = floatBitsToUint(u.motion.y);\n\
-           unpacked_out[o + 16u] = u.material_id;\n  unpacked_out[o + 17u] = u.object_id;\n  unpacked_out[o + 18u] = u.primitive_id;\n}}\n",
-        args.join(", ")
-    ));
-    main
+/// The spellings the harness body needs in each language.
+struct Dialect {
+    vec2: &'static str,
+    vec3: &'static str,
+    uvec4: &'static str,
+    to_float: &'static str,
+    to_bits: &'static str,
 }
 
-/// The same harness in HLSL (compiled by glslang's HLSL front end, cross-compiled back to GLSL by spirv-cross).
-fn harness_hlsl(code: &str, layout: &Layout) -> String {
+const GLSL: Dialect =
+    Dialect { vec2: "vec2", vec3: "vec3", uvec4: "uvec4", to_float: "uintBitsToFloat", to_bits: "floatBitsToUint" };
+const HLSL: Dialect =
+    Dialect { vec2: "float2", vec3: "float3", uvec4: "uint4", to_float: "asfloat", to_bits: "asuint" };
+
+/// The body of the harness's entry point after `uint i` (the sample) is known: read the sample's attributes, pack
+/// them into `packed_out`, unpack gbuf's words from `words` into `unpacked_out`. One text for both languages.
+fn harness_body(layout: &Layout, d: &Dialect) -> String {
     let t = layout.spec().targets.len();
+    let f = |k: usize| format!("{}(inp[b + {k}u])", d.to_float);
+    let mut body = format!(
+        "  uint b = i * {SURFACE_WORDS}u;\n  GbufSurface s;\n  s.depth = {};\n  s.position = {v3}({}, {}, {});\n\
+           s.normal = {v3}({}, {}, {});\n  s.albedo = {v3}({}, {}, {});\n  s.specular = {};\n  s.specular_power = {};\n\
+           s.roughness = {};\n  s.metallic = {};\n  s.motion = {v2}({}, {});\n  s.material_id = inp[b + 16u];\n\
+           s.object_id = inp[b + 17u];\n  s.primitive_id = inp[b + 18u];\n",
+        f(0),
+        f(1),
+        f(2),
+        f(3),
+        f(4),
+        f(5),
+        f(6),
+        f(7),
+        f(8),
+        f(9),
+        f(10),
+        f(11),
+        f(12),
+        f(13),
+        f(14),
+        f(15),
+        v3 = d.vec3,
+        v2 = d.vec2
+    );
     let names: Vec<String> = layout
         .spec()
         .targets
         .iter()
         .map(|x| x.name.chars().map(|c| if c.is_ascii_alphanumeric() { c.to_ascii_lowercase() } else { '_' }).collect())
         .collect();
-    let f = |k: usize| format!("asfloat(inp[b + {k}u])");
-    let mut main = format!(
-        "{code}\nStructuredBuffer<uint> inp : register(t0);\nStructuredBuffer<uint> words : register(t1);\n\
-         RWStructuredBuffer<uint> packed_out : register(u2);\nRWStructuredBuffer<uint> unpacked_out : register(u3);\n\
-         cbuffer Harness : register(b1) {{ uint n_samples; }};\n\
-         [numthreads(64, 1, 1)]\nvoid main(uint3 id : SV_DispatchThreadID) {{\n  uint i = id.x;\n  if (i >= n_samples) return;\n\
-           uint b = i * {SURFACE_WORDS}u;\n  GbufSurface s;\n  s.depth = {};\n  s.position = float3({}, {}, {});\n\
-           s.normal = float3({}, {}, {});\n  s.albedo = float3({}, {}, {});\n  s.specular = {};\n  s.specular_power = {};\n\
-           s.roughness = {};\n  s.metallic = {};\n  s.motion = float2({}, {});\n  s.material_id = inp[b + 16u];\n\
-           s.object_id = inp[b + 17u];\n  s.primitive_id = inp[b + 18u];\n",
-        f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7), f(8), f(9), f(10), f(11), f(12), f(13), f(14), f(15)
-    );
     for (k, name) in names.iter().enumerate() {
-        main.push_str(&format!(
-            "  {{ uint4 w = gbuf_pack_{name}(s); for (uint j = 0u; j < 4u; j++) packed_out[(i * {t}u + {k}u) * 4u + j] = w[j]; }}\n"
+        body.push_str(&format!(
+            "  {{ {} w = gbuf_pack_{name}(s); for (uint j = 0u; j < 4u; j++) packed_out[(i * {t}u + {k}u) * 4u + j] = w[j]; }}\n",
+            d.uvec4
         ));
     }
     let args: Vec<String> = (0..t)
-        .map(|k| format!("uint4(words[(i * {t}u + {k}u) * 4u], words[(i * {t}u + {k}u) * 4u + 1u], words[(i * {t}u + {k}u) * 4u + 2u], words[(i * {t}u + {k}u) * 4u + 3u])"))
+        .map(|k| {
+            let w = |j: usize| format!("words[(i * {t}u + {k}u) * 4u + {j}u]");
+            format!("{}({}, {}, {}, {})", d.uvec4, w(0), w(1), w(2), w(3))
+        })
         .collect();
-    main.push_str(&format!(
-        "  GbufSurface u = gbuf_unpack({});\n  uint o = i * {SURFACE_WORDS}u;\n  unpacked_out[o] = asuint(u.depth);\n\
-           for (uint j = 0u; j < 3u; j++) {{ unpacked_out[o + 1u + j] = asuint(u.position[j]); unpacked_out[o + 4u + j] = asuint(u.normal[j]); unpacked_out[o + 7u + j] = asuint(u.albedo[j]); }}\n\
-           unpacked_out[o + 10u] = asuint(u.specular);\n  unpacked_out[o + 11u] = asuint(u.specular_power);\n\
-           unpacked_out[o + 12u] = asuint(u.roughness);\n  unpacked_out[o + 13u] = asuint(u.metallic);\n\
-           unpacked_out[o + 14u] = asuint(u.motion.x);\n  unpacked_out[o + 15u] = asuint(u.motion.y);\n\
+    let u = d.to_bits;
+    body.push_str(&format!(
+        "  GbufSurface u = gbuf_unpack({});\n  uint o = i * {SURFACE_WORDS}u;\n  unpacked_out[o] = {u}(u.depth);\n\
+           for (uint j = 0u; j < 3u; j++) {{ unpacked_out[o + 1u + j] = {u}(u.position[j]); unpacked_out[o + 4u + j] = {u}(u.normal[j]); unpacked_out[o + 7u + j] = {u}(u.albedo[j]); }}\n\
+           unpacked_out[o + 10u] = {u}(u.specular);\n  unpacked_out[o + 11u] = {u}(u.specular_power);\n\
+           unpacked_out[o + 12u] = {u}(u.roughness);\n  unpacked_out[o + 13u] = {u}(u.metallic);\n\
+           unpacked_out[o + 14u] = {u}(u.motion.x);\n  unpacked_out[o + 15u] = {u}(u.motion.y);\n\
            unpacked_out[o + 16u] = u.material_id;\n  unpacked_out[o + 17u] = u.object_id;\n  unpacked_out[o + 18u] = u.primitive_id;\n}}\n",
         args.join(", ")
     ));
-    main
+    body
+}
+
+/// The harness: reads the attributes and gbuf's packed words, runs pack and unpack per sample. In HLSL it is
+/// compiled by glslang's HLSL front end and cross-compiled back to GLSL by spirv-cross.
+fn harness(code: &str, layout: &Layout, lang: Lang) -> String {
+    match lang {
+        Lang::Hlsl => format!(
+            "{code}\nStructuredBuffer<uint> inp : register(t0);\nStructuredBuffer<uint> words : register(t1);\n\
+             RWStructuredBuffer<uint> packed_out : register(u2);\nRWStructuredBuffer<uint> unpacked_out : register(u3);\n\
+             cbuffer Harness : register(b1) {{ uint n_samples; }};\n\
+             [numthreads(64, 1, 1)]\nvoid main(uint3 id : SV_DispatchThreadID) {{\n  uint i = id.x;\n  if (i >= n_samples) return;\n{}",
+            harness_body(layout, &HLSL)
+        ),
+        _ => format!(
+            "#version 450\nlayout(local_size_x = 64) in;\n\
+             layout(std430, binding = 0) readonly buffer In {{ uint inp[]; }};\n\
+             layout(std430, binding = 1) readonly buffer Words {{ uint words[]; }};\n\
+             layout(std430, binding = 2) writeonly buffer Packed {{ uint packed_out[]; }};\n\
+             layout(std430, binding = 3) writeonly buffer Unpacked {{ uint unpacked_out[]; }};\n\
+             uniform uint n_samples;\n{code}\n\
+             void main() {{\n  uint i = gl_GlobalInvocationID.x;\n  if (i >= n_samples) return;\n{}",
+            harness_body(layout, &GLSL)
+        ),
+    }
 }
 
 /// Runs the shader on llvmpipe: argv = shader, inputs, words, n, targets, znear, zfar, packed out, unpacked out.
