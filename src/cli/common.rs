@@ -326,12 +326,15 @@ impl FramesArgs {
     }
 }
 
-/// True when `dir` holds a file named like a render target (`*.dds`): with `--input-layout`, such a folder is one
-/// frame of packed targets.
+/// True when `dir` holds a file with a render target's extension (`dds`, `bin`, `png`, `exr`): with
+/// `--input-layout`, such a folder is one frame of packed targets (PNG and EXR captures included, not only DDS).
 fn holds_targets(dir: &std::path::Path) -> bool {
-    std::fs::read_dir(dir).is_ok_and(|mut it| {
-        it.any(|e| e.is_ok_and(|e| e.path().extension().is_some_and(|x| x.eq_ignore_ascii_case("dds"))))
-    })
+    let target = |p: &std::path::Path| {
+        p.extension()
+            .and_then(|x| x.to_str())
+            .is_some_and(|x| gbuf::layout::targets::EXTENSIONS.iter().any(|e| e.eq_ignore_ascii_case(x)))
+    };
+    std::fs::read_dir(dir).is_ok_and(|mut it| it.any(|e| e.is_ok_and(|e| e.path().is_file() && target(&e.path()))))
 }
 
 /// Prints a value as pretty JSON on stdout.
