@@ -66,7 +66,11 @@ pub fn run_frame(
                 files.push(Attachment { name: format!("{prefix}pruned_layout.toml"), bytes: text.into_bytes() });
             }
             // The pruned layout as shader code, when every codec it keeps has a recipe (docs/SHADERS.md).
-            for lang in [crate::layout::shader::Lang::Glsl, crate::layout::shader::Lang::Hlsl] {
+            for lang in [
+                crate::layout::shader::Lang::Glsl,
+                crate::layout::shader::Lang::Hlsl,
+                crate::layout::shader::Lang::Wgsl,
+            ] {
                 if let Ok(code) = crate::layout::shader::emit(&layout, lang) {
                     let name = format!("{prefix}pruned_layout.{}", lang.name());
                     files.push(Attachment { name, bytes: code.into_bytes() });

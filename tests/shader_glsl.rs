@@ -139,6 +139,28 @@ fn harness_body(layout: &Layout, d: &Dialect) -> String {
 /// compiled by glslang's HLSL front end and cross-compiled back to GLSL by spirv-cross.
 fn harness(code: &str, layout: &Layout, lang: Lang) -> String {
     match lang {
+        Lang::Wgsl => {
+            // The GLSL body through gbuf's own GLSL → WGSL translation (the harness is GLSL-shaped like the
+            // emitted code), with the buffers as WGSL's structs.
+            let body = format!("void gbuf_harness(uint i) {{\n{}", harness_body(layout, &GLSL));
+            let rename = [
+                ("inp", "inp.d"),
+                ("words", "words.d"),
+                ("packed_out", "packed_out.d"),
+                ("unpacked_out", "unpacked_out.d"),
+            ];
+            let body = gbuf::layout::wgsl::translate(&body, &rename).unwrap_or_else(|e| panic!("harness: {e}"));
+            format!(
+                "{code}\nstruct In {{ d: array<u32> }}\nstruct Words {{ d: array<u32> }}\nstruct Packed {{ d: array<u32> }}\n\
+                 struct Unpacked {{ d: array<u32> }}\nstruct Harness {{ n_samples: u32, pad0: u32, pad1: u32, pad2: u32 }}\n\
+                 @group(0) @binding(0) var<storage, read> inp: In;\n@group(0) @binding(1) var<storage, read> words: Words;\n\
+                 @group(0) @binding(2) var<storage, read_write> packed_out: Packed;\n\
+                 @group(0) @binding(3) var<storage, read_write> unpacked_out: Unpacked;\n\
+                 @group(0) @binding(4) var<uniform> harness: Harness;\n{body}\n\
+                 @compute @workgroup_size(64)\nfn main(@builtin(global_invocation_id) id: vec3<u32>) {{\n\
+                 if (id.x >= harness.n_samples) {{ return; }}\n  gbuf_harness(id.x);\n}}\n"
+            )
+        }
         Lang::Hlsl => format!(
             "{code}\nStructuredBuffer<uint> inp : register(t0);\nStructuredBuffer<uint> words : register(t1);\n\
              RWStructuredBuffer<uint> packed_out : register(u2);\nRWStructuredBuffer<uint> unpacked_out : register(u3);\n\
@@ -172,6 +194,10 @@ src = open(shader).read()
 cs = ctx.compute_shader(src)
 # Bindings by block name (spirv-cross output of the HLSL harness); the GLSL harness uses 0..3 and plain uniforms.
 bind = {m.group(2): int(m.group(1)) for m in re.finditer(r"layout\(binding = (\d+), std\d+\) (?:readonly |writeonly |restrict )*(?:buffer|uniform) (\w+)", src)}
+# spirv-cross names a block after its variable when naga's debug names are present (the WGSL harness).
+for block, var in (("Harness", "harness"), ("GbufCamera", "gbuf_camera"), ("GbufMaterials", "gbuf_materials")):
+    if var in bind and block not in bind:
+        bind[block] = bind[var]
 zn = struct.unpack("<f", struct.pack("<I", int(znear)))[0]
 zf = struct.unpack("<f", struct.pack("<I", int(zfar)))[0]
 keep = []
@@ -229,7 +255,8 @@ fn check(layout: &Layout, gb: &GBuffer, dir: &Path, tag: &str, lang: Lang) {
     let shader = dir.join(format!("{tag}.comp"));
     match lang {
         Lang::Glsl => std::fs::write(&shader, harness(&code, layout, lang)).unwrap(),
-        _ => hlsl_to_glsl(&harness(&code, layout, lang), dir, tag, &shader),
+        Lang::Hlsl => hlsl_to_glsl(&harness(&code, layout, lang), dir, tag, &shader),
+        Lang::Wgsl => wgsl_to_glsl(&harness(&code, layout, lang), dir, tag, &shader),
     }
     let (fi, fw, fp, fu) = (
         dir.join(format!("{tag}.in")),
@@ -303,6 +330,29 @@ fn hlsl_to_glsl(hlsl: &str, dir: &Path, tag: &str, out: &Path) {
         .output()
         .expect("glslangValidator (Debian glslang-tools) is required");
     assert!(o.status.success(), "{tag}: glslang:\n{}", String::from_utf8_lossy(&o.stdout));
+    let o = Command::new("spirv-cross")
+        .args(["--version", "450", "--output"])
+        .arg(out)
+        .arg(&spv)
+        .output()
+        .expect("spirv-cross (Debian spirv-cross) is required");
+    assert!(o.status.success(), "{tag}: spirv-cross:\n{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// WGSL → naga (parse and validate, every check on) → SPIR-V → GLSL 4.50 (spirv-cross), as a WebGPU
+/// implementation on Vulkan compiles it; the GLSL then runs on llvmpipe.
+pub fn wgsl_to_glsl(wgsl: &str, dir: &Path, tag: &str, out: &Path) {
+    std::fs::write(dir.join(format!("{tag}.wgsl")), wgsl).unwrap();
+    let module =
+        naga::front::wgsl::parse_str(wgsl).unwrap_or_else(|e| panic!("{tag}: naga: {}", e.emit_to_string(wgsl)));
+    let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{tag}: naga validation: {}", e.emit_to_string(wgsl)));
+    let mut options = naga::back::spv::Options::default();
+    options.flags |= naga::back::spv::WriterFlags::DEBUG;
+    let words = naga::back::spv::write_vec(&module, &info, &options, None).unwrap();
+    let spv = dir.join(format!("{tag}.spv"));
+    std::fs::write(&spv, words.iter().flat_map(|w| w.to_le_bytes()).collect::<Vec<u8>>()).unwrap();
     let o = Command::new("spirv-cross")
         .args(["--version", "450", "--output"])
         .arg(out)
@@ -395,7 +445,7 @@ fn builtin_layouts_pack_and_unpack_on_llvmpipe_bit_for_bit() {
             continue;
         }
         for (tag, gb) in &frames {
-            for lang in [Lang::Glsl, Lang::Hlsl] {
+            for lang in [Lang::Glsl, Lang::Hlsl, Lang::Wgsl] {
                 check(&layout, gb, dir.path(), &format!("{}-{tag}", layout.name()), lang);
             }
         }
@@ -461,7 +511,7 @@ fn codec_families_at_three_widths_on_llvmpipe() {
             );
             let layout = Layout::from_spec(LayoutSpec::parse(Path::new("family.toml"), &spec).unwrap())
                 .unwrap_or_else(|e| panic!("{c}: {e}"));
-            for lang in [Lang::Glsl, Lang::Hlsl] {
+            for lang in [Lang::Glsl, Lang::Hlsl, Lang::Wgsl] {
                 check(&layout, &gb, dir.path(), &format!("family-{}", c.replace(':', "_")), lang);
             }
         }
@@ -469,7 +519,7 @@ fn codec_families_at_three_widths_on_llvmpipe() {
 }
 
 /// Material-ID indirection keyed by a palette of parameter tuples (the frame's six materials fit the table, so
-/// the palette is lossless and a surface's entry is the one with its parameters), in GLSL and HLSL.
+/// the palette is lossless and a surface's entry is the one with its parameters), in GLSL, HLSL and WGSL.
 #[test]
 fn a_palette_keyed_material_table_on_llvmpipe() {
     if !(support::python_has("moderngl, numpy")
@@ -487,7 +537,7 @@ fn a_palette_keyed_material_table_on_llvmpipe() {
     let table = layout.pack(&gb).unwrap().material_table.unwrap();
     assert_eq!(table.key, "palette");
     assert!(table.lossless, "six materials fit 256 entries");
-    for lang in [Lang::Glsl, Lang::Hlsl] {
+    for lang in [Lang::Glsl, Lang::Hlsl, Lang::Wgsl] {
         check(&layout, &gb, dir.path(), "palette", lang);
     }
 }
@@ -646,7 +696,7 @@ fn float_entry_points_store_the_packed_bits_through_the_hardware_conversion() {
 /// From a dump to shader code in one command: `gbuf budget DUMP --max-bytes 12 --emit hlsl` chooses among the
 /// layouts gbuf can emit and prints the winner as HLSL, which glslang's HLSL front end compiles.
 #[test]
-fn budget_emits_hlsl_in_one_command() {
+fn budget_emits_hlsl_and_wgsl_in_one_command() {
     if !support::tool_has("glslangValidator") {
         return;
     }
@@ -679,4 +729,147 @@ fn budget_emits_hlsl_in_one_command() {
     );
     assert!(o.status.success(), "{}", support::stderr(&o));
     assert!(toml.is_file() && dir.path().join("chosen.glsl").is_file());
+    // WGSL from the same command validates in naga as it is (the layout is packed and unpacked bit for bit in the
+    // tests above; here: the one command's output is a valid module).
+    let o = support::gbuf(dir.path(), &["budget", dump.to_str().unwrap(), "--max-bytes", "12", "--emit", "wgsl"]);
+    assert!(o.status.success(), "{}", support::stderr(&o));
+    let wgsl = String::from_utf8(o.stdout).unwrap();
+    let module = naga::front::wgsl::parse_str(&wgsl).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&wgsl)));
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&wgsl)));
+    assert!(module.functions.iter().any(|(_, f)| f.name.as_deref() == Some("gbuf_unpack")));
+}
+
+/// Runs a compute shader over `n` items: argv = shader, input file (binding 0), output words per item, n, output
+/// file (binding 2).
+const RUN_ITEMS: &str = r#"
+import sys, moderngl
+shader, inp, per, n, out = sys.argv[1:]
+per, n = int(per), int(n)
+ctx = moderngl.create_standalone_context(backend="egl", require=450)
+assert "llvmpipe" in ctx.info["GL_RENDERER"], ctx.info["GL_RENDERER"]
+cs = ctx.compute_shader(open(shader).read())
+bi = ctx.buffer(open(inp, "rb").read())
+bo = ctx.buffer(reserve=n * per * 4)
+bi.bind_to_storage_buffer(0)
+bo.bind_to_storage_buffer(2)
+cs.run(group_x=(n + 63) // 64)
+ctx.finish()
+open(out, "wb").write(bo.read())
+"#;
+
+/// A double with a random sign, a significand of 53 random bits and an exponent in ±`e`.
+fn random_f64(r: &mut gbuf::util::SplitMix64, e: i32) -> f64 {
+    let m = 1.0 + (r.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+    let x = (r.next_u64() % (2 * e as u64 + 1)) as i32 - e;
+    let s = if r.next_u64() & 1 == 0 { 1.0 } else { -1.0 };
+    s * m * 2f64.powi(x)
+}
+
+/// WGSL's software double (`F64_WGSL`, what the f64 codecs run on in WGSL) against Rust's f64, bit for bit, on
+/// llvmpipe: add, sub, mul, div, to f32, gbuf's code rounding and the conversions, over random doubles of wide and
+/// narrow range, random singles, exact ties of every rounding, cancellation, overflow and the single's subnormals.
+#[test]
+fn wgsl_software_double_matches_rust_f64_on_llvmpipe() {
+    if !(support::python_has("moderngl, numpy") && support::tool_has("spirv-cross")) {
+        return;
+    }
+    let mut r = gbuf::util::SplitMix64::new(64);
+    let mut pairs: Vec<(f64, f64)> = Vec::new();
+    for _ in 0..20_000 {
+        pairs.push((random_f64(&mut r, 60), random_f64(&mut r, 60)));
+        pairs.push((random_f64(&mut r, 3), random_f64(&mut r, 3)));
+        let (a, b) = (f64::from(r.range_f32(-100.0, 100.0)), f64::from(r.range_f32(-1.0, 1.0)));
+        pairs.push((a, b));
+        // Cancellation: b within a few ulps of −a.
+        pairs.push((a, -a * (1.0 + (r.next_u64() % 5) as f64 * f64::EPSILON)));
+        // Ties of the f64 → f32 rounding and of the code rounding.
+        let f = r.range_f32(-3.0e4, 3.0e4);
+        let up = f32::from_bits(f.to_bits() + 1);
+        pairs.push(((f64::from(f) + f64::from(up)) / 2.0, (r.next_u64() % 40_000) as f64 + 0.5));
+        // Singles' subnormals and overflow on the way back.
+        pairs.push((random_f64(&mut r, 4) * 2f64.powi(-135), random_f64(&mut r, 4) * 2f64.powi(127)));
+        // Exact products and quotients of singles (the codecs' shape).
+        pairs.push((f64::from(r.next_f32()), f64::from((r.next_u64() % (1 << 24)) as u32)));
+    }
+    for s in [0.0, -0.0, 1.0, -1.0, 16_777_216.0, 16_777_216.5, -16_777_217.0, 0.5, -0.5, 1.5, 2.5, f64::INFINITY] {
+        pairs.push((s, 0.0));
+        pairs.push((s, -0.0));
+        pairs.push((s, 3.0));
+        pairs.push((s, f64::NEG_INFINITY));
+        pairs.push((0.0, s));
+    }
+    let n = pairs.len();
+    let mut inp = Vec::with_capacity(n * 16);
+    for (a, b) in &pairs {
+        inp.extend_from_slice(&a.to_le_bytes());
+        inp.extend_from_slice(&b.to_le_bytes());
+    }
+    // Per item: add, sub, mul, div (2 words each), to_f32(a), round(a), from_f32(f32(a)) (2), from_i32(round(a))
+    // (2), clamp(a, −1, b) (2), lt(a, b).
+    const PER: usize = 16;
+    let shader = format!(
+        "{}\nstruct In {{ d: array<u32> }}\nstruct Out {{ d: array<u32> }}\n\
+         @group(0) @binding(0) var<storage, read> inp: In;\n@group(0) @binding(2) var<storage, read_write> outp: Out;\n\
+         fn put(k: u32, v: vec2<u32>) {{ outp.d[k] = v.x; outp.d[k + 1u] = v.y; }}\n\
+         @compute @workgroup_size(64)\nfn main(@builtin(global_invocation_id) id: vec3<u32>) {{\n\
+         let i = id.x;\n  if (i >= {n}u) {{ return; }}\n\
+         let a = vec2<u32>(inp.d[4u * i], inp.d[4u * i + 1u]);\n  let b = vec2<u32>(inp.d[4u * i + 2u], inp.d[4u * i + 3u]);\n\
+         let o = i * {PER}u;\n  put(o, gbuf_d_add(a, b));\n  put(o + 2u, gbuf_d_sub(a, b));\n  put(o + 4u, gbuf_d_mul(a, b));\n\
+         put(o + 6u, gbuf_d_div(a, b));\n  outp.d[o + 8u] = bitcast<u32>(gbuf_d_to_f32(a));\n\
+         outp.d[o + 9u] = bitcast<u32>(gbuf_d_round(a));\n  put(o + 10u, gbuf_d_from_f32(gbuf_d_to_f32(a)));\n\
+         put(o + 12u, gbuf_d_from_i32(gbuf_d_round(a)));\n  put(o + 14u, gbuf_d_clamp(a, gbuf_d_from_i32(-1), b));\n}}\n",
+        gbuf::layout::shader::F64_WGSL
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let comp = dir.path().join("f64.comp");
+    wgsl_to_glsl(&shader, dir.path(), "f64", &comp);
+    let (fi, fo, run) = (dir.path().join("f64.in"), dir.path().join("f64.out"), dir.path().join("run.py"));
+    std::fs::write(&fi, &inp).unwrap();
+    std::fs::write(&run, RUN_ITEMS).unwrap();
+    let o = Command::new("python3")
+        .arg(&run)
+        .args([&comp, &fi])
+        .args([PER.to_string(), n.to_string()])
+        .arg(&fo)
+        .output()
+        .expect("python3");
+    assert!(o.status.success(), "driver run: {}", String::from_utf8_lossy(&o.stderr));
+    let got = std::fs::read(&fo).unwrap();
+    let w = |k: usize| u32::from_le_bytes(got[k * 4..k * 4 + 4].try_into().unwrap());
+    let d = |k: usize| u64::from(w(k)) | (u64::from(w(k + 1)) << 32);
+    // NaN results compare as "a NaN", whatever its payload; a flushed f64 subnormal counts as the zero it is
+    // documented to be (never reached from the codecs' inputs), so the pairs avoid producing them.
+    let same = |got: u64, want: f64| (want.is_nan() && f64::from_bits(got).is_nan()) || got == want.to_bits();
+    let mut bad = Vec::new();
+    for (i, &(a, b)) in pairs.iter().enumerate() {
+        let o = i * PER;
+        let round = gbuf::codec::normal::round_in_range_f64(a);
+        let checks: [(&str, bool); 8] = [
+            ("add", same(d(o), a + b)),
+            ("sub", same(d(o + 2), a - b)),
+            ("mul", same(d(o + 4), a * b)),
+            ("div", same(d(o + 6), a / b)),
+            ("to_f32", w(o + 8) == (a as f32).to_bits() || ((a as f32).is_nan() && f32::from_bits(w(o + 8)).is_nan())),
+            ("round", a.is_nan() || w(o + 9) as i32 == round),
+            ("from_f32", a.is_nan() || same(d(o + 10), f64::from(a as f32))),
+            (
+                "clamp",
+                a.is_nan()
+                    || b < -1.0
+                    || same(d(o + 14), a.clamp(-1.0, b))
+                    || (a == 0.0 && f64::from_bits(d(o + 14)) == 0.0),
+            ),
+        ];
+        for (name, ok) in checks {
+            if !ok && bad.len() < 10 {
+                bad.push(format!("{name}({a:e}, {b:e})"));
+            }
+        }
+        if !a.is_nan() && f64::from_bits(d(o + 12)) != f64::from(round) {
+            bad.push(format!("from_i32({round})"));
+        }
+    }
+    assert!(bad.is_empty(), "{} items; first mismatches: {bad:?}", n);
 }

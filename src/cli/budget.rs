@@ -53,7 +53,7 @@ pub struct Args {
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
-    /// The winning layout as shader code (glsl): on stdout instead of the table, or beside `-o LAYOUT.toml` as
+    /// The winning layout as shader code (glsl, hlsl or wgsl): on stdout instead of the table, or beside `-o LAYOUT.toml` as
     /// `LAYOUT.<lang>`.
     #[arg(long, value_name = "LANG", conflicts_with = "json")]
     pub emit: Option<gbuf::layout::shader::Lang>,

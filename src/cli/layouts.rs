@@ -18,7 +18,7 @@ pub struct Args {
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
-    /// Print the one layout named as shader code instead (glsl): `GbufSurface`, `gbuf_pack_<target>`,
+    /// Print the one layout named as shader code instead (glsl, hlsl or wgsl): `GbufSurface`, `gbuf_pack_<target>`,
     /// `gbuf_unpack`, bit for bit what gbuf packs (docs/SHADERS.md).
     #[arg(long, value_name = "LANG")]
     pub emit: Option<gbuf::layout::shader::Lang>,

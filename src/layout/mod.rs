@@ -19,6 +19,7 @@ pub mod spec;
 pub mod summary;
 pub mod targets;
 pub mod texture;
+pub mod wgsl;
 
 pub use coder::{CodecKind, Slot};
 pub use formats::{Component, ComponentKind, Format};

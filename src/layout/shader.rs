@@ -25,12 +25,20 @@ pub enum Lang {
     /// HLSL, Shader Model 6 (`double` needs the device's double-precision support, as in D3D12's
     /// `DoublePrecisionFloatShaderOps`).
     Hlsl,
+    /// WGSL (WebGPU). WGSL has no `f64`: the codecs gbuf computes in double run on a software double
+    /// (`f64.wgsl`), bit for bit the same.
+    Wgsl,
 }
 
 crate::named!(Lang: "shading language" {
     Glsl => "glsl",
     Hlsl => "hlsl",
+    Wgsl => "wgsl",
 });
+
+/// The bind group of the uniforms the WGSL declares (`@group(3)`: camera at binding 0, material table at 1);
+/// WebGPU guarantees four groups, and engines tend to fill them from 0.
+pub const WGSL_GROUP: u32 = 3;
 
 /// GLSL → HLSL for the code this module writes (a closed vocabulary, so a token map suffices): vector types,
 /// bit casts, `lf` double literals as casts, constant arrays as initialiser lists.
@@ -175,8 +183,8 @@ fn float_targets(layout: &Layout) -> String {
 }
 
 /// The material table block and the index lookup, for a layout with indirection.
-fn material_block(layout: &Layout, lang: Lang) -> String {
-    let Some(ind) = layout.indirection() else { return String::new() };
+fn material_block(layout: &Layout, lang: Lang) -> (String, String) {
+    let Some(ind) = layout.indirection() else { return (String::new(), String::new()) };
     let n = 1u32 << ind.bits;
     let params: Vec<&str> = ind.parameters.iter().map(|a| a.name()).collect();
     let decl = match lang {
@@ -190,28 +198,36 @@ fn material_block(layout: &Layout, lang: Lang) -> String {
              uint gbuf_material_count;\n    uint gbuf_material_by_id;\n}};\n",
             n.div_ceil(4)
         ),
+        Lang::Wgsl => format!(
+            "struct GbufMaterials {{\n    table: array<vec4<f32>, {n}>,\n    ids: array<vec4<u32>, {}>,\n    \
+             count: u32,\n    by_id: u32,\n}}\n@group({WGSL_GROUP}) @binding(1) var<uniform> gbuf_materials: GbufMaterials;\n",
+            n.div_ceil(4)
+        ),
     };
     let cmp: Vec<String> = params.iter().enumerate().map(|(i, p)| format!("e[{i}] == s.{p}")).collect();
     let dist: Vec<String> =
         params.iter().enumerate().map(|(i, p)| format!("(e[{i}] - s.{p}) * (e[{i}] - s.{p})")).collect();
-    format!(
+    let comment = format!(
         "\n// The material table (material-ID indirection, {bits} index bits): the engine fills it with `gbuf pack`'s\n\
          // material_table.json. gbuf_material_table[k] holds entry k's parameters in the layout's order ({plist}),\n\
          // gbuf_material_ids the engine material ID of each entry (four per element, key `material-id`),\n\
-         // gbuf_material_count the entries, gbuf_material_by_id 1 when the table is keyed by material ID.\n\
-         {decl}\n\
-         // The entry a surface packs: its material ID's entry (key `material-id`), else the entry whose parameters it\n\
+         // gbuf_material_count the entries, gbuf_material_by_id 1 when the table is keyed by material ID\n\
+         // (WGSL: gbuf_materials.table, .ids, .count, .by_id).\n",
+        bits = ind.bits,
+        plist = params.join(", "),
+    );
+    let code = format!(
+        "\n// The entry a surface packs: its material ID's entry (key `material-id`), else the entry whose parameters it\n\
          // has (key `palette`; the nearest when the palette was clustered, which need not be gbuf's assignment).\n\
          uint gbuf_material_index(GbufSurface s) {{\n    uint best = 0u;\n    float best_d = 3.0e38;\n    \
          for (uint k = 0u; k < gbuf_material_count; k++) {{\n        \
          if (gbuf_material_by_id != 0u) {{ if (gbuf_material_ids[k >> 2u][k & 3u] == s.material_id) return k; continue; }}\n        \
          vec4 e = gbuf_material_table[k];\n        if ({exact}) return k;\n        \
          precise float d = {d};\n        if (d < best_d) {{ best_d = d; best = k; }}\n    }}\n    return best;\n}}\n",
-        bits = ind.bits,
-        plist = params.join(", "),
         exact = cmp.join(" && "),
         d = dist.join(" + ")
-    )
+    );
+    (comment + &decl, code)
 }
 
 /// The attributes of `GbufSurface`, in ABI order, with their GLSL types.
@@ -241,18 +257,6 @@ int gbuf_round(float v) {
     int t = int(c);
     precise float f = c - float(t);
     return t + int(f >= 0.5) - int(f <= -0.5);
-}
-
-// clamp() and max() on doubles, written out: HLSL compilers may resolve those intrinsics to float.
-double gbuf_clamp_d(double v, double lo, double hi) {
-    return v < lo ? lo : (v > hi ? hi : v);
-}
-
-int gbuf_round_d(double v) {
-    precise double c = gbuf_clamp_d(v, -16777216.0lf, 16777216.0lf);
-    int t = int(c);
-    precise double f = c - double(t);
-    return t + int(f >= 0.5lf) - int(f <= -0.5lf);
 }
 
 // IEEE single → half bits, round to nearest even; beyond the range → ±Inf, NaN → a quiet NaN.
@@ -403,14 +407,51 @@ vec3 gbuf_oct_unproject(vec2 q) {
 }
 ";
 
+/// The f64 operations of the codecs that compute in double, one function each, so that WGSL's software double
+/// (`f64.wgsl`) stands in for them with the same names. Emitted only when a field needs them: a layout without
+/// such a field needs no `double` support from the device.
+const F64_HELPERS: &str = r"
+// ---- f64 arithmetic (the codecs gbuf computes in double), one function per operation ----
+double gbuf_d_from_f32(float v) { return double(v); }
+double gbuf_d_from_i32(int v) { return double(v); }
+double gbuf_d_from_u32(uint v) { return double(v); }
+float gbuf_d_to_f32(double v) { return float(v); }
+double gbuf_d_add(double a, double b) { precise double r = a + b; return r; }
+double gbuf_d_sub(double a, double b) { precise double r = a - b; return r; }
+double gbuf_d_mul(double a, double b) { precise double r = a * b; return r; }
+double gbuf_d_div(double a, double b) { precise double r = a / b; return r; }
+// clamp() and max() written out: HLSL compilers may resolve those intrinsics to float.
+double gbuf_d_clamp(double v, double lo, double hi) { return v < lo ? lo : (v > hi ? hi : v); }
+double gbuf_d_max(double a, double b) { return a < b ? b : a; }
+
+// Round half away from zero of a value clamped to ±2^24: truncate, then step by the exact fraction.
+int gbuf_d_round(double v) {
+    precise double c = gbuf_d_clamp(v, -16777216.0lf, 16777216.0lf);
+    int t = int(c);
+    precise double f = c - double(t);
+    return t + int(f >= 0.5lf) - int(f <= -0.5lf);
+}
+";
+
+/// IEEE binary64 in software for WGSL (`vec2<u32>` bits; add, sub, mul, div rounding to nearest even,
+/// conversions, clamp, gbuf's code rounding): what the f64 codecs use in WGSL, under the names of
+/// [`F64_HELPERS`]. Checked against Rust's f64 on llvmpipe (tests/shader_glsl.rs).
+pub const F64_WGSL: &str = include_str!("f64.wgsl");
+
+/// What WGSL lacks, as WGSL: NaN and infinity tests on the bits (an implementation may assume neither exists, so
+/// `x != x` can fold away).
+const WGSL_PRELUDE: &str = r"
+fn gbuf_isnan(v: f32) -> bool {
+    return (bitcast<u32>(v) & 0x7fffffffu) > 0x7f800000u;
+}
+fn gbuf_isinf(v: f32) -> bool {
+    return (bitcast<u32>(v) & 0x7fffffffu) == 0x7f800000u;
+}
+";
+
 /// GLSL float literal with the exact bits of `v` (`uintBitsToFloat(0x…u)` keeps every bit).
 fn lit(v: f32) -> String {
     format!("uintBitsToFloat({:#010x}u)", v.to_bits())
-}
-
-/// GLSL double literal holding `v` exactly (an f32 widened).
-fn lit_d(v: f32) -> String {
-    format!("double({})", lit(v))
 }
 
 /// Encode/decode expressions of one quantized coordinate (`Quant`), as GLSL functions named by storage.
@@ -472,6 +513,8 @@ struct FieldCode {
     text: String,
     /// Needs `gbuf_znear`/`gbuf_zfar`.
     camera: bool,
+    /// Computes in f64 (the `gbuf_d_*` helpers).
+    f64: bool,
 }
 
 fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) -> Result<FieldCode> {
@@ -486,6 +529,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
     };
     let mut t = String::new();
     let mut camera = false;
+    let mut f64 = false;
     let (k, n) = match (&f.slot, recipe) {
         (Slot::Whole(a), _) if a.is_id() => {
             let m = if f.bits >= 32 { u32::MAX } else { (1u32 << f.bits) - 1 };
@@ -500,32 +544,33 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             (f.bits, 1)
         }
         (_, Some(Recipe::ScalarUnorm { bits, lo, hi })) => {
+            f64 = true;
             let m = (1u64 << bits) - 1;
             let _ = write!(
                 t,
                 "// unorm over [{lo}, {hi}], {bits} bits (f64 so that wide codes round exactly)\n\
                  uvec3 {name}_enc(float v) {{ precise float u = (v - {l}) / ({h} - {l}); precise float c = isnan(v) ? 0.0 : clamp(u, 0.0, 1.0); \
-                 return uvec3(uint(gbuf_round_d(double(c) * {m}.0lf)), 0u, 0u); }}\n\
-                 float {name}_dec(uvec3 c) {{ precise double t = double(int(c.x & {m}u)) / {m}.0lf; precise float w = {h} - {l}; \
-                 precise double v = {ld} + t * double(w); return float(v); }}\n",
+                 return uvec3(uint(gbuf_d_round(gbuf_d_mul(gbuf_d_from_f32(c), gbuf_d_from_u32({m}u)))), 0u, 0u); }}\n\
+                 float {name}_dec(uvec3 c) {{ double t = gbuf_d_div(gbuf_d_from_u32(c.x & {m}u), gbuf_d_from_u32({m}u)); precise float w = {h} - {l}; \
+                 return gbuf_d_to_f32(gbuf_d_add(gbuf_d_from_f32({l}), gbuf_d_mul(t, gbuf_d_from_f32(w)))); }}\n",
                 l = lit(lo),
                 h = lit(hi),
-                ld = lit_d(lo)
             );
             (bits, 1)
         }
         (_, Some(Recipe::ScalarSnorm { bits, range })) => {
+            f64 = true;
             let m = (1u64 << (bits - 1)) - 1;
             let mask = (1u64 << bits) - 1;
             let _ = write!(
                 t,
                 "// snorm over [−{range}, {range}], {bits} bits (f64)\n\
                  uvec3 {name}_enc(float v) {{ precise float u = v / {r}; precise float c = isnan(v) ? 0.0 : clamp(u, -1.0, 1.0); \
-                 return uvec3(uint(gbuf_round_d(double(c) * {m}.0lf)) & {mask}u, 0u, 0u); }}\n\
-                 float {name}_dec(uvec3 c) {{ int s = int((c.x & {mask}u) << {sh}) >> {sh}; precise double q = double(s) / {m}.0lf; precise double t = q < -1.0lf ? -1.0lf : q; \
-                 precise double v = t * {rd}; return float(v); }}\n",
+                 return uvec3(uint(gbuf_d_round(gbuf_d_mul(gbuf_d_from_f32(c), gbuf_d_from_u32({m}u)))) & {mask}u, 0u, 0u); }}\n\
+                 float {name}_dec(uvec3 c) {{ int s = int((c.x & {mask}u) << {sh}) >> {sh}; \
+                 double q = gbuf_d_max(gbuf_d_div(gbuf_d_from_i32(s), gbuf_d_from_u32({m}u)), gbuf_d_from_i32(-1)); \
+                 return gbuf_d_to_f32(gbuf_d_mul(q, gbuf_d_from_f32({r}))); }}\n",
                 r = lit(range),
-                rd = lit_d(range),
                 sh = 32 - bits
             );
             (bits, 1)
@@ -673,39 +718,52 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
         }
         (_, Some(Recipe::DepthPost { storage, reversed })) => {
             camera = true;
-            let d_of = if reversed { "n / (f - n) * (f / z - 1.0lf)" } else { "f / (f - n) * (1.0lf - n / z)" };
-            let z_of = if reversed { "n * f / (n + d * (f - n))" } else { "n * f / (f - d * (f - n))" };
+            f64 = true;
+            let (d_of, z_of) = if reversed {
+                (
+                    "gbuf_d_mul(gbuf_d_div(n, gbuf_d_sub(f, n)), gbuf_d_sub(gbuf_d_div(f, z), gbuf_d_from_u32(1u)))",
+                    "gbuf_d_div(gbuf_d_mul(n, f), gbuf_d_add(n, gbuf_d_mul(d, gbuf_d_sub(f, n))))",
+                )
+            } else {
+                (
+                    "gbuf_d_mul(gbuf_d_div(f, gbuf_d_sub(f, n)), gbuf_d_sub(gbuf_d_from_u32(1u), gbuf_d_div(n, z)))",
+                    "gbuf_d_div(gbuf_d_mul(n, f), gbuf_d_sub(f, gbuf_d_mul(d, gbuf_d_sub(f, n))))",
+                )
+            };
             let (bits, store, load) = match storage {
                 DepthStorage::Unorm(k) => {
                     let m = (1u64 << k) - 1;
-                    (k, format!("uint(gbuf_round_d(d * {m}.0lf))"), format!("double(int(c.x & {m}u)) / {m}.0lf"))
+                    (
+                        k,
+                        format!("uint(gbuf_d_round(gbuf_d_mul(d, gbuf_d_from_u32({m}u))))"),
+                        format!("gbuf_d_div(gbuf_d_from_u32(c.x & {m}u), gbuf_d_from_u32({m}u))"),
+                    )
                 }
                 DepthStorage::F32 => (
                     32,
-                    "floatBitsToUint(float(d))".to_string(),
-                    "((c.x & 0x7fffffffu) > 0x7f800000u ? DEPTH_D(f, n, f) : double(uintBitsToFloat(c.x)))".to_string(),
+                    "floatBitsToUint(gbuf_d_to_f32(d))".to_string(),
+                    format!(
+                        "(c.x & 0x7fffffffu) > 0x7f800000u ? {name}_d(f, n, f) : gbuf_d_from_f32(uintBitsToFloat(c.x))"
+                    ),
                 ),
             };
             let _ = write!(
                 t,
                 "// post-projection depth d ∈ [0, 1] of the camera's near/far ({}), f64 arithmetic\n\
-                 uvec3 {name}_enc(float depth) {{ precise double n = double(gbuf_znear); precise double f = double(gbuf_zfar); \
-                 precise double z = isnan(depth) ? f : gbuf_clamp_d(double(depth), n, f); precise double d = DEPTH_D(z, n, f); \
+                 double {name}_d(double z, double n, double f) {{ double d = {d_of}; return gbuf_d_clamp(d, gbuf_d_from_u32(0u), gbuf_d_from_u32(1u)); }}\n\
+                 uvec3 {name}_enc(float depth) {{ double n = gbuf_d_from_f32(gbuf_znear); double f = gbuf_d_from_f32(gbuf_zfar); \
+                 double z = isnan(depth) ? f : gbuf_d_clamp(gbuf_d_from_f32(depth), n, f); double d = {name}_d(z, n, f); \
                  return uvec3({store}, 0u, 0u); }}\n\
-                 float {name}_dec(uvec3 c) {{ precise double n = double(gbuf_znear); precise double f = double(gbuf_zfar); \
-                 precise double d = gbuf_clamp_d({load}, 0.0lf, 1.0lf); precise double z = {z_of}; return float(gbuf_clamp_d(z, n, f)); }}\n",
+                 float {name}_dec(uvec3 c) {{ double n = gbuf_d_from_f32(gbuf_znear); double f = gbuf_d_from_f32(gbuf_zfar); \
+                 double d = gbuf_d_clamp({load}, gbuf_d_from_u32(0u), gbuf_d_from_u32(1u)); double z = {z_of}; \
+                 return gbuf_d_to_f32(gbuf_d_clamp(z, n, f)); }}\n",
                 if reversed { "reversed Z" } else { "standard Z" },
             );
-            // The d of a depth is shared by both directions; emitted once per field under its own name.
-            let fun = format!(
-                "double DEPTH_D(double z, double n, double f) {{ precise double d = {d_of}; return gbuf_clamp_d(d, 0.0lf, 1.0lf); }}\n"
-            );
-            t = (fun + &t).replace("DEPTH_D", &format!("{name}_d"));
             (bits, 1)
         }
         (_, None) => return Err(unsupported("no shader recipe for this codec yet")),
     };
-    Ok(FieldCode { k, n, text: t, camera })
+    Ok(FieldCode { k, n, text: t, camera, f64 })
 }
 
 /// Can gbuf emit codec `codec` for `slot` as shader code (it has a recipe, or it is an ID)?
@@ -768,16 +826,18 @@ pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
         camera |= code.camera;
         fields.push((i, f, name, code));
     }
-    let mut o = String::new();
-    let _ = writeln!(o, "// gbuf layout {:?}: {}", layout.name(), layout.spec().description);
+    let f64 = fields.iter().any(|x| x.3.f64);
+    let mut head = String::new();
+    let _ = writeln!(head, "// gbuf layout {:?}: {}", layout.name(), layout.spec().description);
     let _ = writeln!(
-        o,
+        head,
         "// {}, generated by gbuf {} (`gbuf layouts {} --emit {}`). ABI: docs/SHADERS.md. Everything here is\n\
          // named gbuf_*/Gbuf*; paste it into any shader. Packing and unpacking give gbuf's bits exactly (tested on\n\
          // Mesa llvmpipe{}).",
         match lang {
             Lang::Glsl => "GLSL 4.50",
             Lang::Hlsl => "HLSL (Shader Model 6)",
+            Lang::Wgsl => "WGSL",
         },
         env!("CARGO_PKG_VERSION"),
         layout.name(),
@@ -785,22 +845,39 @@ pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
         match lang {
             Lang::Glsl => "",
             Lang::Hlsl => ", compiled by glslang's HLSL front end to SPIR-V",
+            Lang::Wgsl => ", validated and compiled to SPIR-V by naga",
         }
     );
+    if lang == Lang::Wgsl && f64 {
+        head.push_str(
+            "// WGSL has no f64: the fields gbuf computes in double use the software double at the end of this file.\n",
+        );
+    }
+    if camera {
+        head.push_str("\n// The camera's near and far planes (the depth codec's projection).\n");
+        head.push_str(&match lang {
+            Lang::Glsl => "uniform float gbuf_znear;\nuniform float gbuf_zfar;\n".to_string(),
+            Lang::Hlsl => "cbuffer GbufCamera {\n    float gbuf_znear;\n    float gbuf_zfar;\n};\n".to_string(),
+            Lang::Wgsl => format!(
+                "// (@group({WGSL_GROUP}): change the two bind attributes to fit your pipeline layout.)\n\
+                 struct GbufCamera {{\n    znear: f32,\n    zfar: f32,\n}}\n\
+                 @group({WGSL_GROUP}) @binding(0) var<uniform> gbuf_camera: GbufCamera;\n"
+            ),
+        });
+    }
+    let (material_decl, material_code) = material_block(layout, lang);
+    head.push_str(&material_decl);
+    let mut o = String::new();
     o.push_str("\nstruct GbufSurface {\n");
     for (n, t) in SURFACE {
         let _ = writeln!(o, "    {t} {n};");
     }
     o.push_str("};\n");
-    if camera {
-        o.push_str("\n// The camera's near and far planes (the depth codec's projection).\n");
-        o.push_str(match lang {
-            Lang::Glsl => "uniform float gbuf_znear;\nuniform float gbuf_zfar;\n",
-            Lang::Hlsl => "cbuffer GbufCamera {\n    float gbuf_znear;\n    float gbuf_zfar;\n};\n",
-        });
-    }
     o.push_str(HELPERS);
-    o.push_str(&material_block(layout, lang));
+    if f64 && lang != Lang::Wgsl {
+        o.push_str(F64_HELPERS);
+    }
+    o.push_str(&material_code);
     o.push_str("\n// ---- one encode/decode pair per field ----\n");
     for (_, f, _, code) in &fields {
         let _ = writeln!(
@@ -891,20 +968,29 @@ pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
     }
     o.push_str("    return s;\n}\n");
     Ok(match lang {
-        Lang::Glsl => o,
-        Lang::Hlsl => {
-            // The header and the cbuffer blocks are written for HLSL already; translate the rest.
-            let cut = o.find("\nstruct GbufSurface").unwrap_or(0);
-            let (head, mut body) = o.split_at(cut);
-            let mut out = head.to_string();
-            while let Some(a) = body.find("cbuffer ") {
-                let b = a + body[a..].find("};").map_or(body.len() - a, |e| e + 2);
-                out.push_str(&to_hlsl(&body[..a]));
-                out.push_str(&body[a..b]);
-                body = &body[b..];
+        Lang::Glsl => head + &o,
+        Lang::Hlsl => head + &to_hlsl(&o),
+        Lang::Wgsl => {
+            const RENAME: [(&str, &str); 6] = [
+                ("gbuf_znear", "gbuf_camera.znear"),
+                ("gbuf_zfar", "gbuf_camera.zfar"),
+                ("gbuf_material_table", "gbuf_materials.table"),
+                ("gbuf_material_ids", "gbuf_materials.ids"),
+                ("gbuf_material_count", "gbuf_materials.count"),
+                ("gbuf_material_by_id", "gbuf_materials.by_id"),
+            ];
+            let body = super::wgsl::translate(&o, &RENAME)
+                .map_err(|e| Error::Argument(format!("layout {:?}: {e} (a gbuf bug: please report)", layout.name())))?;
+            let mut w = head + WGSL_PRELUDE;
+            if body.contains("gbuf_fence") || body.contains("gbuf_mul(") {
+                w.push_str(super::wgsl::FENCE);
             }
-            out.push_str(&to_hlsl(body));
-            out
+            w.push_str(&body);
+            if f64 {
+                w.push('\n');
+                w.push_str(F64_WGSL);
+            }
+            w
         }
     })
 }
