@@ -277,6 +277,9 @@ impl Codec for R11G11B10F {
         let code = code as u32;
         Vec3::new(decode_ufloat(code & 0x7ff, 6), decode_ufloat((code >> 11) & 0x7ff, 6), decode_ufloat(code >> 22, 5))
     }
+    fn recipe(&self) -> Option<super::Recipe> {
+        Some(super::Recipe::ColorR11G11B10F)
+    }
     fn decode_ops(&self) -> u32 {
         // and, shift + and, shift split the code; decode_ufloat per channel
         4 + 3 * UFLOAT_DECODE_OPS
@@ -331,6 +334,9 @@ impl Codec for Rgb9e5 {
         let code = code as u32;
         let scale = 2f32.powi((code >> 27) as i32 - 15 - 9);
         Vec3::new((code & 511) as f32, ((code >> 9) & 511) as f32, ((code >> 18) & 511) as f32) * scale
+    }
+    fn recipe(&self) -> Option<super::Recipe> {
+        Some(super::Recipe::ColorRgb9e5)
     }
     fn decode_ops(&self) -> u32 {
         // shift, sub for the exponent; 2^e through powi (a libm call); and, 2 × (shift + and) for

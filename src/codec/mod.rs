@@ -150,6 +150,12 @@ pub enum Recipe {
     ColorF16,
     /// Three IEEE singles.
     ColorF32,
+    /// `R11G11B10_FLOAT`: unsigned small floats (5-bit exponent; 6, 6, 5 mantissa bits), round to nearest (ties
+    /// away from zero), NaN and negatives → 0, beyond the range → the largest value.
+    ColorR11G11B10F,
+    /// `RGB9E5`: three 9-bit mantissas under a shared 5-bit exponent (`EXT_texture_shared_exponent`, rounding
+    /// to nearest).
+    ColorRgb9e5,
     /// A monotonic scalar codec of at most [`TABLE_RECIPE_BITS`] bits through tables: encode counts the
     /// thresholds at or below the value (after `lo`/`hi` clamping, NaN as `nan`), decode looks the value up.
     ScalarTable {

@@ -171,14 +171,6 @@ fn float_targets(layout: &Layout) -> String {
             let _ = writeln!(head, "\n// The linear value of each sRGB code (gbuf's srgb8 table).\nconst uint gbuf_srgb8_D[256] = uint[256]({});", de.join(", "));
         }
     }
-    if o.contains("gbuf_ufloat_value") {
-        head.push_str(
-            "\n// An unsigned small float (R11G11B10F: 5-bit exponent, `m`-bit mantissa, no sign) as a single, exactly.\n\
-             float gbuf_ufloat_value(uint c, uint m) {\n    uint e = c >> m;\n    uint f = c & ((1u << m) - 1u);\n    \
-             if (e == 0u) return float(f) * (m == 6u ? 9.5367431640625e-7 : 1.9073486328125e-6);\n    \
-             return uintBitsToFloat(((e + 112u) << 23) | (f << (23u - m)));\n}\n",
-        );
-    }
     head + &o
 }
 
@@ -308,6 +300,31 @@ float gbuf_f32_value(uint b) {
     return uintBitsToFloat(gbuf_f32_clean(b));
 }
 
+// An unsigned small float (R11G11B10F: 5-bit exponent, bias 15, `m` mantissa bits, no sign) of a single: the
+// exponent from the bits, the mantissa scaled by ldexp (exact) and rounded half away from zero, a carry into
+// the next binade; NaN, zero and negatives → 0, beyond the range → the largest value.
+uint gbuf_ufloat_bits(float v, uint m) {
+    if (isnan(v) || v <= 0.0) return 0u;
+    precise float c = min(v, uintBitsToFloat(((30u + 112u) << 23) | (((1u << m) - 1u) << (23u - m))));
+    int e = max(int(floatBitsToUint(c) >> 23) - 127, -14);
+    uint mant = uint(gbuf_round(ldexp(c, int(m) - e)));
+    if (mant >= (2u << m)) {
+        mant = mant >> 1;
+        e = e + 1;
+    }
+    if (mant < (1u << m)) return mant;
+    return (uint(e + 15) << m) | (mant - (1u << m));
+}
+
+// An unsigned small float's value, exactly; exponent 31 (Inf/NaN patterns) reads as the largest value.
+float gbuf_ufloat_value(uint c, uint m) {
+    uint e = c >> m;
+    uint f = c & ((1u << m) - 1u);
+    if (e == 0u) return ldexp(float(f), -14 - int(m));
+    if (e >= 31u) return uintBitsToFloat(((30u + 112u) << 23) | (((1u << m) - 1u) << (23u - m)));
+    return uintBitsToFloat(((e + 112u) << 23) | (f << (23u - m)));
+}
+
 // Clamp to [lo, hi] with NaN → clamp(0) (gbuf's `clean`).
 float gbuf_clean(float v, float lo, float hi) {
     return isnan(v) ? clamp(0.0, lo, hi) : clamp(v, lo, hi);
@@ -397,6 +414,23 @@ vec3 gbuf_spheremap_unproject(vec2 g) {
     precise vec2 d = gbuf_normalize2_or_x(g);
     precise vec3 v = vec3(d.x * r, d.y * r, z);
     return (g.x == 0.0 && g.y == 0.0) ? vec3(0.0, 0.0, -1.0) : v;
+}
+
+// Lambert azimuthal equal-area centred on +Z (Snyder 1987, p. 182; Pranckevičius 2009, Compact Normal Storage,
+// method #4), scaled to the unit disc: n.xy/√(2(1+z)) on z ≥ 0, normalize(n.xy)·√((1−z)/2) below.
+vec2 gbuf_lambert_project(vec3 n) {
+    precise float k = sqrt(2.0 * (1.0 + n.z));
+    precise vec2 a = vec2(n.x / k, n.y / k);
+    precise float r = sqrt(max((1.0 - n.z) * 0.5, 0.0));
+    precise vec2 d = gbuf_normalize2_or_x(vec2(n.x, n.y));
+    precise vec2 b = vec2(d.x * r, d.y * r);
+    return n.z >= 0.0 ? a : b;
+}
+vec3 gbuf_lambert_unproject(vec2 q) {
+    precise float s = min(q.x * q.x + q.y * q.y, 1.0);
+    precise float k = 2.0 * sqrt(1.0 - s);
+    precise float z = 1.0 - 2.0 * s;
+    return vec3(q.x * k, q.y * k, z);
 }
 
 vec3 gbuf_oct_unproject(vec2 q) {
@@ -521,7 +555,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
     let unsupported = |why: &str| {
         Error::Argument(format!(
             "layout {:?}: field {} ({}): {why}; gbuf emits shader code for the uint-N IDs, the unorm/snorm/f16/f32 \
-             scalars, unorm8/unorm-N/srgb8/f16/f32 colours, the oct, oct-unorm, xy-hemi, spheremap-cry, xyz normals, log2-unorm up to 12 bits and every depth codec",
+             scalars, unorm8/unorm-N/srgb8/f16/f32/r11g11b10f/rgb9e5 colours, the oct, oct-unorm, xy-hemi, spheremap-cry, lambert, xyz normals, log2-unorm up to 12 bits and every depth codec",
             layout.name(),
             f.slot.name(),
             f.codec
@@ -637,12 +671,40 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             );
             (32, 3)
         }
+        (_, Some(Recipe::ColorR11G11B10F)) => {
+            let _ = write!(
+                t,
+                "// R11G11B10F: unsigned small floats, 6/6/5 mantissa bits\n\
+                 uvec3 {name}_enc(vec3 v) {{ return uvec3(gbuf_ufloat_bits(v.x, 6u) | (gbuf_ufloat_bits(v.y, 6u) << 11) | (gbuf_ufloat_bits(v.z, 5u) << 22), 0u, 0u); }}\n\
+                 vec3 {name}_dec(uvec3 c) {{ return vec3(gbuf_ufloat_value(c.x & 0x7ffu, 6u), gbuf_ufloat_value((c.x >> 11) & 0x7ffu, 6u), gbuf_ufloat_value(c.x >> 22, 5u)); }}\n"
+            );
+            // One 32-bit code (the channels are 11, 11 and 10 bits wide).
+            (32, 1)
+        }
+        (_, Some(Recipe::ColorRgb9e5)) => {
+            let _ = write!(
+                t,
+                "// RGB9E5 (EXT_texture_shared_exponent, mantissas rounded to nearest): the shared exponent from the\n\
+                 // largest channel's bits, one carry check, the mantissas scaled by ldexp (exact)\n\
+                 uvec3 {name}_enc(vec3 v) {{ vec3 c = vec3(gbuf_clean(v.x, 0.0, 65408.0), gbuf_clean(v.y, 0.0, 65408.0), gbuf_clean(v.z, 0.0, 65408.0)); \
+                 float maxc = max(max(c.x, c.y), c.z); if (maxc < 2.98023223876953125e-8) return uvec3(0u, 0u, 0u); \
+                 int e = max(int(floatBitsToUint(maxc) >> 23) - 127, -16) + 1 + 15; \
+                 if (gbuf_round(ldexp(maxc, 24 - e)) == 512) e = e + 1; \
+                 uint r = min(uint(gbuf_round(ldexp(c.x, 24 - e))), 511u); uint g = min(uint(gbuf_round(ldexp(c.y, 24 - e))), 511u); \
+                 uint b = min(uint(gbuf_round(ldexp(c.z, 24 - e))), 511u); \
+                 return uvec3(r | (g << 9) | (b << 18) | (uint(e) << 27), 0u, 0u); }}\n\
+                 vec3 {name}_dec(uvec3 c) {{ int e = int(c.x >> 27) - 24; \
+                 return vec3(ldexp(float(c.x & 511u), e), ldexp(float((c.x >> 9) & 511u), e), ldexp(float((c.x >> 18) & 511u), e)); }}\n"
+            );
+            (32, 1)
+        }
         (_, Some(Recipe::NormalPlanar { map, quant })) => {
             quant_fns(quant, &format!("{name}_c"), &mut t);
             let (project, unproject) = match map {
                 PlaneMap::Oct => ("gbuf_oct_project", "gbuf_oct_unproject"),
                 PlaneMap::XyHemi => ("gbuf_hemi_project", "gbuf_hemi_unproject"),
                 PlaneMap::SpheremapCry => ("gbuf_spheremap_project", "gbuf_spheremap_unproject"),
+                PlaneMap::Lambert => ("gbuf_lambert_project", "gbuf_lambert_unproject"),
             };
             let _ = write!(
                 t,

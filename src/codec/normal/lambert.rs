@@ -67,6 +67,9 @@ impl Projection for Lambert {
     fn bound_rad(&self, hx: f32, hy: f32, _q: Quant) -> f32 {
         equal_area_bound(hx.hypot(hy))
     }
+    fn plane_map(&self) -> Option<super::PlaneMap> {
+        Some(super::PlaneMap::Lambert)
+    }
 }
 
 #[cfg(test)]

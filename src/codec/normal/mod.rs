@@ -340,6 +340,8 @@ pub enum PlaneMap {
     XyHemi,
     /// [`SpheremapCry`]: CryEngine 3's spheremap (Mittring 2009).
     SpheremapCry,
+    /// [`Lambert`]: Lambert azimuthal equal-area centred on +Z, scaled to the unit disc.
+    Lambert,
 }
 
 /// How the plane coordinates of a projection are stored.
