@@ -488,7 +488,7 @@ fn codec_families_at_three_widths_on_llvmpipe() {
     }
     let dir = tempfile::tempdir().unwrap();
     let gb = every_attribute();
-    let families: [(&str, &str, [&str; 3]); 13] = [
+    let families: [(&str, &str, [&str; 3]); 15] = [
         ("normal", "rgba32ui", ["spheremap-cry-16", "spheremap-cry-24", "spheremap-cry-f16-32"]),
         ("normal", "rgba32ui", ["xy-hemi-16", "xy-hemi-24", "xy-hemi-f16-32"]),
         ("specular_power", "rgba32ui", ["log2-unorm-4", "log2-unorm-8", "log2-unorm-12"]),
@@ -499,6 +499,8 @@ fn codec_families_at_three_widths_on_llvmpipe() {
         ("albedo", "rgba32ui", ["srgb8", "f16", "unorm-10"]),
         ("albedo", "rgba32ui", ["r11g11b10f", "rgb9e5", "unorm-1"]),
         ("normal", "rgba32ui", ["lambert-16", "lambert-unorm-24", "lambert-f16-32"]),
+        ("normal", "rgba32ui", ["stereo-16", "stereo-unorm-20", "stereo-f16-32"]),
+        ("normal", "rgba32ui", ["spheremap-ispc-16", "spheremap-ispc-20", "spheremap-ispc-32"]),
         ("roughness", "rgba32ui", ["unorm-4", "unorm-12", "unorm-24"]),
         ("motion.x", "rgba32ui", ["snorm-6:40", "snorm-12:40", "snorm-24:40"]),
         ("depth", "rgba32ui", ["unorm16", "unorm24-reversed", "f32-standard"]),

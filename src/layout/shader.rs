@@ -433,6 +433,44 @@ vec3 gbuf_lambert_unproject(vec2 q) {
     return vec3(q.x * k, q.y * k, z);
 }
 
+// The spheremap as ISPC's `deferred` example stores it (kernels.ispc, after Mittring): g·0.5 + 0.5, decoded by
+// its own closed form.
+vec2 gbuf_spheremap_ispc_project(vec3 n) {
+    precise vec2 g = gbuf_spheremap_project(n);
+    precise vec2 e = vec2(g.x * 0.5 + 0.5, g.y * 0.5 + 0.5);
+    return e;
+}
+vec3 gbuf_spheremap_ispc_unproject(vec2 e) {
+    precise float f = (e.x - e.x * e.x) + (e.y - e.y * e.y);
+    precise float m = sqrt(max(4.0 * f - 1.0, 0.0));
+    precise vec3 v = vec3(m * (4.0 * e.x - 2.0), m * (4.0 * e.y - 2.0), 3.0 - 8.0 * f);
+    return v;
+}
+
+// Stereographic projection from −Z (Snyder 1987, p. 154; Pranckevičius 2009, method #7): n.xy/(1+z) divided by
+// the scale; below the equator (1−z)/|xy| along normalize(xy), accurate near −Z; then moved radially onto the
+// square |p| ≤ limit.
+vec2 gbuf_stereo_project(vec3 n, float scale, float limit) {
+    precise float r = sqrt(n.x * n.x + n.y * n.y);
+    precise float k = (1.0 + n.z) * scale;
+    precise vec2 front = vec2(n.x / k, n.y / k);
+    precise vec2 d = gbuf_normalize2_or_x(vec2(n.x, n.y));
+    precise float t = min((1.0 - n.z) / r / scale, 65504.0);
+    precise vec2 back = vec2(d.x * t, d.y * t);
+    vec2 p = n.z >= 0.0 ? front : (r > 0.0 ? back : vec2(65504.0, 0.0));
+    precise float m = max(abs(p.x), abs(p.y));
+    precise float c = limit / m;
+    precise vec2 q = vec2(p.x * c, p.y * c);
+    return m > limit ? q : p;
+}
+vec3 gbuf_stereo_unproject(vec2 q, float scale) {
+    precise vec2 p = vec2(q.x * scale, q.y * scale);
+    precise float r2 = p.x * p.x + p.y * p.y;
+    precise float d = 1.0 + r2;
+    precise vec3 v = vec3(2.0 * p.x / d, 2.0 * p.y / d, (1.0 - r2) / d);
+    return (isinf(r2) || isnan(r2)) ? vec3(0.0, 0.0, -1.0) : v;
+}
+
 vec3 gbuf_oct_unproject(vec2 q) {
     precise vec2 p = clamp(q, vec2(-1.0, -1.0), vec2(1.0, 1.0));
     precise float z = 1.0 - abs(p.x) - abs(p.y);
@@ -555,7 +593,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
     let unsupported = |why: &str| {
         Error::Argument(format!(
             "layout {:?}: field {} ({}): {why}; gbuf emits shader code for the uint-N IDs, the unorm/snorm/f16/f32 \
-             scalars, unorm8/unorm-N/srgb8/f16/f32/r11g11b10f/rgb9e5 colours, the oct, oct-unorm, xy-hemi, spheremap-cry, lambert, xyz normals, log2-unorm up to 12 bits and every depth codec",
+             scalars, unorm8/unorm-N/srgb8/f16/f32/r11g11b10f/rgb9e5 colours, the oct, oct-unorm, xy-hemi, spheremap-cry, spheremap-ispc, lambert, stereo, xyz normals, log2-unorm up to 12 bits and every depth codec",
             layout.name(),
             f.slot.name(),
             f.codec
@@ -701,16 +739,26 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
         (_, Some(Recipe::NormalPlanar { map, quant })) => {
             quant_fns(quant, &format!("{name}_c"), &mut t);
             let (project, unproject) = match map {
-                PlaneMap::Oct => ("gbuf_oct_project", "gbuf_oct_unproject"),
-                PlaneMap::XyHemi => ("gbuf_hemi_project", "gbuf_hemi_unproject"),
-                PlaneMap::SpheremapCry => ("gbuf_spheremap_project", "gbuf_spheremap_unproject"),
-                PlaneMap::Lambert => ("gbuf_lambert_project", "gbuf_lambert_unproject"),
+                PlaneMap::Oct => ("gbuf_oct_project(u)".to_string(), "gbuf_oct_unproject(p)".to_string()),
+                PlaneMap::XyHemi => ("gbuf_hemi_project(u)".into(), "gbuf_hemi_unproject(p)".into()),
+                PlaneMap::SpheremapCry => ("gbuf_spheremap_project(u)".into(), "gbuf_spheremap_unproject(p)".into()),
+                PlaneMap::Lambert => ("gbuf_lambert_project(u)".into(), "gbuf_lambert_unproject(p)".into()),
+                PlaneMap::SpheremapIspc => {
+                    ("gbuf_spheremap_ispc_project(u)".into(), "gbuf_spheremap_ispc_unproject(p)".into())
+                }
+                PlaneMap::Stereo { scaled } => {
+                    let (scale, limit) = if scaled { (1.7777f32, 1.0f32) } else { (1.0, 65504.0) };
+                    (
+                        format!("gbuf_stereo_project(u, {}, {})", lit(scale), lit(limit)),
+                        format!("gbuf_stereo_unproject(p, {})", lit(scale)),
+                    )
+                }
             };
             let _ = write!(
                 t,
                 "// two-component normal ({})\n\
-                 uvec3 {name}_enc(vec3 n) {{ vec2 p = {project}(gbuf_sanitize(n)); return uvec3({name}_c_enc(p.x), {name}_c_enc(p.y), 0u); }}\n\
-                 vec3 {name}_dec(uvec3 c) {{ return gbuf_finish({unproject}(vec2({name}_c_dec(c.x), {name}_c_dec(c.y)))); }}\n",
+                 uvec3 {name}_enc(vec3 n) {{ vec3 u = gbuf_sanitize(n); vec2 q = {project}; return uvec3({name}_c_enc(q.x), {name}_c_enc(q.y), 0u); }}\n\
+                 vec3 {name}_dec(uvec3 c) {{ vec2 p = vec2({name}_c_dec(c.x), {name}_c_dec(c.y)); return gbuf_finish({unproject}); }}\n",
                 f.codec
             );
             (quant.bits(), 2)

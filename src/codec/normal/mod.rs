@@ -342,6 +342,14 @@ pub enum PlaneMap {
     SpheremapCry,
     /// [`Lambert`]: Lambert azimuthal equal-area centred on +Z, scaled to the unit disc.
     Lambert,
+    /// [`SpheremapIspc`]: the spheremap as the ISPC `deferred` example stores it (`g·0.5 + 0.5`).
+    SpheremapIspc,
+    /// [`Stereo`]: stereographic from −Z; `scaled` is Pranckevičius's 1.7777 with the unit square, else scale 1
+    /// up to 65504.
+    Stereo {
+        /// [`Stereo::SCALED`] (else [`Stereo::UNSCALED`]).
+        scaled: bool,
+    },
 }
 
 /// How the plane coordinates of a projection are stored.

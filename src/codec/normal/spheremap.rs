@@ -129,6 +129,9 @@ impl Projection for SpheremapIspc {
         // f = (x − x²) + (y − y²) (5); m = √max(4f − 1, 0) (4); m·(4x − 2), m·(4y − 2) (6); 3 − 8f (2).
         17
     }
+    fn plane_map(&self) -> Option<super::PlaneMap> {
+        Some(super::PlaneMap::SpheremapIspc)
+    }
     fn bound_rad(&self, hx: f32, hy: f32, _q: Quant) -> f32 {
         // Unorm steps in e are half as large in g = 2e − 1 units... the other way: twice as large.
         equal_area_bound(2.0 * hx.hypot(hy))

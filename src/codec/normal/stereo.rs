@@ -76,6 +76,9 @@ impl Projection for Stereo {
             Vec3::NEG_Z
         }
     }
+    fn plane_map(&self) -> Option<super::PlaneMap> {
+        Some(super::PlaneMap::Stereo { scaled: self.scale != 1.0 })
+    }
     fn decode_ops(&self) -> u32 {
         // p·S (2); r² (3); d = 1 + r² (1); 2x/d, 2y/d (4); (1 − r²)/d (2); is_finite and its select of x, y, z (4).
         16
