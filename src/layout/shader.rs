@@ -1,12 +1,14 @@
-//! A layout as shader code: GLSL 4.50 that packs a surface into the layout's render-target words and unpacks
-//! them, bit for bit what [`Layout::pack`] and [`Layout::unpack`] do (docs/SHADERS.md has the ABI; the proof runs
-//! the code on Mesa's llvmpipe in `tests/shader_glsl.rs`).
+//! A layout as shader code: GLSL 4.50 (and HLSL and WGSL from the same text) that packs a surface into the
+//! layout's render-target words and unpacks them, bit for bit what [`Layout::pack`] and [`Layout::unpack`] do
+//! (docs/SHADERS.md has the ABI; the proof runs the code on Mesa's llvmpipe in `tests/shader_glsl.rs`).
 //!
 //! Every codec states its arithmetic as a [`Recipe`]; this module writes one function per field from it,
 //! operation for operation as the CPU codec does (f64 where it uses f64, `precise` so no multiply-add is fused,
 //! integer code for half floats and the rounding rule), so the GPU reproduces the CPU's bits rather than
-//! approximating them. Codecs without a recipe (the transcendental ones, `log2-unorm`, the spheremap, the
-//! hemisphere and the other projections) and material-ID indirection are refused with an error naming them.
+//! approximating them. HLSL is the text through a token map; WGSL through [`super::wgsl`], with a software double
+//! and fences for `precise`. Codecs without a recipe (`spherical`, `lambert-sphere`, `stereo-sphere`:
+//! transcendental; `oct-precise`: a search; `log2-unorm` over 12 bits) and material tables over
+//! [`MAX_TABLE_BITS`] are refused with an error naming them.
 
 use super::coder::Slot;
 use super::{Field, Layout};
