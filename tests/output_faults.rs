@@ -45,7 +45,7 @@ fn assert_whole_files(dir: &Path, context: &str) -> usize {
             "md" => bytes.ends_with(b"\n"),
             "toml" => std::str::from_utf8(&bytes).is_ok_and(|t| t.parse::<toml::Table>().is_ok() && t.ends_with('\n')),
             // Shader code ends with gbuf_unpack's closing brace.
-            "glsl" | "hlsl" => bytes.ends_with(b"return s;\n}\n"),
+            "glsl" | "hlsl" | "wgsl" => bytes.ends_with(b"return s;\n}\n"),
             other => panic!("{context}: unexpected file {name} (.{other}) in the report folder"),
         };
         assert!(whole, "{context}: {name} is partial ({} bytes)", bytes.len());

@@ -962,7 +962,7 @@ pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
     );
     if lang == Lang::Wgsl && f64 {
         head.push_str(
-            "// WGSL has no f64: the fields gbuf computes in double use the software double at the end of this file.\n",
+            "// WGSL has no f64: the fields gbuf computes in double use the software double below (gbuf_d_*).\n",
         );
     }
     if camera {
@@ -1093,15 +1093,17 @@ pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
             ];
             let body = super::wgsl::translate(&o, &RENAME)
                 .map_err(|e| Error::Argument(format!("layout {:?}: {e} (a gbuf bug: please report)", layout.name())))?;
+            // The software double before the layout's code, so that the file ends with `gbuf_unpack` as in the
+            // other languages (WGSL does not mind the order).
             let mut w = head + WGSL_PRELUDE;
-            if body.contains("gbuf_fence") || body.contains("gbuf_mul(") {
-                w.push_str(super::wgsl::FENCE);
-            }
-            w.push_str(&body);
             if f64 {
                 w.push('\n');
                 w.push_str(F64_WGSL);
             }
+            if body.contains("gbuf_fence") || body.contains("gbuf_mul(") {
+                w.push_str(super::wgsl::FENCE);
+            }
+            w.push_str(&body);
             w
         }
     })
