@@ -509,7 +509,7 @@ int gbuf_d_round(double v) {
 
 /// IEEE binary64 in software for WGSL (`vec2<u32>` bits; add, sub, mul, div rounding to nearest even,
 /// conversions, clamp, gbuf's code rounding): what the f64 codecs use in WGSL, under the names of
-/// [`F64_HELPERS`]. Checked against Rust's f64 on llvmpipe (tests/shader_glsl.rs).
+/// the GLSL `gbuf_d_*` helpers. Checked against Rust's f64 on llvmpipe (tests/shader_glsl.rs).
 pub const F64_WGSL: &str = include_str!("f64.wgsl");
 
 /// What WGSL lacks, as WGSL: NaN and infinity tests on the bits (an implementation may assume neither exists, so
