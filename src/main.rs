@@ -45,6 +45,10 @@ enum Command {
     Pipelines(cli::pipelines::Args),
     /// Merge the report.json of several `gbuf report` runs (one per frame) into one report.
     Merge(cli::merge::Args),
+    /// Compare two images (EXR or PNG): FLIP's pooled statistics as NVIDIA's tool prints them, RMSE, PSNR, the
+    /// largest difference, tev's relative MSE; thresholds with idiff's exit status (0 pass, 1 warn, 2 fail,
+    /// 3 different size or kind, 4 file error).
+    Compare(cli::compare::Args),
 }
 
 /// Commands that read a dump and have no layout flag of their own: there `--layout` names the layout of packed
@@ -79,16 +83,30 @@ fn main() -> ExitCode {
         Command::Budget(a) => cli::budget::run(a),
         Command::Merge(a) => cli::merge::run(a),
         Command::Pipelines(a) => cli::pipelines::run(a),
+        Command::Compare(a) => cli::compare::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) if cli::is_broken_pipe(&err) => ExitCode::SUCCESS,
+        // A verdict (`gbuf compare`'s WARN/FAIL): the message, no "error".
+        Err(err) if err.downcast_ref::<cli::compare::Status>().is_some_and(|s| s.code <= 2) => {
+            eprintln!("gbuf: {err}");
+            ExitCode::from(err.downcast_ref::<cli::compare::Status>().map_or(1, |s| s.code))
+        }
         Err(err) => {
             eprintln!("gbuf: error: {err}");
+            // One line per cause: an error that quotes its source already (`FILE: No such file…`) is not followed
+            // by that source again.
+            let mut last = err.to_string();
             for cause in err.chain().skip(1) {
-                eprintln!("  caused by: {cause}");
+                let text = cause.to_string();
+                if !last.ends_with(&text) {
+                    eprintln!("  caused by: {text}");
+                }
+                last = text;
             }
-            ExitCode::from(if cli::is_usage(&err) { 2 } else { 1 })
+            let status = err.downcast_ref::<cli::compare::Status>().map(|s| s.code);
+            ExitCode::from(status.unwrap_or(if cli::is_usage(&err) { 2 } else { 1 }))
         }
     }
 }

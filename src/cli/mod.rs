@@ -3,6 +3,7 @@
 pub mod budget;
 pub mod codecs;
 pub mod common;
+pub mod compare;
 pub mod convert;
 pub mod demo;
 pub mod edges;
@@ -18,7 +19,12 @@ pub mod scene;
 
 /// Is this error (anywhere in its chain) a closed pipe? Then the reader went away and we exit quietly.
 pub fn is_broken_pipe(err: &anyhow::Error) -> bool {
-    err.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe))
+    // serde_json keeps the io error inside its own (`gbuf … --json | head`), so ask it too.
+    err.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>().is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe)
+            || c.downcast_ref::<serde_json::Error>()
+                .is_some_and(|e| e.io_error_kind() == Some(std::io::ErrorKind::BrokenPipe))
+    })
 }
 
 /// A usage error: flags that do not go together. `gbuf` exits with status 2 for these (1 is bad input).

@@ -11,6 +11,7 @@
 //!
 //! [`mlaa`]: morphological antialiasing (Reshetov 2009), the post-process alternative to MSAA.
 
+pub mod file;
 pub mod mlaa;
 
 use crate::base::lut::CodeLut;

@@ -1,5 +1,6 @@
 //! Error metrics between G-buffers and between images.
 
+pub mod compare;
 pub mod edges;
 pub mod flip;
 pub mod gbuffer;
