@@ -7,8 +7,22 @@ mod cli;
 
 /// G-buffer encoding and MSAA analysis for deferred shading.
 #[derive(Parser)]
-#[command(name = "gbuf", version, about, long_about = None)]
+#[command(
+    name = "gbuf",
+    version,
+    about,
+    long_about = None,
+    after_help = "Exit status: 0 success, 1 bad input (the message names the file and the problem), 2 usage error; \
+                  `gbuf compare` follows idiff (0 pass, 1 warn, 2 fail, 3 size or kind differ, 4 file error).\n\
+                  Documentation: docs/GUIDE.md; `gbuf man` prints the manual page."
+)]
 struct Cli {
+    /// No progress bars.
+    #[arg(short, long, global = true)]
+    quiet: bool,
+    /// Worker threads (default: one per core).
+    #[arg(long, global = true, value_name = "N")]
+    threads: Option<usize>,
     #[command(subcommand)]
     command: Command,
 }
@@ -49,6 +63,13 @@ enum Command {
     /// largest difference, tev's relative MSE; thresholds with idiff's exit status (0 pass, 1 warn, 2 fail,
     /// 3 different size or kind, 4 file error).
     Compare(cli::compare::Args),
+    /// Print a shell completion script: `gbuf completions bash > /etc/bash_completion.d/gbuf`.
+    Completions {
+        /// The shell.
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff): `gbuf man > gbuf.1; man ./gbuf.1`.
+    Man,
 }
 
 /// Commands that read a dump and have no layout flag of their own: there `--layout` names the layout of packed
@@ -68,6 +89,17 @@ fn parse() -> Cli {
 
 fn main() -> ExitCode {
     let cli = parse();
+    cli::set_quiet(cli.quiet);
+    if let Some(n) = cli.threads {
+        if n == 0 {
+            eprintln!("gbuf: error: --threads must be at least 1");
+            return ExitCode::from(2);
+        }
+        if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(n).build_global() {
+            eprintln!("gbuf: error: --threads {n}: {e}");
+            return ExitCode::from(1);
+        }
+    }
     let result = match cli.command {
         Command::Demo(a) => cli::demo::run(a),
         Command::Scene(a) => cli::scene::run(a),
@@ -84,6 +116,11 @@ fn main() -> ExitCode {
         Command::Merge(a) => cli::merge::run(a),
         Command::Pipelines(a) => cli::pipelines::run(a),
         Command::Compare(a) => cli::compare::run(a),
+        Command::Completions { shell } => {
+            clap_complete::generate(shell, &mut Cli::command(), "gbuf", &mut std::io::stdout());
+            Ok(())
+        }
+        Command::Man => clap_mangen::Man::new(Cli::command()).render(&mut std::io::stdout()).map_err(Into::into),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

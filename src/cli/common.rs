@@ -173,7 +173,7 @@ pub struct InputArgs {
     /// The dump: canonical/Blender/Mitsuba EXR or ISPC `deferred` .bin.
     pub file: PathBuf,
     /// How to read it.
-    #[command(flatten)]
+    #[command(flatten, next_help_heading = "Input")]
     pub read: ReadArgs,
 }
 
@@ -231,7 +231,7 @@ pub struct FramesArgs {
     #[arg(required = true, num_args = 1.., value_name = "FILE")]
     pub files: Vec<PathBuf>,
     /// How to read them (`--scene` only with a single dump: each frame's sidecar is found beside it).
-    #[command(flatten)]
+    #[command(flatten, next_help_heading = "Input")]
     pub read: ReadArgs,
 }
 

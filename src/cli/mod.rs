@@ -17,6 +17,18 @@ pub mod resolve;
 pub mod roundtrip;
 pub mod scene;
 
+static QUIET: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// `-q/--quiet`: no progress bars.
+pub fn set_quiet(quiet: bool) {
+    QUIET.store(quiet, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// Was `-q/--quiet` given?
+pub fn quiet() -> bool {
+    QUIET.load(std::sync::atomic::Ordering::Relaxed)
+}
+
 /// Is this error (anywhere in its chain) a closed pipe? Then the reader went away and we exit quietly.
 pub fn is_broken_pipe(err: &anyhow::Error) -> bool {
     // serde_json keeps the io error inside its own (`gbuf … --json | head`), so ask it too.

@@ -102,7 +102,7 @@ impl SweepArgs {
 /// A progress bar on stderr, hidden when stderr is not a terminal.
 pub fn progress_bar() -> ProgressBar {
     let pb = ProgressBar::with_draw_target(Some(1), ProgressDrawTarget::stderr());
-    if !std::io::stderr().is_terminal() {
+    if !std::io::stderr().is_terminal() || super::quiet() {
         pb.set_draw_target(ProgressDrawTarget::hidden());
     }
     if let Ok(style) = ProgressStyle::with_template("{elapsed:>4} [{bar:30}] {pos}/{len} {msg}") {
