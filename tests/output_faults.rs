@@ -43,6 +43,7 @@ fn assert_whole_files(dir: &Path, context: &str) -> usize {
             "png" => image::load_from_memory(&bytes).is_ok(),
             "svg" => String::from_utf8_lossy(&bytes).trim_end().ends_with("</svg>"),
             "md" => bytes.ends_with(b"\n"),
+            "html" => bytes.ends_with(b"</html>\n"),
             "toml" => std::str::from_utf8(&bytes).is_ok_and(|t| t.parse::<toml::Table>().is_ok() && t.ends_with('\n')),
             // Shader code ends with gbuf_unpack's closing brace.
             "glsl" | "hlsl" | "wgsl" => bytes.ends_with(b"return s;\n}\n"),

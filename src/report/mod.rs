@@ -5,6 +5,7 @@
 pub mod csv;
 pub mod figures;
 pub mod format;
+pub mod html;
 pub mod markdown;
 pub mod pipelines;
 pub mod plot;

@@ -1,4 +1,4 @@
-//! Writes a report folder: `report.md`, `report.csv`, `report.json` and the figures. Every file is written
+//! Writes a report folder: `report.md`, `report.html`, `report.csv`, `report.json` and the figures. Every file is written
 //! atomically; the folder is created if missing; files that are not ours are left untouched.
 
 use crate::analysis::record::Report;
@@ -19,7 +19,7 @@ fn json_err(e: serde_json::Error) -> Error {
 }
 
 /// The files every report folder has besides its attachments.
-const FOLDER_FILES: [&str; 4] = ["report.csv", "aggregate.csv", "report.json", "report.md"];
+const FOLDER_FILES: [&str; 5] = ["report.csv", "aggregate.csv", "report.json", "report.md", "report.html"];
 
 /// Writes the report folder `dir` and returns the paths written.
 pub fn write_folder(dir: &Path, rep: &Report, attachments: &[Attachment]) -> Result<Vec<PathBuf>> {
@@ -41,11 +41,14 @@ pub fn write_folder(dir: &Path, rep: &Report, attachments: &[Attachment]) -> Res
     for a in attachments {
         put(&a.name, &a.bytes)?;
     }
-    let [rows, aggregate, json, md] = FOLDER_FILES;
+    let [rows, aggregate, json, md, html] = FOLDER_FILES;
     put(rows, csv::to_csv(&rep.rows).as_bytes())?;
     put(aggregate, csv::aggregate_csv(&rep.aggregate).as_bytes())?;
     put(json, to_json(rep)?.as_bytes())?;
-    put(md, markdown::to_markdown(rep).as_bytes())?;
+    let text = markdown::to_markdown(rep);
+    put(md, text.as_bytes())?;
+    // One self-contained page to share: the same text, figures inline (report::html).
+    put(html, crate::report::html::to_html(&text, attachments).as_bytes())?;
     Ok(written)
 }
 
@@ -75,7 +78,7 @@ mod tests {
         std::fs::write(dir.join("mine.txt"), "keep").unwrap();
         let att = [Attachment { name: "p.svg".into(), bytes: b"<svg/>".to_vec() }];
         let w = write_folder(&dir, &rep(), &att).unwrap();
-        assert_eq!(w.len(), 5);
+        assert_eq!(w.len(), 6);
         assert_eq!(std::fs::read_to_string(dir.join("mine.txt")).unwrap(), "keep");
         let json: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
@@ -87,7 +90,7 @@ mod tests {
         assert_eq!(back.rows[0].layout, "x", "report.json reads back (what `gbuf merge` does)");
         let names: Vec<String> =
             std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
-        assert_eq!(names.len(), 6, "no temporary files left: {names:?}");
+        assert_eq!(names.len(), 7, "no temporary files left: {names:?}");
         assert!(write_folder(&dir, &rep(), &[Attachment { name: "../x".into(), bytes: vec![] }]).is_err());
     }
 }
