@@ -1,6 +1,7 @@
-//! PNG output through the `png` crate: 8-bit RGB, zlib level [`LEVEL`] with the crate's adaptive filtering, and an
+//! PNG output through the `png` crate: 8-bit RGB, zlib level [`LEVEL`] with the crate's adaptive filtering, an
 //! `sRGB` chunk (the pixels are sRGB-encoded: every picture gbuf writes goes through `base::picture`'s transfer
-//! function or a colour map).
+//! function or a colour map) and provenance text chunks (`Software`: gbuf and its version; `Source`: the command
+//! line).
 //!
 //! gbuf had its own encoder here (bands of rows filtered and deflated in parallel); the crate's is faster per
 //! thread at the same level and one less thing to maintain (docs/DECISIONS.md, "Writing PNGs").
@@ -44,6 +45,14 @@ pub fn encode(width: u32, height: u32, rgb: &[u8], level: u8) -> Result<Vec<u8>>
         png::DeflateCompression::Level(level)
     });
     enc.set_filter(png::Filter::Adaptive);
+    // Provenance: the tool and the command that wrote the picture (PNG's registered `Software` and `Source`
+    // keywords), so a figure pasted anywhere still says where it came from.
+    // `Source` is an iTXt chunk (UTF-8: paths may hold any character); provenance never fails a picture.
+    let _ = enc.add_text_chunk("Software".into(), format!("gbuf {}", env!("CARGO_PKG_VERSION")));
+    let command: Vec<String> = std::env::args_os().map(|a| a.to_string_lossy().into_owned()).collect();
+    if !command.is_empty() {
+        let _ = enc.add_itxt_chunk("Source".into(), command.join(" "));
+    }
     let mut writer = enc.write_header().map_err(fail)?;
     writer.write_image_data(rgb).map_err(fail)?;
     writer.finish().map_err(fail)?;
@@ -54,6 +63,19 @@ pub fn encode(width: u32, height: u32, rgb: &[u8], level: u8) -> Result<Vec<u8>>
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    #[test]
+    fn pictures_carry_srgb_and_their_provenance() {
+        let bytes = encode_rgb8(2, 1, &[0, 10, 20, 30, 40, 50]).unwrap();
+        let dec = png::Decoder::new(std::io::Cursor::new(bytes));
+        let reader = dec.read_info().unwrap();
+        let info = reader.info();
+        assert!(info.srgb.is_some(), "an sRGB chunk");
+        let text: Vec<(String, String)> =
+            info.uncompressed_latin1_text.iter().map(|t| (t.keyword.clone(), t.text.clone())).collect();
+        assert!(text.iter().any(|(k, v)| k == "Software" && v.starts_with("gbuf ")), "{text:?}");
+        assert!(info.utf8_text.iter().any(|t| t.keyword == "Source"), "a UTF-8 Source chunk");
+    }
 
     /// Decodes with the image crate's PNG reader.
     fn decode(bytes: &[u8]) -> (u32, u32, Vec<u8>) {
