@@ -233,6 +233,27 @@ print(renderer)
 
 /// Packs and unpacks every covered sample of `gb` with `layout` on llvmpipe and compares with gbuf, bit for bit.
 fn check(layout: &Layout, gb: &GBuffer, dir: &Path, tag: &str, lang: Lang) {
+    let m = measure(layout, gb, dir, tag, lang, 0);
+    assert_eq!(m.bad, 0, "{tag}-{}: {} mismatches over {} samples; first: {}", lang.name(), m.bad, m.samples, m.first);
+}
+
+/// What the driver gave against gbuf.
+struct Mismatch {
+    /// Texel words and attribute words that differ.
+    bad: usize,
+    /// Samples compared.
+    samples: usize,
+    /// The first difference.
+    first: String,
+    /// Packed texels that differ.
+    bad_pack: usize,
+    /// The largest difference between two codes of `step_bits` bits at the same place (0 when not asked).
+    max_code_step: u64,
+    /// The largest angle between a decoded normal and gbuf's, in degrees.
+    max_normal_deg: f64,
+}
+
+fn measure(layout: &Layout, gb: &GBuffer, dir: &Path, tag: &str, lang: Lang, step_bits: u32) -> Mismatch {
     let code = emit(layout, lang).unwrap_or_else(|e| panic!("{tag}: {e}"));
     let tag = &format!("{tag}-{}", lang.name());
     let packed = layout.pack(gb).unwrap();
@@ -283,6 +304,7 @@ fn check(layout: &Layout, gb: &GBuffer, dir: &Path, tag: &str, lang: Lang) {
     let word = |b: &[u8], k: usize| u32::from_le_bytes(b[k * 4..k * 4 + 4].try_into().unwrap());
     let mut bad = 0usize;
     let mut first = String::new();
+    let (mut max_code_step, mut max_normal_deg, mut bad_pack) = (0u64, 0f64, 0usize);
     for (j, &i) in covered.iter().enumerate() {
         for (k, p) in packed.targets.iter().enumerate() {
             let tb = p.format.bytes();
@@ -290,6 +312,16 @@ fn check(layout: &Layout, gb: &GBuffer, dir: &Path, tag: &str, lang: Lang) {
             want[..tb].copy_from_slice(&p.bytes[i * tb..(i + 1) * tb]);
             let got = &got_p[(j * t + k) * 16..(j * t + k + 1) * 16];
             if got != want {
+                if step_bits > 0 {
+                    let bits = |b: &[u8]| u128::from_le_bytes(b.try_into().unwrap());
+                    let (g, w) = (bits(got), bits(&want));
+                    let mask = (1u128 << step_bits) - 1;
+                    for c in 0..(128 / step_bits) {
+                        let (a, b) = ((g >> (c * step_bits)) & mask, (w >> (c * step_bits)) & mask);
+                        max_code_step = max_code_step.max(a.abs_diff(b) as u64);
+                    }
+                }
+                bad_pack += 1;
                 bad += 1;
                 if first.is_empty() {
                     first = format!("pack {}: sample {i}: GPU {got:02x?} gbuf {want:02x?}", p.name);
@@ -313,8 +345,23 @@ fn check(layout: &Layout, gb: &GBuffer, dir: &Path, tag: &str, lang: Lang) {
                 }
             }
         }
+        if layout.stores(Attribute::Normal) {
+            let (at, _) = offset_of(Attribute::Normal);
+            let v = |w: &dyn Fn(usize) -> u32| {
+                glam::DVec3::new(
+                    f64::from(f32::from_bits(w(at))),
+                    f64::from(f32::from_bits(w(at + 1))),
+                    f64::from(f32::from_bits(w(at + 2))),
+                )
+            };
+            let g = v(&|c| word(&got_u, j * SURFACE_WORDS + c));
+            let e = v(&|c| want[c]);
+            if g != e {
+                max_normal_deg = max_normal_deg.max(g.cross(e).length().atan2(g.dot(e)).to_degrees());
+            }
+        }
     }
-    assert_eq!(bad, 0, "{tag}: {bad} mismatches over {} samples; first: {first}", covered.len());
+    Mismatch { bad, samples: covered.len(), first, bad_pack, max_code_step, max_normal_deg }
 }
 
 /// HLSL → SPIR-V (glslangValidator's HLSL front end) → GLSL 4.50 (spirv-cross), the way a Vulkan engine ships
@@ -488,7 +535,7 @@ fn codec_families_at_three_widths_on_llvmpipe() {
     }
     let dir = tempfile::tempdir().unwrap();
     let gb = every_attribute();
-    let families: [(&str, &str, [&str; 3]); 15] = [
+    let families: [(&str, &str, [&str; 3]); 16] = [
         ("normal", "rgba32ui", ["spheremap-cry-16", "spheremap-cry-24", "spheremap-cry-f16-32"]),
         ("normal", "rgba32ui", ["xy-hemi-16", "xy-hemi-24", "xy-hemi-f16-32"]),
         ("specular_power", "rgba32ui", ["log2-unorm-4", "log2-unorm-8", "log2-unorm-12"]),
@@ -501,6 +548,7 @@ fn codec_families_at_three_widths_on_llvmpipe() {
         ("normal", "rgba32ui", ["lambert-16", "lambert-unorm-24", "lambert-f16-32"]),
         ("normal", "rgba32ui", ["stereo-16", "stereo-unorm-20", "stereo-f16-32"]),
         ("normal", "rgba32ui", ["spheremap-ispc-16", "spheremap-ispc-20", "spheremap-ispc-32"]),
+        ("normal", "rgba32ui", ["oct-precise-16", "oct-precise-24", "oct-precise-32"]),
         ("roughness", "rgba32ui", ["unorm-4", "unorm-12", "unorm-24"]),
         ("motion.x", "rgba32ui", ["snorm-6:40", "snorm-12:40", "snorm-24:40"]),
         ("depth", "rgba32ui", ["unorm16", "unorm24-reversed", "f32-standard"]),
@@ -876,4 +924,45 @@ fn wgsl_software_double_matches_rust_f64_on_llvmpipe() {
         }
     }
     assert!(bad.is_empty(), "{} items; first mismatches: {bad:?}", n);
+}
+
+/// `spherical` goes through the driver's `atan`, `sin` and `cos`, which the shading languages let differ from
+/// libm by several ulps: its code is emitted, and the difference is measured and bounded instead of zero (the
+/// numbers are in docs/SHADERS.md, "Not bit-exact").
+#[test]
+fn spherical_through_the_drivers_transcendentals_is_within_its_measured_bound() {
+    if !(support::python_has("moderngl, numpy")
+        && support::tool_has("glslangValidator")
+        && support::tool_has("spirv-cross"))
+    {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let frames = [("raster", fixture()), ("every", every_attribute())];
+    for c in ["spherical-16", "spherical-24"] {
+        let b = bits_of("normal", c);
+        let spec = format!(
+            "name = \"sph\"\n[[targets]]\nname = \"t\"\nformat = \"rgba32ui\"\nfields = [ {{ attribute = \"normal\", codec = \"{c}\", offset = 0, bits = {b} }} ]\n"
+        );
+        let layout = Layout::from_spec(LayoutSpec::parse(Path::new("sph.toml"), &spec).unwrap()).unwrap();
+        for (tag, gb) in &frames {
+            for lang in [Lang::Glsl, Lang::Hlsl, Lang::Wgsl] {
+                let m = measure(&layout, gb, dir.path(), &format!("{c}-{tag}"), lang, b / 2);
+                println!(
+                    "{c} {tag} {}: packed codes differ in {} of {} samples (largest step {}); decoded normal words in \
+                     {}; largest normal difference {:.2e}°",
+                    lang.name(),
+                    m.bad_pack,
+                    m.samples,
+                    m.max_code_step,
+                    m.bad - m.bad_pack,
+                    m.max_normal_deg
+                );
+                // Measured on llvmpipe: at most 38 of 138 745 samples one code off, decodes within 7.8e-6°.
+                assert!(m.max_code_step <= 1, "{c} {tag}: a code more than one step from gbuf's: {}", m.first);
+                assert!(m.bad_pack * 1000 <= m.samples, "{c} {tag}: {} of {} codes differ", m.bad_pack, m.samples);
+                assert!(m.max_normal_deg < 1e-4, "{c} {tag}: decoded normals {}° from gbuf's", m.max_normal_deg);
+            }
+        }
+    }
 }

@@ -179,6 +179,13 @@ pub enum Recipe {
         /// Storage of each plane coordinate.
         quant: normal::Quant,
     },
+    /// Precise octahedral (Cigolle et al. 2014, "octP"): of the four snorm codes of `k` bits around the projected
+    /// point, the one whose decoded normal is nearest (squared chord, first of equals in the order (0,0), (1,0),
+    /// (0,1), (1,1)).
+    NormalOctPrecise {
+        /// Bits per component.
+        k: u32,
+    },
     /// xyz normal: three coordinates stored as `quant` (`unorm`: `n·0.5 + 0.5`).
     NormalXyz {
         /// Storage of each coordinate.

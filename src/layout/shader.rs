@@ -45,7 +45,9 @@ pub const WGSL_GROUP: u32 = 3;
 /// GLSL → HLSL for the code this module writes (a closed vocabulary, so a token map suffices): vector types,
 /// bit casts, `lf` double literals as casts, constant arrays as initialiser lists.
 fn to_hlsl(glsl: &str) -> String {
-    const WORDS: [(&str, &str); 8] = [
+    const WORDS: [(&str, &str); 9] = [
+        // GLSL's two-argument atan (the only one this code uses).
+        ("atan", "atan2"),
         ("vec2", "float2"),
         ("vec3", "float3"),
         ("vec4", "float4"),
@@ -473,6 +475,25 @@ vec3 gbuf_stereo_unproject(vec2 q, float scale) {
     return (isinf(r2) || isnan(r2)) ? vec3(0.0, 0.0, -1.0) : v;
 }
 
+// Spherical coordinates: θ/π and (φ + π)/2π; decoded with sin and cos, the south pole snapped to −Z and v = 1
+// read as v = 0. atan, sin and cos are the driver's: not bit-exact (docs/SHADERS.md, Not bit-exact).
+vec2 gbuf_spherical_project(vec3 n) {
+    precise float r = sqrt(n.x * n.x + n.y * n.y);
+    float theta = atan(r, n.z);
+    float phi = atan(n.y, n.x);
+    precise vec2 p = vec2(theta / 3.14159274101257324, (phi + 3.14159274101257324) / 6.28318548202514648);
+    return p;
+}
+vec3 gbuf_spherical_unproject(vec2 p) {
+    precise float theta = max(p.x, 0.0) * 3.14159274101257324;
+    float v = p.y >= 1.0 ? 0.0 : max(p.y, 0.0);
+    precise float phi = v * 6.28318548202514648 - 3.14159274101257324;
+    float st = sin(theta);
+    float ct = cos(theta);
+    precise vec3 d = vec3(st * cos(phi), st * sin(phi), ct);
+    return p.x >= 1.0 ? vec3(0.0, 0.0, -1.0) : d;
+}
+
 vec3 gbuf_oct_unproject(vec2 q) {
     precise vec2 p = clamp(q, vec2(-1.0, -1.0), vec2(1.0, 1.0));
     precise float z = 1.0 - abs(p.x) - abs(p.y);
@@ -595,7 +616,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
     let unsupported = |why: &str| {
         Error::Argument(format!(
             "layout {:?}: field {} ({}): {why}; gbuf emits shader code for the uint-N IDs, the unorm/snorm/f16/f32 \
-             scalars, unorm8/unorm-N/srgb8/f16/f32/r11g11b10f/rgb9e5 colours, the oct, oct-unorm, xy-hemi, spheremap-cry, spheremap-ispc, lambert, stereo, xyz normals, log2-unorm up to 12 bits and every depth codec",
+             scalars, unorm8/unorm-N/srgb8/f16/f32/r11g11b10f/rgb9e5 colours, the oct, oct-precise, oct-unorm, xy-hemi, spheremap-cry, spheremap-ispc, spherical, lambert, stereo, xyz normals, log2-unorm up to 12 bits and every depth codec",
             layout.name(),
             f.slot.name(),
             f.codec
@@ -745,6 +766,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
                 PlaneMap::XyHemi => ("gbuf_hemi_project(u)".into(), "gbuf_hemi_unproject(p)".into()),
                 PlaneMap::SpheremapCry => ("gbuf_spheremap_project(u)".into(), "gbuf_spheremap_unproject(p)".into()),
                 PlaneMap::Lambert => ("gbuf_lambert_project(u)".into(), "gbuf_lambert_unproject(p)".into()),
+                PlaneMap::Spherical => ("gbuf_spherical_project(u)".into(), "gbuf_spherical_unproject(p)".into()),
                 PlaneMap::SpheremapIspc => {
                     ("gbuf_spheremap_ispc_project(u)".into(), "gbuf_spheremap_ispc_unproject(p)".into())
                 }
@@ -764,6 +786,28 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
                 f.codec
             );
             (quant.bits(), 2)
+        }
+        (_, Some(Recipe::NormalOctPrecise { k })) => {
+            let q = Quant::Snorm(k);
+            quant_fns(q, &format!("{name}_c"), &mut t);
+            let m = (1u32 << (k - 1)) - 1;
+            let _ = write!(
+                t,
+                "// precise octahedral (Cigolle et al. 2014, octP): of the four codes around the projected point, the one\n\
+                 // whose decoded normal is nearest (squared chord; the first of equals)\n\
+                 vec3 {name}_d2(uint cx, uint cy) {{ return gbuf_finish(gbuf_oct_unproject(vec2({name}_c_dec(cx), {name}_c_dec(cy)))); }}\n\
+                 uvec3 {name}_enc(vec3 n) {{ vec3 u = gbuf_sanitize(n); vec2 q = gbuf_oct_project(u); \
+                 precise vec2 p = vec2(q.x * {m}.0, q.y * {m}.0); vec2 b = floor(p); float best = 3.0e38; uvec2 bc = uvec2(0u, 0u); \
+                 for (uint dy = 0u; dy < 2u; dy++) {{ for (uint dx = 0u; dx < 2u; dx++) {{ \
+                 vec2 s = clamp(b + vec2(float(dx), float(dy)), vec2(-{m}.0, -{m}.0), vec2({m}.0, {m}.0)); \
+                 uint cx = uint(int(s.x)) & {mask}u; uint cy = uint(int(s.y)) & {mask}u; \
+                 vec3 e = {name}_d2(cx, cy) - u; precise float d = e.x * e.x + e.y * e.y + e.z * e.z; \
+                 if (d < best) {{ best = d; bc = uvec2(cx, cy); }} }} }} \
+                 return uvec3(bc.x, bc.y, 0u); }}\n\
+                 vec3 {name}_dec(uvec3 c) {{ return {name}_d2(c.x, c.y); }}\n",
+                mask = (1u64 << k) - 1
+            );
+            (k, 2)
         }
         (_, Some(Recipe::ScalarTable { bits, lo, hi, nan, thresholds, decoded })) => {
             let th: Vec<String> = thresholds.iter().map(|v| format!("{:#010x}u", v.to_bits())).collect();

@@ -164,6 +164,8 @@ fn wgsl_builtin(f: &str) -> Option<&'static str> {
         "floatBitsToUint" => "bitcast<u32>",
         "isnan" => "gbuf_isnan",
         "isinf" => "gbuf_isinf",
+        // The emitted GLSL uses only the two-argument atan.
+        "atan" => "atan2",
         _ => return None,
     })
 }

@@ -344,6 +344,9 @@ pub enum PlaneMap {
     Lambert,
     /// [`SpheremapIspc`]: the spheremap as the ISPC `deferred` example stores it (`g·0.5 + 0.5`).
     SpheremapIspc,
+    /// [`Spherical`]: polar angle and azimuth (atan2; decoded with sin and cos: the driver's transcendentals, so
+    /// not bit-exact on a GPU — docs/SHADERS.md gives the measured difference).
+    Spherical,
     /// [`Stereo`]: stereographic from −Z; `scaled` is Pranckevičius's 1.7777 with the unit square, else scale 1
     /// up to 65504.
     Stereo {

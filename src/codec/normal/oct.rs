@@ -180,6 +180,9 @@ impl Codec for OctPrecise {
         // The plain snorm octahedral decoder: only the encoder searches.
         self.plain.decode_ops()
     }
+    fn recipe(&self) -> Option<crate::codec::Recipe> {
+        Some(crate::codec::Recipe::NormalOctPrecise { k: self.k })
+    }
     fn decode_slice_isa(&self, isa: Isa, codes: &[u64], out: &mut [Vec3]) {
         // The same decoder as plain snorm octahedral, so its vectorised slice path (the encode search stays
         // scalar: the precise variant does not need to be cheap).

@@ -43,6 +43,9 @@ impl Projection for Spherical {
         let (sp, cp) = phi.sin_cos();
         Vec3::new(st * cp, st * sp, ct)
     }
+    fn plane_map(&self) -> Option<super::PlaneMap> {
+        Some(super::PlaneMap::Spherical)
+    }
     fn decode_ops(&self) -> u32 {
         // South-pole test and its select of x, y, z (4); θ = max(u, 0)·π (2); v: compare, max, select (3);
         // φ = v·2π − π (2); sin and cos of θ and of φ (4 transcendentals); st·cp, st·sp (2).
