@@ -793,8 +793,11 @@ pub fn propose(gb: &GBuffer, lights: &[Light], cfg: &BudgetConfig) -> Result<Pro
     }
     if cfg.shader_code {
         cands.retain(|c| {
-            Layout::from_spec(c.spec.clone())
-                .is_ok_and(|l| crate::layout::shader::emit(&l, crate::layout::shader::Lang::Glsl).is_ok())
+            // Code that gives gbuf's bits: emitted, and every codec exact (no driver transcendental).
+            Layout::from_spec(c.spec.clone()).is_ok_and(|l| {
+                crate::layout::shader::emit(&l, crate::layout::shader::Lang::Glsl).is_ok()
+                    && l.fields().iter().all(|f| crate::layout::shader::codec_emittable(f.slot, &f.codec))
+            })
         });
     }
     Ok(Proposal { candidates: cands, combinations, option_costs: option_costs(&space), needs })

@@ -172,6 +172,13 @@ pub enum Recipe {
         /// The decoded value of each code.
         decoded: Vec<f32>,
     },
+    /// `log2-unorm` wider than [`TABLE_RECIPE_BITS`]: `log2(p)/12` as a unorm of `bits` bits (f64 rounding), decoded
+    /// with `exp2`. The driver's `log2`/`exp2` are not libm's: not bit-exact (docs/SHADERS.md gives the measured
+    /// difference).
+    ScalarLog2 {
+        /// Bits.
+        bits: u32,
+    },
     /// Two-component normal: a plane map, its coordinates stored as `quant`.
     NormalPlanar {
         /// The map from the sphere to the plane.
@@ -204,6 +211,19 @@ pub enum Recipe {
         /// Reversed Z (1 at the near plane).
         reversed: bool,
     },
+}
+
+impl Recipe {
+    /// Does the emitted code give the CPU's bits on any conforming driver? Not for the recipes that call the
+    /// driver's transcendentals (`spherical`, `lambert-sphere`: atan2, sin, cos; wide `log2-unorm`: log2, exp2).
+    #[must_use]
+    pub fn is_exact(&self) -> bool {
+        !matches!(
+            self,
+            Recipe::ScalarLog2 { .. }
+                | Recipe::NormalPlanar { map: normal::PlaneMap::Spherical | normal::PlaneMap::LambertSphere, .. }
+        )
+    }
 }
 
 /// Widest codec [`Recipe::ScalarTable`] describes (a table of 2^12 values).

@@ -224,7 +224,7 @@ impl Codec for Log2Unorm {
     fn recipe(&self) -> Option<super::Recipe> {
         let bits = self.inner.bits;
         if bits > super::TABLE_RECIPE_BITS {
-            return None;
+            return Some(super::Recipe::ScalarLog2 { bits });
         }
         // exp2/log2 differ between libm and GPUs: tables keep the bits exact (encode is monotonic on [1, 4096]).
         Some(super::Recipe::ScalarTable {

@@ -6,9 +6,9 @@
 //! operation for operation as the CPU codec does (f64 where it uses f64, `precise` so no multiply-add is fused,
 //! integer code for half floats and the rounding rule), so the GPU reproduces the CPU's bits rather than
 //! approximating them. HLSL is the text through a token map; WGSL through [`super::wgsl`], with a software double
-//! and fences for `precise`. Codecs without a recipe (`spherical`, `lambert-sphere`, `stereo-sphere`:
-//! transcendental; `oct-precise`: a search; `log2-unorm` over 12 bits) and material tables over
-//! [`MAX_TABLE_BITS`] are refused with an error naming them.
+//! and fences for `precise`. Three codecs use the driver's transcendentals and are measured instead of exact
+//! (`spherical`, `lambert-sphere`, `log2-unorm` over 12 bits: docs/SHADERS.md, "Not bit-exact"); material tables
+//! over [`MAX_TABLE_BITS`] are refused with an error naming them.
 
 use super::coder::Slot;
 use super::{Field, Layout};
@@ -475,6 +475,82 @@ vec3 gbuf_stereo_unproject(vec2 q, float scale) {
     return (isinf(r2) || isnan(r2)) ? vec3(0.0, 0.0, -1.0) : v;
 }
 
+// The octahedral fold shared by the -sphere maps: a point (a, b) of the first quadrant's diamond, its signs and
+// hemisphere, to the square (the lower hemisphere reflected across the diamond's edge), and back.
+vec2 gbuf_diamond_to_square(float a, float b, float sx, float sy, bool lower) {
+    precise vec2 l = vec2(sx * (1.0 - b), sy * (1.0 - a));
+    precise vec2 u = vec2(sx * a, sy * b);
+    return lower ? l : u;
+}
+// (a, b, sign x, sign y) of a square point; gbuf_square_lower tells the hemisphere.
+vec4 gbuf_square_to_diamond(vec2 q) {
+    vec2 p = clamp(q, vec2(-1.0, -1.0), vec2(1.0, 1.0));
+    precise float ax = abs(p.x);
+    precise float ay = abs(p.y);
+    bool lower = ax + ay > 1.0;
+    precise vec2 l = vec2(1.0 - ay, 1.0 - ax);
+    vec2 ab = lower ? l : vec2(ax, ay);
+    return vec4(ab.x, ab.y, gbuf_sign_not_zero(p.x), gbuf_sign_not_zero(p.y));
+}
+bool gbuf_square_lower(vec2 q) {
+    vec2 p = clamp(q, vec2(-1.0, -1.0), vec2(1.0, 1.0));
+    precise float s = abs(p.x) + abs(p.y);
+    return s > 1.0;
+}
+
+// Lambert equal-area of each hemisphere on the diamond: radius |xy|/√(1+|z|), the azimuth as the split of the
+// diamond's L1 radius (atan2; decoded with sin: the driver's, not bit-exact, see docs/SHADERS.md).
+vec2 gbuf_lambert_sphere_project(vec3 n) {
+    precise float t = sqrt(n.x * n.x + n.y * n.y) / sqrt(1.0 + abs(n.z));
+    float w = atan(abs(n.y), abs(n.x));
+    precise float s = min(w * 0.636619746685028076, 1.0);
+    precise float a = t * (1.0 - s);
+    precise float b = t * s;
+    return gbuf_diamond_to_square(a, b, gbuf_sign_not_zero(n.x), gbuf_sign_not_zero(n.y), n.z < 0.0);
+}
+vec3 gbuf_lambert_sphere_unproject(vec2 q) {
+    vec4 d = gbuf_square_to_diamond(q);
+    bool lower = gbuf_square_lower(q);
+    precise float t = min(d.x + d.y, 1.0);
+    precise float fa = d.x / t;
+    precise float fb = d.y / t;
+    float ca = t > 0.0 ? fa : 0.0;
+    float cb = t > 0.0 ? fb : 0.0;
+    precise float ea = ca * 1.57079637050628662;
+    precise float eb = cb * 1.57079637050628662;
+    float c = sin(ea);
+    float sn = sin(eb);
+    precise float t2 = t * t;
+    precise float r = t * sqrt(2.0 - t2);
+    precise float z = 1.0 - t2;
+    precise vec3 v = vec3(d.z * r * c, d.w * r * sn, lower ? -z : z);
+    return v;
+}
+
+// Stereographic of each hemisphere on the diamond: radius |xy|/(1+|z|) along the L1 direction of (|x|, |y|).
+vec2 gbuf_stereo_sphere_project(vec3 n) {
+    precise float ax = abs(n.x);
+    precise float ay = abs(n.y);
+    precise float l1 = ax + ay;
+    precise float t = sqrt(n.x * n.x + n.y * n.y) / (1.0 + abs(n.z));
+    precise float kk = t / l1;
+    float k = l1 > 0.0 ? kk : 0.0;
+    precise float a = ax * k;
+    precise float b = ay * k;
+    return gbuf_diamond_to_square(a, b, gbuf_sign_not_zero(n.x), gbuf_sign_not_zero(n.y), n.z < 0.0);
+}
+vec3 gbuf_stereo_sphere_unproject(vec2 q) {
+    vec4 d = gbuf_square_to_diamond(q);
+    bool lower = gbuf_square_lower(q);
+    precise float t = min(d.x + d.y, 1.0);
+    precise float rr = sqrt(d.x * d.x + d.y * d.y);
+    precise float kk = 2.0 * t / rr;
+    float k = rr > 0.0 ? kk : 0.0;
+    precise float z = 1.0 - t * t;
+    precise vec3 v = vec3(d.z * d.x * k, d.w * d.y * k, lower ? -z : z);
+    return v;
+}
+
 // Spherical coordinates: θ/π and (φ + π)/2π; decoded with sin and cos, the south pole snapped to −Z and v = 1
 // read as v = 0. atan, sin and cos are the driver's: not bit-exact (docs/SHADERS.md, Not bit-exact).
 vec2 gbuf_spherical_project(vec3 n) {
@@ -615,8 +691,7 @@ struct FieldCode {
 fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) -> Result<FieldCode> {
     let unsupported = |why: &str| {
         Error::Argument(format!(
-            "layout {:?}: field {} ({}): {why}; gbuf emits shader code for the uint-N IDs, the unorm/snorm/f16/f32 \
-             scalars, unorm8/unorm-N/srgb8/f16/f32/r11g11b10f/rgb9e5 colours, the oct, oct-precise, oct-unorm, xy-hemi, spheremap-cry, spheremap-ispc, spherical, lambert, stereo, xyz normals, log2-unorm up to 12 bits and every depth codec",
+            "layout {:?}: field {} ({}): {why}; gbuf emits shader code for every codec of docs/LAYOUTS.md",
             layout.name(),
             f.slot.name(),
             f.codec
@@ -667,6 +742,21 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
                  return gbuf_d_to_f32(gbuf_d_mul(q, gbuf_d_from_f32({r}))); }}\n",
                 r = lit(range),
                 sh = 32 - bits
+            );
+            (bits, 1)
+        }
+        (_, Some(Recipe::ScalarLog2 { bits })) => {
+            f64 = true;
+            let m = (1u64 << bits) - 1;
+            let _ = write!(
+                t,
+                "// specular power as log2(p)/12 in a {bits}-bit unorm (f64 rounding); the driver's log2 and exp2, so\n\
+                 // not bit-exact (docs/SHADERS.md, Not bit-exact; up to 12 bits gbuf emits exact tables instead)\n\
+                 uvec3 {name}_enc(float v) {{ float p = isnan(v) ? 1.0 : clamp(v, 1.0, 4096.0); float l = log2(p); precise float u = l / 12.0; \
+                 float c = isnan(u) ? 0.0 : clamp(u, 0.0, 1.0); \
+                 return uvec3(uint(gbuf_d_round(gbuf_d_mul(gbuf_d_from_f32(c), gbuf_d_from_u32({m}u)))), 0u, 0u); }}\n\
+                 float {name}_dec(uvec3 c) {{ float t = gbuf_d_to_f32(gbuf_d_div(gbuf_d_from_u32(c.x & {m}u), gbuf_d_from_u32({m}u))); \
+                 precise float x = t * 12.0; float p = exp2(x); return clamp(p, 1.0, 4096.0); }}\n"
             );
             (bits, 1)
         }
@@ -767,6 +857,12 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
                 PlaneMap::SpheremapCry => ("gbuf_spheremap_project(u)".into(), "gbuf_spheremap_unproject(p)".into()),
                 PlaneMap::Lambert => ("gbuf_lambert_project(u)".into(), "gbuf_lambert_unproject(p)".into()),
                 PlaneMap::Spherical => ("gbuf_spherical_project(u)".into(), "gbuf_spherical_unproject(p)".into()),
+                PlaneMap::LambertSphere => {
+                    ("gbuf_lambert_sphere_project(u)".into(), "gbuf_lambert_sphere_unproject(p)".into())
+                }
+                PlaneMap::StereoSphere => {
+                    ("gbuf_stereo_sphere_project(u)".into(), "gbuf_stereo_sphere_unproject(p)".into())
+                }
                 PlaneMap::SpheremapIspc => {
                     ("gbuf_spheremap_ispc_project(u)".into(), "gbuf_spheremap_ispc_unproject(p)".into())
                 }
@@ -922,16 +1018,19 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
     Ok(FieldCode { k, n, text: t, camera, f64 })
 }
 
-/// Can gbuf emit codec `codec` for `slot` as shader code (it has a recipe, or it is an ID)?
+/// Can gbuf emit codec `codec` for `slot` as shader code that gives its bits exactly (it has a recipe that is
+/// exact on any conforming driver, or it is an ID)? What `gbuf budget --emit` chooses among: the codecs that go
+/// through the driver's transcendentals are emitted too, but measured rather than exact (docs/SHADERS.md).
 #[must_use]
 pub fn codec_emittable(slot: Slot, codec: &str) -> bool {
     use super::coder::Coder;
     let [n, f] = super::DEFAULT_DEPTH_RANGE;
+    let exact = |r: Option<Recipe>| r.is_some_and(|r| r.is_exact());
     match Coder::build(slot, codec, n, f) {
-        Ok(Coder::Normal(c)) => c.recipe().is_some(),
-        Ok(Coder::Depth(c)) => c.recipe().is_some(),
-        Ok(Coder::Color(c)) => c.recipe().is_some(),
-        Ok(Coder::Scalar(c)) => c.recipe().is_some(),
+        Ok(Coder::Normal(c)) => exact(c.recipe()),
+        Ok(Coder::Depth(c)) => exact(c.recipe()),
+        Ok(Coder::Color(c)) => exact(c.recipe()),
+        Ok(Coder::Scalar(c)) => exact(c.recipe()),
         Ok(Coder::Id(_) | Coder::None) => true,
         Err(_) => false,
     }

@@ -82,6 +82,9 @@ impl Projection for LambertSphere {
     fn decode_plane(&self, p: Vec2) -> Vec3 {
         LambertSphere::unproject(p)
     }
+    fn plane_map(&self) -> Option<super::PlaneMap> {
+        Some(super::PlaneMap::LambertSphere)
+    }
     fn decode_ops(&self) -> u32 {
         // The fold (Diamond::OF_SQUARE_OPS); t = min(a + b, 1) (2); a/t, b/t behind t > 0 (2 div, compare,
         // 2 selects: 5); ·π/2 (2 mul); two sines (2 transcendentals); t², r = t·√(2 − t²) (mul, sub, sqrt,

@@ -344,6 +344,11 @@ pub enum PlaneMap {
     Lambert,
     /// [`SpheremapIspc`]: the spheremap as the ISPC `deferred` example stores it (`g·0.5 + 0.5`).
     SpheremapIspc,
+    /// [`LambertSphere`]: Lambert equal-area of each hemisphere on the octahedral diamond (atan2 and sin: the
+    /// driver's transcendentals, measured like [`PlaneMap::Spherical`]).
+    LambertSphere,
+    /// [`StereoSphere`]: stereographic of each hemisphere on the octahedral diamond (no transcendental).
+    StereoSphere,
     /// [`Spherical`]: polar angle and azimuth (atan2; decoded with sin and cos: the driver's transcendentals, so
     /// not bit-exact on a GPU — docs/SHADERS.md gives the measured difference).
     Spherical,

@@ -73,6 +73,9 @@ impl Projection for StereoSphere {
     fn decode_plane(&self, p: Vec2) -> Vec3 {
         StereoSphere::unproject(p)
     }
+    fn plane_map(&self) -> Option<super::PlaneMap> {
+        Some(super::PlaneMap::StereoSphere)
+    }
     fn decode_ops(&self) -> u32 {
         // The fold (Diamond::OF_SQUARE_OPS); t = min(a + b, 1) (2); |(a, b)| (2 mul, add, sqrt: 4);
         // k = 2t/|(a, b)| behind > 0 (mul, div, compare, select: 4); x = sx·a·k, y = sy·b·k (4 mul);
