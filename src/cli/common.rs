@@ -149,10 +149,7 @@ impl ReadArgs {
                     .map_err(|e| anyhow::anyhow!("--background: {e}"))?,
                 normals: self.normals,
             },
-            limits: ReadLimits {
-                max_bytes: self.max_memory.map_or_else(ReadLimits::machine_max_bytes, |m| m.saturating_mul(1 << 20)),
-                allow_dwa: self.allow_dwa,
-            },
+            limits: read_limits(self.max_memory, self.allow_dwa),
             frame: self.frame,
             grid: self.grid,
         })
@@ -165,6 +162,14 @@ fn parse_grid(s: &str) -> Result<(u32, u32), String> {
     let n =
         |t: &str| t.trim().parse::<u32>().ok().filter(|v| *v > 0).ok_or_else(|| format!("{s:?}: write CxR, e.g. 2x2"));
     Ok((n(c)?, n(r)?))
+}
+
+/// The read limits of `--max-memory MIB` (default: the machine's share) and `--allow-dwa`.
+pub fn read_limits(max_memory: Option<u64>, allow_dwa: bool) -> ReadLimits {
+    ReadLimits {
+        max_bytes: max_memory.map_or_else(ReadLimits::machine_max_bytes, |m| m.saturating_mul(1 << 20)),
+        allow_dwa,
+    }
 }
 
 /// How to read the input dump.

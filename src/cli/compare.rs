@@ -112,12 +112,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let fail = gates(&args.fail_above, "--fail-above")?;
     let warn = gates(&args.warn_above, "--warn-above")?;
-    let limits = gbuf::io::exr::ReadLimits {
-        max_bytes: args
-            .max_memory
-            .map_or_else(gbuf::io::exr::ReadLimits::machine_max_bytes, |m| m.saturating_mul(1 << 20)),
-        allow_dwa: false,
-    };
+    let limits = super::common::read_limits(args.max_memory, false);
     let read = |p: &Path| -> anyhow::Result<ImageFile> {
         gbuf::image::file::read(p, &limits).map_err(|e| file_error(e, format!("cannot read {}", p.display())))
     };
@@ -151,7 +146,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         "PASS"
     };
-    write_outputs(&args, &c)?;
+    write_outputs(&args, &reference, &test, &c)?;
     let exceeded: Vec<String> = exceeded_fail.iter().chain(&exceeded_warn).cloned().collect();
     if args.json {
         print_json(&Output {
@@ -225,9 +220,9 @@ fn main_map(c: &Comparison) -> Option<&gbuf::measure::flip::FlipMap> {
     c.maps.1.as_ref().or(c.maps.0.as_ref())
 }
 
-fn write_outputs(args: &Args, c: &Comparison) -> anyhow::Result<()> {
+fn write_outputs(args: &Args, r: &ImageFile, t: &ImageFile, c: &Comparison) -> anyhow::Result<()> {
     if let Some(p) = &args.error_map {
-        write_error_map(p, args, c).map_err(|e| file_error(e, format!("cannot write {}", p.display())))?;
+        write_error_map(p, r, t, c).map_err(|e| file_error(e, format!("cannot write {}", p.display())))?;
     }
     if let Some(p) = &args.flip_map {
         let Some(map) = main_map(c) else {
@@ -243,12 +238,8 @@ fn write_outputs(args: &Args, c: &Comparison) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn write_error_map(path: &Path, args: &Args, c: &Comparison) -> anyhow::Result<()> {
+fn write_error_map(path: &Path, r: &ImageFile, t: &ImageFile, c: &Comparison) -> anyhow::Result<()> {
     use gbuf::io::raw::{RawChannel, RawData, RawImage};
-    // Both images again: the comparison keeps only the maps.
-    let limits = gbuf::io::exr::ReadLimits::default();
-    let r = gbuf::image::file::read(&args.reference, &limits)?;
-    let t = gbuf::image::file::read(&args.test, &limits)?;
     let diff = |k: usize| RawChannel {
         name: ["R", "G", "B"][k].into(),
         data: RawData::F32(r.image.rgb.iter().zip(&t.image.rgb).map(|(a, b)| (b[k] - a[k]).abs()).collect()),
