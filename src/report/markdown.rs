@@ -182,8 +182,27 @@ pub fn rows_table(rows: &[Row]) -> String {
             pareto_cell(r.pareto),
         );
     }
-    let notes: Vec<String> =
-        rows.iter().filter_map(|r| r.note.as_ref().map(|n| format!("- {} × {}: {n}", r.layout, r.detector))).collect();
+    // Each note once: the detectors of a layout that share it are listed together (`fat-20 (lauritzen, normal,
+    // combined): …`), in the rows' order.
+    let mut grouped: Vec<(&str, &str, Vec<&str>)> = Vec::new();
+    for r in rows {
+        let Some(n) = r.note.as_deref() else { continue };
+        match grouped.iter_mut().find(|(l, m, _)| *l == r.layout && *m == n) {
+            Some(g) => g.2.push(&r.detector),
+            None => grouped.push((&r.layout, n, vec![&r.detector])),
+        }
+    }
+    let layouts_with_rows = |l: &str| rows.iter().filter(|r| r.layout == l).count();
+    let notes: Vec<String> = grouped
+        .iter()
+        .map(|(l, n, d)| {
+            if d.len() == layouts_with_rows(l) && d.len() > 1 {
+                format!("- {l} (every detector): {n}")
+            } else {
+                format!("- {l} × {}: {n}", d.join(", "))
+            }
+        })
+        .collect();
     if !notes.is_empty() {
         s.push_str("\nNotes:\n");
         s.push_str(&notes.join("\n"));
@@ -401,6 +420,27 @@ pub fn to_markdown(rep: &Report) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_note_shared_by_a_layouts_detectors_is_said_once() {
+        let row = |layout: &str, detector: &str, note: Option<&str>| Row {
+            layout: layout.into(),
+            detector: detector.into(),
+            note: note.map(str::to_string),
+            ..Default::default()
+        };
+        let rows = vec![
+            row("a", "depth", Some("not stored")),
+            row("a", "normal", Some("not stored")),
+            row("b", "depth", Some("x")),
+            row("b", "normal", Some("y")),
+            row("b", "combined", Some("x")),
+            row("c", "depth", None),
+        ];
+        let t = rows_table(&rows);
+        let notes: Vec<&str> = t.lines().filter(|l| l.starts_with("- ")).collect();
+        assert_eq!(notes, ["- a (every detector): not stored", "- b × depth, combined: x", "- b × normal: y"], "{t}");
+    }
 
     #[test]
     fn markdown_has_every_row_and_figure() {
