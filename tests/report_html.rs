@@ -11,7 +11,14 @@ use std::process::Command;
 
 fn chromium(args: &[&str], page: &Path) -> std::process::Output {
     Command::new("chromium")
-        .args(["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-extensions"])
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-dev-shm-usage",
+            "--no-first-run",
+            "--disable-extensions",
+        ])
         .args(args)
         .arg(format!("file://{}", page.display()))
         .output()
