@@ -116,3 +116,36 @@ fn map_flag_reads_unknown_naming() {
     assert_eq!(v["attributes"]["material_id"]["mean"].as_f64(), Some(7.0));
     assert_eq!(v["attributes"]["normal"]["channels"][2], "N.Z");
 }
+
+/// Surfaces per pixel by identity on the llvmpipe capture equal a count made here from its per-sample object and
+/// primitive IDs (issue 36's first check), in `gbuf info --json`.
+#[test]
+fn surfaces_per_pixel_by_identity_match_the_captures_own_ids() {
+    let dir = tempfile::tempdir().unwrap();
+    let dump = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/raster_4x.exr");
+    let o = support::gbuf(dir.path(), &["info", dump.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", support::stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let got: Vec<u64> = v["surfaces_per_pixel"]["by_identity"]
+        .as_array()
+        .expect("by_identity")
+        .iter()
+        .map(|x| x.as_u64().unwrap())
+        .collect();
+    assert_eq!(v["surfaces_per_pixel"]["identity_key"], "object+primitive");
+    let gb = gbuf::io::load(&dump, &gbuf::io::LoadOptions::default()).unwrap().gbuffer;
+    let (obj, prim) = (gb.object_id.as_ref().unwrap(), gb.primitive_id.as_ref().unwrap());
+    let mut want = vec![0u64; gb.samples as usize + 1];
+    for y in 0..gb.height {
+        for x in 0..gb.width {
+            let ids: std::collections::BTreeSet<(u32, u32)> = (0..gb.samples)
+                .map(|s| gb.index(x, y, s))
+                .filter(|&i| gb.coverage[i])
+                .map(|i| (obj[i], prim[i]))
+                .collect();
+            want[ids.len()] += 1;
+        }
+    }
+    assert_eq!(got, want);
+    assert!(want[2] + want[3] + want[4] > 0, "the capture has pixels with several surfaces");
+}

@@ -15,6 +15,7 @@ pub mod pipelines;
 pub mod prune;
 pub mod record;
 pub mod row;
+pub mod surfaces;
 pub mod sweep;
 pub mod traffic;
 

@@ -20,6 +20,8 @@ struct WithNeeds<'a> {
     #[serde(flatten)]
     info: &'a gbuf::io::stats::Info,
     needs: gbuf::analysis::needs::Needs,
+    /// How many surfaces each pixel holds (by IDs and by geometry).
+    surfaces_per_pixel: gbuf::analysis::surfaces::SurfacesPerPixel,
     /// For packed render targets: how much of each field's code space the frame uses.
     #[serde(skip_serializing_if = "Option::is_none")]
     code_space: Option<Vec<gbuf::layout::codespace::FieldCodes>>,
@@ -43,13 +45,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let info = gbuf::io::stats::info(&loaded, &args.input.file);
     let needs = gbuf::analysis::needs_with_pruned_layout(&loaded.gbuffer);
+    let surfaces = gbuf::analysis::surfaces::surfaces_per_pixel(&loaded.gbuffer);
     if args.json {
-        print_json(&WithNeeds { info: &info, needs, code_space: code_space.map(|c| c.1) })
+        print_json(&WithNeeds { info: &info, needs, surfaces_per_pixel: surfaces, code_space: code_space.map(|c| c.1) })
     } else {
         use std::io::Write;
         let mut out = std::io::stdout().lock();
         out.write_all(info.to_text().as_bytes())?;
         out.write_all(needs.to_text().as_bytes())?;
+        out.write_all(surfaces.to_text().as_bytes())?;
         if let Some((name, rows)) = &code_space {
             writeln!(out, "code space  of layout {name}'s fields over the covered samples (no float truth: the codes are the data)")?;
             out.write_all(gbuf::layout::codespace::text(rows).as_bytes())?;
