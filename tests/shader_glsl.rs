@@ -486,10 +486,7 @@ fn every_attribute() -> GBuffer {
 /// Every built-in layout the emitter supports, on both frames.
 #[test]
 fn builtin_layouts_pack_and_unpack_on_llvmpipe_bit_for_bit() {
-    if !(support::python_has("moderngl, numpy")
-        && support::tool_has("glslangValidator")
-        && support::tool_has("spirv-cross"))
-    {
+    if !drivers_ready() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -520,6 +517,22 @@ fn builtin_layouts_pack_and_unpack_on_llvmpipe_bit_for_bit() {
     }
 }
 
+/// The driver and the compilers the shader tests run on: Mesa through moderngl, glslang (HLSL) and spirv-cross.
+/// Required in CI; elsewhere a noted skip.
+fn drivers_ready() -> bool {
+    support::python_has("moderngl, numpy") && support::tool_has("glslangValidator") && support::tool_has("spirv-cross")
+}
+
+/// A layout of one field: `attr` with `codec` at bit `offset` of a `format` target named `t`.
+fn one_field(attr: &str, codec: &str, format: &str, offset: u32) -> Layout {
+    let bits = bits_of(attr.split('.').next().unwrap_or(attr), codec);
+    let spec = format!(
+        "name = \"one\"\n[[targets]]\nname = \"t\"\nformat = \"{format}\"\nfields = [ {{ attribute = \"{attr}\", codec = \"{codec}\", offset = {offset}, bits = {bits} }} ]\n"
+    );
+    Layout::from_spec(LayoutSpec::parse(Path::new("one.toml"), &spec).unwrap())
+        .unwrap_or_else(|e| panic!("{codec}: {e}"))
+}
+
 /// The width of codec `c` for attribute `attr`.
 fn bits_of(attr: &str, c: &str) -> u32 {
     use gbuf::codec::{color_codec, depth_codec, normal_codec, scalar_codec};
@@ -535,10 +548,7 @@ fn bits_of(attr: &str, c: &str) -> u32 {
 /// included).
 #[test]
 fn codec_families_at_three_widths_on_llvmpipe() {
-    if !(support::python_has("moderngl, numpy")
-        && support::tool_has("glslangValidator")
-        && support::tool_has("spirv-cross"))
-    {
+    if !drivers_ready() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -583,10 +593,7 @@ fn codec_families_at_three_widths_on_llvmpipe() {
 /// the palette is lossless and a surface's entry is the one with its parameters), in GLSL, HLSL and WGSL.
 #[test]
 fn a_palette_keyed_material_table_on_llvmpipe() {
-    if !(support::python_has("moderngl, numpy")
-        && support::tool_has("glslangValidator")
-        && support::tool_has("spirv-cross"))
-    {
+    if !drivers_ready() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -940,20 +947,14 @@ fn wgsl_software_double_matches_rust_f64_on_llvmpipe() {
 /// emitted, and the difference is measured and bounded instead of zero (docs/SHADERS.md, "Not bit-exact").
 #[test]
 fn spherical_through_the_drivers_transcendentals_is_within_its_measured_bound() {
-    if !(support::python_has("moderngl, numpy")
-        && support::tool_has("glslangValidator")
-        && support::tool_has("spirv-cross"))
-    {
+    if !drivers_ready() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
     let frames = [("raster", fixture()), ("every", every_attribute())];
     for c in ["spherical-16", "spherical-24", "lambert-sphere-16", "lambert-sphere-24"] {
         let b = bits_of("normal", c);
-        let spec = format!(
-            "name = \"sph\"\n[[targets]]\nname = \"t\"\nformat = \"rgba32ui\"\nfields = [ {{ attribute = \"normal\", codec = \"{c}\", offset = 0, bits = {b} }} ]\n"
-        );
-        let layout = Layout::from_spec(LayoutSpec::parse(Path::new("sph.toml"), &spec).unwrap()).unwrap();
+        let layout = one_field("normal", c, "rgba32ui", 0);
         for (tag, gb) in &frames {
             for lang in [Lang::Glsl, Lang::Hlsl, Lang::Wgsl] {
                 let m = measure(&layout, gb, dir.path(), &format!("{c}-{tag}"), lang, b / 2);
@@ -977,10 +978,7 @@ fn spherical_through_the_drivers_transcendentals_is_within_its_measured_bound() 
     // log2-unorm wider than its exact tables: the driver's log2 and exp2.
     for c in ["log2-unorm-13", "log2-unorm-16", "log2-unorm-24"] {
         let b = bits_of("specular_power", c);
-        let spec = format!(
-            "name = \"lg\"\n[[targets]]\nname = \"t\"\nformat = \"r32ui\"\nfields = [ {{ attribute = \"specular_power\", codec = \"{c}\", offset = 0, bits = {b} }} ]\n"
-        );
-        let layout = Layout::from_spec(LayoutSpec::parse(Path::new("lg.toml"), &spec).unwrap()).unwrap();
+        let layout = one_field("specular_power", c, "r32ui", 0);
         let gb = every_attribute();
         for lang in [Lang::Glsl, Lang::Hlsl, Lang::Wgsl] {
             let m = measure(&layout, &gb, dir.path(), c, lang, b);
