@@ -385,10 +385,15 @@ fn hlsl_to_glsl(hlsl: &str, dir: &Path, tag: &str, out: &Path) {
         .output()
         .expect("glslangValidator (Debian glslang-tools) is required");
     assert!(o.status.success(), "{tag}: glslang:\n{}", String::from_utf8_lossy(&o.stdout));
+    spirv_to_glsl(&spv, tag, out);
+}
+
+/// SPIR-V → GLSL 4.50 (spirv-cross), for llvmpipe.
+fn spirv_to_glsl(spv: &Path, tag: &str, out: &Path) {
     let o = Command::new("spirv-cross")
         .args(["--version", "450", "--output"])
         .arg(out)
-        .arg(&spv)
+        .arg(spv)
         .output()
         .expect("spirv-cross (Debian spirv-cross) is required");
     assert!(o.status.success(), "{tag}: spirv-cross:\n{}", String::from_utf8_lossy(&o.stderr));
@@ -408,13 +413,7 @@ pub fn wgsl_to_glsl(wgsl: &str, dir: &Path, tag: &str, out: &Path) {
     let words = naga::back::spv::write_vec(&module, &info, &options, None).unwrap();
     let spv = dir.join(format!("{tag}.spv"));
     std::fs::write(&spv, words.iter().flat_map(|w| w.to_le_bytes()).collect::<Vec<u8>>()).unwrap();
-    let o = Command::new("spirv-cross")
-        .args(["--version", "450", "--output"])
-        .arg(out)
-        .arg(&spv)
-        .output()
-        .expect("spirv-cross (Debian spirv-cross) is required");
-    assert!(o.status.success(), "{tag}: spirv-cross:\n{}", String::from_utf8_lossy(&o.stderr));
+    spirv_to_glsl(&spv, tag, out);
 }
 
 /// The `GbufMaterials` uniform block (std140) for a layout with indirection, from `gbuf pack`'s table: entry k's
