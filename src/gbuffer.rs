@@ -447,6 +447,20 @@ impl GBuffer {
         }
     }
 
+    /// Resizes every present plane to `n` entries (new ones zero), keeping its storage: for a buffer reused band
+    /// after band.
+    pub fn resize_planes(&mut self, n: usize) {
+        for attr in Attribute::ALL {
+            match self.slot(attr) {
+                PlaneSlot::F32(Some(p)) => p.resize(n, 0.0),
+                PlaneSlot::Vec2(Some(p)) => p.resize(n, Vec2::ZERO),
+                PlaneSlot::Vec3(Some(p)) => p.resize(n, Vec3::ZERO),
+                PlaneSlot::U32(Some(p)) => p.resize(n, 0),
+                _ => {}
+            }
+        }
+    }
+
     /// Calls `v` on every present plane, in canonical attribute order.
     pub fn visit_planes_mut(&mut self, v: &mut impl PlaneVisitor) {
         for attr in Attribute::ALL {

@@ -89,9 +89,29 @@ pub struct Roundtrip {
 
 /// The packed texels of some samples, with what decoding them needs.
 struct Band<'a> {
-    targets: &'a [TargetPlane],
+    /// Per target: the samples' texel bytes and the bytes per texel.
+    targets: Vec<(&'a [u8], usize)>,
     table: Option<&'a MaterialTable>,
     present: &'a [Attribute],
+}
+
+impl<'a> Band<'a> {
+    /// Samples `range` of `targets` (whole planes).
+    fn of(
+        targets: &'a [TargetPlane],
+        range: Range<usize>,
+        table: Option<&'a MaterialTable>,
+        present: &'a [Attribute],
+    ) -> Self {
+        let targets = targets
+            .iter()
+            .map(|t| {
+                let size = t.format.bytes();
+                (&t.bytes[range.start * size..range.end * size], size)
+            })
+            .collect();
+        Band { targets, table, present }
+    }
 }
 
 /// A borrowed source plane for one field.
@@ -438,31 +458,34 @@ impl Layout {
         let coders = self.coders(packed.depth_range)?;
         let mut out = like.shell();
         let mut index = Vec::new();
-        let band = Band { targets: &packed.targets, table: packed.material_table.as_ref(), present: &packed.present };
-        self.unpack_samples(&band, &coders, like, 0..like.len(), &mut out, &mut index)?;
+        let band = Band::of(&packed.targets, 0..like.len(), packed.material_table.as_ref(), &packed.present);
+        let row = like.width as usize * like.samples as usize;
+        self.unpack_samples(&band, &coders, &like.coverage, row, 0..like.len(), &mut out, &mut index)?;
         self.finish_unpack(&mut out, true);
         Ok(out)
     }
 
-    /// Decodes the texels of `band` (samples `range` of `like`, whole rows) into the same samples of `out`'s
-    /// planes, creating zeroed planes that are missing. `index` is scratch for the band's material indices.
+    /// Decodes the texels of `band` (whole rows of `row` samples, whose coverage is `cov`) into samples `r` of
+    /// `out`'s planes, creating planes of `n` zeroes that are missing. Every sample of `r` in a decoded plane is
+    /// written: its value where covered, 0 elsewhere. `index` is scratch for the band's material indices.
+    #[allow(clippy::too_many_arguments)]
     fn unpack_samples(
         &self,
         band: &Band<'_>,
         coders: &[Coder],
-        like: &GBuffer,
-        range: Range<usize>,
+        cov: &[bool],
+        row: usize,
+        r: Range<usize>,
         out: &mut GBuffer,
         index: &mut Vec<u32>,
     ) -> Result<()> {
-        let n = like.len();
-        let cov = &like.coverage[range.clone()];
-        let r = range.clone();
-        let row = like.width as usize * like.samples as usize;
+        let n = out.len();
+        debug_assert!(cov.len() == r.len() && r.end <= n);
+        let range = r.clone();
         let mut has_index = false;
         for (f, coder) in self.fields().iter().zip(coders) {
-            let t = &band.targets[f.target];
-            let src = Texels { bytes: &t.bytes[..], size: t.format.bytes(), offset: f.offset, bits: f.bits, cov, row };
+            let (bytes, size) = band.targets[f.target];
+            let src = Texels { bytes, size, offset: f.offset, bits: f.bits, cov, row };
             let ids = |cs: &[u64], o: &mut [u32]| {
                 for (o, c) in o.iter_mut().zip(cs) {
                     *o = *c as u32;
@@ -531,6 +554,8 @@ impl Layout {
                                 ))
                             })?;
                             *d = entry[p];
+                        } else {
+                            *d = 0.0;
                         }
                     }
                     Ok::<(), Error>(())
@@ -615,8 +640,9 @@ impl Layout {
                 self.pack_samples(gb, &coders, &material, range.clone(), &mut targets);
                 enc += t.elapsed();
                 let t = Instant::now();
-                let band = Band { targets: &targets, table: table.as_ref(), present: &present };
-                self.unpack_samples(&band, &coders, gb, range.clone(), &mut out, &mut index)?;
+                let band = Band::of(&targets, 0..range.len(), table.as_ref(), &present);
+                let cov = &gb.coverage[range.clone()];
+                self.unpack_samples(&band, &coders, cov, row, range.clone(), &mut out, &mut index)?;
                 dec += t.elapsed();
                 start = range.end;
             }
@@ -627,6 +653,14 @@ impl Layout {
             decode_ms.push(dec.as_secs_f64() * 1e3);
         }
         Ok(Roundtrip { decoded: out, encode_ms, decode_ms, table_ms })
+    }
+
+    /// `packed` ready to be decoded a band of rows at a time ([`PackedFrame::decode_rows`]), as a lighting pass
+    /// reads it. Fails as [`Layout::unpack`] when `packed` does not fit this layout or `like`.
+    pub fn frame<'a>(&'a self, packed: &'a Packed, like: &'a GBuffer) -> Result<PackedFrame<'a>> {
+        self.check(packed, like)?;
+        let coders = self.coders(packed.depth_range)?;
+        Ok(PackedFrame { layout: self, packed, like, coders })
     }
 
     fn check(&self, packed: &Packed, like: &GBuffer) -> Result<()> {
@@ -673,8 +707,8 @@ struct Texels<'a> {
 
 impl Texels<'_> {
     /// Decodes the field into `dst` in parallel over blocks of whole rows: the block's codes are extracted, turned
-    /// into values by `decode` (a codec's slice path), and `set(dst[i], value)` runs for covered samples; the
-    /// others keep their value.
+    /// into values by `decode` (a codec's slice path), and `set(dst[i], value)` runs for covered samples,
+    /// `set(dst[i], 0)` for the others (so a reused plane holds nothing of its previous contents).
     fn fill<T: Send, V: Copy + Default + Send>(
         &self,
         dst: &mut [T],
@@ -704,9 +738,7 @@ impl Texels<'_> {
                 let mut vals = vec![V::default(); d.len()];
                 decode(&codes, &mut vals);
                 for ((d, v), &covered) in d.iter_mut().zip(vals).zip(c) {
-                    if covered {
-                        set(d, v);
-                    }
+                    set(d, if covered { v } else { V::default() });
                 }
             },
         );
@@ -775,4 +807,80 @@ pub fn field_code(packed: &Packed, field: &Field, i: usize) -> u64 {
     let t = &packed.targets[field.target];
     let size = t.format.bytes();
     extract(load_le(&t.bytes[i * size..(i + 1) * size]), field.offset, field.bits) & mask(field.bits)
+}
+
+/// A packed G-buffer with what decoding it needs, built once ([`Layout::frame`]): what a lighting pass reads. A
+/// band of rows is decoded into a small G-buffer of its own ([`PackedFrame::decode_rows`]), so a frame can be lit
+/// (or analysed) band by band without its decoded copy ever existing whole.
+pub struct PackedFrame<'a> {
+    layout: &'a Layout,
+    packed: &'a Packed,
+    like: &'a GBuffer,
+    coders: Vec<Coder>,
+}
+
+impl std::fmt::Debug for PackedFrame<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let p = self.packed;
+        f.debug_struct("PackedFrame")
+            .field("layout", &self.layout.name())
+            .field("size", &(p.width, p.height, p.samples))
+            .field("bytes", &p.total_bytes())
+            .finish_non_exhaustive()
+    }
+}
+
+impl<'a> PackedFrame<'a> {
+    /// The layout.
+    #[must_use]
+    pub fn layout(&self) -> &'a Layout {
+        self.layout
+    }
+
+    /// The packed targets.
+    #[must_use]
+    pub fn packed(&self) -> &'a Packed {
+        self.packed
+    }
+
+    /// The G-buffer whose size, sample positions, camera and coverage the packed targets have.
+    #[must_use]
+    pub fn like(&self) -> &'a GBuffer {
+        self.like
+    }
+
+    /// Decodes rows `rows` into `out`, which becomes a G-buffer of `width × rows.len()` pixels (its planes reused
+    /// when `out` held an earlier band of this frame: pass the same `GBuffer` band after band). Its planes are the
+    /// same samples of [`Layout::unpack`]'s bit for bit, in the form the lighting reads
+    /// ([`Layout::roundtrip_for_lighting`]): a layout storing depth but not position gets no position plane (the
+    /// reader derives it from depth and the camera with the frame's pixel coordinates: a band's own would be
+    /// wrong). `out`'s camera is the frame's; its coverage and planes are the band's.
+    pub fn decode_rows(&self, rows: Range<u32>, out: &mut GBuffer) -> Result<()> {
+        let like = self.like;
+        if rows.start > rows.end || rows.end > like.height {
+            return Err(Error::Argument(format!("rows {rows:?} outside the frame's {} rows", like.height)));
+        }
+        let row = like.width as usize * like.samples as usize;
+        let range = rows.start as usize * row..rows.end as usize * row;
+        (out.width, out.height, out.samples) = (like.width, rows.end - rows.start, like.samples);
+        if out.sample_positions != like.sample_positions {
+            out.sample_positions.clone_from(&like.sample_positions);
+        }
+        if out.materials.len() != like.materials.len() {
+            out.materials.clone_from(&like.materials);
+        }
+        out.coverage.clear();
+        out.coverage.extend_from_slice(&like.coverage[range.clone()]);
+        out.resize_planes(range.len());
+        let p = self.packed;
+        let band = Band::of(&p.targets, range.clone(), p.material_table.as_ref(), &p.present);
+        let mut index = Vec::new();
+        let cov = &like.coverage[range.clone()];
+        self.layout.unpack_samples(&band, &self.coders, cov, row, 0..range.len(), out, &mut index)?;
+        // No camera while finishing: nothing may derive positions from the band's own pixel coordinates.
+        out.camera = None;
+        self.layout.finish_unpack(out, false);
+        out.camera = like.camera;
+        Ok(())
+    }
 }

@@ -144,6 +144,7 @@ fn resolve_into_isa(
     out: &mut Resolved,
 ) -> Result<()> {
     let t_start = Instant::now();
+    let packed = gb.packed();
     let (gb, order) = gb.planes();
     cfg.validate()?;
     if mask.width != gb.width || mask.height != gb.height || mask.shade_count.len() != gb.pixel_count() {
@@ -156,9 +157,12 @@ fn resolve_into_isa(
             gb.height
         )));
     }
-    let reader = surface::SurfaceReader::with_order(gb, order)?;
+    let reader = match packed {
+        None => surface::SurfaceReader::with_order(gb, order)?,
+        Some(p) => packed_reader(p)?,
+    };
     let clean = lights::sanitize(lights);
-    let frame = schedule::Frame::new(reader, mask, &clean.lights, &clean.environment, *cfg, isa);
+    let frame = schedule::Frame::new(reader, packed, mask, &clean.lights, &clean.environment, *cfg, isa);
     let t_prep = t_start.elapsed();
 
     let t_par = Instant::now();
@@ -169,7 +173,13 @@ fn resolve_into_isa(
     image.rgb.resize(n, glam::Vec3::ZERO);
     let mut heat = std::mem::take(&mut out.lights_per_pixel);
     heat.resize(n, 0);
-    let t = schedule::run_tiles(&frame, &mut image.rgb, &mut heat);
+    let t = match schedule::run_tiles(&frame, &mut image.rgb, &mut heat) {
+        Ok(t) => t,
+        Err(e) => {
+            (out.image, out.lights_per_pixel) = (image, heat);
+            return Err(e);
+        }
+    };
     let par_wall = t_par.elapsed();
 
     let mut stats = ResolveStats { lights: clean.lights.len() as u64, tiles: t.tiles, ..Default::default() };
@@ -190,12 +200,34 @@ fn resolve_into_isa(
     } else {
         0.0
     };
-    let busy = (tg + tc + tsh).as_secs_f64();
+    // The band decode is timed on every band, the tile stages on a sample of the tiles: on the same scale first.
+    let td = if t.tiles > 0 { t.t_decode.mul_f64(t.timed as f64 / t.tiles as f64) } else { Duration::ZERO };
+    let busy = (tg + tc + tsh + td).as_secs_f64();
     let share = |d: Duration| if busy > 0.0 { ms(par_wall) * d.as_secs_f64() / busy } else { 0.0 };
+    stats.ms.decode = share(td);
     stats.ms.gather = share(tg);
     stats.ms.cull = ms(t_prep) + share(tc);
     stats.ms.shade = share(tsh);
     stats.ms.total = ms(t_start.elapsed());
     *out = Resolved { image, stats, lights_per_pixel: heat };
     Ok(())
+}
+
+/// The reader of a packed frame's camera rays, after checking that its bands can be lit: the decoded planes give a
+/// position (a position plane, or depth with the frame's camera), as [`surface::SurfaceReader::with_order`]
+/// demands of planes.
+fn packed_reader<'a>(p: &'a crate::layout::PackedFrame<'a>) -> Result<surface::SurfaceReader<'a>> {
+    let like = p.like();
+    let mut probe = crate::gbuffer::GBuffer::default();
+    p.decode_rows(0..like.height.min(1), &mut probe)?;
+    let derivable = probe.depth.is_some() && like.camera.is_some();
+    if probe.position.is_none() && !derivable && like.coverage.iter().any(|&c| c) {
+        return Err(Error::Argument(format!(
+            "the resolve needs view-space positions: layout {:?} stores no position, and no depth with a camera to \
+             derive one",
+            p.layout().name()
+        )));
+    }
+    // Only the camera's rays and the frame's size are read through it: every band is decoded on its own.
+    surface::SurfaceReader::with_order(like, surface::SampleOrder::Interleaved)
 }

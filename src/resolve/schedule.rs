@@ -18,6 +18,9 @@ use super::surface::{Reads, SanitizedCounts, SurfaceReader, MIN_VIEW_DEPTH};
 use super::worklist::{Items, QuadSoa, PAD_PIXEL};
 use crate::base::isa::Isa;
 use crate::base::mask::EdgeMask;
+use crate::error::Result;
+use crate::gbuffer::GBuffer;
+use crate::layout::PackedFrame;
 use crate::light::Light;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -25,8 +28,14 @@ use std::time::{Duration, Instant};
 
 /// Everything shared by the tiles of one resolve.
 pub struct Frame<'a> {
-    /// Sample reader.
+    /// Sample reader: of the frame's planes, or (when `packed` is given) only for the camera's rays.
     pub reader: SurfaceReader<'a>,
+    /// The packed targets each band is decoded from, when the frame is lit from them.
+    pub packed: Option<&'a PackedFrame<'a>>,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
     /// Which pixels are shaded per sample.
     pub mask: &'a EdgeMask,
     /// Sanitised lights (the light loop's).
@@ -48,6 +57,7 @@ impl<'a> Frame<'a> {
     #[must_use]
     pub fn new(
         reader: SurfaceReader<'a>,
+        packed: Option<&'a PackedFrame<'a>>,
         mask: &'a EdgeMask,
         lights: &'a [Light],
         environment: &'a [super::lights::Hemisphere],
@@ -56,7 +66,20 @@ impl<'a> Frame<'a> {
     ) -> Self {
         let table = LightTable::new(lights, cfg.falloff);
         let quads = if cfg.culling == Culling::Quad { quad_rects(lights) } else { QuadSoa::default() };
-        Frame { reader, mask, lights, environment, table, quads, cfg, isa: isa.min(Isa::detect()) }
+        let (width, height) = (reader.gbuffer().width, reader.gbuffer().height);
+        Frame {
+            reader,
+            packed,
+            width,
+            height,
+            mask,
+            lights,
+            environment,
+            table,
+            quads,
+            cfg,
+            isa: isa.min(Isa::detect()),
+        }
     }
 }
 
@@ -83,6 +106,10 @@ pub struct TileStats {
     pub t_cull: Duration,
     /// Time shading and filtering (sampled as `t_gather`).
     pub t_shade: Duration,
+    /// Time decoding packed bands (every band: scale by `timed / tiles` to compare with the three above).
+    pub t_decode: Duration,
+    /// Tiles whose stages were timed.
+    pub timed: u64,
 }
 
 impl TileStats {
@@ -99,6 +126,8 @@ impl TileStats {
         self.t_gather += o.t_gather;
         self.t_cull += o.t_cull;
         self.t_shade += o.t_shade;
+        self.t_decode += o.t_decode;
+        self.timed += o.timed;
         self
     }
 }
@@ -137,18 +166,19 @@ struct Scratch {
     /// Light evaluations in f32 (whole numbers, exact below 2²⁴ like the kernel's counts), converted when the band
     /// is copied out.
     band_heat: Vec<f32>,
+    /// The band decoded from packed targets (when the frame is lit from them).
+    band_gb: GBuffer,
 }
 
 /// Runs every tile of `frame`, writing pixel colours into `rgb` and light evaluations per pixel into `heat`
 /// (both row-major, `width × height`). Bands of one tile row run in parallel on the current rayon pool; each band
 /// walks its tiles left to right (fetching the next tile's rows ahead) and owns its rows of the outputs, so the
 /// result does not depend on the thread count.
-pub fn run_tiles(frame: &Frame<'_>, rgb: &mut [Vec3], heat: &mut [u32]) -> TileStats {
-    let gb = frame.reader.gbuffer();
+pub fn run_tiles(frame: &Frame<'_>, rgb: &mut [Vec3], heat: &mut [u32]) -> Result<TileStats> {
     let ts = frame.cfg.tile_size;
-    let band_len = (gb.width * ts) as usize;
+    let band_len = (frame.width * ts) as usize;
     if band_len == 0 {
-        return TileStats::default();
+        return Ok(TileStats::default());
     }
     rgb.par_chunks_mut(band_len)
         .zip(heat.par_chunks_mut(band_len))
@@ -165,16 +195,46 @@ pub fn run_tiles(frame: &Frame<'_>, rgb: &mut [Vec3], heat: &mut [u32]) -> TileS
             }
             run_band(frame, y0, sc, rgb, heat)
         })
-        .reduce(TileStats::default, TileStats::merged)
+        .try_reduce(TileStats::default, |a, b| Ok(a.merged(b)))
 }
 
-/// One band of tiles starting at row `y0`, left to right. Compiled once per instruction set (below) so the
-/// work-list build and the box filter vectorise too; the shading kernel dispatches on its own.
+/// One band of tiles starting at row `y0`, left to right: from the frame's planes, or decoded from the packed
+/// targets first into the thread's band buffer (one tile row: it stays in the last-level cache while its tiles read
+/// it). Compiled once per instruction set (below) so the work-list build and the box filter vectorise too; the
+/// shading kernel dispatches on its own.
 #[inline(always)]
-fn run_band(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat: &mut [u32]) -> TileStats {
-    let gb = frame.reader.gbuffer();
+fn run_band(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat: &mut [u32]) -> Result<TileStats> {
+    let Some(packed) = frame.packed else {
+        return Ok(run_band_tiles(frame, &frame.reader, y0, sc, rgb, heat));
+    };
+    let h = frame.cfg.tile_size.min(frame.height - y0);
+    let t = Instant::now();
+    let mut band = std::mem::take(&mut sc.band_gb);
+    let decoded = packed.decode_rows(y0..y0 + h, &mut band);
+    let t_decode = t.elapsed();
+    let st = decoded.map(|()| {
+        let rd = SurfaceReader::band(&band, frame.reader.rays(), y0);
+        let mut st = run_band_tiles(frame, &rd, y0, sc, rgb, heat);
+        st.t_decode += t_decode;
+        st
+    });
+    sc.band_gb = band;
+    st
+}
+
+/// The tiles of the band at row `y0`, read through `rd`.
+#[inline(always)]
+fn run_band_tiles(
+    frame: &Frame<'_>,
+    rd: &SurfaceReader<'_>,
+    y0: u32,
+    sc: &mut Scratch,
+    rgb: &mut [Vec3],
+    heat: &mut [u32],
+) -> TileStats {
+    let (width, height) = (frame.width, frame.height);
     let ts = frame.cfg.tile_size;
-    let h = ts.min(gb.height - y0);
+    let h = ts.min(height - y0);
     let mut st = TileStats::default();
     // Every pixel of the band is written by its tile: no clearing.
     let n = rgb.len();
@@ -182,19 +242,19 @@ fn run_band(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat
     sc.band_heat.resize(n, 0.0);
     // The band's rows of the edge mask (one byte per pixel, a few kB) first: the prefetch of each next tile reads
     // them.
-    let width = gb.width as usize;
-    for row in frame.mask.shade_count[y0 as usize * width..(y0 + h) as usize * width].chunks(64) {
+    let w = width as usize;
+    for row in frame.mask.shade_count[y0 as usize * w..(y0 + h) as usize * w].chunks(64) {
         std::hint::black_box(row[0]);
     }
-    let planes = planes_read(frame);
+    let planes = planes_read(frame, rd);
     let mut x0 = 0;
-    while x0 < gb.width {
-        let w = ts.min(gb.width - x0);
+    while x0 < width {
+        let w = ts.min(width - x0);
         let next = x0 + w;
-        if next < gb.width {
-            prefetch_tile(frame, &planes, next, y0, ts.min(gb.width - next), h);
+        if next < width {
+            prefetch_tile(frame, rd, &planes, next, y0, ts.min(width - next), h);
         }
-        run_tile(frame, Tile { x0, y0, w, h }, sc, &mut st);
+        run_tile(frame, rd, Tile { x0, y0, w, h }, sc, &mut st);
         x0 = next;
     }
     // To the outputs, replacing any non-finite colour by black (counted).
@@ -213,22 +273,34 @@ fn run_band(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
-fn run_band_avx512(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat: &mut [u32]) -> TileStats {
+fn run_band_avx512(
+    frame: &Frame<'_>,
+    y0: u32,
+    sc: &mut Scratch,
+    rgb: &mut [Vec3],
+    heat: &mut [u32],
+) -> Result<TileStats> {
     run_band(frame, y0, sc, rgb, heat)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn run_band_avx2(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat: &mut [u32]) -> TileStats {
+fn run_band_avx2(
+    frame: &Frame<'_>,
+    y0: u32,
+    sc: &mut Scratch,
+    rgb: &mut [Vec3],
+    heat: &mut [u32],
+) -> Result<TileStats> {
     run_band(frame, y0, sc, rgb, heat)
 }
 
 /// The planes the resolve reads for `frame`'s BRDF, as (start, bytes per sample): what [`prefetch_tile`] fetches.
-fn planes_read(frame: &Frame<'_>) -> [Option<(*const i8, usize)>; 8] {
+fn planes_read(frame: &Frame<'_>, rd: &SurfaceReader<'_>) -> [Option<(*const i8, usize)>; 8] {
     fn raw<T>(p: Option<&[T]>) -> Option<(*const i8, usize)> {
         p.map(|p| (p.as_ptr().cast::<i8>(), std::mem::size_of::<T>()))
     }
-    let gb = frame.reader.gbuffer();
+    let gb = rd.gbuffer();
     let reads = Reads::of(frame.cfg.brdf);
     let only = |read: bool, p: &Option<Vec<f32>>| if read { raw(p.as_deref()) } else { None };
     [
@@ -248,7 +320,15 @@ fn planes_read(frame: &Frame<'_>) -> [Option<(*const i8, usize)>; 8] {
 /// the work-list build waits on memory. Interleaved order: every sample of the tile's rows. Split order: sample 0
 /// of the rows, and the other samples of the edge pixels only (their own lines: issued a tile ahead, the misses
 /// overlap).
-fn prefetch_tile(frame: &Frame<'_>, planes: &[Option<(*const i8, usize)>], x0: u32, y0: u32, w: u32, h: u32) {
+fn prefetch_tile(
+    frame: &Frame<'_>,
+    rd: &SurfaceReader<'_>,
+    planes: &[Option<(*const i8, usize)>],
+    x0: u32,
+    y0: u32,
+    w: u32,
+    h: u32,
+) {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T1};
@@ -263,11 +343,11 @@ fn prefetch_tile(frame: &Frame<'_>, planes: &[Option<(*const i8, usize)>], x0: u
                 line = line.wrapping_add(64);
             }
         }
-        let gb = frame.reader.gbuffer();
+        let gb = rd.gbuffer();
         if w == 0 || h == 0 {
             return;
         }
-        let at = frame.reader.sample_index();
+        let at = rd.sample_index();
         let width = gb.width as usize;
         // Interleaved: through the last sample of the row's last pixel.
         let tail = if at.split() { 1 } else { gb.samples as usize };
@@ -297,11 +377,12 @@ fn prefetch_tile(frame: &Frame<'_>, planes: &[Option<(*const i8, usize)>], x0: u
 /// Gathers, culls and shades one tile, box-filtering into the band's buffers (every pixel of the tile is
 /// written; pixels with nothing to shade are black) and adding the work to `st`.
 #[inline(always)]
-fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) {
+fn run_tile(frame: &Frame<'_>, rd: &SurfaceReader<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) {
     // One clock reading per stage boundary (`lap`: the time since the previous one), on one tile in
     // [`TIME_EVERY`]: the readings cost about 2% of the frame on every tile, and the stage times are only used as
     // shares of the parallel section's wall time.
     let mut last = st.tiles.is_multiple_of(TIME_EVERY).then(Instant::now);
+    st.timed += u64::from(last.is_some());
     let mut lap = || {
         let Some(l) = &mut last else { return Duration::ZERO };
         let now = Instant::now();
@@ -310,10 +391,10 @@ fn run_tile(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats)
         d
     };
     st.tiles += 1;
-    let (n_first, n_real) = gather(frame, tile, sc, st);
+    let (n_first, n_real) = gather(frame, rd, tile, sc, st);
     st.t_gather += lap();
     // Pixels with no sample are black; edge pixels add their samples from 0.
-    let width = frame.reader.gbuffer().width as usize;
+    let width = rd.gbuffer().width as usize;
     for &px in &sc.blank_px {
         sc.band_rgb[px as usize] = Vec3::ZERO;
         sc.band_heat[px as usize] = 0.0;
@@ -524,8 +605,14 @@ fn spread(msaa: MsaaSchedule, n_first: usize, n_real: usize, sc: &mut Scratch) -
 /// Returns how many items are the first sample of their pixel (they come first) and how many are real (the rest
 /// pad the list to whole vectors).
 #[inline(always)]
-fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -> (usize, usize) {
-    let gb = frame.reader.gbuffer();
+fn gather(
+    frame: &Frame<'_>,
+    rd: &SurfaceReader<'_>,
+    tile: Tile,
+    sc: &mut Scratch,
+    st: &mut TileStats,
+) -> (usize, usize) {
+    let gb = rd.gbuffer();
     let samples = gb.samples;
     let weight = 1.0 / samples as f32;
     let it = &mut sc.items;
@@ -557,7 +644,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
     sc.src.reserve(cap);
     let plane = gb.position.as_deref();
     // Where samples sit (either order): a row's samples 0 are `stride` apart.
-    let at = frame.reader.sample_index();
+    let at = rd.sample_index();
     let stride = at.first_stride();
     for y in tile.y0..tile.y0 + tile.h {
         let row = y as usize * width;
@@ -616,7 +703,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
             let local = (local_row + k) as u32;
             if count > 1 {
                 // An edge pixel: sample 0 now, when usable; the others after the tile's single samples.
-                let pos = frame.reader.position(x, y, 0, first, counts);
+                let pos = rd.position(x, y, 0, first, counts);
                 if let Some(pos) = pos {
                     push(it, &mut sc.src, pos, first, local, weight);
                 }
@@ -635,7 +722,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
             }
             let found = (0..samples).any(|s| {
                 let i = at.of(row + x0 + k, s);
-                let pos = frame.reader.position(x, y, s, i, counts);
+                let pos = rd.position(x, y, s, i, counts);
                 if let Some(pos) = pos {
                     push(it, &mut sc.src, pos, i, local, 1.0);
                 }
@@ -653,7 +740,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
         let before = sc.src.len();
         for s in 1..samples {
             let i = rest + s as usize - 1;
-            if let Some(pos) = frame.reader.position(x, y, s, i, counts) {
+            if let Some(pos) = rd.position(x, y, s, i, counts) {
                 push(it, &mut sc.src, pos, i, local, weight);
             }
         }
@@ -666,7 +753,7 @@ fn gather(frame: &Frame<'_>, tile: Tile, sc: &mut Scratch, st: &mut TileStats) -
             let (i, p) = (sc.src[n_real - 1], glam::Vec3::new(it.px[n_real - 1], it.py[n_real - 1], it.pz[n_real - 1]));
             push(it, &mut sc.src, p, i, PAD_PIXEL, 0.0);
         }
-        frame.reader.fill_attributes(frame.isa, &sc.src, it, frame.cfg.brdf, counts);
+        rd.fill_attributes(frame.isa, &sc.src, it, frame.cfg.brdf, counts);
     }
     (n_first, n_real)
 }

@@ -15,6 +15,7 @@
 use super::surface::SampleOrder;
 use crate::error::Result;
 use crate::gbuffer::GBuffer;
+use crate::layout::PackedFrame;
 use rayon::prelude::*;
 
 /// A G-buffer's resolve attributes (coverage, depth, position, normal, albedo, specular, specular power,
@@ -120,6 +121,15 @@ pub enum ResolveInput<'a> {
     Interleaved(&'a GBuffer),
     /// Split order.
     Split(&'a SplitSamples),
+    /// Packed render targets, decoded band by band inside the resolve ([`crate::layout::Layout::frame`]): the
+    /// image is the unpacked G-buffer's bit for bit, and no decoded copy of the frame exists.
+    Packed(&'a PackedFrame<'a>),
+}
+
+impl<'a> From<&'a PackedFrame<'a>> for ResolveInput<'a> {
+    fn from(frame: &'a PackedFrame<'a>) -> Self {
+        ResolveInput::Packed(frame)
+    }
 }
 
 impl<'a> From<&'a GBuffer> for ResolveInput<'a> {
@@ -141,6 +151,16 @@ impl<'a> ResolveInput<'a> {
         match self {
             ResolveInput::Interleaved(gb) => (gb, SampleOrder::Interleaved),
             ResolveInput::Split(split) => (&split.gb, SampleOrder::Split),
+            ResolveInput::Packed(frame) => (frame.like(), SampleOrder::Interleaved),
+        }
+    }
+
+    /// The packed targets, when the input is packed.
+    #[must_use]
+    pub(crate) fn packed(self) -> Option<&'a PackedFrame<'a>> {
+        match self {
+            ResolveInput::Packed(frame) => Some(frame),
+            _ => None,
         }
     }
 }

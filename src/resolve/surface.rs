@@ -128,6 +128,9 @@ pub struct SampleIndex {
     rest: usize,
     /// Split order with more than one sample.
     split: bool,
+    /// Pixel number of the planes' first pixel: 0 for a whole frame, the band's first pixel for a band of rows
+    /// decoded on its own (pixel numbers stay the frame's).
+    origin: usize,
 }
 
 impl SampleIndex {
@@ -135,10 +138,16 @@ impl SampleIndex {
     #[must_use]
     pub fn new(order: SampleOrder, pixels: usize, samples: usize) -> Self {
         match order {
-            SampleOrder::Interleaved => SampleIndex { first: samples, rest_base: 1, rest: samples, split: false },
-            SampleOrder::Split => {
-                SampleIndex { first: 1, rest_base: pixels, rest: samples.saturating_sub(1), split: samples > 1 }
+            SampleOrder::Interleaved => {
+                SampleIndex { first: samples, rest_base: 1, rest: samples, split: false, origin: 0 }
             }
+            SampleOrder::Split => SampleIndex {
+                first: 1,
+                rest_base: pixels,
+                rest: samples.saturating_sub(1),
+                split: samples > 1,
+                origin: 0,
+            },
         }
     }
 
@@ -146,14 +155,14 @@ impl SampleIndex {
     #[inline(always)]
     #[must_use]
     pub fn first(&self, p: usize) -> usize {
-        p * self.first
+        (p - self.origin) * self.first
     }
 
     /// Plane index of sample 1 of pixel number `p`; samples `2..` follow it.
     #[inline(always)]
     #[must_use]
     pub fn rest(&self, p: usize) -> usize {
-        self.rest_base + p * self.rest
+        self.rest_base + (p - self.origin) * self.rest
     }
 
     /// Plane index of sample `s` of pixel number `p`.
@@ -206,11 +215,26 @@ impl<'a> SurfaceReader<'a> {
         Ok(SurfaceReader { gb, rays, at })
     }
 
+    /// Reads `band`, rows `y0..y0 + band.height` of a frame decoded on their own (interleaved order, see
+    /// [`crate::layout::PackedFrame::decode_rows`]), with the frame's pixel coordinates: `rays` are the frame's
+    /// (positions derived from depth are the whole frame's bit for bit).
+    pub(crate) fn band(band: &'a GBuffer, rays: Option<RayCaster>, y0: u32) -> Self {
+        let mut at = SampleIndex::new(SampleOrder::Interleaved, band.pixel_count(), band.samples as usize);
+        at.origin = y0 as usize * band.width as usize;
+        SurfaceReader { gb: band, rays, at }
+    }
+
+    /// The camera rays positions are derived with.
+    #[must_use]
+    pub(crate) fn rays(&self) -> Option<RayCaster> {
+        self.rays
+    }
+
     /// Plane index of sample `s` of pixel (`x`, `y`), in the reader's sample order.
     #[inline(always)]
     #[must_use]
     pub fn index(&self, x: u32, y: u32, s: u32) -> usize {
-        debug_assert!(x < self.gb.width && y < self.gb.height && s < self.gb.samples);
+        debug_assert!(x < self.gb.width && s < self.gb.samples);
         self.at.of(y as usize * self.gb.width as usize + x as usize, s)
     }
 

@@ -1,0 +1,135 @@
+//! The resolve lit from packed render targets (decoded band by band inside it, `Layout::frame`) against the resolve
+//! of the unpacked G-buffer: the same image, heatmap and counts bit for bit, for every built-in layout, detector,
+//! BRDF, culling mode, MSAA schedule, instruction set and thread count.
+
+mod support;
+
+use gbuf::base::isa::Isa;
+use gbuf::detect::{detect, Detector, DetectorConfig};
+use gbuf::layout::Layout;
+use gbuf::light::Light;
+use gbuf::resolve::{resolve_isa, Brdf, Culling, MsaaSchedule, ResolveConfig, Resolved, Schedule};
+use gbuf::scene::{default_lights, render, SceneName};
+use gbuf::GBuffer;
+
+/// Everything but the timings.
+fn same(a: &Resolved, b: &Resolved, what: &str) {
+    assert_eq!((a.image.width, a.image.height), (b.image.width, b.image.height), "{what}");
+    for (i, (x, y)) in a.image.rgb.iter().zip(&b.image.rgb).enumerate() {
+        assert!(x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits), "{what}: pixel {i}: {x} vs {y}");
+    }
+    assert_eq!(a.lights_per_pixel, b.lights_per_pixel, "{what}: heatmap");
+    let (mut sa, mut sb) = (a.stats.clone(), b.stats.clone());
+    (sa.ms, sb.ms) = (Default::default(), Default::default());
+    assert_eq!(sa, sb, "{what}: statistics");
+}
+
+/// The room (materials, IDs, a camera: depth-only layouts derive positions) at a size that is not a whole number
+/// of tiles, and a frame with every attribute (roughness and metallic for GGX, values out of every codec's range).
+fn frames() -> Vec<(&'static str, GBuffer, Vec<Light>)> {
+    let room = render(SceneName::Room, 70, 37, 4).unwrap();
+    let lights = default_lights(SceneName::Room, &room);
+    let mut every = support::io::plausible(29, 21, 4, 3);
+    let n = every.len();
+    let mut r = gbuf::util::SplitMix64::new(5);
+    every.specular = Some((0..n).map(|_| r.range_f32(-0.2, 1.2)).collect());
+    every.specular_power = Some((0..n).map(|_| r.range_f32(0.0, 300.0)).collect());
+    every.roughness = Some((0..n).map(|_| r.range_f32(-0.1, 1.1)).collect());
+    every.metallic = Some((0..n).map(|_| r.next_f32()).collect());
+    every.zero_background();
+    let every_lights = gbuf::resolve::fixture::lights_on_surfaces(&every, 20, 3.0, 7);
+    vec![("room", room, lights), ("every-attribute", every, every_lights)]
+}
+
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap()
+}
+
+#[test]
+fn packed_input_lights_every_layout_as_its_unpacked_gbuffer() {
+    let det_cfg = DetectorConfig::default();
+    let mut checked = 0;
+    for (name, gb, lights) in frames() {
+        let masks: Vec<_> = [Detector::Lauritzen, Detector::Ssaa, Detector::None]
+            .into_iter()
+            .map(|d| (d, detect(&gb, d, &det_cfg).unwrap()))
+            .collect();
+        for layout in Layout::builtins() {
+            let packed = layout.pack(&gb).unwrap();
+            let unpacked = layout.unpack(&packed, &gb).unwrap();
+            let frame = layout.frame(&packed, &gb).unwrap();
+            for (d, mask) in &masks {
+                for brdf in Brdf::ALL {
+                    for culling in Culling::ALL {
+                        for (schedule, msaa) in [
+                            (Schedule::Deferred, MsaaSchedule::Packed),
+                            (Schedule::Deferred, MsaaSchedule::PerPixel),
+                            (Schedule::LightPrepass, MsaaSchedule::TwoPass),
+                        ] {
+                            let cfg = ResolveConfig { brdf, culling, schedule, msaa, ..Default::default() };
+                            if cfg.validate().is_err() {
+                                continue; // per-pixel with clustered culling
+                            }
+                            for isa in Isa::available() {
+                                let what = format!(
+                                    "{name} / {} / {d} / {brdf} / {culling} / {schedule} / {msaa} / {isa:?}",
+                                    layout.name()
+                                );
+                                let a = resolve_isa(isa, &unpacked, &lights, mask, &cfg).unwrap();
+                                let b = resolve_isa(isa, &frame, &lights, mask, &cfg).unwrap();
+                                assert!(a.stats.shading_evaluations > 0, "{what}: nothing shaded");
+                                same(&a, &b, &what);
+                                checked += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(checked >= 2 * 8 * 3 * 3 * 11, "{checked} combinations");
+}
+
+#[test]
+fn packed_input_is_independent_of_thread_count_and_tile_size() {
+    let (_, gb, lights) = frames().remove(0);
+    let mask = detect(&gb, Detector::Lauritzen, &DetectorConfig::default()).unwrap();
+    for layout in Layout::builtins() {
+        let packed = layout.pack(&gb).unwrap();
+        let unpacked = layout.unpack(&packed, &gb).unwrap();
+        let frame = layout.frame(&packed, &gb).unwrap();
+        for tile_size in [8, 16, 32] {
+            let cfg = ResolveConfig { tile_size, ..Default::default() };
+            let a = pool(1).install(|| resolve_isa(Isa::detect(), &unpacked, &lights, &mask, &cfg).unwrap());
+            for threads in [1, 2, 3] {
+                let b = pool(threads).install(|| resolve_isa(Isa::detect(), &frame, &lights, &mask, &cfg).unwrap());
+                same(&a, &b, &format!("{} / tile {tile_size} / {threads} threads", layout.name()));
+            }
+        }
+    }
+}
+
+#[test]
+fn a_packed_frame_with_nothing_to_derive_positions_from_is_refused() {
+    let (_, mut gb, lights) = frames().remove(0);
+    gb.camera = None;
+    let layout = Layout::by_name_or_path("lauritzen-15").unwrap();
+    let packed = layout.pack(&gb).unwrap();
+    let frame = layout.frame(&packed, &gb).unwrap();
+    let mask = detect(&gb, Detector::None, &DetectorConfig::default()).unwrap();
+    let err = gbuf::resolve::resolve(&frame, &lights, &mask, &ResolveConfig::default()).unwrap_err().to_string();
+    assert!(err.contains("positions") && err.contains("lauritzen-15"), "{err}");
+}
+
+#[test]
+fn a_corrupt_material_index_is_an_error_not_a_panic() {
+    let (_, gb, lights) = frames().remove(0);
+    let layout = Layout::builtins().into_iter().find(|l| l.indirection().is_some()).expect("a layout with a table");
+    let mut packed = layout.pack(&gb).unwrap();
+    let table = packed.material_table.as_mut().unwrap();
+    table.entries.truncate(1);
+    let frame = layout.frame(&packed, &gb).unwrap();
+    let mask = detect(&gb, Detector::None, &DetectorConfig::default()).unwrap();
+    let err = gbuf::resolve::resolve(&frame, &lights, &mask, &ResolveConfig::default()).unwrap_err().to_string();
+    assert!(err.contains("material index"), "{err}");
+}
