@@ -133,3 +133,32 @@ fn a_corrupt_material_index_is_an_error_not_a_panic() {
     let err = gbuf::resolve::resolve(&frame, &lights, &mask, &ResolveConfig::default()).unwrap_err().to_string();
     assert!(err.contains("material index"), "{err}");
 }
+
+#[test]
+fn detectors_on_packed_bands_match_the_unpacked_gbuffer() {
+    let det_cfg = DetectorConfig::default();
+    let mut compared = 0;
+    for (name, gb, _) in frames() {
+        for layout in Layout::builtins() {
+            let packed = layout.pack(&gb).unwrap();
+            let unpacked = layout.unpack(&packed, &gb).unwrap();
+            let frame = layout.frame(&packed, &gb).unwrap();
+            for d in Detector::ALL {
+                let what = format!("{name} / {} / {d}", layout.name());
+                match (detect(&unpacked, d, &det_cfg), gbuf::detect::detect_packed(&frame, d, &det_cfg)) {
+                    (Ok(a), Ok(b)) => {
+                        assert_eq!(a, b, "{what}");
+                        compared += 1;
+                    }
+                    // The same refusal (the list of planes it gives differs by the position the lighting derives).
+                    (Err(a), Err(b)) => {
+                        let cause = |e: gbuf::Error| e.to_string().split("; the G-buffer has").next().unwrap().to_string();
+                        assert_eq!(cause(a), cause(b), "{what}");
+                    }
+                    (a, b) => panic!("{what}: {a:?} vs {b:?}"),
+                }
+            }
+        }
+    }
+    assert!(compared >= 2 * 8 * 5, "{compared} masks compared");
+}

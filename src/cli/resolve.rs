@@ -177,17 +177,44 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let gb: GBuffer = loaded.gbuffer;
     let (lights, lights_source) = pick_lights(loaded.lights, args.lights, args.seed, &gb, &file)?;
 
-    let layout_name = args.layout.clone();
-    let (packed, t_pack) = timed(|| -> anyhow::Result<Option<GBuffer>> {
-        let Some(name) = &layout_name else { return Ok(None) };
-        let layout = gbuf::layout::Layout::by_name_or_path(name).with_context(|| format!("--layout {name}"))?;
-        Ok(Some(layout.roundtrip(&gb).with_context(|| format!("{file}: packing with layout {name}"))?))
+    // With a layout the G-buffer is packed into its render targets, and the edge pass and the lighting read those
+    // targets band by band, as a GPU does: no decoded copy of the frame is made.
+    let layout = match &args.layout {
+        Some(name) => Some(gbuf::layout::Layout::by_name_or_path(name).with_context(|| format!("--layout {name}"))?),
+        None => None,
+    };
+    // A layout whose packed frame is no smaller than its decoded planes (a lossless 84-byte layout) gains nothing
+    // from it: that one is unpacked band by band into a copy as before (`Layout::roundtrip_for_lighting`).
+    let packs_smaller = |l: &gbuf::layout::Layout| {
+        let decoded: usize = l.stored_attributes().iter().filter(|a| gb.has(**a)).map(|a| 4 * a.components()).sum();
+        l.bytes_per_sample() < decoded
+    };
+    let in_cpu_copy = layout.as_ref().filter(|l| !packs_smaller(l));
+    let (prepared, t_pack) = timed(|| -> gbuf::Result<(Option<gbuf::layout::Packed>, Option<GBuffer>)> {
+        match (&layout, in_cpu_copy) {
+            (None, _) => Ok((None, None)),
+            (Some(l), None) => Ok((Some(l.pack(&gb)?), None)),
+            (Some(l), Some(_)) => Ok((None, Some(l.roundtrip_for_lighting(&gb, 1)?.decoded))),
+        }
     });
-    let packed = packed?;
-    let lit_gb = packed.as_ref().unwrap_or(&gb);
+    let (packed, copy) =
+        prepared.with_context(|| format!("{file}: packing with layout {}", args.layout.as_deref().unwrap_or("")))?;
+    let frame = match (&layout, &packed) {
+        (Some(l), Some(p)) => Some(l.frame(p, &gb).with_context(|| format!("{file}: layout {}", l.name()))?),
+        _ => None,
+    };
+    let lit_gb: resolve::ResolveInput<'_> = match (&frame, &copy) {
+        (Some(f), _) => f.into(),
+        (None, Some(c)) => c.into(),
+        (None, None) => (&gb).into(),
+    };
     let t_decode = t_decode + t_pack;
 
-    let (mask, t_detect) = timed(|| detect::detect(lit_gb, args.detector, &det_cfg));
+    let (mask, t_detect) = timed(|| match (&frame, &copy) {
+        (Some(f), _) => detect::detect_packed(f, args.detector, &det_cfg),
+        (None, Some(c)) => detect::detect(c, args.detector, &det_cfg),
+        (None, None) => detect::detect(&gb, args.detector, &det_cfg),
+    });
     let mask = mask.with_context(|| format!("{file}: edge detector {}", args.detector))?;
 
     let resolved = resolve::resolve(lit_gb, &lights, &mask, &cfg).with_context(|| format!("{file}: resolve"))?;
@@ -197,7 +224,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         gb.coverage.iter().filter(|c| **c).count(),
         gb.len()
     );
-    let mut stage = StageMs { decode: t_decode, detect: t_detect, ..resolved.stats.ms };
+    // The resolve's own decode (the packed bands it read) is part of the pass.
+    let mut stage = StageMs { decode: t_decode + resolved.stats.ms.decode, detect: t_detect, ..resolved.stats.ms };
     stage.total += t_decode + t_detect;
 
     // The light pre-pass approximates full deferred shading; its own error is measured against that, on the same
@@ -214,7 +242,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let viewing = Viewing { tone_map: args.tonemap, exposure: args.exposure, pixels_per_degree: args.ppd };
     let flip = (!args.no_flip).then_some(&viewing);
     // With a layout, the exact G-buffer lit the same way separates the layout's loss from the detector's.
-    let exact = match &packed {
+    let exact = match &layout {
         Some(_) => Some(
             gbuf::analysis::errors::lit(&gb, &lights, args.detector, &det_cfg, &cfg)
                 .with_context(|| format!("{file}: exact resolve"))?

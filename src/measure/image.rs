@@ -12,7 +12,6 @@ use crate::image::{HdrImage, ToneCurve, ToneMap};
 use crate::light::Light;
 use crate::measure::flip;
 use crate::resolve::{resolve, ResolveConfig, Schedule};
-use crate::GBuffer;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::borrow::Cow;
@@ -295,8 +294,8 @@ pub fn error_triad(
 /// lights and edge mask: `cfg` with its schedule set to [`Schedule::Deferred`] (culling, BRDF, falloff and tiles
 /// as given). The PSNR peak is the deferred image's largest channel value. Also returns the deferred resolve's
 /// wall time in milliseconds.
-pub fn against_full_deferred(
-    gb: &GBuffer,
+pub fn against_full_deferred<'a>(
+    gb: impl Into<crate::resolve::ResolveInput<'a>>,
     lights: &[Light],
     mask: &EdgeMask,
     cfg: &ResolveConfig,
