@@ -6,7 +6,10 @@
 //!   1-sample cost; `…/split` the same frame in split order ([`gbuf::resolve::SplitSamples`]: every
 //!   pixel's sample 0 in planes of their own); `resolve/tiled/4x-ssaa` for scale;
 //! - `resolve/none/1x/1280x720`: no culling, same lights;
-//! - `resolve/tiled/1x/1280x720/threads-1` and `threads-2`: thread scaling (local rayon pools).
+//! - `resolve/tiled/1x/1280x720/threads-1` and `threads-2`: thread scaling (local rayon pools);
+//! - `resolve/layout/<layout>/packed|unpack-then-resolve|unpacked-copy/…`: a layout's packed targets lit directly
+//!   (decoded a tile row at a time inside the resolve) against unpacking the frame first, and against lighting an
+//!   unpacked copy made beforehand.
 //!
 //! The G-buffer is built in code once, outside the timed loop. Run briefly:
 //! `cargo bench --bench resolve -- --warm-up-time 1 --measurement-time 3`.
@@ -87,6 +90,27 @@ fn benches(c: &mut Criterion) {
                 b.iter(|| gbuf::resolve::resolve_isa(isa, black_box(&gb1), black_box(&lights), &mask1, &cfg).unwrap())
             });
         }
+    }
+    // Issue 34's data flow: a layout's packed targets lit directly (each tile row decoded inside the resolve) against
+    // today's unpack-then-resolve and the resolve of the unpacked copy alone (the decode not counted): the same image
+    // bit for bit (tests/resolve_packed.rs).
+    for name in ["lauritzen-15", "destiny-96"] {
+        let layout = gbuf::layout::Layout::by_name_or_path(name).expect("built-in layout");
+        let packed = layout.pack(&gb4).expect("pack");
+        let frame = layout.frame(&packed, &gb4).expect("frame");
+        let unpacked = layout.unpack(&packed, &gb4).expect("unpack");
+        g.bench_function(format!("layout/{name}/packed/4x-adaptive/1280x720"), |b| {
+            b.iter(|| resolve(black_box(&frame), black_box(&lights), &mask4, &tiled).unwrap())
+        });
+        g.bench_function(format!("layout/{name}/unpack-then-resolve/4x-adaptive/1280x720"), |b| {
+            b.iter(|| {
+                let gb = layout.unpack(black_box(&packed), &gb4).unwrap();
+                resolve(&gb, black_box(&lights), &mask4, &tiled).unwrap()
+            })
+        });
+        g.bench_function(format!("layout/{name}/unpacked-copy/4x-adaptive/1280x720"), |b| {
+            b.iter(|| resolve(black_box(&unpacked), black_box(&lights), &mask4, &tiled).unwrap())
+        });
     }
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");

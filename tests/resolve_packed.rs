@@ -152,7 +152,8 @@ fn detectors_on_packed_bands_match_the_unpacked_gbuffer() {
                     }
                     // The same refusal (the list of planes it gives differs by the position the lighting derives).
                     (Err(a), Err(b)) => {
-                        let cause = |e: gbuf::Error| e.to_string().split("; the G-buffer has").next().unwrap().to_string();
+                        let cause =
+                            |e: gbuf::Error| e.to_string().split("; the G-buffer has").next().unwrap().to_string();
                         assert_eq!(cause(a), cause(b), "{what}");
                     }
                     (a, b) => panic!("{what}: {a:?} vs {b:?}"),

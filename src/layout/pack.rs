@@ -93,6 +93,8 @@ struct Band<'a> {
     targets: Vec<(&'a [u8], usize)>,
     table: Option<&'a MaterialTable>,
     present: &'a [Attribute],
+    /// Decoded planes are reused band after band: background samples are written 0.
+    zero_background: bool,
 }
 
 impl<'a> Band<'a> {
@@ -110,7 +112,7 @@ impl<'a> Band<'a> {
                 (&t.bytes[range.start * size..range.end * size], size)
             })
             .collect();
-        Band { targets, table, present }
+        Band { targets, table, present, zero_background: false }
     }
 }
 
@@ -467,7 +469,8 @@ impl Layout {
 
     /// Decodes the texels of `band` (whole rows of `row` samples, whose coverage is `cov`) into samples `r` of
     /// `out`'s planes, creating planes of `n` zeroes that are missing. Every sample of `r` in a decoded plane is
-    /// written: its value where covered, 0 elsewhere. `index` is scratch for the band's material indices.
+    /// written where covered, and 0 elsewhere when `band.zero_background`. `index` is scratch for the band's
+    /// material indices.
     #[allow(clippy::too_many_arguments)]
     fn unpack_samples(
         &self,
@@ -485,7 +488,8 @@ impl Layout {
         let mut has_index = false;
         for (f, coder) in self.fields().iter().zip(coders) {
             let (bytes, size) = band.targets[f.target];
-            let src = Texels { bytes, size, offset: f.offset, bits: f.bits, cov, row };
+            let zero_background = band.zero_background;
+            let src = Texels { bytes, size, offset: f.offset, bits: f.bits, cov, row, zero_background };
             let ids = |cs: &[u64], o: &mut [u32]| {
                 for (o, c) in o.iter_mut().zip(cs) {
                     *o = *c as u32;
@@ -554,7 +558,7 @@ impl Layout {
                                 ))
                             })?;
                             *d = entry[p];
-                        } else {
+                        } else if band.zero_background {
                             *d = 0.0;
                         }
                     }
@@ -703,19 +707,22 @@ struct Texels<'a> {
     bits: u32,
     cov: &'a [bool],
     row: usize,
+    /// Write 0 at background samples (a reused band buffer); otherwise they are not touched, so the untouched
+    /// pages of a fresh zeroed plane are never faulted in (a third of a 1080p frame's samples can be sky).
+    zero_background: bool,
 }
 
 impl Texels<'_> {
     /// Decodes the field into `dst` in parallel over blocks of whole rows: the block's codes are extracted, turned
-    /// into values by `decode` (a codec's slice path), and `set(dst[i], value)` runs for covered samples,
-    /// `set(dst[i], 0)` for the others (so a reused plane holds nothing of its previous contents).
+    /// into values by `decode` (a codec's slice path), and `set(dst[i], value)` runs for covered samples;
+    /// `set(dst[i], 0)` for the others with `zero_background`, else they keep their value.
     fn fill<T: Send, V: Copy + Default + Send>(
         &self,
         dst: &mut [T],
         decode: impl Fn(&[u64], &mut [V]) + Sync,
         set: impl Fn(&mut T, V) + Sync,
     ) {
-        let (size, offset, bits) = (self.size, self.offset, self.bits);
+        let (size, offset, bits, zero) = (self.size, self.offset, self.bits, self.zero_background);
         let chunk = rows_chunk(self.row);
         dst.par_chunks_mut(chunk).zip(self.bytes.par_chunks(chunk * size)).zip(self.cov.par_chunks(chunk)).for_each(
             |((d, b), c)| {
@@ -738,7 +745,11 @@ impl Texels<'_> {
                 let mut vals = vec![V::default(); d.len()];
                 decode(&codes, &mut vals);
                 for ((d, v), &covered) in d.iter_mut().zip(vals).zip(c) {
-                    set(d, if covered { v } else { V::default() });
+                    if covered {
+                        set(d, v);
+                    } else if zero {
+                        set(d, V::default());
+                    }
                 }
             },
         );
@@ -873,7 +884,10 @@ impl<'a> PackedFrame<'a> {
         out.coverage.extend_from_slice(&like.coverage[range.clone()]);
         out.resize_planes(range.len());
         let p = self.packed;
-        let band = Band::of(&p.targets, range.clone(), p.material_table.as_ref(), &p.present);
+        let band = Band {
+            zero_background: true,
+            ..Band::of(&p.targets, range.clone(), p.material_table.as_ref(), &p.present)
+        };
         let mut index = Vec::new();
         let cov = &like.coverage[range.clone()];
         self.layout.unpack_samples(&band, &self.coders, cov, row, 0..range.len(), out, &mut index)?;
