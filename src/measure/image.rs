@@ -391,7 +391,7 @@ mod tests {
     /// relative MSE up to this bound counts as "equal" (1e-5 relative per value, squared).
     const SAME_UP_TO_ROUNDING_REL_MSE: f64 = 1e-10;
 
-    fn prepass_error(gb: &GBuffer, lights: &[Light], brdf: crate::resolve::Brdf) -> ImageError {
+    fn prepass_error(gb: &crate::GBuffer, lights: &[Light], brdf: crate::resolve::Brdf) -> ImageError {
         let mask = crate::detect::detect(gb, crate::detect::Detector::Lauritzen, &Default::default()).unwrap();
         let cfg = ResolveConfig { brdf, schedule: Schedule::LightPrepass, ..Default::default() };
         let pre = resolve(gb, lights, &mask, &cfg).unwrap();
