@@ -149,38 +149,102 @@ pub fn compare(reference: &GBuffer, test: &GBuffer) -> Result<AttributeErrors> {
             reference.width, reference.height, reference.samples, test.width, test.height, test.samples
         )));
     }
-    reference.validate()?;
-    test.validate()?;
-    let covered = Covered(&reference.coverage);
-    let mut out = AttributeErrors { covered_samples: covered.iter().count() as u64, ..Default::default() };
-    // Attributes are measured in parallel, each by the same sequential loop as alone (the numbers do not depend on
-    // the thread count), and assembled in canonical order.
-    let measured: Vec<(Attribute, Option<(Measured, u64)>)> = reference
-        .attributes()
-        .into_par_iter()
-        .map(|attr| {
-            let (Some(r), Some(t)) = (reference.plane(attr), test.plane(attr)) else {
-                return (attr, None);
+    let mut bands = CompareBands::new(reference)?;
+    bands.add(0, test)?;
+    Ok(bands.finish())
+}
+
+/// [`compare`] fed a band of rows at a time (a test G-buffer decoded band by band never exists whole): bands added
+/// in row order and covering the frame give [`compare`]'s numbers bit for bit, because every statistic is one loop
+/// in sample order carried from band to band (sums, first worst sample) or taken over the list of every angle
+/// (the normals' 95th percentile: 8 bytes per covered sample, not the test's planes).
+pub struct CompareBands<'a> {
+    reference: &'a GBuffer,
+    /// Per attribute of the reference, in canonical order: its running measure, `None` when the test lacks it
+    /// (set by the first band).
+    measures: Option<Vec<(Attribute, Option<Running>)>>,
+    /// Samples added so far: the next band must start here.
+    next: usize,
+}
+
+/// One attribute's statistics so far.
+enum Running {
+    Normal { angles: Vec<f64>, max: f64, worst: usize, skipped: u64 },
+    Depth { n: u64, sum: f64, e: DepthErrors, nonfinite: u64 },
+    Id(IdErrors),
+    Values { n: u64, sum: f64, sum2: f64, e: ValueErrors, nonfinite: u64 },
+}
+
+impl<'a> CompareBands<'a> {
+    /// Starts comparing against `reference`.
+    pub fn new(reference: &'a GBuffer) -> Result<Self> {
+        reference.validate()?;
+        Ok(CompareBands { reference, measures: None, next: 0 })
+    }
+
+    /// Adds `test`, the reference's samples `start..start + test.len()` (whole rows, the band after the last one
+    /// added). Errors when the band does not fit.
+    pub fn add(&mut self, start: usize, test: &GBuffer) -> Result<()> {
+        let r = self.reference;
+        if (test.width, test.samples) != (r.width, r.samples) || start != self.next || start + test.len() > r.len() {
+            return Err(Error::Argument(format!(
+                "compare: a band of {}×{}×{} at sample {start} does not continue the {}×{}×{} reference at sample {}",
+                test.width, test.height, test.samples, r.width, r.height, r.samples, self.next
+            )));
+        }
+        test.validate()?;
+        let measures = self.measures.get_or_insert_with(|| {
+            r.attributes()
+                .into_iter()
+                .map(|a| {
+                    let running = test.plane(a).map(|t| match (a, t) {
+                        (Attribute::Normal, PlaneRef::Vec3(_)) => {
+                            Running::Normal { angles: Vec::new(), max: -1.0, worst: 0, skipped: 0 }
+                        }
+                        (Attribute::Depth, PlaneRef::F32(_)) => {
+                            Running::Depth { n: 0, sum: 0.0, e: DepthErrors::default(), nonfinite: 0 }
+                        }
+                        (_, PlaneRef::U32(_)) => {
+                            Running::Id(IdErrors { attribute: a.name().into(), ..Default::default() })
+                        }
+                        _ => Running::Values {
+                            n: 0,
+                            sum: 0.0,
+                            sum2: 0.0,
+                            e: ValueErrors { attribute: a.name().into(), ..Default::default() },
+                            nonfinite: 0,
+                        },
+                    });
+                    (a, running)
+                })
+                .collect()
+        });
+        let range = start..start + test.len();
+        let covered = Covered { flags: &r.coverage[range.clone()], base: start };
+        // Attributes are measured in parallel, each by the same sequential loop as alone (the numbers do not
+        // depend on the thread count).
+        measures.par_iter_mut().try_for_each(|(attr, running)| {
+            let Some(running) = running else { return Ok(()) };
+            let (Some(rp), Some(tp)) = (r.plane(*attr), test.plane(*attr)) else {
+                return Err(Error::Argument(format!("compare: a band lacks the {} plane", attr.name())));
             };
-            let mut nonfinite = 0;
-            let m = match (attr, r, t) {
-                (Attribute::Normal, PlaneRef::Vec3(r), PlaneRef::Vec3(t)) => {
-                    Measured::Normal(normals(reference, covered, r, t))
+            match (running, rp, tp) {
+                (Running::Normal { angles, max, worst, skipped }, PlaneRef::Vec3(rv), PlaneRef::Vec3(tv)) => {
+                    normals(covered, &rv[range.clone()], tv, angles, (max, worst), skipped);
                 }
-                (Attribute::Depth, PlaneRef::F32(r), PlaneRef::F32(t)) => {
-                    Measured::Depth(depth(reference, covered, r, t, &mut nonfinite))
+                (Running::Depth { n, sum, e, nonfinite }, PlaneRef::F32(rv), PlaneRef::F32(tv)) => {
+                    depth(r, covered, &rv[range.clone()], tv, (n, sum), e, nonfinite);
                 }
-                (_, PlaneRef::U32(r), PlaneRef::U32(t)) => {
-                    let mut e = IdErrors { attribute: attr.name().into(), ..Default::default() };
+                (Running::Id(e), PlaneRef::U32(rv), PlaneRef::U32(tv)) => {
+                    let rv = &rv[range.clone()];
                     for i in covered.iter() {
-                        if r[i] != t[i] {
+                        if rv[i] != tv[i] {
                             e.mismatches += 1;
-                            e.first.get_or_insert(at(reference, i));
+                            e.first.get_or_insert(at(r, start + i));
                         }
                     }
-                    Measured::Id(e)
                 }
-                (_, r, t) => {
+                (Running::Values { n, sum, sum2, e, nonfinite }, rp, tp) => {
                     let comps = |p: PlaneRef<'_>, i: usize| -> [f32; 3] {
                         match p {
                             PlaneRef::F32(p) => [p[i], 0.0, 0.0],
@@ -189,70 +253,110 @@ pub fn compare(reference: &GBuffer, test: &GBuffer) -> Result<AttributeErrors> {
                             PlaneRef::U32(p) => [p[i] as f32, 0.0, 0.0],
                         }
                     };
-                    Measured::Values(values(reference, attr, covered, |i| (comps(r, i), comps(t, i)), &mut nonfinite))
+                    let get = |i: usize| (comps(rp, start + i), comps(tp, i));
+                    values(r, *attr, covered, get, (n, sum, sum2), e, nonfinite);
                 }
-            };
-            (attr, Some((m, nonfinite)))
-        })
-        .collect();
-    for (attr, m) in measured {
-        let Some((m, nonfinite)) = m else {
-            out.missing.push(attr.name().to_string());
-            continue;
-        };
-        out.nonfinite += nonfinite;
-        match m {
-            Measured::Normal(e) => out.normal = Some(e),
-            Measured::Depth(e) => out.depth = Some(e),
-            Measured::Id(e) => out.ids.push(e),
-            Measured::Values(e) => match attr {
-                Attribute::Albedo => out.albedo = Some(e),
-                Attribute::Position => out.position = Some(e),
-                Attribute::Motion => out.motion = Some(e),
-                _ => out.scalars.push(e),
-            },
-        }
+                _ => return Err(Error::Argument(format!("compare: the {} planes differ in kind", attr.name()))),
+            }
+            Ok(())
+        })?;
+        self.next = range.end;
+        Ok(())
     }
-    Ok(out)
+
+    /// The errors over every band added.
+    #[must_use]
+    pub fn finish(self) -> AttributeErrors {
+        let r = self.reference;
+        let mut out =
+            AttributeErrors { covered_samples: r.coverage.iter().filter(|&&c| c).count() as u64, ..Default::default() };
+        for (attr, running) in self.measures.unwrap_or_default() {
+            let Some(running) = running else {
+                out.missing.push(attr.name().to_string());
+                continue;
+            };
+            match running {
+                Running::Normal { mut angles, max, worst, skipped } => {
+                    out.normal = Some(if angles.is_empty() {
+                        NormalErrors { skipped_invalid: skipped, ..NormalErrors::default() }
+                    } else {
+                        let mean = angles.iter().sum::<f64>() / angles.len() as f64;
+                        let k = ((angles.len() as f64 * 0.95).ceil() as usize).clamp(1, angles.len()) - 1;
+                        let (_, p95, _) = angles.select_nth_unstable_by(k, f64::total_cmp);
+                        NormalErrors {
+                            mean_deg: mean,
+                            p95_deg: *p95,
+                            max_deg: max,
+                            worst: at(r, worst),
+                            skipped_invalid: skipped,
+                        }
+                    });
+                }
+                Running::Depth { n, sum, mut e, nonfinite } => {
+                    e.rel_mean = if n > 0 { sum / n as f64 } else { 0.0 };
+                    out.nonfinite += nonfinite;
+                    out.depth = Some(e);
+                }
+                Running::Id(e) => out.ids.push(e),
+                Running::Values { n, sum, sum2, mut e, nonfinite } => {
+                    if n > 0 {
+                        e.mean_abs = sum / n as f64;
+                        e.rmse = (sum2 / n as f64).sqrt();
+                    }
+                    out.nonfinite += nonfinite;
+                    match attr {
+                        Attribute::Albedo => out.albedo = Some(e),
+                        Attribute::Position => out.position = Some(e),
+                        Attribute::Motion => out.motion = Some(e),
+                        _ => out.scalars.push(e),
+                    }
+                }
+            }
+        }
+        out
+    }
 }
 
-/// One attribute's errors, of the kind its plane has.
-enum Measured {
-    Normal(NormalErrors),
-    Depth(DepthErrors),
-    Id(IdErrors),
-    Values(ValueErrors),
-}
-
-/// The covered samples of a G-buffer, by index, without a list of them (a 1080p × 4 dump has 8.3 million).
+/// The covered samples of a band, by index within the band, without a list of them (a 1080p × 4 dump has 8.3
+/// million); `base` is the band's first sample in the frame.
 #[derive(Clone, Copy)]
-struct Covered<'a>(&'a [bool]);
+struct Covered<'a> {
+    flags: &'a [bool],
+    base: usize,
+}
 
 impl<'a> Covered<'a> {
     fn iter(self) -> impl Iterator<Item = usize> + 'a {
-        self.0.iter().enumerate().filter_map(|(i, &c)| c.then_some(i))
+        self.flags.iter().enumerate().filter_map(|(i, &c)| c.then_some(i))
     }
 }
 
 /// Samples per chunk of [`normals`]' parallel passes.
 const NORMAL_CHUNK: usize = 1 << 16;
 
-/// Normal errors in two parallel passes over fixed chunks of samples: the valid normals per chunk, then each
-/// chunk's angles into its own part of one list (the list's order, its sum and so the mean, the first sample of
-/// the largest angle and the 95th percentile are those of one loop in sample order, whatever the thread count).
-fn normals(gb: &GBuffer, covered: Covered<'_>, r: &[Vec3], t: &[Vec3]) -> NormalErrors {
-    let chunks = covered.0.len().div_ceil(NORMAL_CHUNK);
-    let span = |k: usize| k * NORMAL_CHUNK..((k + 1) * NORMAL_CHUNK).min(covered.0.len());
-    let valid = |i: usize| covered.0[i] && crate::io::plausible::normal_is_valid(r[i]);
+/// Appends a band's normal angles to `angles` in two parallel passes over fixed chunks of samples: the valid
+/// normals per chunk, then each chunk's angles into its own part of the list (the list's order, the first sample
+/// of the largest angle and so every statistic are those of one loop in sample order, whatever the thread count).
+/// `r` and `t` are the band's planes; `max` and `worst` (a frame sample index) carry the largest angle so far.
+fn normals(
+    covered: Covered<'_>,
+    r: &[Vec3],
+    t: &[Vec3],
+    angles: &mut Vec<f64>,
+    (max, worst): (&mut f64, &mut usize),
+    skipped: &mut u64,
+) {
+    let len = covered.flags.len();
+    let chunks = len.div_ceil(NORMAL_CHUNK);
+    let span = |k: usize| k * NORMAL_CHUNK..((k + 1) * NORMAL_CHUNK).min(len);
+    let valid = |i: usize| covered.flags[i] && crate::io::plausible::normal_is_valid(r[i]);
     let counts: Vec<usize> = (0..chunks).into_par_iter().map(|k| span(k).filter(|&i| valid(i)).count()).collect();
     let total: usize = counts.iter().sum();
-    let skipped_invalid = (covered.iter().count() - total) as u64;
-    if total == 0 {
-        return NormalErrors { skipped_invalid, ..NormalErrors::default() };
-    }
-    let mut angles = vec![0.0f64; total];
+    *skipped += (covered.iter().count() - total) as u64;
+    let old = angles.len();
+    angles.resize(old + total, 0.0);
     let mut parts = Vec::with_capacity(chunks);
-    let mut rest = angles.as_mut_slice();
+    let mut rest = &mut angles[old..];
     for &n in &counts {
         let (part, tail) = rest.split_at_mut(n);
         parts.push(part);
@@ -267,24 +371,29 @@ fn normals(gb: &GBuffer, covered: Covered<'_>, r: &[Vec3], t: &[Vec3]) -> Normal
             for (slot, i) in part.iter_mut().zip(span(k).filter(|&i| valid(i))) {
                 let a = angle_deg(r[i], t[i]);
                 if a > max {
-                    (worst, max) = (i, a);
+                    (worst, max) = (covered.base + i, a);
                 }
                 *slot = a;
             }
             (max, worst)
         })
         .collect();
-    let (max, worst) = maxima.into_iter().fold((-1.0f64, 0usize), |m, c| if c.0 > m.0 { c } else { m });
-    let mean = angles.iter().sum::<f64>() / angles.len() as f64;
-    let k = ((angles.len() as f64 * 0.95).ceil() as usize).clamp(1, angles.len()) - 1;
-    let (_, p95, _) = angles.select_nth_unstable_by(k, f64::total_cmp);
-    NormalErrors { mean_deg: mean, p95_deg: *p95, max_deg: max, worst: at(gb, worst), skipped_invalid }
+    for (m, w) in maxima {
+        if m > *max {
+            (*max, *worst) = (m, w);
+        }
+    }
 }
 
-fn depth(gb: &GBuffer, covered: Covered<'_>, r: &[f32], t: &[f32], nonfinite: &mut u64) -> DepthErrors {
-    let mut e = DepthErrors::default();
-    let mut n = 0u64;
-    let mut sum = 0.0;
+fn depth(
+    gb: &GBuffer,
+    covered: Covered<'_>,
+    r: &[f32],
+    t: &[f32],
+    (n, sum): (&mut u64, &mut f64),
+    e: &mut DepthErrors,
+    nonfinite: &mut u64,
+) {
     for i in covered.iter() {
         let (a, b) = (f64::from(r[i]), f64::from(t[i]));
         if !b.is_finite() || !a.is_finite() {
@@ -293,16 +402,14 @@ fn depth(gb: &GBuffer, covered: Covered<'_>, r: &[f32], t: &[f32], nonfinite: &m
         }
         let abs = (b - a).abs();
         let rel = abs / a.abs().max(f64::from(f32::MIN_POSITIVE));
-        n += 1;
-        sum += rel;
+        *n += 1;
+        *sum += rel;
         e.abs_max = e.abs_max.max(abs);
         if rel > e.rel_max {
             e.rel_max = rel;
-            e.worst = at(gb, i);
+            e.worst = at(gb, covered.base + i);
         }
     }
-    e.rel_mean = if n > 0 { sum / n as f64 } else { 0.0 };
-    e
 }
 
 fn values(
@@ -310,11 +417,11 @@ fn values(
     attr: Attribute,
     covered: Covered<'_>,
     get: impl Fn(usize) -> ([f32; 3], [f32; 3]),
+    (n, sum, sum2): (&mut u64, &mut f64, &mut f64),
+    e: &mut ValueErrors,
     nonfinite: &mut u64,
-) -> ValueErrors {
+) {
     let nc = attr.components();
-    let mut e = ValueErrors { attribute: attr.name().into(), ..Default::default() };
-    let (mut n, mut sum, mut sum2) = (0u64, 0.0, 0.0);
     for i in covered.iter() {
         let (a, b) = get(i);
         for c in 0..nc {
@@ -323,20 +430,15 @@ fn values(
                 *nonfinite += 1;
                 continue;
             }
-            n += 1;
-            sum += d;
-            sum2 += d * d;
+            *n += 1;
+            *sum += d;
+            *sum2 += d * d;
             if d > e.max_abs {
                 e.max_abs = d;
-                e.worst = at(gb, i);
+                e.worst = at(gb, covered.base + i);
             }
         }
     }
-    if n > 0 {
-        e.mean_abs = sum / n as f64;
-        e.rmse = (sum2 / n as f64).sqrt();
-    }
-    e
 }
 
 #[cfg(test)]
@@ -396,10 +498,77 @@ mod tests {
         assert_eq!((worst, skipped), (first, 2));
         for threads in [1, 2] {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            let e = pool.install(|| normals(&a, Covered(&a.coverage), rn, tn));
+            let e = pool.install(|| compare(&a, &b).unwrap().normal.unwrap());
             assert_eq!(e.mean_deg.to_bits(), mean.to_bits(), "{threads} threads");
             assert_eq!((e.p95_deg, e.max_deg, e.skipped_invalid), (p95, max, skipped));
             assert_eq!(e.worst, at(&a, worst));
+        }
+    }
+
+    /// Bands of any height, added in order, give the whole comparison's numbers bit for bit; a band out of order or
+    /// of another width is refused.
+    #[test]
+    fn bands_in_order_equal_the_whole_comparison() {
+        let mut a = GBuffer::new(61, 23, 4).unwrap();
+        let mut rng = crate::util::SplitMix64::new(3);
+        let n = a.len();
+        a.coverage = (0..n).map(|i| i % 9 != 2).collect();
+        a.normal = Some((0..n).map(|_| Vec3::new(rng.range_f32(-0.5, 0.5), 0.2, 1.0).normalize()).collect());
+        a.depth = Some((0..n).map(|_| rng.range_f32(1.0, 50.0)).collect());
+        a.albedo = Some((0..n).map(|_| Vec3::splat(rng.next_f32())).collect());
+        a.object_id = Some((0..n as u32).collect());
+        let mut b = a.clone();
+        for (i, v) in b.normal.as_mut().unwrap().iter_mut().enumerate() {
+            *v = (*v + Vec3::new(rng.range_f32(-0.05, 0.05), 0.0, 0.0)).normalize();
+            if i == 777 {
+                *v = Vec3::NAN;
+            }
+        }
+        for d in b.depth.as_mut().unwrap() {
+            *d *= 1.0 + rng.range_f32(-1e-3, 1e-3);
+        }
+        b.albedo.as_mut().unwrap()[1000] = Vec3::new(f32::INFINITY, 0.0, 0.0);
+        b.object_id.as_mut().unwrap()[500] = 7;
+        let whole = compare(&a, &b).unwrap();
+        let row = (a.width * a.samples) as usize;
+        for rows in [1, 5, 8, 23] {
+            let mut bands = CompareBands::new(&a).unwrap();
+            let mut y = 0;
+            while y < a.height {
+                let h = rows.min(a.height - y);
+                let range = y as usize * row..(y + h) as usize * row;
+                let band = b.map_planes(
+                    (b.width, h, b.samples),
+                    b.sample_positions.clone(),
+                    b.coverage[range.clone()].to_vec(),
+                    &mut Crop(range.clone()),
+                );
+                bands.add(range.start, &band).unwrap();
+                y += h;
+            }
+            let banded = bands.finish();
+            assert_eq!(banded, whole, "bands of {rows} rows");
+            assert_eq!(
+                banded.normal.as_ref().unwrap().mean_deg.to_bits(),
+                whole.normal.as_ref().unwrap().mean_deg.to_bits()
+            );
+        }
+        let mut bands = CompareBands::new(&a).unwrap();
+        let band = b.map_planes(
+            (b.width, 1, b.samples),
+            b.sample_positions.clone(),
+            b.coverage[row..2 * row].to_vec(),
+            &mut Crop(row..2 * row),
+        );
+        assert!(bands.add(row, &band).is_err(), "a band that does not start where the last one ended");
+    }
+
+    /// Crops every plane to a range of samples.
+    struct Crop(std::ops::Range<usize>);
+
+    impl crate::gbuffer::PlaneMapper for Crop {
+        fn map<T: Copy + Default + Send + Sync>(&mut self, _: Attribute, plane: &[T]) -> Option<Vec<T>> {
+            Some(plane[self.0.clone()].to_vec())
         }
     }
 
