@@ -145,8 +145,13 @@ pub struct Row {
     pub detect_ms: Option<f64>,
     /// Median resolve (lighting) time in ms.
     pub resolve_ms: Option<f64>,
-    /// The resolve pass: decode + resolve medians, the time axis of the fronts.
+    /// The resolve pass, the time axis of the fronts: the resolve's median when it read the packed targets (it
+    /// decodes what it lights: `packed_resolve`), else decode + resolve medians.
     pub resolve_pass_ms: Option<f64>,
+    /// The resolve (and the detector) read the layout's packed targets, decoding a band at a time: `resolve_ms`
+    /// holds the decode, and `decode_ms` is what decoding the whole frame once costs.
+    #[serde(default)]
+    pub packed_resolve: bool,
     /// Sum of the four medians (the tool's own time for the row).
     pub total_ms: Option<f64>,
     /// The full timings (median and spread) per stage.
@@ -171,6 +176,7 @@ impl Row {
         }
         self.timings.insert(stage.to_string(), t);
         self.resolve_pass_ms = match (self.decode_ms, self.resolve_ms) {
+            (_, Some(d)) if self.packed_resolve => Some(d),
             (Some(b), Some(d)) => Some(b + d),
             _ => None,
         };

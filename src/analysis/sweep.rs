@@ -15,7 +15,7 @@ use crate::detect::{self, Detector, DetectorConfig, EdgeMask};
 use crate::error::Result;
 use crate::gbuffer::{Attribute, GBuffer};
 use crate::image::HdrImage;
-use crate::layout::Layout;
+use crate::layout::{Layout, Packed, PackedFrame};
 use crate::light::Light;
 use crate::measure;
 use crate::measure::flip::FlipMap;
@@ -134,30 +134,47 @@ pub struct DetectorResult {
 /// Progress callback: (done, total, what is running).
 pub type Progress<'a> = &'a mut dyn FnMut(usize, usize, &str);
 
-fn per_pixel(gb: &GBuffer, f: impl Fn(usize) -> f32 + Sync) -> Vec<f32> {
-    let s = gb.samples as usize;
-    (0..gb.pixel_count())
-        .into_par_iter()
-        .map(|p| (p * s..(p + 1) * s).filter(|&i| gb.coverage[i]).map(&f).fold(f32::NAN, f32::max))
-        .collect()
+/// The per-pixel maximum of `f(i)` over the covered samples of each pixel of `band` (a band's samples `i`; NaN
+/// where none is covered), into `out` (the band's pixels of a frame-sized map).
+fn per_pixel(band: &GBuffer, out: &mut [f32], f: impl Fn(usize) -> f32 + Sync) {
+    let s = band.samples as usize;
+    out.par_iter_mut().enumerate().for_each(|(p, o)| {
+        *o = (p * s..(p + 1) * s).filter(|&i| band.coverage[i]).map(&f).fold(f32::NAN, f32::max);
+    });
 }
 
 /// Per-pixel error maps of `test` against `reference`.
 #[must_use]
 pub fn error_maps(layout: &str, reference: &GBuffer, test: &GBuffer) -> ErrorMaps {
-    let normal_deg = match (reference.normal.as_deref(), test.normal.as_deref()) {
-        (Some(a), Some(b)) => Some(per_pixel(reference, |i| a[i].dot(b[i]).clamp(-1.0, 1.0).acos().to_degrees())),
-        _ => None,
-    };
-    let depth_rel = match (reference.depth.as_deref(), test.depth.as_deref()) {
-        (Some(a), Some(b)) => Some(per_pixel(reference, |i| ((b[i] - a[i]) / a[i].abs().max(f32::MIN_POSITIVE)).abs())),
-        _ => None,
-    };
-    let albedo_abs = match (reference.albedo.as_deref(), test.albedo.as_deref()) {
-        (Some(a), Some(b)) => Some(per_pixel(reference, |i| (b[i] - a[i]).abs().max_element())),
-        _ => None,
-    };
-    ErrorMaps { layout: layout.to_string(), normal_deg, depth_rel, albedo_abs, image_abs: None }
+    let mut maps =
+        ErrorMaps { layout: layout.to_string(), normal_deg: None, depth_rel: None, albedo_abs: None, image_abs: None };
+    error_maps_into(reference, test, 0, &mut maps);
+    maps
+}
+
+/// The error maps of `test`, a band of `reference`'s rows starting at pixel `first_pixel` (the whole frame at 0),
+/// into `maps` (frame-sized maps created when both G-buffers have the attribute).
+fn error_maps_into(reference: &GBuffer, test: &GBuffer, first_pixel: usize, maps: &mut ErrorMaps) {
+    fn map(m: &mut Option<Vec<f32>>, n: usize, px: std::ops::Range<usize>) -> &mut [f32] {
+        &mut m.get_or_insert_with(|| vec![f32::NAN; n])[px]
+    }
+    let (n, s) = (reference.pixel_count(), reference.samples as usize);
+    let px = first_pixel..first_pixel + test.pixel_count();
+    let base = first_pixel * s;
+    if let (Some(a), Some(b)) = (reference.normal.as_deref(), test.normal.as_deref()) {
+        per_pixel(test, map(&mut maps.normal_deg, n, px.clone()), |i| {
+            a[base + i].dot(b[i]).clamp(-1.0, 1.0).acos().to_degrees()
+        });
+    }
+    if let (Some(a), Some(b)) = (reference.depth.as_deref(), test.depth.as_deref()) {
+        per_pixel(test, map(&mut maps.depth_rel, n, px.clone()), |i| {
+            let a = a[base + i];
+            ((b[i] - a) / a.abs().max(f32::MIN_POSITIVE)).abs()
+        });
+    }
+    if let (Some(a), Some(b)) = (reference.albedo.as_deref(), test.albedo.as_deref()) {
+        per_pixel(test, map(&mut maps.albedo_abs, n, px), |i| (b[i] - a[base + i]).abs().max_element());
+    }
 }
 
 fn image_abs(reference: &HdrImage, test: &HdrImage) -> Vec<f32> {
@@ -285,14 +302,9 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
             ..Default::default()
         };
         progress(done, total, Some(Stage::PackUnpack), Some(layout.name()));
-        // Band by band, the decoded planes reused across the runs: the packed frame never exists whole. Positions
-        // stay derived from depth where the layout stores only depth, as the lighting reads them.
-        let decoded = layout.roundtrip_for_lighting(gb, cfg.runs).map(|r| {
-            let timing = |ms| Timing::from_ms(ms).expect("at least one run");
-            (r.decoded, timing(r.encode_ms), timing(r.decode_ms), r.table_ms.map(|ms| timing(vec![ms])))
-        });
+        let prepared = prepare(layout, gb, cfg.runs);
         done += 1;
-        let (decoded, te, td, tt) = match decoded {
+        let prepared = match prepared {
             Ok(v) => v,
             Err(e) => {
                 for d in &cfg.detectors {
@@ -310,23 +322,64 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
             }
         };
         let mut attr_row = base.clone();
-        attr_row.set_timing("encode", te);
-        attr_row.set_timing("decode", td);
-        if let Some(t) = tt {
-            attr_row.set_timing("material_table", t);
+        let frame = match &prepared.source {
+            Source::Packed(p) => Some(layout.frame(p, gb)),
+            _ => None,
         }
-        let mut lmaps = rayon::join(
-            || fill_attribute_errors(&mut attr_row, gb, &decoded),
-            || error_maps(layout.name(), gb, &decoded),
-        )
-        .1;
+        .transpose();
+        // The attribute errors and maps: against the decoded bands of a packed frame (the decode timed there), or
+        // against the whole lighting copy.
+        let measured = match (&frame, &prepared.source) {
+            (Ok(Some(f)), _) => band_pass(f, gb, cfg.runs),
+            (Err(e), _) => Err(crate::error::Error::Argument(e.to_string())),
+            (Ok(None), Source::Copy(d)) => Ok(whole_pass(gb, d, prepared.decode_ms.clone())),
+            (Ok(None), _) => Ok(whole_pass(gb, gb, prepared.decode_ms.clone())),
+        };
+        let (attribute_errors, mut lmaps, derived, decode_ms) = match measured {
+            Ok(m) => m,
+            Err(e) => {
+                for d in &cfg.detectors {
+                    for c in &cullings {
+                        rows.push(Row {
+                            detector: d.name().to_string(),
+                            culling: c.map(|c| c.name().to_string()),
+                            error: Some(format!("roundtrip failed: {e}")),
+                            ..base.clone()
+                        });
+                    }
+                }
+                done += per_layout;
+                continue;
+            }
+        };
+        let frame = frame.ok().flatten();
+        let timing = |ms: Vec<f64>| Timing::from_ms(ms).expect("at least one run");
+        attr_row.packed_resolve = frame.is_some();
+        attr_row.set_timing("encode", timing(prepared.encode_ms.clone()));
+        attr_row.set_timing("decode", timing(decode_ms));
+        if let Some(ms) = prepared.table_ms {
+            attr_row.set_timing("material_table", timing(vec![ms]));
+        }
+        fill_attribute_errors(&mut attr_row, attribute_errors, derived);
+        lmaps.layout = layout.name().to_string();
+        // What the detectors and the resolve read: the packed targets band by band, or a whole G-buffer.
+        let planes: Option<&GBuffer> = match &prepared.source {
+            Source::Packed(_) => None,
+            Source::Copy(d) => Some(d),
+            Source::Input => Some(gb),
+        };
 
         for (di, &det) in cfg.detectors.iter().enumerate() {
             progress(done, total, Some(Stage::Detect), Some(&format!("{} × {}", layout.name(), det.name())));
             let mut row = Row { detector: det.name().to_string(), ..attr_row.clone() };
             row.aa_error = detectors[di].aa_error;
             row.bandwidth_mb = bandwidth(gb, bytes, detectors[di].quad_light_fragments);
-            let mask = match time_runs(cfg.runs, || detect::detect(&decoded, det, &cfg.detector_config)) {
+            let detected = time_runs(cfg.runs, || match (&frame, planes) {
+                (Some(f), _) => detect::detect_packed(f, det, &cfg.detector_config),
+                (None, Some(d)) => detect::detect(d, det, &cfg.detector_config),
+                (None, None) => unreachable!("a layout's input is packed or planes"),
+            });
+            let mask = match detected {
                 Ok((m, t)) => {
                     row.set_timing("detect", t);
                     m
@@ -366,7 +419,12 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
                     FlipRows::Decisive => decisive,
                     FlipRows::None => false,
                 };
-                match time_runs(cfg.runs, || resolve::resolve(&decoded, lights, &mask, &rcfg)) {
+                let input: resolve::ResolveInput<'_> = match (&frame, planes) {
+                    (Some(f), _) => f.into(),
+                    (None, Some(d)) => d.into(),
+                    (None, None) => unreachable!("a layout's input is packed or planes"),
+                };
+                match time_runs(cfg.runs, || resolve::resolve(input, lights, &mask, &rcfg)) {
                     Ok((res, t)) => {
                         r.set_timing("resolve", t);
                         if c == Some(Culling::Quad) {
@@ -405,9 +463,10 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
         }
         maps.push(lmaps);
         keep_worst_maps(&mut maps, &rows);
-        // FLIP runs between layouts, once this one's decoded G-buffer (as large as the input) is gone: the batch's
-        // images, their displayed copies and maps then never share the memory with two G-buffers.
-        drop(decoded);
+        // FLIP runs between layouts, once this one's packed frame or lighting copy is gone: the batch's images, their
+        // displayed copies and maps then never share the memory with it.
+        drop(frame);
+        drop(prepared);
         if pending.len() >= FLIP_BATCH {
             progress(done, total, Some(Stage::Flip), None);
             flush_flip(&mut pending, &mut rows, &reference, &exact, &cfg.viewing, &mut worst_flip);
@@ -555,9 +614,10 @@ fn flush_flip(
     pending.clear();
 }
 
-/// Copies the roundtrip's attribute errors into a row.
-fn fill_attribute_errors(row: &mut Row, reference: &GBuffer, decoded: &GBuffer) {
-    let e = match measure::gbuffer::compare(reference, decoded) {
+/// Copies the roundtrip's attribute errors into a row (`derived`: the lighting derives positions from the stored
+/// depth and the camera, so a layout without positions is not missing them).
+fn fill_attribute_errors(row: &mut Row, errors: Result<measure::gbuffer::AttributeErrors>, derived: bool) {
+    let e = match errors {
         Ok(e) => e,
         Err(err) => {
             row.add_note(format!("attribute errors not computed: {err}"));
@@ -573,10 +633,115 @@ fn fill_attribute_errors(row: &mut Row, reference: &GBuffer, decoded: &GBuffer) 
     // Specular power is an exponent (1..4096): its absolute error is not comparable with the [0, 1] scalars.
     row.scalar_max_abs =
         e.scalars.iter().filter(|s| s.attribute != "specular_power").map(|s| s.max_abs).reduce(f64::max);
-    // Positions the lighting derives from the stored depth and the camera are not missing.
-    let derived = |m: &String| m == Attribute::Position.name() && decoded.depth.is_some() && decoded.camera.is_some();
+    let derived = |m: &String| m == Attribute::Position.name() && derived;
     let missing: Vec<&str> = e.missing.iter().filter(|m| !derived(m)).map(String::as_str).collect();
     if !missing.is_empty() {
         row.add_note(format!("not stored by the layout: {}", missing.join(", ")));
     }
+}
+
+/// What a layout's rows read.
+enum Source {
+    /// The packed frame: read band by band (a layout smaller packed than decoded).
+    Packed(Packed),
+    /// A lighting copy ([`Layout::roundtrip_for_lighting`]): a layout no smaller packed than decoded whose roundtrip
+    /// changes the G-buffer.
+    Copy(GBuffer),
+    /// The input itself: a layout no smaller packed than decoded whose roundtrip leaves the G-buffer bit for bit
+    /// as it is (a lossless layout on finite input).
+    Input,
+}
+
+/// A layout made ready for its rows, with the encode times (and decode times, except for a packed frame, whose
+/// bands are decoded and timed by [`band_pass`]).
+struct Prepared {
+    source: Source,
+    encode_ms: Vec<f64>,
+    decode_ms: Vec<f64>,
+    table_ms: Option<f64>,
+}
+
+/// Packs `gb` with `layout` (`runs` timed encodes), unless its packed frame would be no smaller than the decoded
+/// planes: then the input stands for itself when the roundtrip leaves it unchanged (checked band by band, one
+/// timed run), else a lighting copy is made as before.
+fn prepare(layout: &Layout, gb: &GBuffer, runs: usize) -> Result<Prepared> {
+    let decoded_bytes: usize =
+        layout.stored_attributes().iter().filter(|a| gb.has(**a)).map(|a| 4 * a.components()).sum();
+    if layout.bytes_per_sample() < decoded_bytes {
+        let (packed, encode_ms, table_ms) = layout.pack_timed(gb, runs)?;
+        return Ok(Prepared { source: Source::Packed(packed), encode_ms, decode_ms: Vec::new(), table_ms });
+    }
+    let (same, enc, dec) = layout.roundtrip_matches(gb)?;
+    if same {
+        return Ok(Prepared { source: Source::Input, encode_ms: vec![enc], decode_ms: vec![dec], table_ms: None });
+    }
+    let r = layout.roundtrip_for_lighting(gb, runs)?;
+    Ok(Prepared {
+        source: Source::Copy(r.decoded),
+        encode_ms: r.encode_ms,
+        decode_ms: r.decode_ms,
+        table_ms: r.table_ms,
+    })
+}
+
+/// Rows per band of [`band_pass`].
+const BAND_ROWS: u32 = 64;
+
+/// A layout's attribute errors, error maps, whether positions are derived from depth, and each run's decode time
+/// (ms).
+type Measured = (Result<measure::gbuffer::AttributeErrors>, ErrorMaps, bool, Vec<f64>);
+
+/// The attribute errors, error maps and decode times of a packed frame, decoded band by band against the input
+/// `gb` (the first run of the decode also measures; `runs − 1` more decode every band again, timed only).
+fn band_pass(frame: &PackedFrame<'_>, gb: &GBuffer, runs: usize) -> Result<Measured> {
+    let mut compare = measure::gbuffer::CompareBands::new(gb)?;
+    let mut compared: Result<()> = Ok(());
+    let mut maps =
+        ErrorMaps { layout: String::new(), normal_deg: None, depth_rel: None, albedo_abs: None, image_abs: None };
+    let mut band = GBuffer::default();
+    let mut decode_ms = Vec::new();
+    let row = gb.width as usize * gb.samples as usize;
+    let mut derived = false;
+    for run in 0..runs.max(1) {
+        let mut dec = std::time::Duration::ZERO;
+        let mut y = 0;
+        while y < gb.height {
+            let rows = y..(y + BAND_ROWS).min(gb.height);
+            let t = std::time::Instant::now();
+            frame.decode_rows(rows.clone(), &mut band)?;
+            dec += t.elapsed();
+            if run == 0 {
+                let start = rows.start as usize * row;
+                if compared.is_ok() {
+                    compared = compare.add(start, &band);
+                }
+                error_maps_into(gb, &band, start / gb.samples as usize, &mut maps);
+                derived = band.position.is_none() && band.depth.is_some() && band.camera.is_some();
+            }
+            y = rows.end;
+        }
+        decode_ms.push(dec.as_secs_f64() * 1e3);
+    }
+    let errors = compared.map(|()| compare.finish());
+    Ok((errors, maps, derived, decode_ms))
+}
+
+/// [`band_pass`] for a whole decoded G-buffer (`decode_ms`: its decode times, measured when it was made).
+fn whole_pass(gb: &GBuffer, decoded: &GBuffer, decode_ms: Vec<f64>) -> Measured {
+    let (errors, maps) = rayon::join(
+        || measure::gbuffer::compare(gb, decoded),
+        || {
+            let mut maps = ErrorMaps {
+                layout: String::new(),
+                normal_deg: None,
+                depth_rel: None,
+                albedo_abs: None,
+                image_abs: None,
+            };
+            error_maps_into(gb, decoded, 0, &mut maps);
+            maps
+        },
+    );
+    let derived = decoded.position.is_none() && decoded.depth.is_some() && decoded.camera.is_some();
+    (errors, maps, derived, decode_ms)
 }

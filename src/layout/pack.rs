@@ -88,6 +88,7 @@ pub struct Roundtrip {
 }
 
 /// The packed texels of some samples, with what decoding them needs.
+#[derive(Clone)]
 struct Band<'a> {
     /// Per target: the samples' texel bytes and the bytes per texel.
     targets: Vec<(&'a [u8], usize)>,
@@ -364,6 +365,36 @@ impl Layout {
             depth_range,
             present: self.present(gb),
         })
+    }
+
+    /// [`Layout::pack`], `runs` times (at least once) into the same targets, timing each run's encode; the material
+    /// table is built once before the runs and timed on its own, as [`Layout::roundtrip_timed`] does. Returns the
+    /// packed frame, each run's encode time and the table's (ms).
+    pub fn pack_timed(&self, gb: &GBuffer, runs: usize) -> Result<(Packed, Vec<f64>, Option<f64>)> {
+        gb.validate()?;
+        let depth_range = self.depth_range_for(gb);
+        let coders = self.coders(depth_range)?;
+        let t = Instant::now();
+        let (material_table, index) = self.material_index(gb);
+        let table_ms = material_table.is_some().then(|| t.elapsed().as_secs_f64() * 1e3);
+        let mut targets = self.empty_targets();
+        let mut encode_ms = Vec::new();
+        for _ in 0..runs.max(1) {
+            let t = Instant::now();
+            self.pack_samples(gb, &coders, &index, 0..gb.len(), &mut targets);
+            encode_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        }
+        let packed = Packed {
+            layout: self.name().to_string(),
+            width: gb.width,
+            height: gb.height,
+            samples: gb.samples,
+            targets,
+            material_table,
+            depth_range,
+            present: self.present(gb),
+        };
+        Ok((packed, encode_ms, table_ms))
     }
 
     /// The texel of target `target` at a background sample: zero but a depth field, which holds its codec's
@@ -659,6 +690,72 @@ impl Layout {
         Ok(Roundtrip { decoded: out, encode_ms, decode_ms, table_ms })
     }
 
+    /// Decodes `band`, the texels of rows `rows` of a frame shaped like `like`, into `out` as a G-buffer of its own
+    /// (`width × rows.len()`, its planes reused; background samples 0), in the lighting's form: no position is
+    /// derived from depth (that needs the frame's pixel rows; see [`PackedFrame::decode_rows`]).
+    fn decode_band(
+        &self,
+        band: &Band<'_>,
+        coders: &[Coder],
+        like: &GBuffer,
+        rows: Range<u32>,
+        out: &mut GBuffer,
+    ) -> Result<()> {
+        let row = like.width as usize * like.samples as usize;
+        let range = rows.start as usize * row..rows.end as usize * row;
+        (out.width, out.height, out.samples) = (like.width, rows.end - rows.start, like.samples);
+        if out.sample_positions != like.sample_positions {
+            out.sample_positions.clone_from(&like.sample_positions);
+        }
+        if out.materials.len() != like.materials.len() {
+            out.materials.clone_from(&like.materials);
+        }
+        out.coverage.clear();
+        out.coverage.extend_from_slice(&like.coverage[range.clone()]);
+        out.resize_planes(range.len());
+        let band = Band { zero_background: true, ..band.clone() };
+        let mut index = Vec::new();
+        let cov = &like.coverage[range.clone()];
+        self.unpack_samples(&band, coders, cov, row, 0..range.len(), out, &mut index)?;
+        // No camera while finishing: nothing may derive positions from the band's own pixel coordinates.
+        out.camera = None;
+        self.finish_unpack(out, false);
+        out.camera = like.camera;
+        Ok(())
+    }
+
+    /// Whether the lighting's G-buffer of this layout ([`Layout::roundtrip_for_lighting`]) is `gb` itself, bit for
+    /// bit: the same planes, the same bits in every sample. Packs and unpacks band by band without keeping either
+    /// (a lossless layout's packed frame would be as large as `gb`), and returns the encode and decode times (ms).
+    pub fn roundtrip_matches(&self, gb: &GBuffer) -> Result<(bool, f64, f64)> {
+        gb.validate()?;
+        let coders = self.coders(self.depth_range_for(gb))?;
+        let present = self.present(gb);
+        let (table, material) = self.material_index(gb);
+        let rows_per_band = (BAND_SAMPLES / (gb.width as usize * gb.samples as usize).max(1)).max(1) as u32;
+        let mut targets = self.empty_targets();
+        let mut out = GBuffer::default();
+        let (mut enc, mut dec) = (Duration::ZERO, Duration::ZERO);
+        let row = gb.width as usize * gb.samples as usize;
+        let mut y = 0;
+        while y < gb.height {
+            let rows = y..(y + rows_per_band).min(gb.height);
+            let range = rows.start as usize * row..rows.end as usize * row;
+            let t = Instant::now();
+            self.pack_samples(gb, &coders, &material, range.clone(), &mut targets);
+            enc += t.elapsed();
+            let t = Instant::now();
+            let band = Band::of(&targets, 0..range.len(), table.as_ref(), &present);
+            self.decode_band(&band, &coders, gb, rows.clone(), &mut out)?;
+            dec += t.elapsed();
+            if !same_planes(gb, range, &out) {
+                return Ok((false, enc.as_secs_f64() * 1e3, dec.as_secs_f64() * 1e3));
+            }
+            y = rows.end;
+        }
+        Ok((true, enc.as_secs_f64() * 1e3, dec.as_secs_f64() * 1e3))
+    }
+
     /// `packed` ready to be decoded a band of rows at a time ([`PackedFrame::decode_rows`]), as a lighting pass
     /// reads it. Fails as [`Layout::unpack`] when `packed` does not fit this layout or `like`.
     pub fn frame<'a>(&'a self, packed: &'a Packed, like: &'a GBuffer) -> Result<PackedFrame<'a>> {
@@ -873,28 +970,25 @@ impl<'a> PackedFrame<'a> {
         }
         let row = like.width as usize * like.samples as usize;
         let range = rows.start as usize * row..rows.end as usize * row;
-        (out.width, out.height, out.samples) = (like.width, rows.end - rows.start, like.samples);
-        if out.sample_positions != like.sample_positions {
-            out.sample_positions.clone_from(&like.sample_positions);
-        }
-        if out.materials.len() != like.materials.len() {
-            out.materials.clone_from(&like.materials);
-        }
-        out.coverage.clear();
-        out.coverage.extend_from_slice(&like.coverage[range.clone()]);
-        out.resize_planes(range.len());
         let p = self.packed;
-        let band = Band {
-            zero_background: true,
-            ..Band::of(&p.targets, range.clone(), p.material_table.as_ref(), &p.present)
-        };
-        let mut index = Vec::new();
-        let cov = &like.coverage[range.clone()];
-        self.layout.unpack_samples(&band, &self.coders, cov, row, 0..range.len(), out, &mut index)?;
-        // No camera while finishing: nothing may derive positions from the band's own pixel coordinates.
-        out.camera = None;
-        self.layout.finish_unpack(out, false);
-        out.camera = like.camera;
+        let band = Band::of(&p.targets, range.clone(), p.material_table.as_ref(), &p.present);
+        self.layout.decode_band(&band, &self.coders, like, rows, out)?;
         Ok(())
     }
+}
+
+/// Whether `band`'s planes are samples `range` of `gb`'s, bit for bit, with the same attributes present.
+fn same_planes(gb: &GBuffer, range: Range<usize>, band: &GBuffer) -> bool {
+    fn bits<T: bytemuck::Pod>(a: &[T], b: &[T]) -> bool {
+        bytemuck::cast_slice::<T, u8>(a) == bytemuck::cast_slice::<T, u8>(b)
+    }
+    use crate::gbuffer::PlaneRef as P;
+    gb.attributes() == band.attributes()
+        && gb.attributes().into_iter().all(|a| match (gb.plane(a), band.plane(a)) {
+            (Some(P::F32(x)), Some(P::F32(y))) => bits(&x[range.clone()], y),
+            (Some(P::Vec2(x)), Some(P::Vec2(y))) => bits(&x[range.clone()], y),
+            (Some(P::Vec3(x)), Some(P::Vec3(y))) => bits(&x[range.clone()], y),
+            (Some(P::U32(x)), Some(P::U32(y))) => x[range.clone()] == *y,
+            _ => false,
+        })
 }
