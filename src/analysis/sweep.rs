@@ -640,7 +640,8 @@ fn fill_attribute_errors(row: &mut Row, errors: Result<measure::gbuffer::Attribu
     }
 }
 
-/// What a layout's rows read.
+/// What a layout's rows read (one value per layout: its size does not matter).
+#[allow(clippy::large_enum_variant)]
 enum Source {
     /// The packed frame: read band by band (a layout smaller packed than decoded).
     Packed(Packed),

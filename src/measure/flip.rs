@@ -689,7 +689,8 @@ pub fn ldr_flip_many(
     let mut maps: Vec<Vec<f32>> = tests.iter().map(|_| vec![0.0f32; npix]).collect();
     if npix > 0 && !tests.is_empty() {
         let ctx = Ctx::new(width, height, opts.pixels_per_degree);
-        run_bands_many(&ctx, reference_srgb, tests, Encoding::Srgb, &mut maps, None);
+        let tests: Vec<Pixels<'_>> = tests.iter().map(|t| Pixels::F32(t)).collect();
+        run_bands_many(&ctx, Pixels::F32(reference_srgb), &tests, Encoding::Srgb, &mut maps, None);
     }
     maps.into_iter()
         .map(|values| {
@@ -697,6 +698,42 @@ pub fn ldr_flip_many(
             FlipMap { width, height, values, mean }
         })
         .collect()
+}
+
+/// [`ldr_flip_many`] on 8-bit sRGB images (interleaved RGB bytes, e.g. a tone-mapped display image): the numbers of
+/// `ldr_flip_many` on the images as `f32(byte) / 255`, bit for bit, without those copies (4× the bytes).
+pub fn ldr_flip_many_srgb8(
+    reference: &[u8],
+    tests: &[&[u8]],
+    width: usize,
+    height: usize,
+    opts: &FlipOptions,
+) -> Vec<FlipMap> {
+    let n = width.checked_mul(height).and_then(|n| n.checked_mul(3)).expect("FLIP: image size overflows usize");
+    assert_eq!(reference.len(), n, "FLIP: reference image must have width * height * 3 values");
+    for t in tests {
+        assert_eq!(t.len(), n, "FLIP: test image must have width * height * 3 values");
+    }
+    let npix = width * height;
+    let mut maps: Vec<Vec<f32>> = tests.iter().map(|_| vec![0.0f32; npix]).collect();
+    if npix > 0 && !tests.is_empty() {
+        let ctx = Ctx::new(width, height, opts.pixels_per_degree);
+        let tests: Vec<Pixels<'_>> = tests.iter().map(|t| Pixels::Srgb8(t)).collect();
+        run_bands_many(&ctx, Pixels::Srgb8(reference), &tests, Encoding::Srgb, &mut maps, None);
+    }
+    maps.into_iter()
+        .map(|values| {
+            let mean = mean_f64(&values);
+            FlipMap { width, height, values, mean }
+        })
+        .collect()
+}
+
+/// An image's interleaved RGB values as FLIP reads them: floats, or sRGB bytes read as `byte / 255`.
+#[derive(Clone, Copy)]
+enum Pixels<'a> {
+    F32(&'a [f32]),
+    Srgb8(&'a [u8]),
 }
 
 /// HDR-FLIP of several linear test images against one reference with the reference defaults ([`hdr_flip`] for
@@ -724,7 +761,8 @@ pub fn hdr_flip_many(
         for (i, &e) in exposures.iter().enumerate() {
             let enc = Encoding::Hdr { scale: 2.0f32.powf(e), tm };
             let tag = i as f32 / (n - 1) as f32;
-            run_bands_many(&ctx, reference_linear, tests, enc, &mut maxes, Some((&mut tags, tag)));
+            let tests: Vec<Pixels<'_>> = tests.iter().map(|t| Pixels::F32(t)).collect();
+            run_bands_many(&ctx, Pixels::F32(reference_linear), &tests, enc, &mut maxes, Some((&mut tags, tag)));
         }
     }
     maxes
@@ -750,8 +788,8 @@ type BandRows<'a> = (&'a mut [f32], Option<&'a mut [f32]>);
 /// [`run_bands`] for several tests: per band, the reference's features once, then each test against them.
 fn run_bands_many(
     ctx: &Ctx,
-    r: &[f32],
-    tests: &[&[f32]],
+    r: Pixels<'_>,
+    tests: &[Pixels<'_>],
     enc: Encoding,
     outs: &mut [Vec<f32>],
     merge: Option<(&mut [Vec<f32>], f32)>,
@@ -826,7 +864,7 @@ fn sink_row(ctx: &Ctx, sink: &mut Sink<'_>, rows: usize, ry: usize, x0: usize, f
 
 /// The features of rows `y0..y0 + rows` of one image, handed to `sink` tile row by tile row. Runtime dispatch as
 /// [`band`].
-fn band_features(ctx: &Ctx, img: &[f32], enc: Encoding, y0: usize, rows: usize, sink: &mut Sink<'_>) {
+fn band_features(ctx: &Ctx, img: Pixels<'_>, enc: Encoding, y0: usize, rows: usize, sink: &mut Sink<'_>) {
     #[cfg(target_arch = "x86_64")]
     match band_isa() {
         // SAFETY: the CPU supports AVX-512 F/VL/BW/DQ, AVX2 and FMA (checked by `Isa::detect`).
@@ -840,20 +878,20 @@ fn band_features(ctx: &Ctx, img: &[f32], enc: Encoding, y0: usize, rows: usize, 
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
-unsafe fn band_features_avx512(ctx: &Ctx, img: &[f32], enc: Encoding, y0: usize, rows: usize, sink: &mut Sink<'_>) {
+unsafe fn band_features_avx512(ctx: &Ctx, img: Pixels<'_>, enc: Encoding, y0: usize, rows: usize, sink: &mut Sink<'_>) {
     band_features_impl(ctx, img, enc, y0, rows, sink)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn band_features_avx2(ctx: &Ctx, img: &[f32], enc: Encoding, y0: usize, rows: usize, sink: &mut Sink<'_>) {
+unsafe fn band_features_avx2(ctx: &Ctx, img: Pixels<'_>, enc: Encoding, y0: usize, rows: usize, sink: &mut Sink<'_>) {
     band_features_impl(ctx, img, enc, y0, rows, sink)
 }
 
 /// One image's pass of [`band_impl`]: the same ring, horizontal and vertical sums (7 planes instead of 14), then
 /// per pixel the Lab colour and feature magnitudes that [`vrow2`] computes for each image of a pair.
 #[inline(always)]
-fn band_features_impl(ctx: &Ctx, img: &[f32], enc: Encoding, y0: usize, rows: usize, sink: &mut Sink<'_>) {
+fn band_features_impl(ctx: &Ctx, img: Pixels<'_>, enc: Encoding, y0: usize, rows: usize, sink: &mut Sink<'_>) {
     const NH1: usize = NH / 2;
     let (w, h) = (ctx.w, ctx.h);
     let row_len = NH1 * TW;
@@ -956,7 +994,7 @@ fn band_impl(inp: &Inputs<'_>, y0: usize, out: &mut [f32], mut merge: Option<(&m
             while next <= hi {
                 let slot = next % ctx.ring;
                 let dst = &mut ring[slot * row_len..(slot + 1) * row_len];
-                hrow(ctx, &[r, t], enc, next, x0, tw, tws, &mut pad, &mut rgb, dst);
+                hrow(ctx, &[Pixels::F32(r), Pixels::F32(t)], enc, next, x0, tw, tws, &mut pad, &mut rgb, dst);
                 next += 1;
             }
             // offs[i]: ring offset of input row clamp(y - radius + i), i = 0..=2 radius + 1.
@@ -989,7 +1027,7 @@ fn band_impl(inp: &Inputs<'_>, y0: usize, out: &mut [f32], mut merge: Option<(&m
 #[allow(clippy::too_many_arguments)]
 fn hrow(
     ctx: &Ctx,
-    imgs: &[&[f32]],
+    imgs: &[Pixels<'_>],
     enc: Encoding,
     y: usize,
     x0: usize,
@@ -1008,13 +1046,27 @@ fn hrow(
     let n = hi - lo;
     let lpad = rp - (x0 - lo);
     for (img, src) in imgs.iter().enumerate() {
-        let row = &src[(y * w + lo) * 3..(y * w + hi) * 3];
         let (rr, rest) = rgb[..3 * n].split_at_mut(n);
         let (gg, bb) = rest.split_at_mut(n);
-        for (((p, r0), g0), b0) in row.chunks_exact(3).zip(rr.iter_mut()).zip(gg.iter_mut()).zip(bb.iter_mut()) {
-            *r0 = p[0];
-            *g0 = p[1];
-            *b0 = p[2];
+        match src {
+            Pixels::F32(src) => {
+                let row = &src[(y * w + lo) * 3..(y * w + hi) * 3];
+                for (((p, r0), g0), b0) in row.chunks_exact(3).zip(rr.iter_mut()).zip(gg.iter_mut()).zip(bb.iter_mut())
+                {
+                    *r0 = p[0];
+                    *g0 = p[1];
+                    *b0 = p[2];
+                }
+            }
+            Pixels::Srgb8(src) => {
+                let row = &src[(y * w + lo) * 3..(y * w + hi) * 3];
+                for (((p, r0), g0), b0) in row.chunks_exact(3).zip(rr.iter_mut()).zip(gg.iter_mut()).zip(bb.iter_mut())
+                {
+                    *r0 = f32::from(p[0]) / 255.0;
+                    *g0 = f32::from(p[1]) / 255.0;
+                    *b0 = f32::from(p[2]) / 255.0;
+                }
+            }
         }
         match enc {
             Encoding::Srgb => {
