@@ -374,11 +374,16 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
             let mut row = Row { detector: det.name().to_string(), ..attr_row.clone() };
             row.aa_error = detectors[di].aa_error;
             row.bandwidth_mb = bandwidth(gb, bytes, detectors[di].quad_light_fragments);
-            let detected = time_runs(cfg.runs, || match (&frame, planes) {
-                (Some(f), _) => detect::detect_packed(f, det, &cfg.detector_config),
-                (None, Some(d)) => detect::detect(d, det, &cfg.detector_config),
+            // Packed: the whole frame once, then sampled estimates (see `time_sampled_runs`).
+            let detected = match (&frame, planes) {
+                (Some(f), _) => time_sampled_runs(
+                    cfg.runs,
+                    || detect::detect_packed(f, det, &cfg.detector_config),
+                    || detect::time_packed_sampled(f, det, &cfg.detector_config, resolve::TIMING_STRIDE),
+                ),
+                (None, Some(d)) => time_runs(cfg.runs, || detect::detect(d, det, &cfg.detector_config)),
                 (None, None) => unreachable!("a layout's input is packed or planes"),
-            });
+            };
             let mask = match detected {
                 Ok((m, t)) => {
                     row.set_timing("detect", t);
@@ -424,7 +429,16 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
                     (None, Some(d)) => d.into(),
                     (None, None) => unreachable!("a layout's input is packed or planes"),
                 };
-                match time_runs(cfg.runs, || resolve::resolve(input, lights, &mask, &rcfg)) {
+                let resolved = if frame.is_some() {
+                    time_sampled_runs(
+                        cfg.runs,
+                        || resolve::resolve(input, lights, &mask, &rcfg),
+                        || resolve::time_sampled(input, lights, &mask, &rcfg),
+                    )
+                } else {
+                    time_runs(cfg.runs, || resolve::resolve(input, lights, &mask, &rcfg))
+                };
+                match resolved {
                     Ok((res, t)) => {
                         r.set_timing("resolve", t);
                         if c == Some(Culling::Quad) {
@@ -640,6 +654,24 @@ fn fill_attribute_errors(row: &mut Row, errors: Result<measure::gbuffer::Attribu
     }
 }
 
+/// [`time_runs`] whose runs after the first are estimates: `whole` once (its result and time), then `runs − 1`
+/// times `sample`, which times a systematic sample of the frame (every [`resolve::TIMING_STRIDE`]-th band) and
+/// returns the scaled time in ms. A report times eight layouts × three detectors: the sampled runs keep the
+/// spread of several runs for an eighth of their cost.
+fn time_sampled_runs<T>(
+    runs: usize,
+    whole: impl FnOnce() -> Result<T>,
+    mut sample: impl FnMut() -> Result<f64>,
+) -> Result<(T, Timing)> {
+    let t = std::time::Instant::now();
+    let v = whole()?;
+    let mut ms = vec![t.elapsed().as_secs_f64() * 1e3];
+    for _ in 1..runs.max(1) {
+        ms.push(sample()?);
+    }
+    Ok((v, Timing::from_ms(ms).expect("at least one run")))
+}
+
 /// What a layout's rows read (one value per layout: its size does not matter).
 #[allow(clippy::large_enum_variant)]
 enum Source {
@@ -669,7 +701,7 @@ fn prepare(layout: &Layout, gb: &GBuffer, runs: usize) -> Result<Prepared> {
     let decoded_bytes: usize =
         layout.stored_attributes().iter().filter(|a| gb.has(**a)).map(|a| 4 * a.components()).sum();
     if layout.bytes_per_sample() < decoded_bytes {
-        let (packed, encode_ms, table_ms) = layout.pack_timed(gb, runs)?;
+        let (packed, encode_ms, table_ms) = layout.pack_timed(gb, runs, resolve::TIMING_STRIDE)?;
         return Ok(Prepared { source: Source::Packed(packed), encode_ms, decode_ms: Vec::new(), table_ms });
     }
     let (same, enc, dec) = layout.roundtrip_matches(gb)?;
@@ -709,11 +741,18 @@ fn band_pass(frame: &PackedFrame<'_>, gb: &GBuffer, runs: usize) -> Result<Measu
     let mut decode_ms = Vec::new();
     let row = gb.width as usize * gb.samples as usize;
     let mut derived = false;
+    let bands = gb.height.div_ceil(BAND_ROWS).max(1);
     for run in 0..runs.max(1) {
+        // The first run decodes (and measures) every band; the others time every TIMING_STRIDE-th, scaled.
+        let stride = if run == 0 { 1 } else { resolve::TIMING_STRIDE };
         let mut dec = std::time::Duration::ZERO;
         let mut y = 0;
         while y < gb.height {
             let rows = y..(y + BAND_ROWS).min(gb.height);
+            if (y / BAND_ROWS) % stride != 0 {
+                y = rows.end;
+                continue;
+            }
             let t = std::time::Instant::now();
             frame.decode_rows(rows.clone(), &mut band)?;
             dec += t.elapsed();
@@ -727,7 +766,8 @@ fn band_pass(frame: &PackedFrame<'_>, gb: &GBuffer, runs: usize) -> Result<Measu
             }
             y = rows.end;
         }
-        decode_ms.push(dec.as_secs_f64() * 1e3);
+        let sampled = bands.div_ceil(stride);
+        decode_ms.push(dec.as_secs_f64() * 1e3 * f64::from(bands) / f64::from(sampled));
     }
     let errors = compared.map(|()| compare.finish());
     Ok((errors, maps, derived, decode_ms))

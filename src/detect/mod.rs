@@ -129,6 +129,45 @@ const PACKED_BAND_ROWS: u32 = 32;
 /// (tested for every built-in layout and detector), and no decoded copy of the frame exists. Bands run in
 /// parallel on rayon's current pool; errors are `detect`'s.
 pub fn detect_packed(frame: &PackedFrame<'_>, detector: Detector, cfg: &DetectorConfig) -> Result<EdgeMask> {
+    detect_packed_bands(frame, detector, cfg, 1)
+}
+
+/// An estimate of [`detect_packed`]'s wall time (ms) from every `stride`-th band (the others skipped), scaled by
+/// the stride: the repeated timing runs of `gbuf report` (see `resolve::time_sampled`).
+pub fn time_packed_sampled(
+    frame: &PackedFrame<'_>,
+    detector: Detector,
+    cfg: &DetectorConfig,
+    stride: u32,
+) -> Result<f64> {
+    let t = std::time::Instant::now();
+    detect_packed_bands(frame, detector, cfg, stride.max(1))?;
+    let bands = frame.like().height.div_ceil(PACKED_BAND_ROWS).max(1);
+    let sampled = bands.div_ceil(stride.max(1));
+    Ok(t.elapsed().as_secs_f64() * 1e3 * f64::from(bands) / f64::from(sampled))
+}
+
+/// The attributes `detector` reads (besides coverage): all a band decoded for it needs.
+fn reads(detector: Detector) -> &'static [Attribute] {
+    use Attribute as A;
+    match detector {
+        Detector::Lauritzen => &[A::Depth, A::Position, A::Normal],
+        Detector::Combined => &[A::Depth, A::Position, A::Normal, A::MaterialId, A::ObjectId],
+        Detector::Depth => &[A::Depth, A::Position],
+        Detector::Normal => &[A::Normal],
+        Detector::Id => &[A::MaterialId, A::ObjectId],
+        Detector::ForwardMsaa => &[A::PrimitiveId, A::ObjectId],
+        Detector::Ssaa | Detector::None => &[],
+    }
+}
+
+/// [`detect_packed`] on every `stride`-th band only (the others' rows stay 0).
+fn detect_packed_bands(
+    frame: &PackedFrame<'_>,
+    detector: Detector,
+    cfg: &DetectorConfig,
+    stride: u32,
+) -> Result<EdgeMask> {
     cfg.validate()?;
     let like = frame.like();
     like.validate()?;
@@ -138,16 +177,20 @@ pub fn detect_packed(frame: &PackedFrame<'_>, detector: Detector, cfg: &Detector
     }
     let mut mask = EdgeMask::filled(w, h, like.samples, 0);
     let band_px = (PACKED_BAND_ROWS * w) as usize;
-    mask.shade_count.par_chunks_mut(band_px).enumerate().try_for_each_init(GBuffer::default, |band, (b, out)| {
-        let y0 = b as u32 * PACKED_BAND_ROWS;
-        let y1 = (y0 + PACKED_BAND_ROWS).min(h);
-        let (top, bottom) = (y0.saturating_sub(NEIGHBOUR_ROWS), (y1 + NEIGHBOUR_ROWS).min(h));
-        frame.decode_rows(top..bottom, band)?;
-        let m = detect(band, detector, cfg)?;
-        let skip = ((y0 - top) * w) as usize;
-        out.copy_from_slice(&m.shade_count[skip..skip + out.len()]);
-        Ok(())
-    })?;
+    let stride = stride as usize;
+    mask.shade_count.par_chunks_mut(band_px).enumerate().filter(|(b, _)| b % stride == 0).try_for_each_init(
+        GBuffer::default,
+        |band, (b, out)| {
+            let y0 = b as u32 * PACKED_BAND_ROWS;
+            let y1 = (y0 + PACKED_BAND_ROWS).min(h);
+            let (top, bottom) = (y0.saturating_sub(NEIGHBOUR_ROWS), (y1 + NEIGHBOUR_ROWS).min(h));
+            frame.decode_rows_only(top..bottom, band, reads(detector))?;
+            let m = detect(band, detector, cfg)?;
+            let skip = ((y0 - top) * w) as usize;
+            out.copy_from_slice(&m.shade_count[skip..skip + out.len()]);
+            Ok(())
+        },
+    )?;
     Ok(mask)
 }
 

@@ -96,6 +96,8 @@ struct Band<'a> {
     present: &'a [Attribute],
     /// Decoded planes are reused band after band: background samples are written 0.
     zero_background: bool,
+    /// Decode only these attributes' fields and table parameters (`present` is already cut to them).
+    only: Option<&'a [Attribute]>,
 }
 
 impl<'a> Band<'a> {
@@ -113,7 +115,7 @@ impl<'a> Band<'a> {
                 (&t.bytes[range.start * size..range.end * size], size)
             })
             .collect();
-        Band { targets, table, present, zero_background: false }
+        Band { targets, table, present, zero_background: false, only: None }
     }
 }
 
@@ -367,10 +369,12 @@ impl Layout {
         })
     }
 
-    /// [`Layout::pack`], `runs` times (at least once) into the same targets, timing each run's encode; the material
-    /// table is built once before the runs and timed on its own, as [`Layout::roundtrip_timed`] does. Returns the
-    /// packed frame, each run's encode time and the table's (ms).
-    pub fn pack_timed(&self, gb: &GBuffer, runs: usize) -> Result<(Packed, Vec<f64>, Option<f64>)> {
+    /// [`Layout::pack`], timed: the whole frame once, then `runs − 1` estimates that pack every `stride`-th band of
+    /// [`BAND_SAMPLES`] (the others skipped) into scratch targets, scaled by the stride (a systematic sample of the
+    /// frame; `stride` 1 packs it whole again). The material table is built once before the runs and timed on its
+    /// own, as [`Layout::roundtrip_timed`] does. Returns the packed frame, each run's encode time and the table's
+    /// (ms).
+    pub fn pack_timed(&self, gb: &GBuffer, runs: usize, stride: u32) -> Result<(Packed, Vec<f64>, Option<f64>)> {
         gb.validate()?;
         let depth_range = self.depth_range_for(gb);
         let coders = self.coders(depth_range)?;
@@ -378,11 +382,22 @@ impl Layout {
         let (material_table, index) = self.material_index(gb);
         let table_ms = material_table.is_some().then(|| t.elapsed().as_secs_f64() * 1e3);
         let mut targets = self.empty_targets();
-        let mut encode_ms = Vec::new();
-        for _ in 0..runs.max(1) {
+        let t = Instant::now();
+        self.pack_samples(gb, &coders, &index, 0..gb.len(), &mut targets);
+        let mut encode_ms = vec![t.elapsed().as_secs_f64() * 1e3];
+        let row = (gb.width as usize * gb.samples as usize).max(1);
+        let band_len = row * (BAND_SAMPLES / row).max(1);
+        let bands = gb.len().div_ceil(band_len).max(1);
+        let stride = stride.max(1) as usize;
+        let mut scratch = self.empty_targets();
+        for _ in 1..runs.max(1) {
             let t = Instant::now();
-            self.pack_samples(gb, &coders, &index, 0..gb.len(), &mut targets);
-            encode_ms.push(t.elapsed().as_secs_f64() * 1e3);
+            for b in (0..bands).step_by(stride) {
+                let range = b * band_len..((b + 1) * band_len).min(gb.len());
+                self.pack_samples(gb, &coders, &index, range, &mut scratch);
+            }
+            let sampled = bands.div_ceil(stride);
+            encode_ms.push(t.elapsed().as_secs_f64() * 1e3 * bands as f64 / sampled as f64);
         }
         let packed = Packed {
             layout: self.name().to_string(),
@@ -577,6 +592,9 @@ impl Layout {
         if let Some(table) = band.table {
             let chunk = rows_chunk(row);
             for (p, a) in table.attributes().into_iter().enumerate() {
+                if band.only.is_some_and(|only| !only.contains(&a)) {
+                    continue;
+                }
                 let plane = &mut scalar_plane(out, a, n)?[r.clone()];
                 plane.par_chunks_mut(chunk).zip(cov.par_chunks(chunk)).enumerate().try_for_each(|(ci, (d, c))| {
                     for (j, (d, &covered)) in d.iter_mut().zip(c).enumerate() {
@@ -604,9 +622,16 @@ impl Layout {
     /// from the other when the layout stores only one (position only when `derive_position`: see
     /// [`Layout::roundtrip_for_lighting`]).
     fn finish_unpack(&self, out: &mut GBuffer, derive_position: bool) {
+        self.finish_unpack_only(out, derive_position, None);
+    }
+
+    /// [`Layout::finish_unpack`] setting only the constants of `only` (all when `None`).
+    fn finish_unpack_only(&self, out: &mut GBuffer, derive_position: bool, only: Option<&[Attribute]>) {
         let n = out.len();
         for (a, vals) in self.constants() {
-            set_constant(out, *a, vals, n);
+            if only.is_none_or(|only| only.contains(a)) {
+                set_constant(out, *a, vals, n);
+            }
         }
         if !self.stores(Attribute::Position) && self.stores(Attribute::Depth) && out.depth.is_some() {
             if derive_position {
@@ -700,6 +725,7 @@ impl Layout {
         like: &GBuffer,
         rows: Range<u32>,
         out: &mut GBuffer,
+        only: Option<&[Attribute]>,
     ) -> Result<()> {
         let row = like.width as usize * like.samples as usize;
         let range = rows.start as usize * row..rows.end as usize * row;
@@ -713,13 +739,17 @@ impl Layout {
         out.coverage.clear();
         out.coverage.extend_from_slice(&like.coverage[range.clone()]);
         out.resize_planes(range.len());
-        let band = Band { zero_background: true, ..band.clone() };
+        let present: Vec<Attribute> = match only {
+            Some(only) => band.present.iter().copied().filter(|a| only.contains(a)).collect(),
+            None => band.present.to_vec(),
+        };
+        let band = Band { zero_background: true, present: &present, only, ..band.clone() };
         let mut index = Vec::new();
         let cov = &like.coverage[range.clone()];
         self.unpack_samples(&band, coders, cov, row, 0..range.len(), out, &mut index)?;
         // No camera while finishing: nothing may derive positions from the band's own pixel coordinates.
         out.camera = None;
-        self.finish_unpack(out, false);
+        self.finish_unpack_only(out, false, only);
         out.camera = like.camera;
         Ok(())
     }
@@ -746,7 +776,7 @@ impl Layout {
             enc += t.elapsed();
             let t = Instant::now();
             let band = Band::of(&targets, 0..range.len(), table.as_ref(), &present);
-            self.decode_band(&band, &coders, gb, rows.clone(), &mut out)?;
+            self.decode_band(&band, &coders, gb, rows.clone(), &mut out, None)?;
             dec += t.elapsed();
             if !same_planes(gb, range, &out) {
                 return Ok((false, enc.as_secs_f64() * 1e3, dec.as_secs_f64() * 1e3));
@@ -972,8 +1002,27 @@ impl<'a> PackedFrame<'a> {
         let range = rows.start as usize * row..rows.end as usize * row;
         let p = self.packed;
         let band = Band::of(&p.targets, range.clone(), p.material_table.as_ref(), &p.present);
-        self.layout.decode_band(&band, &self.coders, like, rows, out)?;
+        self.layout.decode_band(&band, &self.coders, like, rows, out, None)?;
         Ok(())
+    }
+
+    /// [`PackedFrame::decode_rows`] decoding only the planes of `only` (what a pass reads: the others' fields are not
+    /// extracted, and their planes are absent), each plane the same as `decode_rows` gives bit for bit. Depth and
+    /// position come together (either one is derived from the other).
+    pub fn decode_rows_only(&self, rows: Range<u32>, out: &mut GBuffer, only: &[Attribute]) -> Result<()> {
+        let like = self.like;
+        if rows.start > rows.end || rows.end > like.height {
+            return Err(Error::Argument(format!("rows {rows:?} outside the frame's {} rows", like.height)));
+        }
+        let mut only = only.to_vec();
+        if only.iter().any(|a| matches!(a, Attribute::Depth | Attribute::Position)) {
+            only.extend([Attribute::Depth, Attribute::Position]);
+        }
+        let row = like.width as usize * like.samples as usize;
+        let range = rows.start as usize * row..rows.end as usize * row;
+        let p = self.packed;
+        let band = Band::of(&p.targets, range, p.material_table.as_ref(), &p.present);
+        self.layout.decode_band(&band, &self.coders, like, rows, out, Some(&only))
     }
 }
 

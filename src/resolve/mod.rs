@@ -135,6 +135,46 @@ pub fn resolve_isa<'a>(
     Ok(out)
 }
 
+/// Bands of tile rows a sampled timing runs: one in this many ([`time_sampled`]).
+pub const TIMING_STRIDE: u32 = 8;
+
+/// An estimate of [`resolve`]'s wall time (ms) on this input from a systematic sample of it: the per-frame
+/// preparation (reader, lights, culling tables) in full, then every [`TIMING_STRIDE`]-th band of tile rows (the
+/// others skipped) scaled by the stride. Bands are lit exactly as in a full resolve; the sample spreads over the
+/// whole frame, so sparse and dense regions weigh as they do in it. For repeated timing runs (`gbuf report`): the
+/// first run lights the whole frame, the others sample it. `benches/report.rs` compares the estimate with the
+/// full time.
+pub fn time_sampled<'a>(
+    gb: impl Into<ResolveInput<'a>>,
+    lights: &[Light],
+    mask: &EdgeMask,
+    cfg: &ResolveConfig,
+) -> Result<f64> {
+    let t_start = Instant::now();
+    let gb = gb.into();
+    let packed = gb.packed();
+    let (gb, order) = gb.planes();
+    cfg.validate()?;
+    if mask.width != gb.width || mask.height != gb.height || mask.shade_count.len() != gb.pixel_count() {
+        return Err(Error::Argument("edge mask and G-buffer differ in size".into()));
+    }
+    let reader = match packed {
+        None => surface::SurfaceReader::with_order(gb, order)?,
+        Some(p) => packed_reader(p)?,
+    };
+    let clean = lights::sanitize(lights);
+    let mut frame = schedule::Frame::new(reader, packed, mask, &clean.lights, &clean.environment, *cfg, Isa::detect());
+    frame.band_stride = TIMING_STRIDE;
+    let n = gb.pixel_count();
+    let (mut rgb, mut heat) = (vec![glam::Vec3::ZERO; n], vec![0u32; n]);
+    let t_prep = t_start.elapsed();
+    let t_par = Instant::now();
+    schedule::run_tiles(&frame, &mut rgb, &mut heat)?;
+    let bands = gb.height.div_ceil(cfg.tile_size).max(1);
+    let sampled = bands.div_ceil(TIMING_STRIDE);
+    Ok(ms(t_prep) + ms(t_par.elapsed()) * f64::from(bands) / f64::from(sampled))
+}
+
 fn resolve_into_isa(
     isa: Isa,
     gb: ResolveInput<'_>,
@@ -219,7 +259,7 @@ fn resolve_into_isa(
 fn packed_reader<'a>(p: &'a crate::layout::PackedFrame<'a>) -> Result<surface::SurfaceReader<'a>> {
     let like = p.like();
     let mut probe = crate::gbuffer::GBuffer::default();
-    p.decode_rows(0..like.height.min(1), &mut probe)?;
+    p.decode_rows_only(0..like.height.min(1), &mut probe, &[crate::gbuffer::Attribute::Depth])?;
     let derivable = probe.depth.is_some() && like.camera.is_some();
     if probe.position.is_none() && !derivable && like.coverage.iter().any(|&c| c) {
         return Err(Error::Argument(format!(

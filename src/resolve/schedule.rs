@@ -50,6 +50,11 @@ pub struct Frame<'a> {
     pub cfg: ResolveConfig,
     /// The instruction set every SIMD stage runs with (at most [`Isa::detect`]).
     pub isa: Isa,
+    /// The attributes decoded from packed targets: what the BRDF reads.
+    pub packed_reads: Vec<crate::gbuffer::Attribute>,
+    /// Only every `band_stride`-th band of tile rows runs (1: all); the others' outputs are left as they are. For
+    /// estimating a frame's time from a sample of its bands.
+    pub band_stride: u32,
 }
 
 impl<'a> Frame<'a> {
@@ -79,6 +84,8 @@ impl<'a> Frame<'a> {
             quads,
             cfg,
             isa: isa.min(Isa::detect()),
+            band_stride: 1,
+            packed_reads: Reads::of(cfg.brdf).attributes(),
         }
     }
 }
@@ -180,9 +187,11 @@ pub fn run_tiles(frame: &Frame<'_>, rgb: &mut [Vec3], heat: &mut [u32]) -> Resul
     if band_len == 0 {
         return Ok(TileStats::default());
     }
+    let stride = frame.band_stride.max(1) as usize;
     rgb.par_chunks_mut(band_len)
         .zip(heat.par_chunks_mut(band_len))
         .enumerate()
+        .filter(|(band, _)| band % stride == 0)
         .map_init(Scratch::default, |sc, (band, (rgb, heat))| {
             let y0 = band as u32 * ts;
             #[cfg(target_arch = "x86_64")]
@@ -210,7 +219,7 @@ fn run_band(frame: &Frame<'_>, y0: u32, sc: &mut Scratch, rgb: &mut [Vec3], heat
     let h = frame.cfg.tile_size.min(frame.height - y0);
     let t = Instant::now();
     let mut band = std::mem::take(&mut sc.band_gb);
-    let decoded = packed.decode_rows(y0..y0 + h, &mut band);
+    let decoded = packed.decode_rows_only(y0..y0 + h, &mut band, &frame.packed_reads);
     let t_decode = t.elapsed();
     let st = decoded.map(|()| {
         let rd = SurfaceReader::band(&band, frame.reader.rays(), y0);

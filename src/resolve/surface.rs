@@ -482,6 +482,24 @@ impl Reads {
             Brdf::Ggx => Reads { specular: false, power: true, metal_rough: true },
         }
     }
+
+    /// The attributes a resolve with these reads decodes from packed targets: position (or depth), normal, albedo
+    /// and the BRDF's parameters.
+    #[must_use]
+    pub fn attributes(self) -> Vec<crate::gbuffer::Attribute> {
+        use crate::gbuffer::Attribute as A;
+        let mut v = vec![A::Depth, A::Position, A::Normal, A::Albedo];
+        if self.specular {
+            v.push(A::Specular);
+        }
+        if self.power {
+            v.push(A::SpecularPower);
+        }
+        if self.metal_rough {
+            v.extend([A::Roughness, A::Metallic]);
+        }
+        v
+    }
 }
 
 /// One vector of a scalar attribute: `plane[idx[k]]` sanitised into `out` ([`clamped`]), or the defaults.
