@@ -749,7 +749,7 @@ fn band_pass(frame: &PackedFrame<'_>, gb: &GBuffer, runs: usize) -> Result<Measu
         let mut y = 0;
         while y < gb.height {
             let rows = y..(y + BAND_ROWS).min(gb.height);
-            if (y / BAND_ROWS) % stride != 0 {
+            if !(y / BAND_ROWS).is_multiple_of(stride) {
                 y = rows.end;
                 continue;
             }
