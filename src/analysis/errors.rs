@@ -35,6 +35,26 @@ pub fn layout_image_error(
     detector_config: &DetectorConfig,
     rc: &ResolveConfig,
 ) -> Result<ImageError> {
-    let decoded = layout.roundtrip(gb)?;
-    Ok(compare(exact, &lit(&decoded, lights, detector, detector_config, rc)?.image))
+    Ok(compare(exact, &lit_layout(gb, lights, layout, detector, detector_config, rc)?.image))
+}
+
+/// `gb` through `layout` [`lit`]: the edge pass and the lighting read the packed targets band by band when the
+/// layout packs smaller than its decoded planes ([`Layout::packs_smaller`]), else a decoded copy — the same image
+/// either way (tests/resolve_packed.rs), in the least memory.
+pub fn lit_layout(
+    gb: &GBuffer,
+    lights: &[Light],
+    layout: &Layout,
+    detector: Detector,
+    detector_config: &DetectorConfig,
+    rc: &ResolveConfig,
+) -> Result<Resolved> {
+    if layout.packs_smaller(gb) {
+        let packed = layout.pack(gb)?;
+        let frame = layout.frame(&packed, gb)?;
+        let mask = detect::detect_packed(&frame, detector, detector_config)?;
+        resolve::resolve(&frame, lights, &mask, rc)
+    } else {
+        lit(&layout.roundtrip_for_lighting(gb, 1)?.decoded, lights, detector, detector_config, rc)
+    }
 }

@@ -698,9 +698,7 @@ struct Prepared {
 /// planes: then the input stands for itself when the roundtrip leaves it unchanged (checked band by band, one
 /// timed run), else a lighting copy is made as before.
 fn prepare(layout: &Layout, gb: &GBuffer, runs: usize) -> Result<Prepared> {
-    let decoded_bytes: usize =
-        layout.stored_attributes().iter().filter(|a| gb.has(**a)).map(|a| 4 * a.components()).sum();
-    if layout.bytes_per_sample() < decoded_bytes {
+    if layout.packs_smaller(gb) {
         let (packed, encode_ms, table_ms) = layout.pack_timed(gb, runs, resolve::TIMING_STRIDE)?;
         return Ok(Prepared { source: Source::Packed(packed), encode_ms, decode_ms: Vec::new(), table_ms });
     }

@@ -185,11 +185,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     // A layout whose packed frame is no smaller than its decoded planes (a lossless 84-byte layout) gains nothing
     // from it: that one is unpacked band by band into a copy as before (`Layout::roundtrip_for_lighting`).
-    let packs_smaller = |l: &gbuf::layout::Layout| {
-        let decoded: usize = l.stored_attributes().iter().filter(|a| gb.has(**a)).map(|a| 4 * a.components()).sum();
-        l.bytes_per_sample() < decoded
-    };
-    let in_cpu_copy = layout.as_ref().filter(|l| !packs_smaller(l));
+    let in_cpu_copy = layout.as_ref().filter(|l| !l.packs_smaller(&gb));
     let (prepared, t_pack) = timed(|| -> gbuf::Result<(Option<gbuf::layout::Packed>, Option<GBuffer>)> {
         match (&layout, in_cpu_copy) {
             (None, _) => Ok((None, None)),

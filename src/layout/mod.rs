@@ -31,7 +31,7 @@ pub use spec::{
 pub use summary::LayoutSummary;
 
 use crate::error::{Error, Result};
-use crate::gbuffer::Attribute;
+use crate::gbuffer::{Attribute, GBuffer};
 use std::collections::HashSet;
 use std::path::Path;
 
@@ -213,6 +213,15 @@ impl Layout {
     #[must_use]
     pub fn stores(&self, attr: Attribute) -> bool {
         self.stored_attributes().contains(&attr)
+    }
+
+    /// Whether `gb` packed with this layout takes fewer bytes than the planes it decodes to (4 per float or ID
+    /// component of every attribute it stores and `gb` has): then lighting from the packed targets
+    /// ([`Layout::frame`]) holds less than a decoded copy. A lossless 84-byte layout does not.
+    #[must_use]
+    pub fn packs_smaller(&self, gb: &GBuffer) -> bool {
+        let decoded: usize = self.stored_attributes().iter().filter(|a| gb.has(**a)).map(|a| 4 * a.components()).sum();
+        self.bytes_per_sample() < decoded
     }
 }
 
