@@ -11,6 +11,9 @@
 //!   `report/resolve-every-sample/WxHxS`, the f32 resolve shading every sample (its baseline: issue 14 asks for the
 //!   reference within 3× of it).
 //!
+//! - `report-timing/resolve-whole|resolve-estimate/1920x1080x4`: the report's sampled timing runs (issue 34) against
+//!   whole-frame runs; the ratio of the estimate to the whole time is printed before.
+//!
 //! The ratio of the two (measured in the same run) is what a report row costs in resolves. The room and its lights
 //! are built once, outside the timed loop. Run briefly:
 //! `cargo bench --bench report -- --warm-up-time 1 --measurement-time 3`.
@@ -77,6 +80,56 @@ fn benches(c: &mut Criterion) {
             assert!(out.rows.len() == 1 && out.rows[0].error.is_none(), "the row must succeed");
             out
         })
+    });
+    group.finish();
+    timing_estimate(c);
+}
+
+/// The report's sampled timing runs against whole-frame runs (issue 34): the resolve and the edge pass of a packed
+/// 1080p × 4 room timed whole and estimated from every `TIMING_STRIDE`-th band, interleaved, 7 rounds; the ratio of
+/// the medians is printed (an estimate within a few percent of the whole time is what the report's spread assumes),
+/// and criterion times both calls (the estimate's own cost is about 1/8 of a frame).
+fn timing_estimate(c: &mut Criterion) {
+    use gbuf::resolve::time_sampled;
+    let (w, h) = (1920, 1080);
+    let gb = render(SceneName::Room, w, h, SAMPLES).expect("room");
+    let lights = default_lights(SceneName::Room, &gb);
+    let layout = Layout::by_name_or_path(LAYOUT).expect("built-in layout");
+    let packed = layout.pack(&gb).expect("pack");
+    let frame = layout.frame(&packed, &gb).expect("frame");
+    let det_cfg = DetectorConfig::default();
+    let cfg = ResolveConfig::default();
+    let mask = gbuf::detect::detect_packed(&frame, DETECTOR, &det_cfg).expect("detect");
+    let stride = gbuf::resolve::TIMING_STRIDE;
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let (mut full, mut est, mut dfull, mut dest) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..7 {
+        let t = std::time::Instant::now();
+        resolve(&frame, &lights, &mask, &cfg).unwrap();
+        full.push(t.elapsed().as_secs_f64() * 1e3);
+        est.push(time_sampled(&frame, &lights, &mask, &cfg).unwrap());
+        let t = std::time::Instant::now();
+        gbuf::detect::detect_packed(&frame, DETECTOR, &det_cfg).unwrap();
+        dfull.push(t.elapsed().as_secs_f64() * 1e3);
+        dest.push(gbuf::detect::time_packed_sampled(&frame, DETECTOR, &det_cfg, stride).unwrap());
+    }
+    let (f, e, df, de) = (median(full), median(est), median(dfull), median(dest));
+    eprintln!(
+        "timing estimate ({w}x{h}x{SAMPLES}, {LAYOUT} packed, every {stride}th band): resolve whole {f:.1} ms, \
+         estimate {e:.1} ms ({:.3}x); detect whole {df:.1} ms, estimate {de:.1} ms ({:.3}x)",
+        e / f,
+        de / df
+    );
+    let mut group = c.benchmark_group("report-timing");
+    group.sample_size(10);
+    group.bench_function(format!("resolve-whole/{w}x{h}x{SAMPLES}"), |b| {
+        b.iter(|| resolve(black_box(&frame), black_box(&lights), &mask, &cfg).unwrap())
+    });
+    group.bench_function(format!("resolve-estimate/{w}x{h}x{SAMPLES}"), |b| {
+        b.iter(|| time_sampled(black_box(&frame), black_box(&lights), &mask, &cfg).unwrap())
     });
     group.finish();
 }
