@@ -47,6 +47,7 @@ pub fn run_frame(
         clock = std::time::Instant::now();
     };
     let mut needs = needs::analyze(gb);
+    let surface_maps = crate::analysis::surfaces::surface_maps(gb);
     lap("needs analysis");
     let mut out = sweep::sweep(gb, input.lights, cfg, progress)?;
     lap("sweep");
@@ -123,6 +124,10 @@ pub fn run_frame(
             figures.extend(g);
         }
     }
+    if let Some((f, g)) = figures::surfaces_figure(gb, &surface_maps, prefix)? {
+        files.push(f);
+        figures.push(g);
+    }
     lap("figures");
     let covered = gb.len() - gb.background_samples();
     let frame = Frame {
@@ -142,6 +147,7 @@ pub fn run_frame(
         detectors: out.detectors,
         pipelines,
         pipelines_error,
+        surfaces_per_pixel: Some(crate::analysis::surfaces::SurfacesPerPixel::of(gb.samples, &surface_maps)),
     };
     Ok(FrameResult { frame, rows: out.rows, files, figures })
 }

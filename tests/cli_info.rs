@@ -149,3 +149,27 @@ fn surfaces_per_pixel_by_identity_match_the_captures_own_ids() {
     assert_eq!(got, want);
     assert!(want[2] + want[3] + want[4] > 0, "the capture has pixels with several surfaces");
 }
+
+/// `gbuf edges --json` and the report carry the same histograms as `gbuf info`, and the report draws the heatmap.
+#[test]
+fn edges_and_the_report_give_the_same_surfaces_per_pixel() {
+    let dir = tempfile::tempdir().unwrap();
+    let dump = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/raster_4x.exr");
+    let dump = dump.to_str().unwrap();
+    let info = json(&support::gbuf(dir.path(), &["info", dump, "--json"]))["surfaces_per_pixel"].clone();
+    assert!(info["by_geometry"].is_array() && info["by_identity"].is_array(), "{info}");
+    let edges = json(&support::gbuf(dir.path(), &["edges", dump, "--json"]))["surfaces_per_pixel"].clone();
+    assert_eq!(edges, info);
+    let o = support::gbuf(
+        dir.path(),
+        &["report", dump, "--layouts", "minimal-8", "--detectors", "lauritzen", "--flip", "none", "-o", "rep", "-q"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("rep/report.json")).unwrap()).unwrap();
+    assert_eq!(report["frames"][0]["surfaces_per_pixel"], info);
+    let png = std::fs::read(dir.path().join("rep/surfaces_per_pixel.png")).expect("the heatmap");
+    assert!(png.starts_with(b"\x89PNG") && png.len() > 1000);
+    let md = std::fs::read_to_string(dir.path().join("rep/report.md")).unwrap();
+    assert!(md.contains("surfaces/pixel (object+primitive) 1: 82.76%"), "{md}");
+}

@@ -61,6 +61,9 @@ pub struct Frame {
     /// Why the pipelines could not be measured on this frame.
     #[serde(default)]
     pub pipelines_error: Option<String>,
+    /// How many surfaces each pixel holds (by IDs and by geometry): what MSAA G-buffer compression could keep.
+    #[serde(default)]
+    pub surfaces_per_pixel: Option<crate::analysis::surfaces::SurfacesPerPixel>,
 }
 
 /// Everything a report folder holds: the frames, one row per frame × layout × detector (× culling), and the rows
@@ -112,6 +115,7 @@ pub(crate) fn test_report(input: &str, width: u32, height: u32, rows: Vec<Row>, 
             detectors: vec![],
             pipelines: None,
             pipelines_error: None,
+            surfaces_per_pixel: None,
         }],
         runs: 3,
         viewing: Viewing::default(),

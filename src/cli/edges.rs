@@ -144,6 +144,8 @@ struct Output {
     mask_truth: Option<&'static str>,
     thresholds: DetectorConfig,
     results: Vec<Row>,
+    /// How many surfaces each pixel holds (by IDs and by geometry): the pixels an edge detector should find.
+    surfaces_per_pixel: gbuf::analysis::surfaces::SurfacesPerPixel,
 }
 
 /// How the shading truth was made.
@@ -243,6 +245,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         mask_truth,
         thresholds: cfg,
         results: rows,
+        surfaces_per_pixel: gbuf::analysis::surfaces::surfaces_per_pixel(gb),
     };
     if args.json {
         print_json(&out)
@@ -258,6 +261,9 @@ fn print_table(out: &Output, gb: &GBuffer) -> anyhow::Result<()> {
         None => "no object IDs: no ID truth".to_string(),
     };
     writeln!(w, "{}: {}×{}, {} samples/pixel; {truth}", out.file.display(), gb.width, gb.height, gb.samples)?;
+    if gb.samples > 1 {
+        write!(w, "{}", out.surfaces_per_pixel.to_text())?;
+    }
     if let Some(f) = out.primitive_true_edge_fraction {
         writeln!(
             w,

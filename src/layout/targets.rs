@@ -146,7 +146,7 @@ fn ungrid(t: Texture, (cols, rows): (u32, u32), tb: usize, path: &Path) -> Resul
 
 /// A packed frame read from files, before decoding.
 #[derive(Clone, Debug)]
-pub struct PackedFrame {
+pub struct PackedFiles {
     /// The targets' bytes (pixel-major, as [`Layout::pack`] makes them) and what the layout stores.
     pub packed: Packed,
     /// The G-buffer without planes: size, samples, sample positions, camera, coverage.
@@ -166,7 +166,7 @@ pub fn read_frame(
     layout: &Layout,
     explicit: &[(String, PathBuf)],
     opts: &LoadOptions,
-) -> Result<PackedFrame> {
+) -> Result<PackedFiles> {
     crate::util::protect_input(dir);
     if !dir.is_dir() && explicit.is_empty() {
         return Err(Error::invalid(
@@ -327,7 +327,7 @@ pub fn read_frame(
         depth_range,
         present: layout.stored_attributes(),
     };
-    Ok(PackedFrame { packed, shell, files: read, coverage_from, positions_assumed })
+    Ok(PackedFiles { packed, shell, files: read, coverage_from, positions_assumed })
 }
 
 /// Reads and decodes the targets of `layout` in `dir`: the G-buffer the engine's lighting pass would see, then
@@ -343,7 +343,7 @@ pub fn load_packed_frame(
     layout: &Layout,
     explicit: &[(String, PathBuf)],
     opts: &LoadOptions,
-) -> Result<(Loaded, PackedFrame)> {
+) -> Result<(Loaded, PackedFiles)> {
     let frame = read_frame(dir, layout, explicit, opts)?;
     let gbuffer = layout.unpack(&frame.packed, &frame.shell).map_err(|e| Error::invalid(dir, e.to_string()))?;
     if !gbuffer.coverage.iter().any(|&c| c) {

@@ -269,6 +269,34 @@ pub fn figures(
     }
     Ok((files, figs))
 }
+/// The heatmap of how many surfaces each pixel holds (by identity when the frame has IDs, else by geometry; grey
+/// where no sample is covered): where MSAA G-buffer compression would keep more than one surface. `None` for a
+/// 1-sample frame or one without IDs and geometry.
+pub fn surfaces_figure(
+    gb: &GBuffer,
+    maps: &crate::analysis::surfaces::SurfaceMaps,
+    prefix: &str,
+) -> Result<Option<(Attachment, Figure)>> {
+    let (how, counts) = match (&maps.by_identity, &maps.by_geometry) {
+        _ if gb.samples < 2 => return Ok(None),
+        (Some(m), _) => (format!("by {} IDs", maps.identity_key.unwrap_or("")), m),
+        (None, Some(m)) => ("by geometry (depth plane and normal)".to_string(), m),
+        (None, None) => return Ok(None),
+    };
+    let values: Vec<Option<f32>> = counts.iter().map(|&k| (k > 0).then_some(f32::from(k))).collect();
+    let max = gb.samples as f32;
+    let img = heat_plot(format!("Surfaces per pixel, {how}"), &values, gb, max, "surfaces".into())?;
+    let name = format!("{prefix}surfaces_per_pixel.png");
+    let caption = format!(
+        "Surfaces per pixel, {how} (colour bar to {max}; grey = no covered sample): pixels above 1 are where a \
+         compressed MSAA G-buffer needs more than one surface slot"
+    );
+    Ok(Some((
+        Attachment { name: name.clone(), bytes: crate::base::picture::png_bytes(&img)? },
+        Figure { file: name, caption },
+    )))
+}
+
 /// The "shading computations per pixel" pair of a frame: forward MSAA's fragment-shader lanes (helpers included)
 /// and the deferred mask's shading evaluations, on one colour scale so the two compare.
 pub fn shading_figures(

@@ -375,6 +375,19 @@ pub fn to_markdown(rep: &Report) -> String {
         frame_header(&mut s, f, rows.len(), rep.runs);
         s.push_str(if multi { "### What the scene needs\n\n" } else { "## What the scene needs\n\n" });
         s.push_str(&needs_section(&f.needs));
+        if let Some(sp) = f.surfaces_per_pixel.as_ref().filter(|sp| sp.samples > 1) {
+            let text = sp.to_text();
+            if !text.is_empty() {
+                let _ = writeln!(
+                    s,
+                    "\nSurfaces per pixel (covered pixels by how many distinct surfaces their samples hold):\n"
+                );
+                for line in text.lines() {
+                    let _ = writeln!(s, "- {}", line.split_whitespace().collect::<Vec<_>>().join(" "));
+                }
+                s.push('\n');
+            }
+        }
         s.push_str(if multi { "\n### Layouts × detectors\n\n" } else { "\n## Layouts × detectors\n\n" });
         s.push_str(&rows_table(&rows));
         s.push_str(if multi { "\n### Pareto fronts\n\n" } else { "\n## Pareto fronts\n\n" });
