@@ -2,7 +2,7 @@
 //! real words.
 //!
 //! A [`Layout`] is a list of render targets with real [`Format`]s and, inside each texel, fields: (attribute,
-//! codec, bit range). [`Layout::pack`] turns a [`GBuffer`](crate::GBuffer) into the bytes a renderer would hold in
+//! codec, bit range). [`Layout::pack`] turns a [`GBuffer`] into the bytes a renderer would hold in
 //! its render targets ([`Packed`]); [`Layout::unpack`] reads them back into the G-buffer the lighting pass would
 //! see. Layouts come from [`Layout::builtins`] or from TOML/JSON files ([`Layout::load`], docs/LAYOUTS.md).
 
