@@ -301,22 +301,26 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
             decode_ops_per_sample: Some(layout.decode_ops_per_sample()),
             ..Default::default()
         };
+        // A layout that cannot be packed or measured gives each of its rows the reason.
+        let fail_layout = |rows: &mut Vec<Row>, e: &crate::error::Error| {
+            for d in &cfg.detectors {
+                for c in &cullings {
+                    rows.push(Row {
+                        detector: d.name().to_string(),
+                        culling: c.map(|c| c.name().to_string()),
+                        error: Some(format!("roundtrip failed: {e}")),
+                        ..base.clone()
+                    });
+                }
+            }
+        };
         progress(done, total, Some(Stage::PackUnpack), Some(layout.name()));
         let prepared = prepare(layout, gb, cfg.runs);
         done += 1;
         let prepared = match prepared {
             Ok(v) => v,
             Err(e) => {
-                for d in &cfg.detectors {
-                    for c in &cullings {
-                        rows.push(Row {
-                            detector: d.name().to_string(),
-                            culling: c.map(|c| c.name().to_string()),
-                            error: Some(format!("roundtrip failed: {e}")),
-                            ..base.clone()
-                        });
-                    }
-                }
+                fail_layout(&mut rows, &e);
                 done += per_layout;
                 continue;
             }
@@ -338,16 +342,7 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
         let (attribute_errors, mut lmaps, derived, decode_ms) = match measured {
             Ok(m) => m,
             Err(e) => {
-                for d in &cfg.detectors {
-                    for c in &cullings {
-                        rows.push(Row {
-                            detector: d.name().to_string(),
-                            culling: c.map(|c| c.name().to_string()),
-                            error: Some(format!("roundtrip failed: {e}")),
-                            ..base.clone()
-                        });
-                    }
-                }
+                fail_layout(&mut rows, &e);
                 done += per_layout;
                 continue;
             }

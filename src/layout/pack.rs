@@ -351,22 +351,7 @@ impl Layout {
 
     /// Packs `gb` into render-target bytes.
     pub fn pack(&self, gb: &GBuffer) -> Result<Packed> {
-        gb.validate()?;
-        let depth_range = self.depth_range_for(gb);
-        let coders = self.coders(depth_range)?;
-        let (material_table, index) = self.material_index(gb);
-        let mut targets = self.empty_targets();
-        self.pack_samples(gb, &coders, &index, 0..gb.len(), &mut targets);
-        Ok(Packed {
-            layout: self.name().to_string(),
-            width: gb.width,
-            height: gb.height,
-            samples: gb.samples,
-            targets,
-            material_table,
-            depth_range,
-            present: self.present(gb),
-        })
+        self.pack_timed(gb, 1, 1).map(|(packed, _, _)| packed)
     }
 
     /// [`Layout::pack`], timed: the whole frame once, then `runs − 1` estimates that pack every `stride`-th band of

@@ -685,19 +685,8 @@ pub fn ldr_flip_many(
     for t in tests {
         check_sizes(reference_srgb, t, width, height);
     }
-    let npix = width * height;
-    let mut maps: Vec<Vec<f32>> = tests.iter().map(|_| vec![0.0f32; npix]).collect();
-    if npix > 0 && !tests.is_empty() {
-        let ctx = Ctx::new(width, height, opts.pixels_per_degree);
-        let tests: Vec<Pixels<'_>> = tests.iter().map(|t| Pixels::F32(t)).collect();
-        run_bands_many(&ctx, Pixels::F32(reference_srgb), &tests, Encoding::Srgb, &mut maps, None);
-    }
-    maps.into_iter()
-        .map(|values| {
-            let mean = mean_f64(&values);
-            FlipMap { width, height, values, mean }
-        })
-        .collect()
+    let tests: Vec<Pixels<'_>> = tests.iter().map(|t| Pixels::F32(t)).collect();
+    ldr_many(Pixels::F32(reference_srgb), &tests, width, height, opts)
 }
 
 /// [`ldr_flip_many`] on 8-bit sRGB images (interleaved RGB bytes, e.g. a tone-mapped display image): the numbers of
@@ -714,12 +703,23 @@ pub fn ldr_flip_many_srgb8(
     for t in tests {
         assert_eq!(t.len(), n, "FLIP: test image must have width * height * 3 values");
     }
+    let tests: Vec<Pixels<'_>> = tests.iter().map(|t| Pixels::Srgb8(t)).collect();
+    ldr_many(Pixels::Srgb8(reference), &tests, width, height, opts)
+}
+
+/// The LDR-FLIP maps of `tests` against `reference` (sizes checked by the caller), the reference filtered once.
+fn ldr_many(
+    reference: Pixels<'_>,
+    tests: &[Pixels<'_>],
+    width: usize,
+    height: usize,
+    opts: &FlipOptions,
+) -> Vec<FlipMap> {
     let npix = width * height;
     let mut maps: Vec<Vec<f32>> = tests.iter().map(|_| vec![0.0f32; npix]).collect();
     if npix > 0 && !tests.is_empty() {
         let ctx = Ctx::new(width, height, opts.pixels_per_degree);
-        let tests: Vec<Pixels<'_>> = tests.iter().map(|t| Pixels::Srgb8(t)).collect();
-        run_bands_many(&ctx, Pixels::Srgb8(reference), &tests, Encoding::Srgb, &mut maps, None);
+        run_bands_many(&ctx, reference, tests, Encoding::Srgb, &mut maps, None);
     }
     maps.into_iter()
         .map(|values| {
