@@ -380,7 +380,7 @@ fn prefetch_tile(
         }
     }
     #[cfg(not(target_arch = "x86_64"))]
-    let _ = (frame, planes, x0, y0, w, h);
+    let _ = (frame, rd, planes, x0, y0, w, h);
 }
 
 /// Gathers, culls and shades one tile, box-filtering into the band's buffers (every pixel of the tile is
