@@ -18,10 +18,11 @@ cd "$(dirname "$0")/.."
 TARGET=aarch64-unknown-linux-gnu
 SYSROOT=/usr/aarch64-linux-gnu
 # The integration tests of the CI subset: the resolve's (bit-identical images across culling, tile size, thread
-# count and sample order; finite output for every lane and on stiff inputs). With the library's unit tests (the
-# NEON lanes against f64, the NEON kernel against the portable one) they run in about 2 minutes under qemu; the
+# count and sample order; finite output for every lane and on stiff inputs; packed targets lit as their unpacked
+# G-buffer). With the library's unit tests (the NEON lanes against f64, the NEON kernel against the portable one)
+# they run in about 3 minutes under qemu; the
 # build takes most of the time (about 11 minutes from nothing on 2 shared cores).
-TESTS=(resolve_props resolve_finite resolve_stiff)
+TESTS=(resolve_props resolve_finite resolve_stiff resolve_packed)
 
 need_apt=()
 command -v qemu-aarch64 >/dev/null || need_apt+=(qemu-user)
