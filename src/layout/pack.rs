@@ -979,35 +979,31 @@ impl<'a> PackedFrame<'a> {
     /// reader derives it from depth and the camera with the frame's pixel coordinates: a band's own would be
     /// wrong). `out`'s camera is the frame's; its coverage and planes are the band's.
     pub fn decode_rows(&self, rows: Range<u32>, out: &mut GBuffer) -> Result<()> {
-        let like = self.like;
-        if rows.start > rows.end || rows.end > like.height {
-            return Err(Error::Argument(format!("rows {rows:?} outside the frame's {} rows", like.height)));
-        }
-        let row = like.width as usize * like.samples as usize;
-        let range = rows.start as usize * row..rows.end as usize * row;
-        let p = self.packed;
-        let band = Band::of(&p.targets, range.clone(), p.material_table.as_ref(), &p.present);
-        self.layout.decode_band(&band, &self.coders, like, rows, out, None)?;
-        Ok(())
+        self.decode(rows, out, None)
     }
 
     /// [`PackedFrame::decode_rows`] decoding only the planes of `only` (what a pass reads: the others' fields are not
     /// extracted, and their planes are absent), each plane the same as `decode_rows` gives bit for bit. Depth and
     /// position come together (either one is derived from the other).
     pub fn decode_rows_only(&self, rows: Range<u32>, out: &mut GBuffer, only: &[Attribute]) -> Result<()> {
-        let like = self.like;
-        if rows.start > rows.end || rows.end > like.height {
-            return Err(Error::Argument(format!("rows {rows:?} outside the frame's {} rows", like.height)));
-        }
         let mut only = only.to_vec();
         if only.iter().any(|a| matches!(a, Attribute::Depth | Attribute::Position)) {
             only.extend([Attribute::Depth, Attribute::Position]);
+        }
+        self.decode(rows, out, Some(&only))
+    }
+
+    /// Rows `rows` into `out`, every plane or only those of `only`.
+    fn decode(&self, rows: Range<u32>, out: &mut GBuffer, only: Option<&[Attribute]>) -> Result<()> {
+        let like = self.like;
+        if rows.start > rows.end || rows.end > like.height {
+            return Err(Error::Argument(format!("rows {rows:?} outside the frame's {} rows", like.height)));
         }
         let row = like.width as usize * like.samples as usize;
         let range = rows.start as usize * row..rows.end as usize * row;
         let p = self.packed;
         let band = Band::of(&p.targets, range, p.material_table.as_ref(), &p.present);
-        self.layout.decode_band(&band, &self.coders, like, rows, out, Some(&only))
+        self.layout.decode_band(&band, &self.coders, like, rows, out, only)
     }
 }
 

@@ -153,15 +153,7 @@ pub fn time_sampled<'a>(
     let t_start = Instant::now();
     let gb = gb.into();
     let packed = gb.packed();
-    let (gb, order) = gb.planes();
-    cfg.validate()?;
-    if mask.width != gb.width || mask.height != gb.height || mask.shade_count.len() != gb.pixel_count() {
-        return Err(Error::Argument("edge mask and G-buffer differ in size".into()));
-    }
-    let reader = match packed {
-        None => surface::SurfaceReader::with_order(gb, order)?,
-        Some(p) => packed_reader(p)?,
-    };
+    let (reader, gb) = prepare(gb, mask, cfg)?;
     let clean = lights::sanitize(lights);
     let mut frame = schedule::Frame::new(reader, packed, mask, &clean.lights, &clean.environment, *cfg, Isa::detect());
     frame.band_stride = TIMING_STRIDE;
@@ -185,22 +177,7 @@ fn resolve_into_isa(
 ) -> Result<()> {
     let t_start = Instant::now();
     let packed = gb.packed();
-    let (gb, order) = gb.planes();
-    cfg.validate()?;
-    if mask.width != gb.width || mask.height != gb.height || mask.shade_count.len() != gb.pixel_count() {
-        return Err(Error::Argument(format!(
-            "edge mask is {}×{} ({} entries) but the G-buffer is {}×{}",
-            mask.width,
-            mask.height,
-            mask.shade_count.len(),
-            gb.width,
-            gb.height
-        )));
-    }
-    let reader = match packed {
-        None => surface::SurfaceReader::with_order(gb, order)?,
-        Some(p) => packed_reader(p)?,
-    };
+    let (reader, gb) = prepare(gb, mask, cfg)?;
     let clean = lights::sanitize(lights);
     let frame = schedule::Frame::new(reader, packed, mask, &clean.lights, &clean.environment, *cfg, isa);
     let t_prep = t_start.elapsed();
@@ -251,6 +228,34 @@ fn resolve_into_isa(
     stats.ms.total = ms(t_start.elapsed());
     *out = Resolved { image, stats, lights_per_pixel: heat };
     Ok(())
+}
+
+/// What every resolve checks and builds first: the configuration valid, the mask the frame's size, and the reader
+/// (of the planes, or of a packed frame's camera rays after [`packed_reader`]'s check). Returns it with the frame's
+/// G-buffer (for a packed frame, the one its size and coverage come from).
+fn prepare<'a>(
+    input: ResolveInput<'a>,
+    mask: &EdgeMask,
+    cfg: &ResolveConfig,
+) -> Result<(surface::SurfaceReader<'a>, &'a crate::gbuffer::GBuffer)> {
+    let packed = input.packed();
+    let (gb, order) = input.planes();
+    cfg.validate()?;
+    if mask.width != gb.width || mask.height != gb.height || mask.shade_count.len() != gb.pixel_count() {
+        return Err(Error::Argument(format!(
+            "edge mask is {}×{} ({} entries) but the G-buffer is {}×{}",
+            mask.width,
+            mask.height,
+            mask.shade_count.len(),
+            gb.width,
+            gb.height
+        )));
+    }
+    let reader = match packed {
+        None => surface::SurfaceReader::with_order(gb, order)?,
+        Some(p) => packed_reader(p)?,
+    };
+    Ok((reader, gb))
 }
 
 /// The reader of a packed frame's camera rays, after checking that its bands can be lit: the decoded planes give a
