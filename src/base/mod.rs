@@ -3,6 +3,7 @@
 //!
 //! | module      | what                                                                              |
 //! |-------------|-----------------------------------------------------------------------------------|
+//! | `fastmath`  | the one branch-free `log2` / `exp2` / `pow` (the shading kernel, FLIP)                |
 //! | [`isa`]     | the CPU instruction-set levels the SIMD paths are compiled for, detected once      |
 //! | [`names`]   | the one spelling rule for every closed choice (flags, JSON, layout files)          |
 //! | [`timing`]  | wall-clock stage timing in milliseconds                                            |
@@ -11,6 +12,7 @@
 //! | [`picture`] | 8-bit pictures: sRGB, the colour map, PNG files                                    |
 //! | [`png`]     | the PNG encoder: bands of rows filtered and deflated in parallel                   |
 
+pub(crate) mod fastmath;
 pub mod isa;
 pub mod lut;
 pub mod mask;

@@ -41,6 +41,7 @@
 // Constants are kept with the reference's decimals (they round to the same f32).
 #![allow(clippy::excessive_precision, clippy::needless_range_loop, clippy::too_many_arguments)]
 
+use crate::base::fastmath;
 use crate::base::isa::Isa;
 use rayon::prelude::*;
 
@@ -1399,48 +1400,8 @@ fn srgb_decode_fast(s: f32) -> f32 {
 }
 
 // ---------------------------------------------------------------------------
-// Branch-free f32 log2 / exp2 / pow (vectorisable; ~1e-6 relative error)
+// Branch-free f32 pow (vectorisable): the crate's one log2 / exp2, `base::fastmath`
 // ---------------------------------------------------------------------------
-
-/// log2(x) for finite x > 0 (subnormals handled).
-#[inline(always)]
-fn fast_log2(x: f32) -> f32 {
-    let sub = x < f32::MIN_POSITIVE;
-    let xs = if sub { x * 16777216.0 } else { x }; // 2^24
-    let bits = xs.to_bits();
-    let e = (bits >> 23) as i32 - if sub { 127 + 24 } else { 127 };
-    let m = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000); // [1, 2)
-    let big = m > std::f32::consts::SQRT_2;
-    let m = if big { m * 0.5 } else { m }; // [sqrt(1/2), sqrt(2))
-    let e = if big { e + 1 } else { e };
-    // ln(m) = 2 atanh(t), t = (m - 1) / (m + 1), |t| <= 0.1716.
-    let t = (m - 1.0) / (m + 1.0);
-    let t2 = t * t;
-    const K: f32 = 2.0 * std::f32::consts::LOG2_E;
-    let p = K + t2 * (K / 3.0 + t2 * (K / 5.0 + t2 * (K / 7.0 + t2 * (K / 9.0))));
-    e as f32 + t * p
-}
-
-/// 2^v, for v clamped to [-126, 127].
-#[inline(always)]
-fn fast_exp2(v: f32) -> f32 {
-    let v = if v > -126.0 { v } else { -126.0 };
-    let v = if v < 127.0 { v } else { 127.0 };
-    const MAGIC: f32 = 12582912.0; // 1.5 * 2^23: rounds to an integer
-    let tmp = v + MAGIC;
-    let n = tmp - MAGIC;
-    let ni = tmp.to_bits() as i32 - 0x4B40_0000;
-    let f = v - n; // [-0.5, 0.5]
-    const L1: f32 = std::f32::consts::LN_2;
-    const L2: f32 = L1 * L1 / 2.0;
-    const L3: f32 = L2 * L1 / 3.0;
-    const L4: f32 = L3 * L1 / 4.0;
-    const L5: f32 = L4 * L1 / 5.0;
-    const L6: f32 = L5 * L1 / 6.0;
-    const L7: f32 = L6 * L1 / 7.0;
-    let p = 1.0 + f * (L1 + f * (L2 + f * (L3 + f * (L4 + f * (L5 + f * (L6 + f * L7))))));
-    p * f32::from_bits(((ni + 127) as u32) << 23)
-}
 
 /// Cube root for x >= 0 (the reference uses powf(x, 1/3)): bit-level initial guess
 /// (|rel. error| < 4%), one Halley step in f32 (~1e-4) and one in f64 (~1e-12), so the
@@ -1467,7 +1428,7 @@ fn fast_cbrt(x: f32) -> f32 {
 fn fast_pow(x: f32, y: f32) -> f32 {
     let pos = x > 0.0;
     let xs = if pos { x } else { 1.0 };
-    let r = fast_exp2(y * fast_log2(xs));
+    let r = fastmath::exp2_below(y * fastmath::log2_any(xs), 127.0);
     let zero_case = if y == 0.0 { 1.0 } else { 0.0 };
     if pos {
         r

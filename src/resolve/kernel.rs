@@ -11,7 +11,7 @@
 use super::brdf::{DIELECTRIC_F0, MIN_ALPHA, MIN_HALF_LENGTH, MIN_NDOTV};
 use super::config::{Brdf, Falloff};
 use super::falloff::MIN_DISTANCE;
-use super::fastmath::POW_MIN_BASE;
+use crate::base::fastmath::POW_MIN_BASE;
 use super::lights::{LightRec, LightTable, LUMA};
 #[cfg(target_arch = "aarch64")]
 use super::simd::Neon;

@@ -15,7 +15,6 @@ mod brdf;
 mod config;
 mod culling;
 mod falloff;
-mod fastmath;
 pub mod fixture;
 mod kernel;
 mod lights;

@@ -16,7 +16,7 @@
 //! multiply-add, refined vs exact reciprocal square root); within one run the same path shades every tile, so
 //! images do not depend on culling, tile size or thread count.
 
-use super::fastmath;
+use crate::base::fastmath;
 use std::ops::{Add, Mul, Sub};
 
 /// Lanes per machine vector of the base types ([`Portable`], [`Avx512`]).

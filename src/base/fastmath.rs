@@ -1,5 +1,6 @@
-//! Branch-free `log2`, `exp2` and `pow` for the shading kernel. `f32::powf` is a libm call, which stops the
-//! compiler from vectorising the light loop; these use only arithmetic, comparisons and bit casts, so they do.
+//! The one branch-free `log2`, `exp2` and `pow` of the crate, for the shading kernel and FLIP. `f32::powf` is a libm
+//! call, which stops the compiler from vectorising a loop; these use only arithmetic, comparisons and bit casts, so
+//! they do (the resolve's explicit SIMD paths, `resolve::simd`, are these formulas lane by lane).
 //!
 //! Accuracy (checked by the tests below against f64): `log2` within [`LOG2_MAX_ABS_ERROR`] plus one f32 epsilon
 //! of the result for normal inputs, `exp2` within [`EXP2_MAX_REL_ERROR`] relative on [−126, 126]. `pow_clamped(x, p)` takes `x` in
@@ -47,9 +48,20 @@ pub fn exp2_nonpositive(x: f32) -> f32 {
     exp2_below(x, 0.0)
 }
 
-/// [`exp2`] with `x` clamped to [−126, `hi`] (`hi` ≤ 126).
+/// `log2(x)` for every finite `x > 0`, subnormals included (scaled by 2²⁴ into the normal range first): FLIP's
+/// colour and distance terms reach below `f32::MIN_POSITIVE`, the kernel's clamped bases never do.
 #[inline(always)]
-fn exp2_below(x: f32, hi: f32) -> f32 {
+#[must_use]
+pub fn log2_any(x: f32) -> f32 {
+    let sub = x < f32::MIN_POSITIVE;
+    let scaled = if sub { x * 16_777_216.0 } else { x };
+    log2(scaled) - if sub { 24.0 } else { 0.0 }
+}
+
+/// [`exp2`] with `x` clamped to [−126, `hi`] (`hi` ≤ 127, where the result is still finite).
+#[inline(always)]
+#[must_use]
+pub fn exp2_below(x: f32, hi: f32) -> f32 {
     let x = x.clamp(-126.0, hi);
     // Round to nearest with the 1.5·2²³ trick: adding it leaves round(x) in the low mantissa bits. Unlike `floor`
     // (a libm call on baseline x86_64) or a saturating `as i32` (NaN/overflow fix-ups), this is plain vector
@@ -91,6 +103,14 @@ mod tests {
             x *= 7.3;
         }
         assert_eq!(log2(1.0), 0.0);
+        // Subnormals: the same bound through the scaling.
+        for v in [1e-45f32, 3e-42, 1e-39, f32::MIN_POSITIVE * 0.999, f32::MIN_POSITIVE, 1e-30, 5.0] {
+            let want = f64::from(v).log2();
+            let got = f64::from(log2_any(v));
+            let tol = f64::from(LOG2_MAX_ABS_ERROR) + want.abs() * f64::from(f32::EPSILON);
+            assert!((got - want).abs() < tol, "log2_any({v}) = {got}, want {want}");
+        }
+        assert!(exp2_below(127.0, 127.0).is_finite() && exp2_below(1e9, 127.0) > 1e38);
     }
 
     #[test]
