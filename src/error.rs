@@ -100,6 +100,18 @@ pub enum Error {
     /// A parameter given by the caller is out of range or inconsistent (no file involved).
     #[error("invalid argument: {0}")]
     Argument(String),
+    /// Inputs that are each valid but do not fit together (a mask of another size than the G-buffer, data packed with
+    /// another layout, a detector or resolve given a G-buffer without the planes it reads).
+    #[error("{0}")]
+    Mismatch(String),
+    /// The inputs give no result that can be right (no covered sample, no light, a black reference): the job stops
+    /// instead of reporting a number that means nothing.
+    #[error("no meaningful result: {0}")]
+    Implausible(String),
+    /// A step that cannot fail on valid data failed (serialising a report, drawing a plot, emitting a shader):
+    /// a gbuf bug.
+    #[error("internal error (a gbuf bug: please report): {0}")]
+    Internal(String),
     /// A step of a job over several frames failed on one of them.
     #[error("{frame}: {step}")]
     InFrame {

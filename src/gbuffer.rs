@@ -570,7 +570,7 @@ impl GBuffer {
             return Err(Error::Argument(format!("sample count {} outside 1..={MAX_SAMPLES}", self.samples)));
         }
         if self.sample_positions.len() != self.samples as usize {
-            return Err(Error::Argument(format!(
+            return Err(Error::Mismatch(format!(
                 "{} sample positions for {} samples",
                 self.sample_positions.len(),
                 self.samples
@@ -578,12 +578,12 @@ impl GBuffer {
         }
         let n = checked_len(self.width, self.height, self.samples)?;
         if self.coverage.len() != n {
-            return Err(Error::Argument(format!("coverage has {} entries, expected {n}", self.coverage.len())));
+            return Err(Error::Mismatch(format!("coverage has {} entries, expected {n}", self.coverage.len())));
         }
         for attr in self.attributes() {
             let len = self.plane(attr).expect("present").len();
             if len != n {
-                return Err(Error::Argument(format!("{} plane has {len} entries, expected {n}", attr.name())));
+                return Err(Error::Mismatch(format!("{} plane has {len} entries, expected {n}", attr.name())));
             }
         }
         Ok(())

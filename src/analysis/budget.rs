@@ -893,7 +893,7 @@ pub fn decide(
     }
     let winner =
         cands.iter().find(|c| c.rmse.is_some() && c.bytes_per_sample <= cfg.max_bytes).cloned().ok_or_else(|| {
-            Error::Argument(format!(
+            Error::Implausible(format!(
                 "no layout of at most {} bytes per sample could be measured on {}",
                 cfg.max_bytes,
                 if n > 1 { "every frame" } else { "this scene" }
@@ -901,7 +901,7 @@ pub fn decide(
         })?;
     if let Some(e) = cfg.max_error {
         if winner.rmse.is_some_and(|r| r > e) {
-            return Err(Error::Argument(format!(
+            return Err(Error::Implausible(format!(
                 "no layout of at most {} bytes per sample reaches layout error RMSE ≤ {e}; the best is {} with {:.6}",
                 cfg.max_bytes,
                 winner.name,

@@ -68,7 +68,7 @@ pub struct QuadShading {
 fn triangle_keys<'a>(gb: &'a GBuffer, what: &str) -> Result<impl Fn(usize) -> u64 + 'a> {
     let prim = gb.primitive_id.as_deref().ok_or_else(|| {
         let have: Vec<&str> = gb.attributes().iter().map(|a| a.name()).collect();
-        Error::Argument(format!("{what} needs primitive IDs; the G-buffer has: {}", have.join(", ")))
+        Error::Mismatch(format!("{what} needs primitive IDs; the G-buffer has: {}", have.join(", ")))
     })?;
     let obj = gb.object_id.as_deref();
     Ok(move |i: usize| (u64::from(obj.map_or(0, |o| o[i])) << 32) | u64::from(prim[i]))

@@ -271,21 +271,21 @@ pub const SINGLE_COVERAGE_MISMATCH_MAX: f64 = 0.02;
 /// (covered at the centre but by no MSAA sample, or the other way round).
 pub fn check_single(gb: &GBuffer, one: &GBuffer) -> Result<()> {
     if (one.width, one.height) != (gb.width, gb.height) || one.samples != 1 {
-        return Err(Error::Argument(format!(
+        return Err(Error::Mismatch(format!(
             "the 1-sample render is {}×{} × {} samples; it must be {}×{} × 1 (the same frame at pixel centres)",
             one.width, one.height, one.samples, gb.width, gb.height
         )));
     }
     if let (Some(a), Some(b)) = (&gb.camera, &one.camera) {
         if a != b {
-            return Err(Error::Argument("the 1-sample render has another camera than the MSAA frame".into()));
+            return Err(Error::Mismatch("the 1-sample render has another camera than the MSAA frame".into()));
         }
     }
     let covered = detect::covered_per_pixel(gb);
     let mismatched = (0..one.len()).filter(|&p| (covered[p] > 0) != one.coverage[p]).count();
     let fraction = mismatched as f64 / one.len().max(1) as f64;
     if fraction > SINGLE_COVERAGE_MISMATCH_MAX {
-        return Err(Error::Argument(format!(
+        return Err(Error::Mismatch(format!(
             "the 1-sample render does not look like the same frame: {mismatched} of {} pixels ({:.1}%) are covered in \
              one and empty in the other (at most {:.0}% allowed)",
             one.len(),
@@ -411,11 +411,6 @@ pub fn pipelines_with(
     if let Some(one) = single {
         check_single(gb, one)?;
     }
-    let pixels = f64::from(w) * f64::from(h);
-    let covered = (gb.len() - gb.background_samples()) as f64;
-    let covered_px = detect::covered_per_pixel(gb).iter().filter(|&&c| c > 0).count() as f64;
-    let n_lights = lights.len() as u64;
-    let mb = |bytes: f64| bytes / 1e6;
     let computed;
     let computed_reference = reference.is_none();
     let reference = match reference {
@@ -425,303 +420,31 @@ pub fn pipelines_with(
             &computed
         }
     };
-    // Numerical errors now; FLIP at the end, once per distinct image and in one batch against the reference
-    // (several rows share an image: forward MSAA, forward+ and the visibility buffer; the deferred schedules).
-    let err = |img: &HdrImage| error_set(reference, img, None);
-    // Known FLIPs are against the caller's reference: none apply to one computed here.
-    let flips = FlipBatch::new(if computed_reference { &[] } else { known });
-    let run = |mask: &EdgeMask, culling: Culling, schedule: Schedule| -> Result<(resolve::Resolved, f64)> {
-        let rc = ResolveConfig { culling, schedule, ..cfg.resolve };
-        let t = Instant::now();
-        let r = resolve::resolve(gb, lights, mask, &rc)?;
-        Ok((r, t.elapsed().as_secs_f64() * 1e3))
-    };
+    // Numerical errors as each image is made; FLIP at the end, once per distinct image and in one batch against the
+    // reference (several rows share an image: forward MSAA, forward+ and the visibility buffer; the deferred
+    // schedules). Known FLIPs are against the caller's reference: none apply to one computed here.
+    let m = Measure { gb, lights, cfg, reference, flips: FlipBatch::new(if computed_reference { &[] } else { known }) };
 
-    // One sample per pixel through the tiled resolve: the no-AA image, and each tile's light-list length.
-    let (no_aa, no_aa_ms) = match single {
-        Some(one) => {
-            let none = detect::detect(one, Detector::None, &cfg.detector_config)?;
-            let rc = ResolveConfig { culling: Culling::Tiled, schedule: Schedule::Deferred, ..cfg.resolve };
-            let t = Instant::now();
-            let r = resolve::resolve(one, lights, &none, &rc)?;
-            (r, t.elapsed().as_secs_f64() * 1e3)
-        }
-        None => {
-            let none = detect::detect(gb, Detector::None, &cfg.detector_config)?;
-            run(&none, Culling::Tiled, Schedule::Deferred)?
-        }
-    };
-    let no_aa_note = if single.is_some() {
-        "the 1-sample render at pixel centres"
-    } else if s > 1 {
-        "sample 0 of the MSAA dump, off the pixel centre (estimate: MLAA's reconstruction assumes centred samples)"
-    } else {
-        "the 1-sample dump"
-    };
-    let ts = cfg.resolve.tile_size;
-    let tile_lights = tile_light_counts(&no_aa.lights_per_pixel, w, h, ts);
-    let list_entries: u64 = tile_lights.iter().map(|&c| u64::from(c)).sum();
-    let light_list_bytes = 4 * list_entries + 8 * tile_lights.len() as u64;
-    let tile_of = |p: usize| {
-        let (x, y) = (p as u32 % w, p as u32 / w);
-        ((y / ts) * w.div_ceil(ts) + x / ts) as usize
-    };
-    // Light pairs of forward+ and the visibility buffer: each lane tests its tile's list.
-    let tiled_pairs = |q: &QuadShading| -> u64 {
-        q.lanes_per_pixel.iter().enumerate().map(|(p, &n)| u64::from(n) * u64::from(tile_lights[tile_of(p)])).sum()
-    };
-
+    let no_aa = m.no_aa(single)?;
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
-    let fwd_msaa = forward::forward_quads(gb, ForwardSamples::Msaa);
-    let fwd_one = forward::forward_quads(single.unwrap_or(gb), ForwardSamples::Single { sample: 0 });
-    let lists = forward::fragment_lists(gb, ts);
-    match (&fwd_msaa, &fwd_one, &lists) {
-        (Ok(fm), Ok(f1), Ok(fl)) => {
-            // Forward MSAA's image: one shade per (triangle, pixel), resolved by coverage. The resolve gives a pixel
-            // shaded once its one sample's value whole, which would drop the background from silhouette pixels; those
-            // (partly covered) are shaded per sample instead, so the box filter weighs them by coverage as the MSAA
-            // resolve does. Their shading then varies per sample where forward MSAA replicates one value: a small
-            // advantage to the forward rows' error on silhouettes, none to their lane counts (those come from quads).
-            let mut fm_mask = detect::detect(gb, Detector::ForwardMsaa, &cfg.detector_config)?;
-            let all = s.min(u32::from(u8::MAX)) as u8;
-            for (c, &n) in fm_mask.shade_count.iter_mut().zip(&detect::covered_per_pixel(gb)) {
-                if n > 0 && u32::from(n) < s {
-                    *c = all;
-                }
-            }
-            let (msaa_img, _) = run(&fm_mask, Culling::Tiled, Schedule::Deferred)?;
-            let msaa_err = err(&msaa_img.image);
-            let msaa_key = flips.image(&msaa_img.image, cfg.viewing.is_some());
-            flips.wants(FlipSlot::Row(Pipeline::ForwardMsaa), msaa_key);
-            flips.wants(FlipSlot::Row(Pipeline::ForwardPlus), msaa_key);
-            flips.wants(FlipSlot::Row(Pipeline::VisibilityBuffer), msaa_key);
-            let no_aa_key = flips.image(&no_aa.image, cfg.viewing.is_some());
-            flips.wants(FlipSlot::Row(Pipeline::Forward), no_aa_key);
-            let util = |q: &QuadShading| if q.lanes > 0 { q.covered_lanes as f64 / q.lanes as f64 } else { 1.0 };
-            let vb = cfg.visibility_layout.bytes_per_sample() as f64;
-            let n = Counts {
-                pixels,
-                samples: f64::from(s),
-                covered,
-                covered_pixels: covered_px,
-                bytes: f64::from(cfg.gbuffer_bytes),
-                light_pairs: None,
-                light_list_bytes: light_list_bytes as f64,
-                fragments: fl.entries as f64,
-                visibility_bytes: vb,
-            };
-            debug_assert_eq!(fl.bytes, 8 * fl.entries, "the footprint model's 8·F");
-            let model = |p: Pipeline| {
-                (p.footprint(&n).expect("every count is known"), p.traffic(&n).expect("every count is known"))
-            };
-            let row =
-                |pipeline, footprint: f64, traffic: f64, q: &QuadShading, pairs, error, note: String| PipelineRow {
-                    pipeline,
-                    footprint_mb: mb(footprint),
-                    bandwidth_mb: mb(traffic),
-                    shading: q.lanes,
-                    shading_unit: "lanes".into(),
-                    light_pairs: pairs,
-                    utilisation: util(q),
-                    cpu_ms: None,
-                    error: Some(error),
-                    estimated: q.estimated,
-                    note,
-                };
-            let (fp, tr) = model(Pipeline::Forward);
-            rows.push(row(
-                Pipeline::Forward,
-                fp,
-                tr,
-                f1,
-                f1.lanes * n_lights,
-                err(&no_aa.image),
-                if f1.estimated {
-                    "one sample per pixel: sample 0 stands for the pixel centre (estimate)".into()
-                } else if single.is_some() {
-                    "quads of the 1-sample render".into()
-                } else {
-                    "quads of the single-sample dump".into()
-                },
-            ));
-            let (fp, tr) = model(Pipeline::ForwardMsaa);
-            rows.push(row(
-                Pipeline::ForwardMsaa,
-                fp,
-                tr,
-                fm,
-                fm.lanes * n_lights,
-                msaa_err,
-                format!(
-                    "{} quads of {} triangles, {:.0}% helper lanes",
-                    fm.quads,
-                    fm.triangles,
-                    100.0 * fm.helper_fraction
-                ),
-            ));
-            let (fp, tr) = model(Pipeline::ForwardPlus);
-            rows.push(row(
-                Pipeline::ForwardPlus,
-                fp,
-                tr,
-                fm,
-                tiled_pairs(fm),
-                msaa_err,
-                format!(
-                    "light lists {} ({list_entries} entries in {} tiles)",
-                    fmt_bytes(light_list_bytes),
-                    tile_lights.len()
-                ),
-            ));
-            let (fp, tr) = model(Pipeline::VisibilityBuffer);
-            let mut vis = row(
-                Pipeline::VisibilityBuffer,
-                fp,
-                tr,
-                fm,
-                tiled_pairs(fm),
-                msaa_err,
-                format!(
-                    "{} ({} B); fragment lists {} entries, longest {} ({})",
-                    cfg.visibility_layout.name(),
-                    cfg.visibility_layout.bytes_per_sample(),
-                    fl.entries,
-                    fl.max_entries,
-                    fmt_bytes(fl.bytes)
-                ),
-            );
-            vis.shading = 4 * fl.entries;
-            rows.push(vis);
-        }
-        _ => {
-            let why = fwd_msaa.as_ref().err().map_or_else(String::new, ToString::to_string);
-            for p in [Pipeline::Forward, Pipeline::ForwardMsaa, Pipeline::ForwardPlus, Pipeline::VisibilityBuffer] {
-                skipped.push((p, why.clone()));
-            }
-        }
-    }
-
-    // The deferred rows: the chosen detector's mask, run through the resolve.
+    let forward = m.forward_rows(single, &no_aa, &mut rows, &mut skipped)?;
     let mask = detect::detect(gb, cfg.detector, &cfg.detector_config)?;
-    let b = cfg.gbuffer_bytes;
-    let packed = forward::utilisation(&mask, MsaaSchedule::Packed, cfg.warps.first().copied().unwrap_or(16), ts);
-    let n = Counts {
-        pixels,
-        samples: f64::from(s),
-        covered,
-        covered_pixels: covered_px,
-        bytes: f64::from(b),
-        ..Counts::default()
-    };
-    let footprint = |p: Pipeline| p.footprint(&n).expect("every count is known");
-    let mut tiled: Option<(resolve::Resolved, f64)> = None;
-    for (pipeline, culling, schedule) in [
-        (Pipeline::DeferredQuad, Culling::Quad, Schedule::Deferred),
-        (Pipeline::TiledDeferred, Culling::Tiled, Schedule::Deferred),
-        (Pipeline::LightPrepass, Culling::Tiled, Schedule::LightPrepass),
-    ] {
-        let (r, ms) = run(&mask, culling, schedule)?;
-        if pipeline == Pipeline::TiledDeferred && cfg.resolve.msaa == MsaaSchedule::Packed {
-            // The packed schedule's run and the detector's anti-aliasing row below are this resolve.
-            tiled = Some((r.clone(), ms));
-        }
-        let st = &r.stats;
-        let (footprint, traffic, note) = match pipeline {
-            Pipeline::DeferredQuad => (
-                footprint(pipeline),
-                bandwidth(gb, b, Some(st.light_pairs_tested)).quad.unwrap_or(f64::NAN) * 1e6,
-                format!("{} G-buffer, {} B/sample; lights as screen quads", cfg.layout, b),
-            ),
-            Pipeline::TiledDeferred => (
-                footprint(pipeline),
-                bandwidth(gb, b, None).tiled * 1e6,
-                format!("{} G-buffer, {} B/sample; light lists stay on chip", cfg.layout, b),
-            ),
-            _ => (
-                footprint(pipeline),
-                pipeline.traffic(&n).expect("every count is known"),
-                "depth + normal/power 8 B and light buffer RGBA16F 8 B per sample".into(),
-            ),
-        };
-        rows.push(PipelineRow {
-            pipeline,
-            footprint_mb: mb(footprint),
-            bandwidth_mb: mb(traffic),
-            shading: st.shading_evaluations,
-            shading_unit: "evaluations".into(),
-            light_pairs: st.light_pairs_tested,
-            utilisation: packed.ratio,
-            cpu_ms: Some(ms),
-            error: Some(err(&r.image)),
-            estimated: false,
-            note,
-        });
-        flips.wants(FlipSlot::Row(pipeline), flips.image(&r.image, cfg.viewing.is_some()));
-    }
+    let tiled = m.deferred_rows(&mask, &mut rows)?;
     if rows.is_empty() {
-        return Err(Error::Argument("no pipeline could be measured".into()));
+        return Err(Error::Implausible("no pipeline could be measured".into()));
     }
+    let b = cfg.gbuffer_bytes;
     let schedules = schedule_runs(gb, lights, &mask, &cfg.resolve, tiled.as_ref(), b)?;
     let mut utilisation = Vec::new();
     for &warp in &cfg.warps {
         for sched in MsaaSchedule::ALL {
-            utilisation.push(forward::utilisation(&mask, sched, warp, ts));
+            utilisation.push(forward::utilisation(&mask, sched, warp, cfg.resolve.tile_size));
         }
     }
     rows.sort_by_key(|r| Pipeline::ALL.iter().position(|&p| p == r.pipeline));
-
-    // Anti-aliasing: the no-AA image, MLAA on it, adaptive MSAA with each detector, SSAA.
-    let gbuf_mb = |samples: u32| mb(f64::from(b) * f64::from(samples) * pixels);
-    let mut aa = Vec::new();
-    let mut aa_images = Vec::new();
-    let t = Instant::now();
-    let (smoothed, mlaa_stats) = mlaa(&no_aa.image.rgb, w, h, &cfg.mlaa);
-    let mlaa_ms = t.elapsed().as_secs_f64() * 1e3;
-    let smoothed = HdrImage { width: w, height: h, rgb: smoothed };
-    let evals = no_aa.stats.shading_evaluations;
-    flips.wants(FlipSlot::Aa(aa.len()), flips.image(&no_aa.image, cfg.viewing.is_some()));
-    aa.push(AaRow {
-        method: "no-aa".into(),
-        evaluations: evals,
-        footprint_mb: gbuf_mb(1),
-        ms: no_aa_ms,
-        error: err(&no_aa.image),
-        note: no_aa_note.into(),
-    });
-    // MLAA's buffers on a GPU: an RG8 edge texture and an RGBA8 blend-weight texture.
-    flips.wants(FlipSlot::Aa(aa.len()), flips.image(&smoothed, cfg.viewing.is_some()));
-    aa.push(AaRow {
-        method: "mlaa".into(),
-        evaluations: evals,
-        footprint_mb: gbuf_mb(1) + mb(6.0 * pixels),
-        ms: no_aa_ms + mlaa_ms,
-        error: err(&smoothed),
-        note: format!("on {no_aa_note}"),
-    });
-    aa_images.push(no_aa.image);
-    aa_images.push(smoothed);
-    let mut methods: Vec<(String, Detector)> = cfg.aa_detectors.iter().map(|&d| (format!("msaa:{d}"), d)).collect();
-    methods.push(("ssaa".into(), Detector::Ssaa));
-    for (method, d) in methods {
-        let (r, ms) = match &tiled {
-            Some((r, ms)) if d == cfg.detector => (r.clone(), *ms),
-            _ => {
-                let Ok(m) = detect::detect(gb, d, &cfg.detector_config) else { continue };
-                run(&m, Culling::Tiled, Schedule::Deferred)?
-            }
-        };
-        flips.wants(FlipSlot::Aa(aa.len()), flips.image(&r.image, cfg.viewing.is_some()));
-        aa.push(AaRow {
-            method,
-            evaluations: r.stats.shading_evaluations,
-            footprint_mb: gbuf_mb(s),
-            ms,
-            error: err(&r.image),
-            note: String::new(),
-        });
-        aa_images.push(r.image);
-    }
+    let (mut aa, aa_images, mlaa_stats) = m.aa_rows(no_aa, tiled)?;
+    let Measure { flips, .. } = m;
     if let Some(v) = cfg.viewing.as_ref() {
         flips.fill(reference, v, &mut rows, &mut aa);
     }
@@ -744,10 +467,10 @@ pub fn pipelines_with(
         gbuffer_bytes: b,
         rows,
         skipped,
-        forward_msaa: fwd_msaa.ok(),
-        forward: fwd_one.ok(),
-        fragment_lists: lists.ok(),
-        light_list_bytes,
+        forward_msaa: forward.msaa,
+        forward: forward.one,
+        fragment_lists: forward.lists,
+        light_list_bytes: forward.light_list_bytes,
         utilisation,
         schedules,
         aa,
@@ -757,6 +480,349 @@ pub fn pipelines_with(
         visibility_packing,
         aa_images,
     })
+}
+
+/// What every stage of [`pipelines_with`] reads: the frame, its lights and configuration, the reference, and the
+/// batch of FLIPs the stages add their images to.
+struct Measure<'a> {
+    gb: &'a GBuffer,
+    lights: &'a [Light],
+    cfg: &'a PipelinesConfig,
+    reference: &'a HdrImage,
+    flips: FlipBatch<'a>,
+}
+
+/// The no-AA image: one sample per pixel through the tiled resolve, the time it took, and where its samples come from.
+struct NoAa {
+    resolved: resolve::Resolved,
+    ms: f64,
+    note: &'static str,
+}
+
+/// The forward rows' measurements, kept in [`Pipelines`] (each `None` when the G-buffer cannot give it).
+struct ForwardParts {
+    msaa: Option<QuadShading>,
+    one: Option<QuadShading>,
+    lists: Option<FragmentLists>,
+    light_list_bytes: u64,
+}
+
+impl Measure<'_> {
+    /// The numerical errors of `img` against the reference (FLIP comes later, from the batch).
+    fn err(&self, img: &HdrImage) -> ErrorSet {
+        error_set(self.reference, img, None)
+    }
+
+    /// Row `slot` gets the FLIP of `img` (when FLIP is wanted).
+    fn flip(&self, slot: FlipSlot, img: &HdrImage) {
+        self.flips.wants(slot, self.flips.image(img, self.cfg.viewing.is_some()));
+    }
+
+    /// Lights `gb` with `mask` under `culling` and `schedule`, timed in milliseconds.
+    fn run(&self, mask: &EdgeMask, culling: Culling, schedule: Schedule) -> Result<(resolve::Resolved, f64)> {
+        let rc = ResolveConfig { culling, schedule, ..self.cfg.resolve };
+        let t = Instant::now();
+        let r = resolve::resolve(self.gb, self.lights, mask, &rc)?;
+        Ok((r, t.elapsed().as_secs_f64() * 1e3))
+    }
+
+    /// One sample per pixel through the tiled resolve: `single` when given, else every pixel's sample 0.
+    fn no_aa(&self, single: Option<&GBuffer>) -> Result<NoAa> {
+        let cfg = self.cfg;
+        let (resolved, ms) = match single {
+            Some(one) => {
+                let none = detect::detect(one, Detector::None, &cfg.detector_config)?;
+                let rc = ResolveConfig { culling: Culling::Tiled, schedule: Schedule::Deferred, ..cfg.resolve };
+                let t = Instant::now();
+                let r = resolve::resolve(one, self.lights, &none, &rc)?;
+                (r, t.elapsed().as_secs_f64() * 1e3)
+            }
+            None => {
+                let none = detect::detect(self.gb, Detector::None, &cfg.detector_config)?;
+                self.run(&none, Culling::Tiled, Schedule::Deferred)?
+            }
+        };
+        let note = if single.is_some() {
+            "the 1-sample render at pixel centres"
+        } else if self.gb.samples > 1 {
+            "sample 0 of the MSAA dump, off the pixel centre (estimate: MLAA's reconstruction assumes centred samples)"
+        } else {
+            "the 1-sample dump"
+        };
+        Ok(NoAa { resolved, ms, note })
+    }
+
+    /// The forward, forward MSAA, forward+ and visibility-buffer rows (skipped, with the reason, without primitive
+    /// IDs).
+    fn forward_rows(
+        &self,
+        single: Option<&GBuffer>,
+        no_aa: &NoAa,
+        rows: &mut Vec<PipelineRow>,
+        skipped: &mut Vec<(Pipeline, String)>,
+    ) -> Result<ForwardParts> {
+        let (gb, cfg) = (self.gb, self.cfg);
+        let (w, h, s) = (gb.width, gb.height, gb.samples);
+        let pixels = f64::from(w) * f64::from(h);
+        let n_lights = self.lights.len() as u64;
+        let ts = cfg.resolve.tile_size;
+        let tile_lights = tile_light_counts(&no_aa.resolved.lights_per_pixel, w, h, ts);
+        let list_entries: u64 = tile_lights.iter().map(|&c| u64::from(c)).sum();
+        let light_list_bytes = 4 * list_entries + 8 * tile_lights.len() as u64;
+        let tile_of = |p: usize| {
+            let (x, y) = (p as u32 % w, p as u32 / w);
+            ((y / ts) * w.div_ceil(ts) + x / ts) as usize
+        };
+        // Light pairs of forward+ and the visibility buffer: each lane tests its tile's list.
+        let tiled_pairs = |q: &QuadShading| -> u64 {
+            q.lanes_per_pixel.iter().enumerate().map(|(p, &n)| u64::from(n) * u64::from(tile_lights[tile_of(p)])).sum()
+        };
+        let fwd_msaa = forward::forward_quads(gb, ForwardSamples::Msaa);
+        let fwd_one = forward::forward_quads(single.unwrap_or(gb), ForwardSamples::Single { sample: 0 });
+        let lists = forward::fragment_lists(gb, ts);
+        match (&fwd_msaa, &fwd_one, &lists) {
+            (Ok(fm), Ok(f1), Ok(fl)) => {
+                // Forward MSAA's image: one shade per (triangle, pixel), resolved by coverage. The resolve gives a
+                // pixel shaded once its one sample's value whole, which would drop the background from silhouette
+                // pixels; those (partly covered) are shaded per sample instead, so the box filter weighs them by
+                // coverage as the MSAA resolve does. Their shading then varies per sample where forward MSAA
+                // replicates one value: a small advantage to the forward rows' error on silhouettes, none to their
+                // lane counts (those come from quads).
+                let mut fm_mask = detect::detect(gb, Detector::ForwardMsaa, &cfg.detector_config)?;
+                let all = s.min(u32::from(u8::MAX)) as u8;
+                for (c, &n) in fm_mask.shade_count.iter_mut().zip(&detect::covered_per_pixel(gb)) {
+                    if n > 0 && u32::from(n) < s {
+                        *c = all;
+                    }
+                }
+                let (msaa_img, _) = self.run(&fm_mask, Culling::Tiled, Schedule::Deferred)?;
+                let msaa_err = self.err(&msaa_img.image);
+                for p in [Pipeline::ForwardMsaa, Pipeline::ForwardPlus, Pipeline::VisibilityBuffer] {
+                    self.flip(FlipSlot::Row(p), &msaa_img.image);
+                }
+                self.flip(FlipSlot::Row(Pipeline::Forward), &no_aa.resolved.image);
+                let util = |q: &QuadShading| if q.lanes > 0 { q.covered_lanes as f64 / q.lanes as f64 } else { 1.0 };
+                let vb = cfg.visibility_layout.bytes_per_sample() as f64;
+                let n = Counts {
+                    pixels,
+                    samples: f64::from(s),
+                    covered: (gb.len() - gb.background_samples()) as f64,
+                    covered_pixels: covered_pixels(gb),
+                    bytes: f64::from(cfg.gbuffer_bytes),
+                    light_pairs: None,
+                    light_list_bytes: light_list_bytes as f64,
+                    fragments: fl.entries as f64,
+                    visibility_bytes: vb,
+                };
+                debug_assert_eq!(fl.bytes, 8 * fl.entries, "the footprint model's 8·F");
+                let row = |pipeline: Pipeline, q: &QuadShading, pairs, error, note: String| PipelineRow {
+                    pipeline,
+                    footprint_mb: pipeline.footprint(&n).expect("every count is known") / 1e6,
+                    bandwidth_mb: pipeline.traffic(&n).expect("every count is known") / 1e6,
+                    shading: q.lanes,
+                    shading_unit: "lanes".into(),
+                    light_pairs: pairs,
+                    utilisation: util(q),
+                    cpu_ms: None,
+                    error: Some(error),
+                    estimated: q.estimated,
+                    note,
+                };
+                let forward_note = if f1.estimated {
+                    "one sample per pixel: sample 0 stands for the pixel centre (estimate)"
+                } else if single.is_some() {
+                    "quads of the 1-sample render"
+                } else {
+                    "quads of the single-sample dump"
+                };
+                rows.push(row(
+                    Pipeline::Forward,
+                    f1,
+                    f1.lanes * n_lights,
+                    self.err(&no_aa.resolved.image),
+                    forward_note.into(),
+                ));
+                rows.push(row(
+                    Pipeline::ForwardMsaa,
+                    fm,
+                    fm.lanes * n_lights,
+                    msaa_err,
+                    format!(
+                        "{} quads of {} triangles, {:.0}% helper lanes",
+                        fm.quads,
+                        fm.triangles,
+                        100.0 * fm.helper_fraction
+                    ),
+                ));
+                rows.push(row(
+                    Pipeline::ForwardPlus,
+                    fm,
+                    tiled_pairs(fm),
+                    msaa_err,
+                    format!(
+                        "light lists {} ({list_entries} entries in {} tiles)",
+                        fmt_bytes(light_list_bytes),
+                        tile_lights.len()
+                    ),
+                ));
+                let mut vis = row(
+                    Pipeline::VisibilityBuffer,
+                    fm,
+                    tiled_pairs(fm),
+                    msaa_err,
+                    format!(
+                        "{} ({} B); fragment lists {} entries, longest {} ({})",
+                        cfg.visibility_layout.name(),
+                        cfg.visibility_layout.bytes_per_sample(),
+                        fl.entries,
+                        fl.max_entries,
+                        fmt_bytes(fl.bytes)
+                    ),
+                );
+                vis.shading = 4 * fl.entries;
+                rows.push(vis);
+            }
+            _ => {
+                let why = fwd_msaa.as_ref().err().map_or_else(String::new, ToString::to_string);
+                for p in [Pipeline::Forward, Pipeline::ForwardMsaa, Pipeline::ForwardPlus, Pipeline::VisibilityBuffer] {
+                    skipped.push((p, why.clone()));
+                }
+            }
+        }
+        Ok(ForwardParts { msaa: fwd_msaa.ok(), one: fwd_one.ok(), lists: lists.ok(), light_list_bytes })
+    }
+
+    /// The deferred rows (quad lights, tiled, light pre-pass): `mask`, the chosen detector's, through the resolve.
+    /// Returns the tiled deferred run when the packed MSAA schedule made it (the schedules and the detector's
+    /// anti-aliasing row reuse it).
+    fn deferred_rows(&self, mask: &EdgeMask, rows: &mut Vec<PipelineRow>) -> Result<Option<(resolve::Resolved, f64)>> {
+        let (gb, cfg) = (self.gb, self.cfg);
+        let b = cfg.gbuffer_bytes;
+        let ts = cfg.resolve.tile_size;
+        let packed = forward::utilisation(mask, MsaaSchedule::Packed, cfg.warps.first().copied().unwrap_or(16), ts);
+        let n = Counts {
+            pixels: f64::from(gb.width) * f64::from(gb.height),
+            samples: f64::from(gb.samples),
+            covered: (gb.len() - gb.background_samples()) as f64,
+            covered_pixels: covered_pixels(gb),
+            bytes: f64::from(b),
+            ..Counts::default()
+        };
+        let footprint = |p: Pipeline| p.footprint(&n).expect("every count is known");
+        let mut tiled: Option<(resolve::Resolved, f64)> = None;
+        for (pipeline, culling, schedule) in [
+            (Pipeline::DeferredQuad, Culling::Quad, Schedule::Deferred),
+            (Pipeline::TiledDeferred, Culling::Tiled, Schedule::Deferred),
+            (Pipeline::LightPrepass, Culling::Tiled, Schedule::LightPrepass),
+        ] {
+            let (r, ms) = self.run(mask, culling, schedule)?;
+            if pipeline == Pipeline::TiledDeferred && cfg.resolve.msaa == MsaaSchedule::Packed {
+                // The packed schedule's run and the detector's anti-aliasing row below are this resolve.
+                tiled = Some((r.clone(), ms));
+            }
+            let st = &r.stats;
+            let (footprint, traffic, note) = match pipeline {
+                Pipeline::DeferredQuad => (
+                    footprint(pipeline),
+                    bandwidth(gb, b, Some(st.light_pairs_tested)).quad.unwrap_or(f64::NAN) * 1e6,
+                    format!("{} G-buffer, {} B/sample; lights as screen quads", cfg.layout, b),
+                ),
+                Pipeline::TiledDeferred => (
+                    footprint(pipeline),
+                    bandwidth(gb, b, None).tiled * 1e6,
+                    format!("{} G-buffer, {} B/sample; light lists stay on chip", cfg.layout, b),
+                ),
+                _ => (
+                    footprint(pipeline),
+                    pipeline.traffic(&n).expect("every count is known"),
+                    "depth + normal/power 8 B and light buffer RGBA16F 8 B per sample".into(),
+                ),
+            };
+            rows.push(PipelineRow {
+                pipeline,
+                footprint_mb: footprint / 1e6,
+                bandwidth_mb: traffic / 1e6,
+                shading: st.shading_evaluations,
+                shading_unit: "evaluations".into(),
+                light_pairs: st.light_pairs_tested,
+                utilisation: packed.ratio,
+                cpu_ms: Some(ms),
+                error: Some(self.err(&r.image)),
+                estimated: false,
+                note,
+            });
+            self.flip(FlipSlot::Row(pipeline), &r.image);
+        }
+        Ok(tiled)
+    }
+
+    /// Anti-aliasing: the no-AA image, MLAA on it, adaptive MSAA with each detector, SSAA. Returns the rows, their
+    /// images (in row order) and MLAA's statistics.
+    fn aa_rows(
+        &self,
+        no_aa: NoAa,
+        tiled: Option<(resolve::Resolved, f64)>,
+    ) -> Result<(Vec<AaRow>, Vec<HdrImage>, MlaaStats)> {
+        let (gb, cfg) = (self.gb, self.cfg);
+        let (w, h, s) = (gb.width, gb.height, gb.samples);
+        let pixels = f64::from(w) * f64::from(h);
+        let gbuf_mb = |samples: u32| f64::from(cfg.gbuffer_bytes) * f64::from(samples) * pixels / 1e6;
+        let mut aa = Vec::new();
+        let mut aa_images = Vec::new();
+        let t = Instant::now();
+        let (smoothed, mlaa_stats) = mlaa(&no_aa.resolved.image.rgb, w, h, &cfg.mlaa);
+        let mlaa_ms = t.elapsed().as_secs_f64() * 1e3;
+        let smoothed = HdrImage { width: w, height: h, rgb: smoothed };
+        let evals = no_aa.resolved.stats.shading_evaluations;
+        self.flip(FlipSlot::Aa(aa.len()), &no_aa.resolved.image);
+        aa.push(AaRow {
+            method: "no-aa".into(),
+            evaluations: evals,
+            footprint_mb: gbuf_mb(1),
+            ms: no_aa.ms,
+            error: self.err(&no_aa.resolved.image),
+            note: no_aa.note.into(),
+        });
+        // MLAA's buffers on a GPU: an RG8 edge texture and an RGBA8 blend-weight texture.
+        self.flip(FlipSlot::Aa(aa.len()), &smoothed);
+        aa.push(AaRow {
+            method: "mlaa".into(),
+            evaluations: evals,
+            footprint_mb: gbuf_mb(1) + 6.0 * pixels / 1e6,
+            ms: no_aa.ms + mlaa_ms,
+            error: self.err(&smoothed),
+            note: format!("on {}", no_aa.note),
+        });
+        aa_images.push(no_aa.resolved.image);
+        aa_images.push(smoothed);
+        let mut methods: Vec<(String, Detector)> = cfg.aa_detectors.iter().map(|&d| (format!("msaa:{d}"), d)).collect();
+        methods.push(("ssaa".into(), Detector::Ssaa));
+        for (method, d) in methods {
+            let (r, ms) = match &tiled {
+                Some((r, ms)) if d == cfg.detector => (r.clone(), *ms),
+                _ => {
+                    let Ok(m) = detect::detect(gb, d, &cfg.detector_config) else { continue };
+                    self.run(&m, Culling::Tiled, Schedule::Deferred)?
+                }
+            };
+            self.flip(FlipSlot::Aa(aa.len()), &r.image);
+            aa.push(AaRow {
+                method,
+                evaluations: r.stats.shading_evaluations,
+                footprint_mb: gbuf_mb(s),
+                ms,
+                error: self.err(&r.image),
+                note: String::new(),
+            });
+            aa_images.push(r.image);
+        }
+        Ok((aa, aa_images, mlaa_stats))
+    }
+}
+
+/// Pixels with at least one covered sample.
+fn covered_pixels(gb: &GBuffer) -> f64 {
+    detect::covered_per_pixel(gb).iter().filter(|&&c| c > 0).count() as f64
 }
 
 /// Packs and unpacks `gb` with the visibility buffer's `layout` and counts what changed in what re-materialisation

@@ -327,17 +327,22 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
         };
         let mut attr_row = base.clone();
         let frame = match &prepared.source {
-            Source::Packed(p) => Some(layout.frame(p, gb)),
+            Source::Packed(p) => match layout.frame(p, gb) {
+                Ok(f) => Some(f),
+                Err(e) => {
+                    fail_layout(&mut rows, &e);
+                    done += per_layout;
+                    continue;
+                }
+            },
             _ => None,
-        }
-        .transpose();
+        };
         // The attribute errors and maps: against the decoded bands of a packed frame (the decode timed there), or
         // against the whole lighting copy.
         let measured = match (&frame, &prepared.source) {
-            (Ok(Some(f)), _) => band_pass(f, gb, cfg.runs),
-            (Err(e), _) => Err(crate::error::Error::Argument(e.to_string())),
-            (Ok(None), Source::Copy(d)) => Ok(whole_pass(gb, d, prepared.decode_ms.clone())),
-            (Ok(None), _) => Ok(whole_pass(gb, gb, prepared.decode_ms.clone())),
+            (Some(f), _) => band_pass(f, gb, cfg.runs),
+            (None, Source::Copy(d)) => Ok(whole_pass(gb, d, prepared.decode_ms.clone())),
+            (None, _) => Ok(whole_pass(gb, gb, prepared.decode_ms.clone())),
         };
         let (attribute_errors, mut lmaps, derived, decode_ms) = match measured {
             Ok(m) => m,
@@ -347,7 +352,6 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
                 continue;
             }
         };
-        let frame = frame.ok().flatten();
         let timing = |ms: Vec<f64>| Timing::from_ms(ms).expect("at least one run");
         attr_row.packed_resolve = frame.is_some();
         attr_row.set_timing("encode", timing(prepared.encode_ms.clone()));

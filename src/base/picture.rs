@@ -68,7 +68,7 @@ pub fn write_rgb8_png(path: &Path, width: u32, height: u32, bytes: Vec<u8>) -> R
         return Err(Error::Argument(format!("{}: cannot write an empty image", path.display())));
     }
     let img = RgbImage::from_raw(width, height, bytes)
-        .ok_or_else(|| Error::Argument(format!("{}: pixel buffer does not match {width}×{height}", path.display())))?;
+        .ok_or_else(|| Error::Mismatch(format!("{}: pixel buffer does not match {width}×{height}", path.display())))?;
     write_png(path, &img)
 }
 
@@ -81,7 +81,7 @@ pub const HEATMAP_LEGEND_ROWS: u32 = 8;
 /// text).
 pub fn write_heatmap_png(path: &Path, width: u32, height: u32, counts: &[u32]) -> Result<u32> {
     if counts.len() != width as usize * height as usize {
-        return Err(Error::Argument(format!(
+        return Err(Error::Mismatch(format!(
             "{}: {} counts for a {width}×{height} heatmap",
             path.display(),
             counts.len()

@@ -28,12 +28,12 @@ pub fn encode(width: u32, height: u32, rgb: &[u8], level: u8) -> Result<Vec<u8>>
     }
     let expected = 3 * u128::from(width) * u128::from(height);
     if rgb.len() as u128 != expected {
-        return Err(Error::Argument(format!(
+        return Err(Error::Mismatch(format!(
             "PNG encoding: {} bytes for a {width}×{height} RGB picture ({expected} expected)",
             rgb.len()
         )));
     }
-    let fail = |e: png::EncodingError| Error::Argument(format!("PNG encoding: {e}"));
+    let fail = |e: png::EncodingError| Error::Internal(format!("PNG encoding: {e}"));
     let mut out = Vec::with_capacity(rgb.len() / 2 + 1024);
     let mut enc = png::Encoder::new(&mut out, width, height);
     enc.set_color(png::ColorType::Rgb);

@@ -165,7 +165,7 @@ pub fn detect_with_gradient(gb: &GBuffer, cfg: &DetectorConfig, with_ids: bool, 
     cfg.validate()?;
     gb.validate()?;
     if gradient.len() != gb.pixel_count() {
-        return Err(Error::Argument(format!(
+        return Err(Error::Mismatch(format!(
             "depth gradient has {} entries for {} pixels",
             gradient.len(),
             gb.pixel_count()

@@ -198,7 +198,7 @@ fn detect_packed_bands(
 pub(crate) fn missing(gb: &GBuffer, detector: Detector, needs: &str) -> Error {
     let have: Vec<&str> = gb.attributes().iter().map(|a| a.name()).collect();
     let have = if have.is_empty() { "none".to_string() } else { have.join(", ") };
-    Error::Argument(format!("detector {detector} needs {needs}; the G-buffer has: {have}"))
+    Error::Mismatch(format!("detector {detector} needs {needs}; the G-buffer has: {have}"))
 }
 
 /// The view-depth plane: `depth`, else `−position.z` (0 at background samples).

@@ -67,13 +67,13 @@ pub fn render(gb: &GBuffer, mask: &EdgeMask, truth: Option<&[bool]>) -> Result<i
     gb.validate()?;
     let n = gb.pixel_count();
     if mask.width != gb.width || mask.height != gb.height || mask.shade_count.len() != n {
-        return Err(Error::Argument(format!(
+        return Err(Error::Mismatch(format!(
             "edge mask is {}×{}, the G-buffer {}×{}",
             mask.width, mask.height, gb.width, gb.height
         )));
     }
     if truth.is_some_and(|t| t.len() != n) {
-        return Err(Error::Argument(format!("truth has {} pixels, the G-buffer {n}", truth.map_or(0, <[bool]>::len))));
+        return Err(Error::Mismatch(format!("truth has {} pixels, the G-buffer {n}", truth.map_or(0, <[bool]>::len))));
     }
     let scene = scene_rgb(gb);
     let mut img = image::RgbImage::new(gb.width, gb.height);

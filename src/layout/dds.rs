@@ -86,7 +86,7 @@ pub fn dds_bytes(plane: &TargetPlane, width: u32, height: u32, samples: u32) -> 
     })?;
     let (pixels, s) = (width as usize * height as usize, samples as usize);
     if plane.bytes.len() != pixels * s * plane.format.bytes() {
-        return Err(Error::Argument(format!(
+        return Err(Error::Mismatch(format!(
             "target {}: {} bytes for {width}×{height}×{samples} texels of {}",
             plane.name,
             plane.bytes.len(),
@@ -134,7 +134,7 @@ pub fn raw_bytes(plane: &TargetPlane, width: u32, height: u32, samples: u32) -> 
         texel_bytes: plane.format.bytes(),
         order: "sample-major",
     };
-    let json = serde_json::to_vec(&header).map_err(|e| Error::Argument(format!("target header: {e}")))?;
+    let json = serde_json::to_vec(&header).map_err(|e| Error::Internal(format!("target header: {e}")))?;
     let mut out = (json.len() as u32).to_le_bytes().to_vec();
     out.extend(json);
     out.extend(slices(plane, width as usize * height as usize, samples as usize));
@@ -182,7 +182,7 @@ pub fn write_targets(packed: &Packed, dir: &Path) -> Result<Vec<WrittenTarget>> 
         });
     }
     if let Some(table) = &packed.material_table {
-        let json = serde_json::to_vec_pretty(table).map_err(|e| Error::Argument(format!("material table: {e}")))?;
+        let json = serde_json::to_vec_pretty(table).map_err(|e| Error::Internal(format!("material table: {e}")))?;
         let path = dir.join("material_table.json");
         write_bytes_atomic(&path, &json)?;
         out.push(WrittenTarget {

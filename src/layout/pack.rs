@@ -570,7 +570,7 @@ impl Layout {
                     }
                 },
                 (slot, _) => {
-                    return Err(Error::Argument(format!("layout {:?}: cannot decode {}", self.name(), slot.name())))
+                    return Err(Error::Mismatch(format!("layout {:?}: cannot decode {}", self.name(), slot.name())))
                 }
             }
         }
@@ -586,7 +586,7 @@ impl Layout {
                         if covered {
                             let k = if has_index { index[ci * chunk + j] } else { 0 };
                             let entry = table.entries.get(k as usize).ok_or_else(|| {
-                                Error::Argument(format!(
+                                Error::Mismatch(format!(
                                     "material index {k} outside the table of {} entries",
                                     table.entries.len()
                                 ))
@@ -780,7 +780,7 @@ impl Layout {
     }
 
     fn check(&self, packed: &Packed, like: &GBuffer) -> Result<()> {
-        let bad = |what: String| Err(Error::Argument(format!("unpack with layout {:?}: {what}", self.name())));
+        let bad = |what: String| Err(Error::Mismatch(format!("unpack with layout {:?}: {what}", self.name())));
         if packed.layout != self.name() {
             return bad(format!("the data was packed with layout {:?}", packed.layout));
         }
@@ -875,7 +875,7 @@ fn scalar_plane(gb: &mut GBuffer, a: Attribute, n: usize) -> Result<&mut Vec<f32
         Attribute::SpecularPower => &mut gb.specular_power,
         Attribute::Roughness => &mut gb.roughness,
         Attribute::Metallic => &mut gb.metallic,
-        _ => return Err(Error::Argument(format!("{} is not a scalar attribute", a.name()))),
+        _ => return Err(Error::Internal(format!("{} is not a scalar attribute", a.name()))),
     };
     Ok(p.get_or_insert_with(|| vec![0.0; n]))
 }
@@ -885,7 +885,7 @@ fn id_plane(gb: &mut GBuffer, a: Attribute, n: usize) -> Result<&mut Vec<u32>> {
         Attribute::MaterialId => &mut gb.material_id,
         Attribute::ObjectId => &mut gb.object_id,
         Attribute::PrimitiveId => &mut gb.primitive_id,
-        _ => return Err(Error::Argument(format!("{} is not an ID attribute", a.name()))),
+        _ => return Err(Error::Internal(format!("{} is not an ID attribute", a.name()))),
     };
     Ok(p.get_or_insert_with(|| vec![0; n]))
 }
@@ -997,7 +997,7 @@ impl<'a> PackedFrame<'a> {
     fn decode(&self, rows: Range<u32>, out: &mut GBuffer, only: Option<&[Attribute]>) -> Result<()> {
         let like = self.like;
         if rows.start > rows.end || rows.end > like.height {
-            return Err(Error::Argument(format!("rows {rows:?} outside the frame's {} rows", like.height)));
+            return Err(Error::Mismatch(format!("rows {rows:?} outside the frame's {} rows", like.height)));
         }
         let row = like.width as usize * like.samples as usize;
         let range = rows.start as usize * row..rows.end as usize * row;

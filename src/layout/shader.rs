@@ -1235,7 +1235,7 @@ pub fn emit(layout: &Layout, lang: Lang) -> Result<String> {
                 ("gbuf_material_by_id", "gbuf_materials.by_id"),
             ];
             let body = super::wgsl::translate(&o, &RENAME)
-                .map_err(|e| Error::Argument(format!("layout {:?}: {e} (a gbuf bug: please report)", layout.name())))?;
+                .map_err(|e| Error::Internal(format!("layout {:?}: {e}", layout.name())))?;
             // The software double before the layout's code, so that the file ends with `gbuf_unpack` as in the
             // other languages (WGSL does not mind the order).
             let mut w = head + WGSL_PRELUDE;

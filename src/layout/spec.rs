@@ -184,8 +184,8 @@ impl LayoutSpec {
     /// Serializes in the given syntax.
     pub fn to_text(&self, syntax: SpecSyntax) -> Result<String> {
         match syntax {
-            SpecSyntax::Json => serde_json::to_string_pretty(self).map_err(|e| Error::Argument(e.to_string())),
-            SpecSyntax::Toml => toml::to_string_pretty(self).map_err(|e| Error::Argument(e.to_string())),
+            SpecSyntax::Json => serde_json::to_string_pretty(self).map_err(|e| Error::Internal(e.to_string())),
+            SpecSyntax::Toml => toml::to_string_pretty(self).map_err(|e| Error::Internal(e.to_string())),
         }
     }
 

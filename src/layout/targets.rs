@@ -440,7 +440,7 @@ pub fn write_packed(
     if packed.layout != layout.name()
         || (packed.width, packed.height, packed.samples) != (gb.width, gb.height, gb.samples)
     {
-        return Err(Error::Argument(format!(
+        return Err(Error::Mismatch(format!(
             "targets of layout {:?} ({}×{}×{}) written as layout {:?} for a {}×{}×{} G-buffer",
             packed.layout,
             packed.width,
@@ -479,7 +479,7 @@ pub fn write_packed(
     extra("layout", "toml", path)?;
     let mut side = crate::scene::scene_sidecar(gb, lights);
     side.sample_positions = Some(gb.sample_positions.iter().map(|p| [p.x, p.y]).collect());
-    let mut text = serde_json::to_vec_pretty(&side).map_err(|e| Error::Argument(format!("sidecar: {e}")))?;
+    let mut text = serde_json::to_vec_pretty(&side).map_err(|e| Error::Internal(format!("sidecar: {e}")))?;
     text.push(b'\n');
     let path = dir.join("scene.json");
     crate::util::write_bytes_atomic(&path, &text)?;

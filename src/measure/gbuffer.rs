@@ -144,7 +144,7 @@ pub fn compare(reference: &GBuffer, test: &GBuffer) -> Result<AttributeErrors> {
     if (reference.width, reference.height, reference.samples) != (test.width, test.height, test.samples)
         || reference.coverage.len() != reference.len()
     {
-        return Err(Error::Argument(format!(
+        return Err(Error::Mismatch(format!(
             "compare: reference is {}×{}×{}, test is {}×{}×{}",
             reference.width, reference.height, reference.samples, test.width, test.height, test.samples
         )));
@@ -187,7 +187,7 @@ impl<'a> CompareBands<'a> {
     pub fn add(&mut self, start: usize, test: &GBuffer) -> Result<()> {
         let r = self.reference;
         if (test.width, test.samples) != (r.width, r.samples) || start != self.next || start + test.len() > r.len() {
-            return Err(Error::Argument(format!(
+            return Err(Error::Mismatch(format!(
                 "compare: a band of {}×{}×{} at sample {start} does not continue the {}×{}×{} reference at sample {}",
                 test.width, test.height, test.samples, r.width, r.height, r.samples, self.next
             )));
@@ -226,7 +226,7 @@ impl<'a> CompareBands<'a> {
         measures.par_iter_mut().try_for_each(|(attr, running)| {
             let Some(running) = running else { return Ok(()) };
             let (Some(rp), Some(tp)) = (r.plane(*attr), test.plane(*attr)) else {
-                return Err(Error::Argument(format!("compare: a band lacks the {} plane", attr.name())));
+                return Err(Error::Mismatch(format!("compare: a band lacks the {} plane", attr.name())));
             };
             match (running, rp, tp) {
                 (Running::Normal { angles, max, worst, skipped }, PlaneRef::Vec3(rv), PlaneRef::Vec3(tv)) => {
@@ -256,7 +256,7 @@ impl<'a> CompareBands<'a> {
                     let get = |i: usize| (comps(rp, start + i), comps(tp, i));
                     values(r, *attr, covered, get, (n, sum, sum2), e, nonfinite);
                 }
-                _ => return Err(Error::Argument(format!("compare: the {} planes differ in kind", attr.name()))),
+                _ => return Err(Error::Mismatch(format!("compare: the {} planes differ in kind", attr.name()))),
             }
             Ok(())
         })?;

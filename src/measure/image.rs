@@ -304,7 +304,7 @@ pub fn against_full_deferred<'a>(
 ) -> crate::Result<(ImageError, f64)> {
     let deferred = resolve(gb, lights, mask, &ResolveConfig { schedule: Schedule::Deferred, ..*cfg })?;
     let err = try_compare(&deferred.image, image).ok_or_else(|| {
-        crate::Error::Argument(format!(
+        crate::Error::Mismatch(format!(
             "image is {}×{} but the G-buffer is {}×{}",
             image.width, image.height, deferred.image.width, deferred.image.height
         ))

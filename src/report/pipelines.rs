@@ -219,7 +219,7 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
 pub fn write_shading_heatmaps(path: &Path, forward: &QuadShading, deferred: &EdgeMask) -> Result<u32> {
     let (w, h) = (deferred.width as usize, deferred.height as usize);
     if forward.lanes_per_pixel.len() != w * h {
-        return Err(Error::Argument(format!(
+        return Err(Error::Mismatch(format!(
             "{}: forward counts for {} pixels, mask of {w}×{h}",
             path.display(),
             forward.lanes_per_pixel.len()
@@ -299,7 +299,7 @@ pub fn aa_crop_picture(p: &Pipelines, reference: &HdrImage) -> Result<(RgbImage,
     if p.aa_images.len() != p.aa.len()
         || p.aa_images.iter().any(|i| (i.width, i.height) != (reference.width, reference.height))
     {
-        return Err(Error::Argument(format!(
+        return Err(Error::Mismatch(format!(
             "anti-aliasing images ({}) do not match the rows ({}) or the reference's size {}×{}",
             p.aa_images.len(),
             p.aa.len(),

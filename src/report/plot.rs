@@ -76,7 +76,7 @@ pub struct Heatmap<'a> {
 }
 
 fn draw_err(e: impl std::fmt::Display) -> crate::Error {
-    crate::Error::Argument(format!("drawing the plot failed: {e}"))
+    crate::Error::Internal(format!("drawing the plot failed: {e}"))
 }
 
 /// Checks the image size and registers the font (once).
@@ -86,7 +86,7 @@ fn prepare(w: u32, h: u32) -> Result<()> {
     }
     static OK: OnceLock<bool> = OnceLock::new();
     let ok = *OK.get_or_init(|| plotters::style::register_font(FAMILY, FontStyle::Normal, FONT).is_ok());
-    ok.then_some(()).ok_or_else(|| crate::Error::Argument("the embedded font is not a readable TrueType font".into()))
+    ok.then_some(()).ok_or_else(|| crate::Error::Internal("the embedded font is not a readable TrueType font".into()))
 }
 
 fn font(size: f64) -> TextStyle<'static> {
@@ -388,7 +388,7 @@ impl Draw for Heatmap<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
         if self.values.len() != self.width as usize * self.height as usize {
             let (w, h, n) = (self.width, self.height, self.values.len());
-            return Err(crate::Error::Argument(format!("heatmap of {w}×{h} cells given {n} values")));
+            return Err(crate::Error::Internal(format!("heatmap of {w}×{h} cells given {n} values")));
         }
         root.fill(&WHITE).map_err(draw_err)?;
         let area = root.margin(8, 0, 0, 0).titled(&self.title, font(20.0)).map_err(draw_err)?;

@@ -15,7 +15,7 @@ pub fn to_json(rep: &Report) -> Result<String> {
 }
 
 fn json_err(e: serde_json::Error) -> Error {
-    Error::Argument(format!("cannot serialize the report: {e}"))
+    Error::Internal(format!("cannot serialize the report: {e}"))
 }
 
 /// The files every report folder has besides its attachments.

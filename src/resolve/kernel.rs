@@ -11,7 +11,6 @@
 use super::brdf::{DIELECTRIC_F0, MIN_ALPHA, MIN_HALF_LENGTH, MIN_NDOTV};
 use super::config::{Brdf, Falloff};
 use super::falloff::MIN_DISTANCE;
-use crate::base::fastmath::POW_MIN_BASE;
 use super::lights::{LightRec, LightTable, LUMA};
 #[cfg(target_arch = "aarch64")]
 use super::simd::Neon;
@@ -20,6 +19,7 @@ pub use super::simd::BLOCK;
 use super::simd::{Avx2, Avx512};
 use super::simd::{Lanes, Portable, Two};
 use super::worklist::{Items, QuadSoa};
+use crate::base::fastmath::POW_MIN_BASE;
 use crate::base::isa::Isa;
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;

@@ -241,7 +241,7 @@ fn prepare<'a>(
     let (gb, order) = input.planes();
     cfg.validate()?;
     if mask.width != gb.width || mask.height != gb.height || mask.shade_count.len() != gb.pixel_count() {
-        return Err(Error::Argument(format!(
+        return Err(Error::Mismatch(format!(
             "edge mask is {}×{} ({} entries) but the G-buffer is {}×{}",
             mask.width,
             mask.height,
@@ -266,7 +266,7 @@ fn packed_reader<'a>(p: &'a crate::layout::PackedFrame<'a>) -> Result<surface::S
     p.decode_rows_only(0..like.height.min(1), &mut probe, &[crate::gbuffer::Attribute::Depth])?;
     let derivable = probe.depth.is_some() && like.camera.is_some();
     if probe.position.is_none() && !derivable && like.coverage.iter().any(|&c| c) {
-        return Err(Error::Argument(format!(
+        return Err(Error::Mismatch(format!(
             "the resolve needs view-space positions: layout {:?} stores no position, and no depth with a camera to \
              derive one",
             p.layout().name()

@@ -222,16 +222,16 @@ pub fn reference(gb: &GBuffer, lights: &[Light], cfg: &ResolveConfig) -> Result<
 pub fn check_meaningful(gb: &GBuffer, lights: &[Light], reference: &HdrImage) -> Result<()> {
     let covered = gb.coverage.iter().filter(|c| **c).count();
     if covered == 0 {
-        return Err(Error::Argument(format!(
+        return Err(Error::Implausible(format!(
             "no covered sample: all {} samples are background, nothing to shade (is the background marker right?)",
             gb.len()
         )));
     }
     if lights.is_empty() {
-        return Err(Error::Argument("no lights: every image would be black".into()));
+        return Err(Error::Implausible("no lights: every image would be black".into()));
     }
     if reference.rgb.iter().all(|c| *c == Vec3::ZERO) {
-        return Err(Error::Argument(format!(
+        return Err(Error::Implausible(format!(
             "the reference image is black: none of the {} lights reaches any of the {covered} covered samples \
              (lights in another space than the G-buffer, out of range, or behind every surface?)",
             lights.len()

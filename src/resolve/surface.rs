@@ -204,7 +204,7 @@ impl<'a> SurfaceReader<'a> {
         gb.validate()?;
         let derivable = gb.depth.is_some() && gb.camera.is_some();
         if gb.position.is_none() && !derivable && gb.coverage.iter().any(|&c| c) {
-            return Err(Error::Argument(
+            return Err(Error::Mismatch(
                 "the resolve needs view-space positions: the G-buffer has no position plane, and no depth plane \
                  with a camera to derive one"
                     .into(),

@@ -74,7 +74,7 @@ struct Rebuilt {
 /// `gb`'s size and compares each attribute `gb` holds with the rebuilt one.
 pub fn rematerialise(name: SceneName, gb: &GBuffer) -> Result<Rematerialised> {
     let (Some(obj), Some(prim)) = (&gb.object_id, &gb.primitive_id) else {
-        return Err(Error::Argument("re-materialisation needs object and primitive IDs in the G-buffer".into()));
+        return Err(Error::Mismatch("re-materialisation needs object and primitive IDs in the G-buffer".into()));
     };
     let scene = build(name, gb.width, gb.height);
     let mesh: &Mesh = &scene.mesh;
@@ -112,7 +112,7 @@ pub fn rematerialise(name: SceneName, gb: &GBuffer) -> Result<Rematerialised> {
     let ok: Vec<usize> = (0..gb.len()).filter(|&i| rebuilt[i].is_some()).collect();
     let failed = covered - ok.len() as u64;
     if failed as f64 > MAX_FAILED_FRACTION * covered as f64 {
-        return Err(Error::Argument(format!(
+        return Err(Error::Implausible(format!(
             "the dump does not look like the {} scene at {}×{}: {failed} of {covered} covered samples name no \
              triangle of it or miss the one they name",
             name.name(),
