@@ -7,6 +7,7 @@
 
 pub mod aggregate;
 pub mod budget;
+pub mod compress;
 pub mod errors;
 pub mod forward;
 pub mod needs;
