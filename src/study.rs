@@ -169,6 +169,7 @@ pub fn pipelines_config(cfg: &SweepConfig) -> crate::analysis::pipelines::Pipeli
         mlaa: crate::image::mlaa::MlaaConfig::default(),
         geometry: None,
         visibility_layout: crate::layout::Layout::by_name("visibility-8").expect("the built-in visibility layout"),
+        compression_slots: None,
     }
 }
 

@@ -11,6 +11,7 @@
 //! `forward-msaa` detector's image); the deferred rows shade what the chosen detector asks. Forward rows need
 //! primitive IDs: without them they are listed with the reason and no numbers.
 
+use crate::analysis::compress::{compress, footprint, FragmentKey, StreamingConfig};
 use crate::analysis::forward::{self, ForwardSamples, FragmentLists, QuadShading, Utilisation};
 use crate::analysis::traffic::{bandwidth, Counts};
 use crate::base::mask::EdgeMask;
@@ -57,6 +58,55 @@ pub struct PipelinesConfig {
     /// The visibility buffer's layout (IDs + depth, e.g. the built-in `visibility-8`): its bytes per sample set the
     /// row's footprint and traffic, and the frame is packed and unpacked with it to check its IDs and depth survive.
     pub visibility_layout: Layout,
+    /// Surface slots per pixel of the streaming-compression rows ([`crate::analysis::compress`]); `None`: 1 to 4
+    /// and the sample count ([`default_slots`]); empty: no such rows.
+    pub compression_slots: Option<Vec<u32>>,
+}
+
+/// The slot counts the compressed-G-buffer rows try by default: 1 to 4 (Kerzner & Salvi keep 3 at 8×) and the
+/// sample count, at most the sample count.
+#[must_use]
+pub fn default_slots(samples: u32) -> Vec<u32> {
+    let mut k: Vec<u32> = (1..=4).filter(|&k| k <= samples).collect();
+    if !k.contains(&samples) {
+        k.push(samples);
+    }
+    k
+}
+
+/// The frame's MSAA G-buffer compressed into `slots` surface slots per pixel (Kerzner & Salvi 2014's streaming
+/// compression, [`crate::analysis::compress`]) and lit from them, against the every-sample reference.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CompressedRow {
+    /// Surface slots per pixel.
+    pub slots: u32,
+    /// How the pixels' fragments were rebuilt from the dump.
+    pub fragments_from: FragmentKey,
+    /// Bytes of one slot (the layout's fields and the coverage word).
+    pub slot_bytes: u32,
+    /// Bytes per pixel compressed (slots and bookkeeping) and of the full MSAA G-buffer.
+    pub bytes_per_pixel: u32,
+    /// Bytes per pixel of the full MSAA G-buffer of the same layout.
+    pub full_bytes_per_pixel: u32,
+    /// The compressed G-buffer in MB.
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    pub footprint_mb: f64,
+    /// Shading evaluations: one per slot in use.
+    pub evaluations: u64,
+    /// Pixels by slots in use (0..=slots).
+    pub slot_histogram: Vec<u64>,
+    /// Fragments merged into a slot.
+    pub merges: u64,
+    /// Covered samples whose fragment was evicted, as a fraction of the covered samples.
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    pub evicted_fraction: f64,
+    /// Pixels that evicted a fragment.
+    pub discarded_pixels: u64,
+    /// CPU time: compressing and lighting, ms.
+    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    pub ms: f64,
+    /// Error against the reference.
+    pub error: ErrorSet,
 }
 
 /// The visibility buffer's layout packed and unpacked on the frame: does it keep what re-materialisation needs?
@@ -191,6 +241,9 @@ pub struct Pipelines {
     /// The visibility buffer's layout packed and unpacked on this frame (needs primitive IDs).
     #[serde(default)]
     pub visibility_packing: Option<VisibilityPacking>,
+    /// The compressed-G-buffer rows, one per slot count.
+    #[serde(default)]
+    pub compressed: Vec<CompressedRow>,
     /// The images of [`Pipelines::aa`] (same order), for pictures; not serialised.
     #[serde(skip)]
     pub aa_images: Vec<HdrImage>,
@@ -301,6 +354,7 @@ pub fn check_single(gb: &GBuffer, one: &GBuffer) -> Result<()> {
 enum FlipSlot {
     Row(Pipeline),
     Aa(usize),
+    Compressed(usize),
 }
 
 /// An image whose FLIP against the pipelines' reference (with the same viewing conditions) the caller has already
@@ -359,7 +413,14 @@ impl<'a> FlipBatch<'a> {
     }
 
     /// Computes the FLIPs and writes them into the rows' error sets.
-    fn fill(self, reference: &HdrImage, viewing: &Viewing, rows: &mut [PipelineRow], aa: &mut [AaRow]) {
+    fn fill(
+        self,
+        reference: &HdrImage,
+        viewing: &Viewing,
+        rows: &mut [PipelineRow],
+        aa: &mut [AaRow],
+        compressed: &mut [CompressedRow],
+    ) {
         let images = self.images.into_inner();
         let tests: Vec<&HdrImage> = images.iter().collect();
         let results = if tests.is_empty() { Vec::new() } else { flip_many(reference, &tests, viewing) };
@@ -373,6 +434,7 @@ impl<'a> FlipBatch<'a> {
             let error = match slot {
                 FlipSlot::Row(p) => rows.iter_mut().find(|r| r.pipeline == p).and_then(|r| r.error.as_mut()),
                 FlipSlot::Aa(i) => aa.get_mut(i).map(|r| &mut r.error),
+                FlipSlot::Compressed(i) => compressed.get_mut(i).map(|r| &mut r.error),
             };
             if let Some(e) = error {
                 e.flip_ldr = Some(ldr);
@@ -444,9 +506,10 @@ pub fn pipelines_with(
     }
     rows.sort_by_key(|r| Pipeline::ALL.iter().position(|&p| p == r.pipeline));
     let (mut aa, aa_images, mlaa_stats) = m.aa_rows(no_aa, tiled)?;
+    let mut compressed = m.compressed_rows()?;
     let Measure { flips, .. } = m;
     if let Some(v) = cfg.viewing.as_ref() {
-        flips.fill(reference, v, &mut rows, &mut aa);
+        flips.fill(reference, v, &mut rows, &mut aa, &mut compressed);
     }
     let (rematerialised, rematerialise_error) = match cfg.geometry {
         Some(name) => match rematerialise(name, gb) {
@@ -478,6 +541,7 @@ pub fn pipelines_with(
         rematerialised,
         rematerialise_error,
         visibility_packing,
+        compressed,
         aa_images,
     })
 }
@@ -817,6 +881,46 @@ impl Measure<'_> {
             aa_images.push(r.image);
         }
         Ok((aa, aa_images, mlaa_stats))
+    }
+}
+
+impl Measure<'_> {
+    /// The compressed-G-buffer rows: the frame compressed into each slot count (merging as Kerzner & Salvi do) and
+    /// lit from the slots. None when the frame has one sample per pixel (nothing to compress).
+    fn compressed_rows(&self) -> Result<Vec<CompressedRow>> {
+        let (gb, cfg) = (self.gb, self.cfg);
+        if gb.samples < 2 {
+            return Ok(Vec::new());
+        }
+        let slots = cfg.compression_slots.clone().unwrap_or_else(|| default_slots(gb.samples));
+        let covered = (gb.len() - gb.background_samples()) as f64;
+        let pixels = f64::from(gb.width) * f64::from(gb.height);
+        let rc = ResolveConfig { culling: Culling::Tiled, schedule: Schedule::Deferred, ..cfg.resolve };
+        let mut rows = Vec::new();
+        for k in slots {
+            let t = Instant::now();
+            let c = compress(gb, &StreamingConfig { slots: k, merge: true })?;
+            let r = c.light(self.lights, &rc)?;
+            let ms = t.elapsed().as_secs_f64() * 1e3;
+            let f = footprint(cfg.gbuffer_bytes, gb.samples, k);
+            self.flip(FlipSlot::Compressed(rows.len()), &r.image);
+            rows.push(CompressedRow {
+                slots: k,
+                fragments_from: c.key,
+                slot_bytes: f.slot_bytes,
+                bytes_per_pixel: f.compressed_bytes_per_pixel,
+                full_bytes_per_pixel: f.full_bytes_per_pixel,
+                footprint_mb: f64::from(f.compressed_bytes_per_pixel) * pixels / 1e6,
+                evaluations: c.evaluations(),
+                slot_histogram: c.slot_histogram(),
+                merges: c.merges,
+                evicted_fraction: if covered > 0.0 { c.evicted_samples as f64 / covered } else { 0.0 },
+                discarded_pixels: c.discarded_pixels,
+                ms,
+                error: self.err(&r.image),
+            });
+        }
+        Ok(rows)
     }
 }
 

@@ -69,6 +69,10 @@ pub struct Args {
     /// stands in, off the pixel centre, and those rows are marked as estimates.
     #[arg(long, value_name = "FILE")]
     pub single: Option<PathBuf>,
+    /// Surface slots per pixel of the compressed-G-buffer rows (Kerzner & Salvi's streaming compression):
+    /// default 1 to 4 and the sample count; `none` for no such rows.
+    #[arg(long, value_name = "LIST|none", value_delimiter = ',')]
+    pub slots: Option<Vec<String>>,
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
@@ -79,6 +83,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.warps.is_empty() || args.warps.iter().any(|&w| w == 0 || w > 1024) {
         crate::usage!("--warps: widths between 1 and 1024 lanes, got {:?}", args.warps);
     }
+    let compression_slots = match args.slots.as_deref() {
+        None => None,
+        Some([none]) if none == "none" => Some(Vec::new()),
+        Some(list) => match list.iter().map(|k| k.parse::<u32>().ok().filter(|&k| k >= 1)).collect() {
+            Some(k) => Some(k),
+            None => crate::usage!("--slots: counts of at least 1 separated by commas, or none; got {list:?}"),
+        },
+    };
     let layout = Layout::by_name_or_path(&args.layout).with_context(|| format!("--layout {}", args.layout))?;
     let file = args.input.file.display().to_string();
     let loaded = args.input.load().with_context(|| format!("loading {file}"))?;
@@ -97,6 +109,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         geometry: args.geometry,
         visibility_layout: Layout::by_name_or_path(&args.visibility_layout)
             .with_context(|| format!("--visibility-layout {}", args.visibility_layout))?,
+        compression_slots,
     };
     let single = match &args.single {
         Some(path) => {

@@ -207,6 +207,45 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
             );
         }
     }
+    if let Some(first) = p.compressed.first() {
+        let _ = writeln!(
+            s,
+            "\n{h} Compressed MSAA G-buffer (Kerzner & Salvi 2014: K surface slots per pixel, one evaluation each)\n\n\
+             Fragments rebuilt from the dump's {}; each slot holds the {} fields ({} B) and a coverage word: {} B per \
+             slot, plus 8 B per pixel. The full {}× G-buffer takes {} B per pixel.\n",
+            match first.fragments_from {
+                crate::analysis::compress::FragmentKey::ObjectPrimitive => "object and primitive IDs, in ID order",
+                crate::analysis::compress::FragmentKey::ObjectMaterial => "object/material IDs, in ID order",
+                crate::analysis::compress::FragmentKey::Geometry => "geometry (no IDs), in sample order",
+            },
+            p.layout,
+            p.gbuffer_bytes,
+            first.slot_bytes,
+            p.size.2,
+            first.full_bytes_per_pixel
+        );
+        s.push_str(
+            "| slots | B/pixel | vs full | MB | evaluations | evicted samples | discarded pixels | CPU ms | RMSE | \
+             LDR-FLIP | HDR-FLIP |\n|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n",
+        );
+        for r in &p.compressed {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {:.0}% | {:.2} | {} | {:.3}% | {} | {:.1} | {} | {} | {} |",
+                r.slots,
+                r.bytes_per_pixel,
+                100.0 * f64::from(r.bytes_per_pixel) / f64::from(r.full_bytes_per_pixel.max(1)),
+                r.footprint_mb,
+                r.evaluations,
+                100.0 * r.evicted_fraction,
+                r.discarded_pixels,
+                r.ms,
+                fmt_opt(Some(r.error.rmse), 5),
+                fmt_opt(r.error.flip_ldr, 4),
+                fmt_opt(r.error.flip_hdr, 4)
+            );
+        }
+    }
     let _ = writeln!(s, "\n{h} Traffic model ({})\n", crate::analysis::traffic::legend());
     for r in &p.rows {
         let _ = writeln!(s, "- {}: {}", r.pipeline, r.pipeline.bandwidth_formula());
