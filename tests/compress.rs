@@ -2,7 +2,7 @@
 //! pixels, the lossless case against the uncompressed adaptive image, and the llvmpipe fixture's fragments against
 //! its per-sample IDs.
 
-use gbuf::analysis::compress::{compress, footprint, Compressed, StreamingConfig};
+use gbuf::analysis::compress::{aggregate, compress, footprint, Compressed, StreamingConfig};
 use gbuf::analysis::surfaces::surfaces_per_pixel;
 use gbuf::detect::{covered_per_pixel, detect, Detector, DetectorConfig};
 use gbuf::io::LoadOptions;
@@ -175,4 +175,46 @@ fn the_llvmpipe_fragments_are_its_distinct_primitives_and_fewer_slots_evict_more
     assert_eq!(footprint(20, 4, 4).compressed_bytes_per_pixel, 104);
     assert_eq!(footprint(20, 4, 2).compressed_bytes_per_pixel, 56);
     assert_eq!(footprint(8, 4, 2).compressed_bytes_per_pixel, footprint(8, 4, 2).full_bytes_per_pixel);
+}
+
+#[test]
+fn aggregates_cut_a_pixel_at_its_largest_depth_gaps_and_average_each_layer() {
+    let gb = one_pixel();
+    // Depths 2 (×5), 5 (×2), 9 (×1): two layers cut at the larger gap (5 → 9); nothing evicted.
+    let a = aggregate(&gb, 2).unwrap();
+    assert_eq!((a.slots_per_pixel[0], a.evicted_samples, a.evaluations()), (2, 0, 2));
+    let albedo = a.gbuffer.albedo.as_ref().unwrap();
+    let near = Vec3::splat((5.0 * 0.1 + 2.0 * 0.2) / 7.0);
+    for i in [0usize, 1, 2, 3, 4, 5, 7] {
+        assert!((albedo[i] - near).abs().max_element() < 1e-6, "sample {i}: {}", albedo[i]);
+    }
+    assert!((albedo[6] - Vec3::splat(0.3)).abs().max_element() < 1e-6);
+    // The near layer's normal: the renormalised mean of 5 × +Z and 2 × +X; its IDs the nearest sample's.
+    let n = a.gbuffer.normal.as_ref().unwrap()[2];
+    assert!((n - Vec3::new(2.0, 0.0, 5.0).normalize()).length() < 1e-6, "{n}");
+    assert_eq!(a.gbuffer.object_id.as_ref().unwrap()[2], 1);
+    // One aggregate: everything averaged, shaded per sample (8 of 8 covered, one layer → once).
+    let one = aggregate(&gb, 1).unwrap();
+    assert_eq!((one.slots_per_pixel[0], one.mask.shade_count[0]), (1, 1));
+    // A pixel on one plane keeps one layer however many are allowed.
+    let mut flat = gb.clone();
+    flat.depth = Some(vec![3.0; 8]);
+    flat.position = Some(vec![Vec3::new(0.0, 0.0, -3.0); 8]);
+    assert_eq!(aggregate(&flat, 2).unwrap().slots_per_pixel[0], 1);
+}
+
+#[test]
+fn aggregates_widen_the_specular_lobe_where_normals_disagree() {
+    let mut gb = one_pixel();
+    gb.specular_power = Some(vec![64.0; 8]);
+    let a = aggregate(&gb, 1).unwrap();
+    // Mean of 5 × +Z and 3 × +X: ρ = √34 / 8; Toksvig: ρs / (ρ + s(1 − ρ)).
+    let rho = 34f32.sqrt() / 8.0;
+    let want = rho * 64.0 / (rho + 64.0 * (1.0 - rho));
+    let got = a.gbuffer.specular_power.as_ref().unwrap()[0];
+    assert!((got - want).abs() < 1e-3 * want && got < 10.0, "{got} vs {want}");
+    // Agreeing normals keep the power.
+    let mut flat = gb.clone();
+    flat.normal = Some(vec![Vec3::Z; 8]);
+    assert_eq!(aggregate(&flat, 1).unwrap().gbuffer.specular_power.as_ref().unwrap()[0], 64.0);
 }

@@ -171,7 +171,13 @@ fn pipelines_runs_on_every_fixture() {
         // The compressed-G-buffer rows: slots 1 to 4 and the sample count; more slots evict no more samples and
         // cost more bytes; with a slot per sample nothing is evicted; none for a 1-sample frame.
         let samples = j["size"][2].as_u64().unwrap();
-        let compressed = j["compressed"].as_array().unwrap();
+        let all = j["compressed"].as_array().unwrap();
+        let compressed: Vec<serde_json::Value> = all.iter().filter(|r| r["method"] == "streaming").cloned().collect();
+        let aggregates: Vec<&serde_json::Value> = all.iter().filter(|r| r["method"] == "aggregate").collect();
+        assert_eq!(aggregates.len(), usize::from(samples > 1), "{f}: 2 AGAA-style aggregates on MSAA frames");
+        for a in aggregates {
+            assert_eq!((a["slots"].as_u64(), a["evicted_fraction"].as_f64()), (Some(2), Some(0.0)), "{f}: {a}");
+        }
         let slots: Vec<u64> = compressed.iter().map(|r| r["slots"].as_u64().unwrap()).collect();
         let mut want: Vec<u64> = (1..=4.min(samples)).collect();
         if samples > 4 {
@@ -331,7 +337,8 @@ fn streaming_compression_reproduces_the_papers_footprint_on_an_8x_frame() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    let rows = j["compressed"].as_array().unwrap();
+    let rows: Vec<&serde_json::Value> =
+        j["compressed"].as_array().unwrap().iter().filter(|r| r["method"] == "streaming").collect();
     assert_eq!(rows.len(), 1);
     let r = &rows[0];
     assert_eq!(

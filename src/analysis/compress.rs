@@ -58,6 +58,16 @@ pub enum FragmentKey {
     Geometry,
 }
 
+/// How the compressed G-buffer was formed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Kerzner & Salvi's streaming slots ([`compress`]).
+    Streaming,
+    /// AGAA-style depth-layer aggregates ([`aggregate`]).
+    Aggregate,
+}
+
 /// Compression settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StreamingConfig {
@@ -71,8 +81,10 @@ pub struct StreamingConfig {
 /// A compressed frame: what the slots hold, written back as a G-buffer the resolve lights, and what it cost.
 #[derive(Clone, Debug)]
 pub struct Compressed {
-    /// The settings.
+    /// The settings (for aggregates: `slots` is the aggregate count, `merge` false).
     pub config: StreamingConfig,
+    /// Streaming slots or aggregates.
+    pub method: Method,
     /// How fragments were rebuilt.
     pub key: FragmentKey,
     /// Slots in use per pixel (row-major).
@@ -171,6 +183,44 @@ impl Fields {
         }
     }
 
+    /// The mean of the samples `members` (the first is the nearest: its IDs are kept), the specular power widened
+    /// by Toksvig's factor where the normals disagree.
+    fn mean(gb: &GBuffer, members: impl Iterator<Item = usize> + Clone) -> Self {
+        let mut it = members.clone();
+        let first = it.next().expect("a layer has a sample");
+        let mut sum = Fields::of(gb, first, 1.0);
+        for i in it {
+            let f = Fields::of(gb, i, 1.0);
+            sum.weight += 1.0;
+            sum.depth += f.depth;
+            sum.position += f.position;
+            sum.normal += f.normal;
+            sum.albedo += f.albedo;
+            sum.specular += f.specular;
+            sum.specular_power += f.specular_power;
+            sum.roughness += f.roughness;
+            sum.metallic += f.metallic;
+            sum.motion += f.motion;
+        }
+        let inv = 1.0 / sum.weight;
+        let mean_normal = sum.normal * inv;
+        let rho = mean_normal.length().min(1.0);
+        let power = sum.specular_power * inv;
+        Fields {
+            weight: sum.weight,
+            depth: sum.depth * inv,
+            position: sum.position * inv,
+            normal: mean_normal.normalize_or(Fields::of(gb, first, 1.0).normal),
+            albedo: sum.albedo * inv,
+            specular: sum.specular * inv,
+            specular_power: if rho > 0.0 && power > 0.0 { rho * power / (rho + power * (1.0 - rho)) } else { power },
+            roughness: sum.roughness * inv,
+            metallic: sum.metallic * inv,
+            motion: sum.motion * inv,
+            ids: sum.ids,
+        }
+    }
+
     /// The coverage-weighted mean of `a` and `b`.
     fn merge(a: &Fields, b: &Fields) -> Fields {
         let w = a.weight + b.weight;
@@ -231,56 +281,13 @@ impl Fields {
 /// Errors when `slots` is 0 or above the sample count, when the G-buffer has more than 64 samples, or when no
 /// position can be formed for the lighting pass (no position plane, and no depth with a camera).
 pub fn compress(gb: &GBuffer, cfg: &StreamingConfig) -> Result<Compressed> {
-    gb.validate()?;
+    let (mut out, depth, slope) = prepare(gb, cfg.slots, "surface slots")?;
     let s = gb.samples as usize;
-    if cfg.slots == 0 || cfg.slots > gb.samples {
-        return Err(Error::Argument(format!("{} surface slots for {} samples per pixel: 1..={}", cfg.slots, s, s)));
-    }
-    if s > 64 {
-        return Err(Error::Argument(format!("streaming compression masks hold 64 samples, not {s}")));
-    }
-    // The one copy: slots are written back into it pixel by pixel (a slot's fields are read before its samples are
-    // written, and slots cover disjoint samples, so no value is read after it was replaced).
-    let mut out = gb.clone();
-    if out.position.is_none() {
-        out.fill_position_from_depth();
-    }
-    if out.position.is_none() && gb.coverage.iter().any(|&c| c) {
-        return Err(Error::Mismatch(
-            "streaming compression lights its slots: the G-buffer needs positions, or depth with a camera".into(),
-        ));
-    }
-    let depth: Option<Vec<f32>> = detect::depth_plane(&out, Detector::Lauritzen).ok().map(|d| d.into_owned());
-    let slope: Vec<f32> = match &depth {
-        Some(_) => detect::lauritzen::neighbour_gradients(&out)?
-            .iter()
-            .map(|g| {
-                let d = g.x.abs() + g.y.abs();
-                if d.is_finite() {
-                    d
-                } else {
-                    0.0
-                }
-            })
-            .collect(),
-        None => vec![0.0; gb.pixel_count()],
-    };
     let key = fragment_key(gb);
     let merge_geometry = cfg.merge && depth.is_some() && gb.normal.is_some();
     let k = cfg.slots as usize;
     let pixels = gb.pixel_count();
-    let mut c = Compressed {
-        config: *cfg,
-        key,
-        slots_per_pixel: vec![0; pixels],
-        fragments: 0,
-        merges: 0,
-        evicted_samples: 0,
-        discarded_pixels: 0,
-        gbuffer: GBuffer::default(),
-        mask: EdgeMask::filled(gb.width, gb.height, gb.samples, 0),
-        scale: vec![1.0; pixels],
-    };
+    let mut c = Compressed::empty(gb, *cfg, Method::Streaming, key);
     let mut frags: Vec<(u64, Slot)> = Vec::with_capacity(s);
     let mut slots: Vec<Slot> = Vec::with_capacity(k + 1);
     let mut merged: Vec<Fields> = Vec::new();
@@ -365,46 +372,177 @@ pub fn compress(gb: &GBuffer, cfg: &StreamingConfig) -> Result<Compressed> {
                 discarded = true;
             }
         }
-        // Write the slots back per sample; evicted samples become background.
-        let mut kept: u64 = 0;
-        for t in &slots {
-            kept |= t.mask;
-            let fields = match t.merged {
-                Some(m) => merged[m],
-                None => Fields::of(&out, t.first, 0.0),
-            };
-            for j in 0..s {
-                if t.mask >> j & 1 == 1 {
-                    fields.write(&mut out, base + j);
-                }
-            }
-        }
-        let covered = gb.coverage[base..base + s].iter().filter(|&&c| c).count();
-        for j in 0..s {
-            if gb.coverage[base + j] && kept >> j & 1 == 0 {
-                out.coverage[base + j] = false;
-            }
-        }
-        let kept_n = kept.count_ones() as usize;
-        c.slots_per_pixel[p] = slots.len() as u8;
-        c.mask.shade_count[p] = match slots.len() {
-            0 => 0,
-            1 if covered == s && kept_n == s => 1,
-            _ => s.min(usize::from(u8::MAX)) as u8,
-        };
-        if discarded {
-            c.discarded_pixels += 1;
-            if kept_n > 0 {
-                c.scale[p] = covered as f32 / kept_n as f32;
-            }
-        }
+        // Write the slots back per sample (every slot's fields read before any sample is written); evicted
+        // samples become background.
+        let fields: Vec<(u64, Fields)> = slots
+            .iter()
+            .map(|t| (t.mask, t.merged.map_or_else(|| Fields::of(&out, t.first, 0.0), |m| merged[m])))
+            .collect();
+        write_pixel(gb, &mut out, &mut c, p, &fields, discarded);
     }
     out.zero_background();
     c.gbuffer = out;
     Ok(c)
 }
 
+/// Writes pixel `p`'s slots (coverage mask, fields) into `out`, samples no slot covers becoming background, and
+/// sets the pixel's slot count, mask entry and (when `discarded`) its colour scale in `c`.
+fn write_pixel(
+    gb: &GBuffer,
+    out: &mut GBuffer,
+    c: &mut Compressed,
+    p: usize,
+    slots: &[(u64, Fields)],
+    discarded: bool,
+) {
+    let s = gb.samples as usize;
+    let base = p * s;
+    let mut kept: u64 = 0;
+    for (mask, fields) in slots {
+        kept |= mask;
+        for j in 0..s {
+            if mask >> j & 1 == 1 {
+                fields.write(out, base + j);
+            }
+        }
+    }
+    let covered = gb.coverage[base..base + s].iter().filter(|&&c| c).count();
+    for j in 0..s {
+        if gb.coverage[base + j] && kept >> j & 1 == 0 {
+            out.coverage[base + j] = false;
+        }
+    }
+    let kept_n = kept.count_ones() as usize;
+    c.slots_per_pixel[p] = slots.len() as u8;
+    c.mask.shade_count[p] = match slots.len() {
+        0 => 0,
+        1 if covered == s && kept_n == s => 1,
+        _ => s.min(usize::from(u8::MAX)) as u8,
+    };
+    if discarded {
+        c.discarded_pixels += 1;
+        if kept_n > 0 {
+            c.scale[p] = covered as f32 / kept_n as f32;
+        }
+    }
+}
+
+/// Aggregates in the manner of Crassin et al.'s AGAA (HPG 2015), simulated on a dump: each pixel's covered samples
+/// are split into at most `count` depth layers — sorted by view depth and cut at the largest gaps that exceed the
+/// pixel's depth slope (|∂z/∂x| + |∂z/∂y|, the span one surface covers across a pixel), so a pixel on one surface
+/// keeps one aggregate — and each layer stores the coverage-weighted mean of its samples' fields, shaded once. The
+/// normal is the renormalised mean; where the normals disagree, the mean's length ρ < 1 widens the specular lobe
+/// (Toksvig 2005: power s becomes ρs / (ρ + s(1 − ρ))), the filtering an aggregate needs to stand for several
+/// surfaces. IDs are those of the layer's nearest sample. Footprint as [`footprint`] with `count` slots; nothing
+/// is evicted (every covered sample belongs to a layer).
+///
+/// Errors as [`compress`].
+pub fn aggregate(gb: &GBuffer, count: u32) -> Result<Compressed> {
+    let (mut out, depth, slope) = prepare(gb, count, "aggregates")?;
+    let s = gb.samples as usize;
+    let pixels = gb.pixel_count();
+    let mut c =
+        Compressed::empty(gb, StreamingConfig { slots: count, merge: false }, Method::Aggregate, fragment_key(gb));
+    let mut order: Vec<(f32, usize)> = Vec::with_capacity(s);
+    let mut cuts: Vec<(f32, usize)> = Vec::with_capacity(s);
+    for p in 0..pixels {
+        let base = p * s;
+        order.clear();
+        for j in 0..s {
+            if gb.coverage[base + j] {
+                order.push((depth.as_ref().map_or(0.0, |d| d[base + j]), j));
+            }
+        }
+        order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        // The largest gaps (beyond one surface's span) become the cuts between layers, in depth order.
+        cuts.clear();
+        for w in 0..order.len().saturating_sub(1) {
+            let gap = order[w + 1].0 - order[w].0;
+            if gap > 2.0 * slope[p] {
+                cuts.push((gap, w + 1));
+            }
+        }
+        cuts.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        cuts.truncate(count as usize - 1);
+        let mut at: Vec<usize> = cuts.iter().map(|c| c.1).collect();
+        at.sort_unstable();
+        at.push(order.len());
+        c.fragments += order.len() as u64;
+        let mut start = 0;
+        let mut layers: Vec<(u64, Fields)> = Vec::with_capacity(at.len());
+        for &end in &at {
+            if end > start {
+                let members = &order[start..end];
+                let mask = members.iter().fold(0u64, |m, &(_, j)| m | 1 << j);
+                layers.push((mask, Fields::mean(&out, members.iter().map(|&(_, j)| base + j))));
+            }
+            start = end;
+        }
+        write_pixel(gb, &mut out, &mut c, p, &layers, false);
+    }
+    out.zero_background();
+    c.gbuffer = out;
+    Ok(c)
+}
+
+/// Checks `slots` (1..=samples, at most 64 samples) and returns the copy slots are written into (with a position
+/// plane), the view-depth plane and each pixel's depth slope |∂z/∂x| + |∂z/∂y| (0 where unknown).
+fn prepare(gb: &GBuffer, slots: u32, what: &str) -> Result<(GBuffer, Option<Vec<f32>>, Vec<f32>)> {
+    gb.validate()?;
+    let s = gb.samples;
+    if slots == 0 || slots > s {
+        return Err(Error::Argument(format!("{slots} {what} for {s} samples per pixel: 1..={s}")));
+    }
+    if s > 64 {
+        return Err(Error::Argument(format!("MSAA G-buffer compression masks hold 64 samples, not {s}")));
+    }
+    // The one copy: slots are written back into it pixel by pixel (a pixel's slots are read before its samples are
+    // written, and no pixel reads another's samples).
+    let mut out = gb.clone();
+    if out.position.is_none() {
+        out.fill_position_from_depth();
+    }
+    if out.position.is_none() && gb.coverage.iter().any(|&c| c) {
+        return Err(Error::Mismatch(
+            "MSAA G-buffer compression lights its slots: the G-buffer needs positions, or depth with a camera".into(),
+        ));
+    }
+    let depth: Option<Vec<f32>> = detect::depth_plane(&out, Detector::Lauritzen).ok().map(|d| d.into_owned());
+    let slope: Vec<f32> = match &depth {
+        Some(_) => detect::lauritzen::neighbour_gradients(&out)?
+            .iter()
+            .map(|g| {
+                let d = g.x.abs() + g.y.abs();
+                if d.is_finite() {
+                    d
+                } else {
+                    0.0
+                }
+            })
+            .collect(),
+        None => vec![0.0; gb.pixel_count()],
+    };
+    Ok((out, depth, slope))
+}
+
 impl Compressed {
+    fn empty(gb: &GBuffer, config: StreamingConfig, method: Method, key: FragmentKey) -> Self {
+        let pixels = gb.pixel_count();
+        Compressed {
+            config,
+            method,
+            key,
+            slots_per_pixel: vec![0; pixels],
+            fragments: 0,
+            merges: 0,
+            evicted_samples: 0,
+            discarded_pixels: 0,
+            gbuffer: GBuffer::default(),
+            mask: EdgeMask::filled(gb.width, gb.height, gb.samples, 0),
+            scale: vec![1.0; pixels],
+        }
+    }
+
     /// Shading evaluations a GPU pays: one per slot in use.
     #[must_use]
     pub fn evaluations(&self) -> u64 {

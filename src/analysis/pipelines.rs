@@ -11,7 +11,7 @@
 //! `forward-msaa` detector's image); the deferred rows shade what the chosen detector asks. Forward rows need
 //! primitive IDs: without them they are listed with the reason and no numbers.
 
-use crate::analysis::compress::{compress, footprint, FragmentKey, StreamingConfig};
+use crate::analysis::compress::{aggregate, compress, footprint, FragmentKey, Method, StreamingConfig};
 use crate::analysis::forward::{self, ForwardSamples, FragmentLists, QuadShading, Utilisation};
 use crate::analysis::traffic::{bandwidth, Counts};
 use crate::base::mask::EdgeMask;
@@ -59,7 +59,7 @@ pub struct PipelinesConfig {
     /// row's footprint and traffic, and the frame is packed and unpacked with it to check its IDs and depth survive.
     pub visibility_layout: Layout,
     /// Surface slots per pixel of the streaming-compression rows ([`crate::analysis::compress`]); `None`: 1 to 4
-    /// and the sample count ([`default_slots`]); empty: no such rows.
+    /// and the sample count ([`default_slots`]); empty: no compressed rows (nor the aggregates row).
     pub compression_slots: Option<Vec<u32>>,
 }
 
@@ -78,7 +78,9 @@ pub fn default_slots(samples: u32) -> Vec<u32> {
 /// compression, [`crate::analysis::compress`]) and lit from them, against the every-sample reference.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CompressedRow {
-    /// Surface slots per pixel.
+    /// Kerzner & Salvi's streaming slots, or AGAA-style aggregates.
+    pub method: Method,
+    /// Surface slots (or aggregates) per pixel.
     pub slots: u32,
     /// How the pixels' fragments were rebuilt from the dump.
     pub fragments_from: FragmentKey,
@@ -886,25 +888,37 @@ impl Measure<'_> {
 
 impl Measure<'_> {
     /// The compressed-G-buffer rows: the frame compressed into each slot count (merging as Kerzner & Salvi do) and
-    /// lit from the slots. None when the frame has one sample per pixel (nothing to compress).
+    /// lit from the slots, then into 2 AGAA-style aggregates. None when the frame has one sample per pixel (nothing to
+    /// compress).
     fn compressed_rows(&self) -> Result<Vec<CompressedRow>> {
         let (gb, cfg) = (self.gb, self.cfg);
         if gb.samples < 2 {
             return Ok(Vec::new());
         }
         let slots = cfg.compression_slots.clone().unwrap_or_else(|| default_slots(gb.samples));
+        if slots.is_empty() {
+            return Ok(Vec::new());
+        }
         let covered = (gb.len() - gb.background_samples()) as f64;
         let pixels = f64::from(gb.width) * f64::from(gb.height);
         let rc = ResolveConfig { culling: Culling::Tiled, schedule: Schedule::Deferred, ..cfg.resolve };
         let mut rows = Vec::new();
-        for k in slots {
+        let runs = slots.iter().map(|&k| (Method::Streaming, k)).chain(
+            // AGAA's configuration: 2 aggregates per pixel.
+            (gb.samples >= 2).then_some((Method::Aggregate, 2)),
+        );
+        for (method, k) in runs {
             let t = Instant::now();
-            let c = compress(gb, &StreamingConfig { slots: k, merge: true })?;
+            let c = match method {
+                Method::Streaming => compress(gb, &StreamingConfig { slots: k, merge: true })?,
+                Method::Aggregate => aggregate(gb, k)?,
+            };
             let r = c.light(self.lights, &rc)?;
             let ms = t.elapsed().as_secs_f64() * 1e3;
             let f = footprint(cfg.gbuffer_bytes, gb.samples, k);
             self.flip(FlipSlot::Compressed(rows.len()), &r.image);
             rows.push(CompressedRow {
+                method,
                 slots: k,
                 fragments_from: c.key,
                 slot_bytes: f.slot_bytes,

@@ -70,7 +70,7 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     pub single: Option<PathBuf>,
     /// Surface slots per pixel of the compressed-G-buffer rows (Kerzner & Salvi's streaming compression):
-    /// default 1 to 4 and the sample count; `none` for no such rows.
+    /// default 1 to 4 and the sample count (plus a row of 2 AGAA-style aggregates); `none` for no compressed rows.
     #[arg(long, value_name = "LIST|none", value_delimiter = ',')]
     pub slots: Option<Vec<String>>,
     /// Machine-readable output on stdout.

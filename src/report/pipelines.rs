@@ -210,7 +210,8 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
     if let Some(first) = p.compressed.first() {
         let _ = writeln!(
             s,
-            "\n{h} Compressed MSAA G-buffer (Kerzner & Salvi 2014: K surface slots per pixel, one evaluation each)\n\n\
+            "\n{h} Compressed MSAA G-buffer (Kerzner & Salvi 2014's K surface slots per pixel; AGAA-style depth-layer \
+             aggregates, Crassin et al. 2015; one evaluation each)\n\n\
              Fragments rebuilt from the dump's {}; each slot holds the {} fields ({} B) and a coverage word: {} B per \
              slot, plus 8 B per pixel. The full {}× G-buffer takes {} B per pixel.\n",
             match first.fragments_from {
@@ -225,13 +226,17 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
             first.full_bytes_per_pixel
         );
         s.push_str(
-            "| slots | B/pixel | vs full | MB | evaluations | evicted samples | discarded pixels | CPU ms | RMSE | \
-             LDR-FLIP | HDR-FLIP |\n|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n",
+            "| method | slots | B/pixel | vs full | MB | evaluations | evicted samples | discarded pixels | CPU ms | \
+             RMSE | LDR-FLIP | HDR-FLIP |\n|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n",
         );
         for r in &p.compressed {
             let _ = writeln!(
                 s,
-                "| {} | {} | {:.0}% | {:.2} | {} | {:.3}% | {} | {:.1} | {} | {} | {} |",
+                "| {} | {} | {} | {:.0}% | {:.2} | {} | {:.3}% | {} | {:.1} | {} | {} | {} |",
+                match r.method {
+                    crate::analysis::compress::Method::Streaming => "streaming",
+                    crate::analysis::compress::Method::Aggregate => "aggregates",
+                },
                 r.slots,
                 r.bytes_per_pixel,
                 100.0 * f64::from(r.bytes_per_pixel) / f64::from(r.full_bytes_per_pixel.max(1)),
