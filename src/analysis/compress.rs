@@ -286,12 +286,11 @@ pub fn compress(gb: &GBuffer, cfg: &StreamingConfig) -> Result<Compressed> {
     let key = fragment_key(gb);
     let merge_geometry = cfg.merge && depth.is_some() && gb.normal.is_some();
     let k = cfg.slots as usize;
-    let pixels = gb.pixel_count();
     let mut c = Compressed::empty(gb, *cfg, Method::Streaming, key);
     let mut frags: Vec<(u64, Slot)> = Vec::with_capacity(s);
     let mut slots: Vec<Slot> = Vec::with_capacity(k + 1);
     let mut merged: Vec<Fields> = Vec::new();
-    for p in 0..pixels {
+    for (p, &slope) in slope.iter().enumerate() {
         let base = p * s;
         frags.clear();
         slots.clear();
@@ -329,7 +328,7 @@ pub fn compress(gb: &GBuffer, cfg: &StreamingConfig) -> Result<Compressed> {
         let mut discarded = false;
         for &(_, mut f) in frags.iter() {
             c.fragments += 1;
-            f.z = (f.z.0 - slope[p], f.z.1 + slope[p]);
+            f.z = (f.z.0 - slope, f.z.1 + slope);
             f.z_mean = mean_depth(&f, base, &z_of);
             // Merge into the first slot, front to back, that agrees.
             if merge_geometry {
@@ -440,12 +439,11 @@ fn write_pixel(
 pub fn aggregate(gb: &GBuffer, count: u32) -> Result<Compressed> {
     let (mut out, depth, slope) = prepare(gb, count, "aggregates")?;
     let s = gb.samples as usize;
-    let pixels = gb.pixel_count();
     let mut c =
         Compressed::empty(gb, StreamingConfig { slots: count, merge: false }, Method::Aggregate, fragment_key(gb));
     let mut order: Vec<(f32, usize)> = Vec::with_capacity(s);
     let mut cuts: Vec<(f32, usize)> = Vec::with_capacity(s);
-    for p in 0..pixels {
+    for (p, &slope) in slope.iter().enumerate() {
         let base = p * s;
         order.clear();
         for j in 0..s {
@@ -458,7 +456,7 @@ pub fn aggregate(gb: &GBuffer, count: u32) -> Result<Compressed> {
         cuts.clear();
         for w in 0..order.len().saturating_sub(1) {
             let gap = order[w + 1].0 - order[w].0;
-            if gap > 2.0 * slope[p] {
+            if gap > 2.0 * slope {
                 cuts.push((gap, w + 1));
             }
         }
