@@ -40,6 +40,7 @@ use crate::detect::{self, Detector};
 use crate::error::{Error, Result};
 use crate::gbuffer::GBuffer;
 use glam::{Vec2, Vec3};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Bytes per pixel of slot bookkeeping: the slot count and the front-to-back order (two 32-bit words in the
@@ -147,7 +148,25 @@ struct Slot {
     merged: Option<usize>,
 }
 
-/// Float fields of a merged slot (coverage-weighted means), and the IDs of its larger part.
+/// What the compressors read: the input, its positions (the input's plane, or derived from depth), its view depth
+/// and each pixel's depth slope.
+struct Source<'a> {
+    gb: &'a GBuffer,
+    position: &'a [Vec3],
+    depth: Option<&'a [f32]>,
+    slope: &'a [f32],
+}
+
+impl Source<'_> {
+    fn z(&self, i: usize) -> f32 {
+        self.depth.map_or(0.0, |d| d[i])
+    }
+    fn normal(&self, i: usize) -> Vec3 {
+        self.gb.normal.as_ref().map_or(Vec3::ZERO, |n| n[i])
+    }
+}
+
+/// The fields of one slot: one sample's, or the coverage-weighted mean of merged ones (IDs of the larger part).
 #[derive(Clone, Copy, Debug, Default)]
 struct Fields {
     weight: f32,
@@ -160,18 +179,19 @@ struct Fields {
     roughness: f32,
     metallic: f32,
     motion: Vec2,
-    /// Material, object and primitive ID of the larger part's first sample.
+    /// Material, object and primitive ID.
     ids: [u32; 3],
 }
 
 impl Fields {
-    fn of(gb: &GBuffer, i: usize, weight: f32) -> Self {
+    fn of(src: &Source<'_>, i: usize, weight: f32) -> Self {
+        let gb = src.gb;
         let f = |p: &Option<Vec<f32>>| p.as_ref().map_or(0.0, |v| v[i]);
         let v = |p: &Option<Vec<Vec3>>| p.as_ref().map_or(Vec3::ZERO, |v| v[i]);
         Fields {
             weight,
             depth: f(&gb.depth),
-            position: v(&gb.position),
+            position: src.position[i],
             normal: v(&gb.normal),
             albedo: v(&gb.albedo),
             specular: f(&gb.specular),
@@ -185,12 +205,13 @@ impl Fields {
 
     /// The mean of the samples `members` (the first is the nearest: its IDs are kept), the specular power widened
     /// by Toksvig's factor where the normals disagree.
-    fn mean(gb: &GBuffer, members: impl Iterator<Item = usize> + Clone) -> Self {
-        let mut it = members.clone();
+    fn mean(src: &Source<'_>, members: impl Iterator<Item = usize>) -> Self {
+        let mut it = members;
         let first = it.next().expect("a layer has a sample");
-        let mut sum = Fields::of(gb, first, 1.0);
+        let mut sum = Fields::of(src, first, 1.0);
+        let first_normal = sum.normal;
         for i in it {
-            let f = Fields::of(gb, i, 1.0);
+            let f = Fields::of(src, i, 1.0);
             sum.weight += 1.0;
             sum.depth += f.depth;
             sum.position += f.position;
@@ -210,7 +231,7 @@ impl Fields {
             weight: sum.weight,
             depth: sum.depth * inv,
             position: sum.position * inv,
-            normal: mean_normal.normalize_or(Fields::of(gb, first, 1.0).normal),
+            normal: mean_normal.normalize_or(first_normal),
             albedo: sum.albedo * inv,
             specular: sum.specular * inv,
             specular_power: if rho > 0.0 && power > 0.0 { rho * power / (rho + power * (1.0 - rho)) } else { power },
@@ -245,35 +266,267 @@ impl Fields {
             ids: larger.ids,
         }
     }
+}
 
-    /// Writes the fields into sample `i` of `out` (the planes `out` has).
-    fn write(&self, out: &mut GBuffer, i: usize) {
-        let put = |p: &mut Option<Vec<f32>>, x: f32| {
-            if let Some(v) = p.as_mut() {
-                v[i] = x;
-            }
-        };
-        put(&mut out.depth, self.depth);
-        put(&mut out.specular, self.specular);
-        put(&mut out.specular_power, self.specular_power);
-        put(&mut out.roughness, self.roughness);
-        put(&mut out.metallic, self.metallic);
-        for (p, x) in
-            [(&mut out.position, self.position), (&mut out.normal, self.normal), (&mut out.albedo, self.albedo)]
-        {
+/// One row of pixels of the compressed G-buffer being written (each plane the input has, and position).
+struct RowOut<'a> {
+    coverage: &'a mut [bool],
+    depth: Option<&'a mut [f32]>,
+    position: &'a mut [Vec3],
+    normal: Option<&'a mut [Vec3]>,
+    albedo: Option<&'a mut [Vec3]>,
+    specular: Option<&'a mut [f32]>,
+    specular_power: Option<&'a mut [f32]>,
+    roughness: Option<&'a mut [f32]>,
+    metallic: Option<&'a mut [f32]>,
+    motion: Option<&'a mut [Vec2]>,
+    ids: [Option<&'a mut [u32]>; 3],
+    slots: &'a mut [u8],
+    shade_count: &'a mut [u8],
+    scale: &'a mut [f32],
+}
+
+impl RowOut<'_> {
+    /// Writes `f` into sample `i` of the row.
+    fn write(&mut self, f: &Fields, i: usize) {
+        fn put<T: Copy>(p: &mut Option<&mut [T]>, i: usize, x: T) {
             if let Some(v) = p.as_mut() {
                 v[i] = x;
             }
         }
-        if let Some(v) = out.motion.as_mut() {
-            v[i] = self.motion;
-        }
-        for (o, id) in [&mut out.material_id, &mut out.object_id, &mut out.primitive_id].into_iter().zip(self.ids) {
-            if let Some(o) = o.as_mut() {
-                o[i] = id;
-            }
+        put(&mut self.depth, i, f.depth);
+        self.position[i] = f.position;
+        put(&mut self.normal, i, f.normal);
+        put(&mut self.albedo, i, f.albedo);
+        put(&mut self.specular, i, f.specular);
+        put(&mut self.specular_power, i, f.specular_power);
+        put(&mut self.roughness, i, f.roughness);
+        put(&mut self.metallic, i, f.metallic);
+        put(&mut self.motion, i, f.motion);
+        for (o, &id) in self.ids.iter_mut().zip(&f.ids) {
+            put(o, i, id);
         }
     }
+}
+
+/// Splits `plane` (present or not) into `rows` rows.
+fn rows_of<T>(plane: &mut Option<Vec<T>>, row: usize, rows: usize) -> Vec<Option<&mut [T]>> {
+    match plane {
+        Some(v) => v.chunks_mut(row).map(Some).collect(),
+        None => (0..rows).map(|_| None).collect(),
+    }
+}
+
+/// What one pixel's compression counted.
+#[derive(Clone, Copy, Debug, Default)]
+struct Counts {
+    fragments: u64,
+    merges: u64,
+    evicted_samples: u64,
+    discarded_pixels: u64,
+}
+
+impl std::ops::Add for Counts {
+    type Output = Counts;
+    fn add(self, o: Counts) -> Counts {
+        Counts {
+            fragments: self.fragments + o.fragments,
+            merges: self.merges + o.merges,
+            evicted_samples: self.evicted_samples + o.evicted_samples,
+            discarded_pixels: self.discarded_pixels + o.discarded_pixels,
+        }
+    }
+}
+
+/// Runs `pixel` on every pixel of `gb` (rows in parallel) and writes its slots — (coverage mask, fields), and
+/// whether it evicted — into a new G-buffer: samples no slot covers are background (zero), every other sample holds
+/// its slot's fields. `pixel(src, p, slots)` fills `slots` for pixel `p` and returns its counts.
+fn run<S: Default + Send>(
+    gb: &GBuffer,
+    slots: u32,
+    what: &str,
+    config: StreamingConfig,
+    method: Method,
+    pixel: impl Fn(&Source<'_>, usize, &mut S, &mut Vec<(u64, Fields)>) -> (Counts, bool) + Sync,
+) -> Result<Compressed> {
+    gb.validate()?;
+    let s = gb.samples;
+    if slots == 0 || slots > s {
+        return Err(Error::Argument(format!("{slots} {what} for {s} samples per pixel: 1..={s}")));
+    }
+    if s > 64 {
+        return Err(Error::Argument(format!("MSAA G-buffer compression masks hold 64 samples, not {s}")));
+    }
+    // Positions for the lighting pass: the input's, or derived from depth (one plane; the input is not copied).
+    let derived;
+    let position: &[Vec3] = match &gb.position {
+        Some(p) => p,
+        None => {
+            let mut d = gb.shell();
+            d.depth = gb.depth.clone();
+            d.fill_position_from_depth();
+            derived = d.position.ok_or_else(|| {
+                Error::Mismatch(
+                    "MSAA G-buffer compression lights its slots: the G-buffer needs positions, or depth with a camera"
+                        .into(),
+                )
+            })?;
+            &derived
+        }
+    };
+    let depth = detect::depth_plane(gb, Detector::Lauritzen).ok();
+    let slope: Vec<f32> = match &depth {
+        Some(_) => detect::lauritzen::neighbour_gradients(gb)?
+            .iter()
+            .map(|g| {
+                let d = g.x.abs() + g.y.abs();
+                if d.is_finite() {
+                    d
+                } else {
+                    0.0
+                }
+            })
+            .collect(),
+        None => vec![0.0; gb.pixel_count()],
+    };
+    let src = Source { gb, position, depth: depth.as_deref(), slope: &slope };
+
+    // The output: the input's planes (and position), zero-filled, written row by row in parallel.
+    let n = gb.len();
+    let (w, h) = (gb.width as usize, gb.height as usize);
+    let row = w * s as usize;
+    let zeros = |p: &Option<Vec<f32>>| p.as_ref().map(|_| vec![0.0f32; n]);
+    let zeros3 = |p: &Option<Vec<Vec3>>| p.as_ref().map(|_| vec![Vec3::ZERO; n]);
+    let zero_ids = |p: &Option<Vec<u32>>| p.as_ref().map(|_| vec![0u32; n]);
+    let mut out = GBuffer {
+        depth: zeros(&gb.depth),
+        position: Some(vec![Vec3::ZERO; n]),
+        normal: zeros3(&gb.normal),
+        albedo: zeros3(&gb.albedo),
+        specular: zeros(&gb.specular),
+        specular_power: zeros(&gb.specular_power),
+        roughness: zeros(&gb.roughness),
+        metallic: zeros(&gb.metallic),
+        motion: gb.motion.as_ref().map(|_| vec![Vec2::ZERO; n]),
+        material_id: zero_ids(&gb.material_id),
+        object_id: zero_ids(&gb.object_id),
+        primitive_id: zero_ids(&gb.primitive_id),
+        ..gb.shell()
+    };
+    let mut c = Compressed::empty(gb, config, method, fragment_key(gb));
+    let counts = {
+        let GBuffer {
+            coverage,
+            depth,
+            position,
+            normal,
+            albedo,
+            specular,
+            specular_power,
+            roughness,
+            metallic,
+            motion,
+            material_id,
+            object_id,
+            primitive_id,
+            ..
+        } = &mut out;
+        let mut it = (
+            coverage.chunks_mut(row),
+            rows_of(depth, row, h).into_iter(),
+            position.as_mut().expect("set above").chunks_mut(row),
+            rows_of(normal, row, h).into_iter(),
+            rows_of(albedo, row, h).into_iter(),
+            rows_of(specular, row, h).into_iter(),
+            rows_of(specular_power, row, h).into_iter(),
+            rows_of(roughness, row, h).into_iter(),
+            rows_of(metallic, row, h).into_iter(),
+            rows_of(motion, row, h).into_iter(),
+            rows_of(material_id, row, h).into_iter(),
+            rows_of(object_id, row, h).into_iter(),
+            rows_of(primitive_id, row, h).into_iter(),
+            c.slots_per_pixel.chunks_mut(w),
+            c.mask.shade_count.chunks_mut(w),
+            c.scale.chunks_mut(w),
+        );
+        let mut rows = Vec::with_capacity(h);
+        for _ in 0..h {
+            rows.push(RowOut {
+                coverage: it.0.next().expect("h rows"),
+                depth: it.1.next().expect("h rows"),
+                position: it.2.next().expect("h rows"),
+                normal: it.3.next().expect("h rows"),
+                albedo: it.4.next().expect("h rows"),
+                specular: it.5.next().expect("h rows"),
+                specular_power: it.6.next().expect("h rows"),
+                roughness: it.7.next().expect("h rows"),
+                metallic: it.8.next().expect("h rows"),
+                motion: it.9.next().expect("h rows"),
+                ids: [it.10.next().expect("h rows"), it.11.next().expect("h rows"), it.12.next().expect("h rows")],
+                slots: it.13.next().expect("h rows"),
+                shade_count: it.14.next().expect("h rows"),
+                scale: it.15.next().expect("h rows"),
+            });
+        }
+        let su = s as usize;
+        rows.into_par_iter()
+            .enumerate()
+            .map_init(
+                || (S::default(), Vec::new()),
+                |(state, slots), (y, mut o)| {
+                    let mut total = Counts::default();
+                    for x in 0..w {
+                        let p = y * w + x;
+                        slots.clear();
+                        let (counts, discarded) = pixel(&src, p, state, slots);
+                        total = total + counts;
+                        let base = p * su;
+                        let mut kept: u64 = 0;
+                        for (mask, fields) in slots.iter() {
+                            kept |= mask;
+                            for j in 0..su {
+                                if mask >> j & 1 == 1 {
+                                    o.write(fields, x * su + j);
+                                }
+                            }
+                        }
+                        let covered = gb.coverage[base..base + su].iter().filter(|&&c| c).count();
+                        for j in 0..su {
+                            o.coverage[x * su + j] = kept >> j & 1 == 1;
+                        }
+                        let kept_n = kept.count_ones() as usize;
+                        o.slots[x] = slots.len() as u8;
+                        o.shade_count[x] = match slots.len() {
+                            0 => 0,
+                            1 if covered == su && kept_n == su => 1,
+                            _ => su.min(usize::from(u8::MAX)) as u8,
+                        };
+                        if discarded {
+                            total.discarded_pixels += 1;
+                            if kept_n > 0 {
+                                o.scale[x] = covered as f32 / kept_n as f32;
+                            }
+                        }
+                    }
+                    total
+                },
+            )
+            .reduce(Counts::default, |a, b| a + b)
+    };
+    c.fragments = counts.fragments;
+    c.merges = counts.merges;
+    c.evicted_samples = counts.evicted_samples;
+    c.discarded_pixels = counts.discarded_pixels;
+    c.gbuffer = out;
+    Ok(c)
+}
+
+/// Per-thread scratch of [`compress`].
+#[derive(Default)]
+struct StreamScratch {
+    frags: Vec<(u64, Slot)>,
+    slots: Vec<Slot>,
+    merged: Vec<Fields>,
 }
 
 /// Compresses `gb` into at most `cfg.slots` slots per pixel (see the module notes).
@@ -281,22 +534,18 @@ impl Fields {
 /// Errors when `slots` is 0 or above the sample count, when the G-buffer has more than 64 samples, or when no
 /// position can be formed for the lighting pass (no position plane, and no depth with a camera).
 pub fn compress(gb: &GBuffer, cfg: &StreamingConfig) -> Result<Compressed> {
-    let (mut out, depth, slope) = prepare(gb, cfg.slots, "surface slots")?;
-    let s = gb.samples as usize;
     let key = fragment_key(gb);
-    let merge_geometry = cfg.merge && depth.is_some() && gb.normal.is_some();
+    let merge_geometry = cfg.merge && gb.normal.is_some() && detect::depth_plane(gb, Detector::Lauritzen).is_ok();
     let k = cfg.slots as usize;
-    let mut c = Compressed::empty(gb, *cfg, Method::Streaming, key);
-    let mut frags: Vec<(u64, Slot)> = Vec::with_capacity(s);
-    let mut slots: Vec<Slot> = Vec::with_capacity(k + 1);
-    let mut merged: Vec<Fields> = Vec::new();
-    for (p, &slope) in slope.iter().enumerate() {
-        let base = p * s;
+    let s = gb.samples as usize;
+    run(gb, cfg.slots, "surface slots", *cfg, Method::Streaming, |src, p, sc: &mut StreamScratch, out| {
+        let StreamScratch { frags, slots, merged } = sc;
         frags.clear();
         slots.clear();
         merged.clear();
-        let z_of = |i: usize| depth.as_ref().map_or(0.0, |d| d[i]);
-        let n_of = |i: usize| gb.normal.as_ref().map_or(Vec3::ZERO, |n| n[i]);
+        let mut counts = Counts::default();
+        let base = p * s;
+        let slope = src.slope[p];
         // Rebuild the fragments: covered samples grouped by key, each with its mask, first sample and depth range.
         for j in 0..s {
             let i = base + j;
@@ -305,31 +554,28 @@ pub fn compress(gb: &GBuffer, cfg: &StreamingConfig) -> Result<Compressed> {
             }
             let order = order_key(gb, key, i, j);
             let joins = frags.iter().position(|(o, f)| match key {
-                FragmentKey::Geometry => same_geometry(z_of(f.first), n_of(f.first), z_of(i), n_of(i)),
+                FragmentKey::Geometry => same_geometry(src.z(f.first), src.normal(f.first), src.z(i), src.normal(i)),
                 _ => *o == order,
             });
+            let z = src.z(i);
             match joins {
                 Some(f) => {
                     let f = &mut frags[f].1;
                     f.mask |= 1 << j;
-                    let z = z_of(i);
                     f.z = (f.z.0.min(z), f.z.1.max(z));
                 }
-                None => {
-                    let z = z_of(i);
-                    frags.push((
-                        order,
-                        Slot { mask: 1 << j, first: i, z: (z, z), z_mean: z, normal: n_of(i), merged: None },
-                    ));
-                }
+                None => frags.push((
+                    order,
+                    Slot { mask: 1 << j, first: i, z: (z, z), z_mean: z, normal: src.normal(i), merged: None },
+                )),
             }
         }
         frags.sort_by_key(|(o, _)| *o);
         let mut discarded = false;
         for &(_, mut f) in frags.iter() {
-            c.fragments += 1;
+            counts.fragments += 1;
             f.z = (f.z.0 - slope, f.z.1 + slope);
-            f.z_mean = mean_depth(&f, base, &z_of);
+            f.z_mean = mean_depth(f.mask, base, |i| src.z(i));
             // Merge into the first slot, front to back, that agrees.
             if merge_geometry {
                 let target = slots.iter().position(|t| {
@@ -339,16 +585,16 @@ pub fn compress(gb: &GBuffer, cfg: &StreamingConfig) -> Result<Compressed> {
                         && t.normal.dot(f.normal).abs() >= MERGE_DOT
                 });
                 if let Some(t) = target {
-                    c.merges += 1;
+                    counts.merges += 1;
                     let t = &mut slots[t];
                     let a =
-                        t.merged.map_or_else(|| Fields::of(&out, t.first, t.mask.count_ones() as f32), |m| merged[m]);
-                    let b = Fields::of(&out, f.first, f.mask.count_ones() as f32);
+                        t.merged.map_or_else(|| Fields::of(src, t.first, t.mask.count_ones() as f32), |m| merged[m]);
+                    let b = Fields::of(src, f.first, f.mask.count_ones() as f32);
                     let m = Fields::merge(&a, &b);
                     t.mask |= f.mask;
                     t.z = (t.z.0.min(f.z.0), t.z.1.max(f.z.1));
                     t.normal = m.normal;
-                    t.z_mean = m.depth;
+                    t.z_mean = mean_depth(t.mask, base, |i| src.z(i));
                     match t.merged {
                         Some(idx) => merged[idx] = m,
                         None => {
@@ -366,89 +612,39 @@ pub fn compress(gb: &GBuffer, cfg: &StreamingConfig) -> Result<Compressed> {
                 // ties to the farther one.
                 let victim =
                     (0..slots.len()).rev().min_by_key(|&v| slots[v].mask.count_ones()).expect("k + 1 candidates");
-                c.evicted_samples += u64::from(slots[victim].mask.count_ones());
+                counts.evicted_samples += u64::from(slots[victim].mask.count_ones());
                 slots.remove(victim);
                 discarded = true;
             }
         }
-        // Write the slots back per sample (every slot's fields read before any sample is written); evicted
-        // samples become background.
-        let fields: Vec<(u64, Fields)> = slots
-            .iter()
-            .map(|t| (t.mask, t.merged.map_or_else(|| Fields::of(&out, t.first, 0.0), |m| merged[m])))
-            .collect();
-        write_pixel(gb, &mut out, &mut c, p, &fields, discarded);
-    }
-    out.zero_background();
-    c.gbuffer = out;
-    Ok(c)
-}
-
-/// Writes pixel `p`'s slots (coverage mask, fields) into `out`, samples no slot covers becoming background, and
-/// sets the pixel's slot count, mask entry and (when `discarded`) its colour scale in `c`.
-fn write_pixel(
-    gb: &GBuffer,
-    out: &mut GBuffer,
-    c: &mut Compressed,
-    p: usize,
-    slots: &[(u64, Fields)],
-    discarded: bool,
-) {
-    let s = gb.samples as usize;
-    let base = p * s;
-    let mut kept: u64 = 0;
-    for (mask, fields) in slots {
-        kept |= mask;
-        for j in 0..s {
-            if mask >> j & 1 == 1 {
-                fields.write(out, base + j);
-            }
-        }
-    }
-    let covered = gb.coverage[base..base + s].iter().filter(|&&c| c).count();
-    for j in 0..s {
-        if gb.coverage[base + j] && kept >> j & 1 == 0 {
-            out.coverage[base + j] = false;
-        }
-    }
-    let kept_n = kept.count_ones() as usize;
-    c.slots_per_pixel[p] = slots.len() as u8;
-    c.mask.shade_count[p] = match slots.len() {
-        0 => 0,
-        1 if covered == s && kept_n == s => 1,
-        _ => s.min(usize::from(u8::MAX)) as u8,
-    };
-    if discarded {
-        c.discarded_pixels += 1;
-        if kept_n > 0 {
-            c.scale[p] = covered as f32 / kept_n as f32;
-        }
-    }
+        out.extend(
+            slots.iter().map(|t| (t.mask, t.merged.map_or_else(|| Fields::of(src, t.first, 0.0), |m| merged[m]))),
+        );
+        (counts, discarded)
+    })
 }
 
 /// Aggregates in the manner of Crassin et al.'s AGAA (HPG 2015), simulated on a dump: each pixel's covered samples
 /// are split into at most `count` depth layers — sorted by view depth and cut at the largest gaps that exceed the
 /// pixel's depth slope (|∂z/∂x| + |∂z/∂y|, the span one surface covers across a pixel), so a pixel on one surface
-/// keeps one aggregate — and each layer stores the coverage-weighted mean of its samples' fields, shaded once. The
-/// normal is the renormalised mean; where the normals disagree, the mean's length ρ < 1 widens the specular lobe
-/// (Toksvig 2005: power s becomes ρs / (ρ + s(1 − ρ))), the filtering an aggregate needs to stand for several
-/// surfaces. IDs are those of the layer's nearest sample. Footprint as [`footprint`] with `count` slots; nothing
-/// is evicted (every covered sample belongs to a layer).
+/// keeps one aggregate — and each layer stores the mean of its samples' fields, shaded once. The normal is the
+/// renormalised mean; where the normals disagree, the mean's length ρ < 1 widens the specular lobe (Toksvig 2005:
+/// power s becomes ρs / (ρ + s(1 − ρ))), the filtering an aggregate needs to stand for several surfaces. IDs are
+/// those of the layer's nearest sample. Footprint as [`footprint`] with `count` slots; nothing is evicted (every
+/// covered sample belongs to a layer).
 ///
 /// Errors as [`compress`].
 pub fn aggregate(gb: &GBuffer, count: u32) -> Result<Compressed> {
-    let (mut out, depth, slope) = prepare(gb, count, "aggregates")?;
     let s = gb.samples as usize;
-    let mut c =
-        Compressed::empty(gb, StreamingConfig { slots: count, merge: false }, Method::Aggregate, fragment_key(gb));
-    let mut order: Vec<(f32, usize)> = Vec::with_capacity(s);
-    let mut cuts: Vec<(f32, usize)> = Vec::with_capacity(s);
-    for (p, &slope) in slope.iter().enumerate() {
+    let config = StreamingConfig { slots: count, merge: false };
+    type Scratch = (Vec<(f32, usize)>, Vec<(f32, usize)>, Vec<usize>);
+    run(gb, count, "aggregates", config, Method::Aggregate, |src, p, sc: &mut Scratch, out| {
+        let (order, cuts, at) = sc;
         let base = p * s;
         order.clear();
         for j in 0..s {
             if gb.coverage[base + j] {
-                order.push((depth.as_ref().map_or(0.0, |d| d[base + j]), j));
+                order.push((src.z(base + j), j));
             }
         }
         order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
@@ -456,71 +652,27 @@ pub fn aggregate(gb: &GBuffer, count: u32) -> Result<Compressed> {
         cuts.clear();
         for w in 0..order.len().saturating_sub(1) {
             let gap = order[w + 1].0 - order[w].0;
-            if gap > 2.0 * slope {
+            if gap > 2.0 * src.slope[p] {
                 cuts.push((gap, w + 1));
             }
         }
         cuts.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
         cuts.truncate(count as usize - 1);
-        let mut at: Vec<usize> = cuts.iter().map(|c| c.1).collect();
+        at.clear();
+        at.extend(cuts.iter().map(|c| c.1));
         at.sort_unstable();
         at.push(order.len());
-        c.fragments += order.len() as u64;
         let mut start = 0;
-        let mut layers: Vec<(u64, Fields)> = Vec::with_capacity(at.len());
-        for &end in &at {
+        for &end in at.iter() {
             if end > start {
                 let members = &order[start..end];
                 let mask = members.iter().fold(0u64, |m, &(_, j)| m | 1 << j);
-                layers.push((mask, Fields::mean(&out, members.iter().map(|&(_, j)| base + j))));
+                out.push((mask, Fields::mean(src, members.iter().map(|&(_, j)| base + j))));
             }
             start = end;
         }
-        write_pixel(gb, &mut out, &mut c, p, &layers, false);
-    }
-    out.zero_background();
-    c.gbuffer = out;
-    Ok(c)
-}
-
-/// Checks `slots` (1..=samples, at most 64 samples) and returns the copy slots are written into (with a position
-/// plane), the view-depth plane and each pixel's depth slope |∂z/∂x| + |∂z/∂y| (0 where unknown).
-fn prepare(gb: &GBuffer, slots: u32, what: &str) -> Result<(GBuffer, Option<Vec<f32>>, Vec<f32>)> {
-    gb.validate()?;
-    let s = gb.samples;
-    if slots == 0 || slots > s {
-        return Err(Error::Argument(format!("{slots} {what} for {s} samples per pixel: 1..={s}")));
-    }
-    if s > 64 {
-        return Err(Error::Argument(format!("MSAA G-buffer compression masks hold 64 samples, not {s}")));
-    }
-    // The one copy: slots are written back into it pixel by pixel (a pixel's slots are read before its samples are
-    // written, and no pixel reads another's samples).
-    let mut out = gb.clone();
-    if out.position.is_none() {
-        out.fill_position_from_depth();
-    }
-    if out.position.is_none() && gb.coverage.iter().any(|&c| c) {
-        return Err(Error::Mismatch(
-            "MSAA G-buffer compression lights its slots: the G-buffer needs positions, or depth with a camera".into(),
-        ));
-    }
-    let depth: Option<Vec<f32>> = detect::depth_plane(&out, Detector::Lauritzen).ok().map(|d| d.into_owned());
-    let slope: Vec<f32> = match &depth {
-        Some(_) => detect::lauritzen::neighbour_gradients(&out)?
-            .iter()
-            .map(|g| {
-                let d = g.x.abs() + g.y.abs();
-                if d.is_finite() {
-                    d
-                } else {
-                    0.0
-                }
-            })
-            .collect(),
-        None => vec![0.0; gb.pixel_count()],
-    };
-    Ok((out, depth, slope))
+        (Counts { fragments: order.len() as u64, ..Counts::default() }, false)
+    })
 }
 
 impl Compressed {
@@ -601,13 +753,13 @@ fn same_geometry(z0: f32, n0: Vec3, z1: f32, n1: Vec3) -> bool {
     n0.dot(n1).abs() >= MERGE_DOT && (z0 - z1).abs() <= crate::analysis::surfaces::MERGE_DEPTH_RELATIVE * near
 }
 
-/// Mean view depth of a fragment's samples.
-fn mean_depth(f: &Slot, base: usize, z_of: &impl Fn(usize) -> f32) -> f32 {
+/// Mean view depth of the samples of `mask` in the pixel starting at sample `base`.
+fn mean_depth(mask: u64, base: usize, z: impl Fn(usize) -> f32) -> f32 {
     let (mut sum, mut n) = (0.0f32, 0u32);
-    let mut m = f.mask;
+    let mut m = mask;
     while m != 0 {
         let j = m.trailing_zeros() as usize;
-        sum += z_of(base + j);
+        sum += z(base + j);
         n += 1;
         m &= m - 1;
     }
