@@ -218,3 +218,42 @@ fn aggregates_widen_the_specular_lobe_where_normals_disagree() {
     flat.normal = Some(vec![Vec3::Z; 8]);
     assert_eq!(aggregate(&flat, 1).unwrap().gbuffer.specular_power.as_ref().unwrap()[0], 64.0);
 }
+
+#[test]
+fn lighting_strip_by_strip_is_lighting_the_whole_compressed_frame() {
+    use gbuf::analysis::compress::{light_compressed, Method};
+    for scene in [SceneName::Room, SceneName::Stress] {
+        let gb = render(scene, 61, 45, 4).unwrap();
+        let lights = default_lights(scene, &gb);
+        let rc = ResolveConfig::default();
+        for (method, slots) in [(Method::Streaming, 1), (Method::Streaming, 2), (Method::Aggregate, 2)] {
+            let whole = match method {
+                Method::Streaming => compress(&gb, &cfg(slots, true)).unwrap(),
+                Method::Aggregate => gbuf::analysis::compress::aggregate(&gb, slots).unwrap(),
+            };
+            let want = whole.light(&lights, &rc).unwrap();
+            for strip in [1, 7, 16, 64] {
+                let lit = light_compressed(&gb, method, &cfg(slots, true), &lights, &rc, strip).unwrap();
+                let what = format!("{scene:?} {method:?} {slots} slots, strips of {strip}");
+                assert!(
+                    want.image
+                        .rgb
+                        .iter()
+                        .zip(&lit.image.rgb)
+                        .all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)),
+                    "{what}"
+                );
+                assert_eq!(
+                    (lit.evaluations, lit.slot_histogram.clone()),
+                    (whole.evaluations(), whole.slot_histogram()),
+                    "{what}"
+                );
+                assert_eq!(
+                    (lit.fragments, lit.merges, lit.evicted_samples, lit.discarded_pixels),
+                    (whole.fragments, whole.merges, whole.evicted_samples, whole.discarded_pixels),
+                    "{what}"
+                );
+            }
+        }
+    }
+}

@@ -39,9 +39,11 @@ use crate::base::mask::EdgeMask;
 use crate::detect::{self, Detector};
 use crate::error::{Error, Result};
 use crate::gbuffer::GBuffer;
+use crate::image::HdrImage;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 
 /// Bytes per pixel of slot bookkeeping: the slot count and the front-to-back order (two 32-bit words in the
 /// authors' code).
@@ -338,17 +340,17 @@ impl std::ops::Add for Counts {
     }
 }
 
-/// Runs `pixel` on every pixel of `gb` (rows in parallel) and writes its slots — (coverage mask, fields), and
-/// whether it evicted — into a new G-buffer: samples no slot covers are background (zero), every other sample holds
-/// its slot's fields. `pixel(src, p, slots)` fills `slots` for pixel `p` and returns its counts.
-fn run<S: Default + Send>(
-    gb: &GBuffer,
-    slots: u32,
-    what: &str,
-    config: StreamingConfig,
-    method: Method,
-    pixel: impl Fn(&Source<'_>, usize, &mut S, &mut Vec<(u64, Fields)>) -> (Counts, bool) + Sync,
-) -> Result<Compressed> {
+/// The input with what every pixel's compression reads: positions (the input's, or derived from depth: one plane,
+/// the input is not copied), view depth and each pixel's depth slope.
+struct Prepared<'a> {
+    gb: &'a GBuffer,
+    position: Cow<'a, [Vec3]>,
+    depth: Option<Cow<'a, [f32]>>,
+    slope: Vec<f32>,
+}
+
+/// Checks `slots` (1..=samples, at most 64 samples) and derives what [`run_rows`] reads.
+fn prepare<'a>(gb: &'a GBuffer, slots: u32, what: &str) -> Result<Prepared<'a>> {
     gb.validate()?;
     let s = gb.samples;
     if slots == 0 || slots > s {
@@ -358,20 +360,18 @@ fn run<S: Default + Send>(
         return Err(Error::Argument(format!("MSAA G-buffer compression masks hold 64 samples, not {s}")));
     }
     // Positions for the lighting pass: the input's, or derived from depth (one plane; the input is not copied).
-    let derived;
-    let position: &[Vec3] = match &gb.position {
-        Some(p) => p,
+    let position: Cow<'_, [Vec3]> = match &gb.position {
+        Some(p) => Cow::Borrowed(p),
         None => {
             let mut d = gb.shell();
             d.depth = gb.depth.clone();
             d.fill_position_from_depth();
-            derived = d.position.ok_or_else(|| {
+            Cow::Owned(d.position.ok_or_else(|| {
                 Error::Mismatch(
                     "MSAA G-buffer compression lights its slots: the G-buffer needs positions, or depth with a camera"
                         .into(),
                 )
-            })?;
-            &derived
+            })?)
         }
     };
     let depth = detect::depth_plane(gb, Detector::Lauritzen).ok();
@@ -389,11 +389,31 @@ fn run<S: Default + Send>(
             .collect(),
         None => vec![0.0; gb.pixel_count()],
     };
-    let src = Source { gb, position, depth: depth.as_deref(), slope: &slope };
+    Ok(Prepared { gb, position, depth, slope })
+}
 
+/// What compresses one pixel: `pixel(src, p, scratch, slots)` fills `slots` — (coverage mask, fields) — for pixel
+/// `p` (row-major, whole frame) and returns its counts and whether it evicted.
+trait PixelFn<S>: Fn(&Source<'_>, usize, &mut S, &mut Vec<(u64, Fields)>) -> (Counts, bool) + Sync {}
+impl<S, F: Fn(&Source<'_>, usize, &mut S, &mut Vec<(u64, Fields)>) -> (Counts, bool) + Sync> PixelFn<S> for F {}
+
+/// Runs `pixel` on the pixels of rows `rows` (in parallel) and writes their slots into a new G-buffer of those rows
+/// (its `height` the rows'): samples no slot covers are background (zero), every other sample holds its slot's
+/// fields.
+fn run_rows<S: Default + Send>(
+    pre: &Prepared<'_>,
+    rows: std::ops::Range<usize>,
+    config: StreamingConfig,
+    method: Method,
+    pixel: &impl PixelFn<S>,
+) -> Compressed {
+    let gb = pre.gb;
+    let src = Source { gb, position: &pre.position, depth: pre.depth.as_deref(), slope: &pre.slope };
+    let s = gb.samples;
+    let first_row = rows.start;
     // The output: the input's planes (and position), zero-filled, written row by row in parallel.
-    let n = gb.len();
-    let (w, h) = (gb.width as usize, gb.height as usize);
+    let (w, h) = (gb.width as usize, rows.len());
+    let n = w * h * s as usize;
     let row = w * s as usize;
     let zeros = |p: &Option<Vec<f32>>| p.as_ref().map(|_| vec![0.0f32; n]);
     let zeros3 = |p: &Option<Vec<Vec3>>| p.as_ref().map(|_| vec![Vec3::ZERO; n]);
@@ -411,9 +431,16 @@ fn run<S: Default + Send>(
         material_id: zero_ids(&gb.material_id),
         object_id: zero_ids(&gb.object_id),
         primitive_id: zero_ids(&gb.primitive_id),
-        ..gb.shell()
+        coverage: vec![false; n],
+        height: h as u32,
+        width: gb.width,
+        samples: gb.samples,
+        sample_positions: gb.sample_positions.clone(),
+        camera: gb.camera,
+        materials: gb.materials.clone(),
+        ..GBuffer::default()
     };
-    let mut c = Compressed::empty(gb, config, method, fragment_key(gb));
+    let mut c = Compressed::empty(gb.width, h as u32, gb.samples, config, method, fragment_key(gb));
     let counts = {
         let GBuffer {
             coverage,
@@ -476,7 +503,7 @@ fn run<S: Default + Send>(
                 |(state, slots), (y, mut o)| {
                     let mut total = Counts::default();
                     for x in 0..w {
-                        let p = y * w + x;
+                        let p = (first_row + y) * w + x;
                         slots.clear();
                         let (counts, discarded) = pixel(&src, p, state, slots);
                         total = total + counts;
@@ -518,7 +545,7 @@ fn run<S: Default + Send>(
     c.evicted_samples = counts.evicted_samples;
     c.discarded_pixels = counts.discarded_pixels;
     c.gbuffer = out;
-    Ok(c)
+    c
 }
 
 /// Per-thread scratch of [`compress`].
@@ -534,11 +561,17 @@ struct StreamScratch {
 /// Errors when `slots` is 0 or above the sample count, when the G-buffer has more than 64 samples, or when no
 /// position can be formed for the lighting pass (no position plane, and no depth with a camera).
 pub fn compress(gb: &GBuffer, cfg: &StreamingConfig) -> Result<Compressed> {
+    let pre = prepare(gb, cfg.slots, "surface slots")?;
+    Ok(run_rows(&pre, 0..gb.height as usize, *cfg, Method::Streaming, &stream_pixel(gb, cfg)))
+}
+
+/// The streaming compressor of one pixel ([`compress`]).
+fn stream_pixel<'g>(gb: &'g GBuffer, cfg: &StreamingConfig) -> impl PixelFn<StreamScratch> + 'g {
     let key = fragment_key(gb);
     let merge_geometry = cfg.merge && gb.normal.is_some() && detect::depth_plane(gb, Detector::Lauritzen).is_ok();
     let k = cfg.slots as usize;
     let s = gb.samples as usize;
-    run(gb, cfg.slots, "surface slots", *cfg, Method::Streaming, |src, p, sc: &mut StreamScratch, out| {
+    move |src: &Source<'_>, p: usize, sc: &mut StreamScratch, out: &mut Vec<(u64, Fields)>| {
         let StreamScratch { frags, slots, merged } = sc;
         frags.clear();
         slots.clear();
@@ -621,7 +654,7 @@ pub fn compress(gb: &GBuffer, cfg: &StreamingConfig) -> Result<Compressed> {
             slots.iter().map(|t| (t.mask, t.merged.map_or_else(|| Fields::of(src, t.first, 0.0), |m| merged[m]))),
         );
         (counts, discarded)
-    })
+    }
 }
 
 /// Aggregates in the manner of Crassin et al.'s AGAA (HPG 2015), simulated on a dump: each pixel's covered samples
@@ -635,10 +668,18 @@ pub fn compress(gb: &GBuffer, cfg: &StreamingConfig) -> Result<Compressed> {
 ///
 /// Errors as [`compress`].
 pub fn aggregate(gb: &GBuffer, count: u32) -> Result<Compressed> {
-    let s = gb.samples as usize;
+    let pre = prepare(gb, count, "aggregates")?;
     let config = StreamingConfig { slots: count, merge: false };
-    type Scratch = (Vec<(f32, usize)>, Vec<(f32, usize)>, Vec<usize>);
-    run(gb, count, "aggregates", config, Method::Aggregate, |src, p, sc: &mut Scratch, out| {
+    Ok(run_rows(&pre, 0..gb.height as usize, config, Method::Aggregate, &aggregate_pixel(gb, count)))
+}
+
+/// Per-thread scratch of [`aggregate`]: the samples by depth, the cuts, the layer ends.
+type AggregateScratch = (Vec<(f32, usize)>, Vec<(f32, usize)>, Vec<usize>);
+
+/// The aggregate builder of one pixel ([`aggregate`]).
+fn aggregate_pixel(gb: &GBuffer, count: u32) -> impl PixelFn<AggregateScratch> + '_ {
+    let s = gb.samples as usize;
+    move |src: &Source<'_>, p: usize, sc: &mut AggregateScratch, out: &mut Vec<(u64, Fields)>| {
         let (order, cuts, at) = sc;
         let base = p * s;
         order.clear();
@@ -672,12 +713,99 @@ pub fn aggregate(gb: &GBuffer, count: u32) -> Result<Compressed> {
             start = end;
         }
         (Counts { fragments: order.len() as u64, ..Counts::default() }, false)
-    })
+    }
+}
+
+/// Rows per strip of [`light_compressed`]: a strip's compressed G-buffer is a few MB at 1080p (4 tile rows of 16).
+pub const STRIP_ROWS: usize = 64;
+
+/// A compressed frame lit strip by strip ([`light_compressed`]): the image and what the compression counted.
+#[derive(Clone, Debug)]
+pub struct LitCompressed {
+    /// How the pixels' fragments were rebuilt.
+    pub key: FragmentKey,
+    /// The lit image (every discarded pixel's colour rescaled as [`Compressed::light`] does).
+    pub image: HdrImage,
+    /// Shading evaluations: one per slot in use.
+    pub evaluations: u64,
+    /// Pixels by slots in use (0..=slots).
+    pub slot_histogram: Vec<u64>,
+    /// Fragments streamed in.
+    pub fragments: u64,
+    /// Fragments merged into a slot.
+    pub merges: u64,
+    /// Covered samples whose fragment was evicted.
+    pub evicted_samples: u64,
+    /// Pixels that evicted a fragment.
+    pub discarded_pixels: u64,
+}
+
+/// Compresses `gb` ([`compress`] for [`Method::Streaming`], [`aggregate`] with `cfg.slots` layers for
+/// [`Method::Aggregate`]) and lights it, `strip_rows` rows at a time: the same image as compressing the whole frame
+/// and calling [`Compressed::light`] (the resolve reads the slots' positions, so a strip lights as the frame does;
+/// tested), without the whole compressed G-buffer in memory.
+pub fn light_compressed(
+    gb: &GBuffer,
+    method: Method,
+    cfg: &StreamingConfig,
+    lights: &[crate::light::Light],
+    rc: &crate::resolve::ResolveConfig,
+    strip_rows: usize,
+) -> Result<LitCompressed> {
+    match method {
+        Method::Streaming => {
+            let pre = prepare(gb, cfg.slots, "surface slots")?;
+            strips(&pre, *cfg, method, &stream_pixel(gb, cfg), lights, rc, strip_rows)
+        }
+        Method::Aggregate => {
+            let pre = prepare(gb, cfg.slots, "aggregates")?;
+            let config = StreamingConfig { slots: cfg.slots, merge: false };
+            strips(&pre, config, method, &aggregate_pixel(gb, cfg.slots), lights, rc, strip_rows)
+        }
+    }
+}
+
+fn strips<S: Default + Send>(
+    pre: &Prepared<'_>,
+    config: StreamingConfig,
+    method: Method,
+    pixel: &impl PixelFn<S>,
+    lights: &[crate::light::Light],
+    rc: &crate::resolve::ResolveConfig,
+    strip_rows: usize,
+) -> Result<LitCompressed> {
+    let gb = pre.gb;
+    let (w, h) = (gb.width as usize, gb.height as usize);
+    let mut lit = LitCompressed {
+        key: fragment_key(gb),
+        image: HdrImage { width: gb.width, height: gb.height, rgb: vec![Vec3::ZERO; w * h] },
+        evaluations: 0,
+        slot_histogram: vec![0; config.slots as usize + 1],
+        fragments: 0,
+        merges: 0,
+        evicted_samples: 0,
+        discarded_pixels: 0,
+    };
+    let step = strip_rows.max(1);
+    for y0 in (0..h).step_by(step) {
+        let c = run_rows(pre, y0..(y0 + step).min(h), config, method, pixel);
+        let r = c.light(lights, rc)?;
+        lit.image.rgb[y0 * w..y0 * w + r.image.rgb.len()].copy_from_slice(&r.image.rgb);
+        lit.evaluations += c.evaluations();
+        for (a, b) in lit.slot_histogram.iter_mut().zip(c.slot_histogram()) {
+            *a += b;
+        }
+        lit.fragments += c.fragments;
+        lit.merges += c.merges;
+        lit.evicted_samples += c.evicted_samples;
+        lit.discarded_pixels += c.discarded_pixels;
+    }
+    Ok(lit)
 }
 
 impl Compressed {
-    fn empty(gb: &GBuffer, config: StreamingConfig, method: Method, key: FragmentKey) -> Self {
-        let pixels = gb.pixel_count();
+    fn empty(width: u32, height: u32, samples: u32, config: StreamingConfig, method: Method, key: FragmentKey) -> Self {
+        let pixels = width as usize * height as usize;
         Compressed {
             config,
             method,
@@ -688,7 +816,7 @@ impl Compressed {
             evicted_samples: 0,
             discarded_pixels: 0,
             gbuffer: GBuffer::default(),
-            mask: EdgeMask::filled(gb.width, gb.height, gb.samples, 0),
+            mask: EdgeMask::filled(width, height, samples, 0),
             scale: vec![1.0; pixels],
         }
     }

@@ -11,7 +11,7 @@
 //! `forward-msaa` detector's image); the deferred rows shade what the chosen detector asks. Forward rows need
 //! primitive IDs: without them they are listed with the reason and no numbers.
 
-use crate::analysis::compress::{aggregate, compress, footprint, FragmentKey, Method, StreamingConfig};
+use crate::analysis::compress::{footprint, light_compressed, FragmentKey, Method, StreamingConfig, STRIP_ROWS};
 use crate::analysis::forward::{self, ForwardSamples, FragmentLists, QuadShading, Utilisation};
 use crate::analysis::traffic::{bandwidth, Counts};
 use crate::base::mask::EdgeMask;
@@ -909,29 +909,26 @@ impl Measure<'_> {
         );
         for (method, k) in runs {
             let t = Instant::now();
-            let c = match method {
-                Method::Streaming => compress(gb, &StreamingConfig { slots: k, merge: true })?,
-                Method::Aggregate => aggregate(gb, k)?,
-            };
-            let r = c.light(self.lights, &rc)?;
+            let lit =
+                light_compressed(gb, method, &StreamingConfig { slots: k, merge: true }, self.lights, &rc, STRIP_ROWS)?;
             let ms = t.elapsed().as_secs_f64() * 1e3;
             let f = footprint(cfg.gbuffer_bytes, gb.samples, k);
-            self.flip(FlipSlot::Compressed(rows.len()), &r.image);
+            self.flip(FlipSlot::Compressed(rows.len()), &lit.image);
             rows.push(CompressedRow {
                 method,
                 slots: k,
-                fragments_from: c.key,
+                fragments_from: lit.key,
                 slot_bytes: f.slot_bytes,
                 bytes_per_pixel: f.compressed_bytes_per_pixel,
                 full_bytes_per_pixel: f.full_bytes_per_pixel,
                 footprint_mb: f64::from(f.compressed_bytes_per_pixel) * pixels / 1e6,
-                evaluations: c.evaluations(),
-                slot_histogram: c.slot_histogram(),
-                merges: c.merges,
-                evicted_fraction: if covered > 0.0 { c.evicted_samples as f64 / covered } else { 0.0 },
-                discarded_pixels: c.discarded_pixels,
+                evaluations: lit.evaluations,
+                slot_histogram: lit.slot_histogram,
+                merges: lit.merges,
+                evicted_fraction: if covered > 0.0 { lit.evicted_samples as f64 / covered } else { 0.0 },
+                discarded_pixels: lit.discarded_pixels,
                 ms,
-                error: self.err(&r.image),
+                error: self.err(&lit.image),
             });
         }
         Ok(rows)
