@@ -438,7 +438,6 @@ fn run_rows<S: Default + Send>(
         sample_positions: gb.sample_positions.clone(),
         camera: gb.camera,
         materials: gb.materials.clone(),
-        ..GBuffer::default()
     };
     let mut c = Compressed::empty(gb.width, h as u32, gb.samples, config, method, fragment_key(gb));
     let counts = {
