@@ -132,6 +132,28 @@ fn report_on_a_canonical_dump_and_bad_input() {
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("minimal-8") && text.contains("report.md"), "{text}");
     assert!(out.join("report.json").is_file());
+    // The worst layouts' error maps as float EXRs beside the report, linked from report.md: their largest values
+    // are the rows' largest errors.
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    let mut seen = 0;
+    for layout in ["minimal-8", "lauritzen-15"] {
+        let file = format!("error_maps_{}.exr", layout.replace('-', "_"));
+        let Ok(raw) = gbuf::io::exr::read_raw(&out.join(&file), &Default::default()) else { continue };
+        seen += 1;
+        assert!(md.contains(&format!("[{file}]({file})")), "report.md links {file}");
+        let row = json["rows"].as_array().unwrap().iter().find(|r| r["layout"] == layout).unwrap();
+        for (channel, key) in
+            [("normal_deg", "normal_max_deg"), ("depth_rel", "depth_rel_max"), ("albedo_abs", "albedo_max_abs")]
+        {
+            let c = raw.channels.iter().find(|c| c.name == channel).unwrap_or_else(|| panic!("{file}: {channel}"));
+            let gbuf::io::raw::RawData::F32(v) = &c.data else { panic!("{file}: {channel} is not f32") };
+            let max = v.iter().copied().filter(|x| !x.is_nan()).fold(0.0f32, f32::max) as f64;
+            let want = row[key].as_f64().unwrap();
+            assert!((max - want).abs() <= 1e-3 * want.abs() + 1e-9, "{file} {channel}: max {max}, row {want}");
+        }
+    }
+    assert!(seen >= 1, "no error map EXR in {:?}", std::fs::read_dir(&out).unwrap().collect::<Vec<_>>());
 
     // Garbage input: exit 1 with the file named, no panic.
     let bad = dir.path().join("bad.exr");

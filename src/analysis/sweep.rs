@@ -163,7 +163,18 @@ fn error_maps_into(reference: &GBuffer, test: &GBuffer, first_pixel: usize, maps
     let base = first_pixel * s;
     if let (Some(a), Some(b)) = (reference.normal.as_deref(), test.normal.as_deref()) {
         per_pixel(test, map(&mut maps.normal_deg, n, px.clone()), |i| {
-            a[base + i].dot(b[i]).clamp(-1.0, 1.0).acos().to_degrees()
+            // 2·atan2(|a−b|, |a+b|) of the unit vectors: exact for small angles, where acos of the dot product
+            // loses ~0.02° to f32 rounding (the rows' angles come from measure::gbuffer::angle_deg, in f64).
+            let (u, v) = (a[base + i].normalize_or_zero(), b[i].normalize_or_zero());
+            if u == glam::Vec3::ZERO || v == glam::Vec3::ZERO {
+                if u == v {
+                    0.0
+                } else {
+                    180.0
+                }
+            } else {
+                (2.0 * (u - v).length().atan2((u + v).length())).to_degrees()
+            }
         });
     }
     if let (Some(a), Some(b)) = (reference.depth.as_deref(), test.depth.as_deref()) {

@@ -442,6 +442,12 @@ pub fn write_raw(path: &Path, image: &RawImage) -> Result<()> {
     write_raw_with(path, image, WriteCompression::Zip)
 }
 
+/// The ZIP-compressed EXR file of `image` as bytes, as [`write_raw`] writes it (`name` names it in errors): for
+/// outputs collected before they are written, such as a report's attachments.
+pub fn raw_to_bytes(name: &Path, image: &RawImage) -> Result<Vec<u8>> {
+    super::exr_write::to_bytes(name, image, super::exr_write::Compression::Zip)
+}
+
 /// [`write_raw`] with the compression given. ZIP and NONE go through gbuf's own block writer (`io::exr_write`:
 /// parallel zlib-rs, blocks written as they are made); PIZ and RLE through the exr crate's.
 pub fn write_raw_with(path: &Path, image: &RawImage, compression: WriteCompression) -> Result<()> {

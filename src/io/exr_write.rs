@@ -109,6 +109,17 @@ fn latin1(path: &Path, s: &str, what: &str) -> Result<Vec<u8>> {
 
 /// Writes `image` at `path` (atomically: a temporary file, then a rename) with `compression`.
 pub(crate) fn write(path: &Path, image: &RawImage, compression: Compression) -> Result<()> {
+    encode(Target::File(path), path, image, compression)
+}
+
+/// The EXR file of `image` as bytes (`name` names it in errors).
+pub(crate) fn to_bytes(name: &Path, image: &RawImage, compression: Compression) -> Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    encode(Target::Memory(&mut bytes), name, image, compression)?;
+    Ok(bytes)
+}
+
+fn encode(target: Target<'_>, path: &Path, image: &RawImage, compression: Compression) -> Result<()> {
     let (width, height) = (image.width as usize, image.height as usize);
     if width == 0 || height == 0 || i32::try_from(width).is_err() || i32::try_from(height).is_err() {
         return Err(Error::invalid(path, format!("cannot write a {width}×{height} EXR image")));
@@ -141,9 +152,51 @@ pub(crate) fn write(path: &Path, image: &RawImage, compression: Compression) -> 
     let block_bytes = lines * line_bytes;
     let group = (4 * threads).max(GROUP_BYTES / block_bytes.max(1)).min(blocks);
     let mut buf = vec![0u8; group * block_bytes];
-    crate::util::write_atomic(path, |file| {
-        let mut out = std::io::BufWriter::with_capacity(1 << 20, file);
-        out.write_all(&header)?;
+    let geometry = Blocks { width, height, lines, blocks, block_bytes, group, compression };
+    match target {
+        Target::File(path) => {
+            crate::util::write_atomic(path, |file| emit(file, &header, &channels, &geometry, &mut buf))
+        }
+        Target::Memory(bytes) => {
+            let mut cursor = std::io::Cursor::new(std::mem::take(bytes));
+            emit(&mut cursor, &header, &channels, &geometry, &mut buf).map_err(|e| Error::io(path, e))?;
+            *bytes = cursor.into_inner();
+            Ok(())
+        }
+    }
+}
+
+/// Where [`encode`] puts the file.
+enum Target<'a> {
+    /// A file, written atomically.
+    File(&'a Path),
+    /// Bytes in memory.
+    Memory(&'a mut Vec<u8>),
+}
+
+/// The block geometry of one image.
+struct Blocks {
+    width: usize,
+    height: usize,
+    lines: usize,
+    blocks: usize,
+    block_bytes: usize,
+    group: usize,
+    compression: Compression,
+}
+
+/// Writes the header, the offset table and the blocks to `file`, then the table's offsets.
+fn emit<W: Write + Seek>(
+    file: &mut W,
+    header: &[u8],
+    channels: &[Channel<'_>],
+    g: &Blocks,
+    buf: &mut [u8],
+) -> std::io::Result<()> {
+    let Blocks { width, height, lines, blocks, block_bytes, group, compression } = *g;
+    {
+        let mut out = std::io::BufWriter::with_capacity(1 << 20, &mut *file);
+        out.write_all(header)?;
         let table_at = header.len() as u64;
         out.write_all(&vec![0u8; 8 * blocks])?;
         let mut at = table_at + 8 * blocks as u64;
@@ -159,7 +212,7 @@ pub(crate) fn write(path: &Path, image: &RawImage, compression: Compression) -> 
                     let rows = lines.min(height - y0);
                     let mut off = 0;
                     for y in y0..y0 + rows {
-                        for c in &channels {
+                        for c in channels {
                             let len = c.bytes_per_sample() * width;
                             c.put(y * width, width, &mut block[off..off + len]);
                             off += len;
@@ -184,11 +237,13 @@ pub(crate) fn write(path: &Path, image: &RawImage, compression: Compression) -> 
                 at += 8 + data.len() as u64;
             }
         }
-        let file = out.into_inner().map_err(std::io::IntoInnerError::into_error)?;
+        out.flush()?;
+        drop(out);
         file.seek(SeekFrom::Start(table_at))?;
         let table: Vec<u8> = offsets.iter().flat_map(|o| o.to_le_bytes()).collect();
-        file.write_all(&table)
-    })
+        file.write_all(&table)?;
+    }
+    Ok(())
 }
 
 /// A block made: its first line, its raw bytes, and its ZIP bytes when they are smaller.

@@ -9,6 +9,7 @@ use crate::analysis::sweep::SweepOutput;
 use crate::base::mask::EdgeMask;
 use crate::error::Result;
 use crate::gbuffer::GBuffer;
+use crate::io::raw::{RawChannel, RawData, RawImage};
 use crate::report::format::Attachment;
 use crate::report::plot::{self, PlotPoint, ScatterPlot};
 use image::{Rgb, RgbImage};
@@ -229,6 +230,32 @@ pub fn figures(
     for (name, _) in worst.iter().take(WORST_LAYOUTS) {
         let Some(m) = out.maps.iter().find(|m| m.layout == *name) else { continue };
         let slug: String = name.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
+        // The same maps as floats, one channel each, for tev or any EXR viewer (NaN = background).
+        let channels: Vec<RawChannel> = [
+            ("normal_deg", &m.normal_deg),
+            ("depth_rel", &m.depth_rel),
+            ("albedo_abs", &m.albedo_abs),
+            ("image_abs", &m.image_abs),
+        ]
+        .into_iter()
+        .filter_map(|(c, v)| v.as_ref().map(|v| RawChannel { name: c.into(), data: RawData::F32(v.clone()) }))
+        .collect();
+        if !channels.is_empty() {
+            let file = format!("{prefix}error_maps_{slug}.exr");
+            let names: Vec<String> = channels.iter().map(|c| c.name.clone()).collect();
+            let raw = RawImage { width: gb.width, height: gb.height, channels, ..Default::default() };
+            files.push(Attachment {
+                name: file.clone(),
+                bytes: crate::io::exr::raw_to_bytes(std::path::Path::new(&file), &raw)?,
+            });
+            figs.push(Figure {
+                file,
+                caption: format!(
+                    "{name}: the per-pixel error maps as floats (channels {}; NaN = background), for tev",
+                    names.join(", ")
+                ),
+            });
+        }
         for (what, unit, map) in [
             ("normal", "degrees", &m.normal_deg),
             ("depth", "relative", &m.depth_rel),

@@ -407,8 +407,15 @@ pub fn to_markdown(rep: &Report) -> String {
     }
     if !rep.figures.is_empty() {
         s.push_str("\n## Figures\n\n");
-        for f in &rep.figures {
+        for f in rep.figures.iter().filter(|f| !f.file.ends_with(".exr")) {
             let _ = writeln!(s, "![{}]({})\n\n*{}*\n", f.caption, f.file, f.caption);
+        }
+        let data: Vec<_> = rep.figures.iter().filter(|f| f.file.ends_with(".exr")).collect();
+        if !data.is_empty() {
+            s.push_str("\n### Float error maps (EXR, beside this file)\n\n");
+            for f in data {
+                let _ = writeln!(s, "- [{}]({}): {}", f.file, f.file, f.caption);
+            }
         }
     }
     s.push_str(
