@@ -114,6 +114,7 @@ pub fn run_frame(
                     "Anti-aliasing: the {w}×{h} crop at ({x}, {y}) where no AA errs most, under the reference, no AA, \
                      MLAA, adaptive MSAA per detector and SSAA"
                 ),
+                against: None,
             });
         }
     }

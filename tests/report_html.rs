@@ -39,7 +39,13 @@ fn the_report_page_loads_in_chromium_without_a_console_message_and_renders() {
     }
     let md = std::fs::read_to_string(dir.path().join("r/report.md")).unwrap();
     let figures = md.lines().filter(|l| l.starts_with("![")).count();
-    assert!(figures >= 3 && html.matches("<figure>").count() == figures, "every figure of report.md is inline");
+    let ab = md.lines().filter(|l| l.starts_with("![A/B: ")).count();
+    assert!(
+        figures >= 3 && html.matches("<figure>").count() + html.matches("<figure class=\"ab\">").count() == figures,
+        "every figure of report.md is inline"
+    );
+    // One A/B view per layout of the sweep (8 built-ins), each with its two images and a slider.
+    assert_eq!((ab, html.matches("<figure class=\"ab\">").count()), (8, 8));
     assert!(!html.contains("not in the report"), "no figure is missing");
     if !support::tool_has("chromium") {
         return;
@@ -50,6 +56,8 @@ fn the_report_page_loads_in_chromium_without_a_console_message_and_renders() {
     let dom = String::from_utf8_lossy(&o.stdout);
     let tables = html.matches("<table>").count();
     assert!(tables >= 3 && dom.contains(&format!("data-ready=\"{tables}\"")), "the page's script did not finish");
+    assert!(dom.contains("data-ab=\"8\""), "the A/B views were not set up");
+    assert!(dom.contains("class=\"ab-label\">fat_20 | reference<"), "the A/B labels are set by the script");
     // No console message (script errors and refused requests are logged there), and a rendered screenshot.
     let shot = dir.path().join("shot.png");
     let o = chromium(

@@ -16,6 +16,9 @@ pub struct Figure {
     pub file: String,
     /// One-line caption.
     pub caption: String,
+    /// The image this one is shown against (an A/B pair: the report page flickers or wipes between them).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub against: Option<String>,
 }
 
 /// One analysed frame (dump) of a report: what it is and what was measured on it apart from the rows.

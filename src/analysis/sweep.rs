@@ -102,6 +102,11 @@ pub struct SweepOutput {
     pub exact: Vec<Option<HdrImage>>,
     /// The LDR-FLIP map of the layout with the largest layout FLIP (first detector), with its name.
     pub worst_flip: Option<(String, FlipMap)>,
+    /// Per layout (first detector), its lit image as LDR-FLIP sees it on the display (tone-mapped 8-bit sRGB,
+    /// interleaved RGB): the report's A/B views. Empty without FLIP.
+    pub shown: Vec<(String, Vec<u8>)>,
+    /// The reference as displayed the same way (when `shown` is not empty).
+    pub reference_shown: Option<Vec<u8>>,
     /// Wall time of the sweep in seconds.
     pub seconds: f64,
     /// Wall time by kind of stage (`reference`, `detectors on the exact G-buffer`, `pack/unpack`, `detect`,
@@ -299,6 +304,7 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
     let mut masks = Vec::new();
     let mut lights_per_pixel = None;
     let mut worst_flip: Option<(String, FlipMap)> = None;
+    let mut shown: Vec<(String, Vec<u8>)> = Vec::new();
     let mut pending: Vec<PendingFlip> = Vec::new();
     // Layouts keep the coverage: one count of covered samples serves every row's shading fraction.
     let covered = detect::covered_per_pixel(gb);
@@ -493,15 +499,16 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
         drop(prepared);
         if pending.len() >= FLIP_BATCH {
             progress(done, total, Some(Stage::Flip), None);
-            flush_flip(&mut pending, &mut rows, &reference, &exact, &cfg.viewing, &mut worst_flip);
+            flush_flip(&mut pending, &mut rows, &reference, &exact, &cfg.viewing, &mut worst_flip, &mut shown);
         }
     }
     if !pending.is_empty() {
         progress(done, total, Some(Stage::Flip), None);
-        flush_flip(&mut pending, &mut rows, &reference, &exact, &cfg.viewing, &mut worst_flip);
+        flush_flip(&mut pending, &mut rows, &reference, &exact, &cfg.viewing, &mut worst_flip, &mut shown);
     }
     progress(total, total, None, None);
     mark_pareto(&mut rows);
+    let reference_shown = (!shown.is_empty()).then(|| reference.to_srgb8(cfg.viewing.tone()));
     Ok(SweepOutput {
         rows,
         reference,
@@ -512,6 +519,8 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
         detectors,
         exact,
         worst_flip,
+        reference_shown,
+        shown,
         seconds: start.elapsed().as_secs_f64(),
         stage_seconds: clock.seconds,
     })
@@ -605,7 +614,11 @@ fn flush_flip(
     exact: &[Option<HdrImage>],
     viewing: &Viewing,
     worst: &mut Option<(String, FlipMap)>,
+    shown: &mut Vec<(String, Vec<u8>)>,
 ) {
+    for p in pending.iter().filter(|p| p.decisive) {
+        shown.push((rows[p.row].layout.clone(), p.image.to_srgb8(viewing.tone())));
+    }
     let set = |e: &mut Option<ErrorSet>, f: Option<(FlipMap, f64)>| -> Option<FlipMap> {
         let (e, (map, hdr)) = (e.as_mut()?, f?);
         e.flip_ldr = Some(map.mean);

@@ -127,6 +127,7 @@ fn plot_pair(
                 "Layout error{over} against {what}, one point per layout (its best detector); the Pareto front in red \
                  (SVG: {stem}.svg)"
             ),
+            against: None,
         });
         files.push(Attachment { name: format!("{stem}.svg"), bytes: p.to_svg(w, h)?.into_bytes() });
     }
@@ -174,7 +175,7 @@ pub fn figures(
      -> Result<()> {
         let name = format!("{prefix}{name}");
         files.push(Attachment { name: name.clone(), bytes: crate::base::picture::png_bytes(&fit(img))? });
-        figs.push(Figure { file: name, caption });
+        figs.push(Figure { file: name, caption, against: None });
         Ok(())
     };
     if with_plots {
@@ -200,6 +201,51 @@ pub fn figures(
         &mut files,
         &mut figs,
     )?;
+    // A/B views: each layout's displayed image against the reference's, on the crop where the worst layout's FLIP
+    // is largest (the report page flickers between them on a click and wipes with a slider).
+    if let Some(reference) = out.reference_shown.as_ref().filter(|_| !out.shown.is_empty()) {
+        let (w, h) = (out.reference.width, out.reference.height);
+        let (cw, ch) = (w.min(AB_CROP[0]), h.min(AB_CROP[1]));
+        let (x0, y0) = match &out.worst_flip {
+            Some((_, map)) if map.values.len() == (w * h) as usize => busiest_window(&map.values, w, h, cw, ch),
+            _ => ((w - cw) / 2, (h - ch) / 2),
+        };
+        let zoom = 2;
+        let crop = |rgb: &[u8]| -> RgbImage {
+            let mut img = RgbImage::new(cw * zoom, ch * zoom);
+            for (x, y, px) in img.enumerate_pixels_mut() {
+                let i = 3 * (((y0 + y / zoom) * w + x0 + x / zoom) as usize);
+                *px = image::Rgb([rgb[i], rgb[i + 1], rgb[i + 2]]);
+            }
+            img
+        };
+        let ab_reference = format!("{prefix}ab_reference.png");
+        png(
+            "ab_reference.png",
+            crop(reference),
+            format!(
+                "The reference, {cw}×{ch} pixels at ({x0}, {y0}) magnified {zoom}×: where the A/B views below look"
+            ),
+            &mut files,
+            &mut figs,
+        )?;
+        for (layout, rgb) in &out.shown {
+            if rgb.len() != reference.len() {
+                continue;
+            }
+            let slug: String = layout.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
+            let file = format!("{prefix}ab_{slug}.png");
+            files.push(Attachment { name: file.clone(), bytes: crate::base::picture::png_bytes(&crop(rgb))? });
+            figs.push(Figure {
+                file,
+                caption: format!(
+                    "A/B: {layout} (lit with the first detector) against the reference, same crop (the page: click to \
+                     flicker, drag the slider to wipe)"
+                ),
+                against: Some(ab_reference.clone()),
+            });
+        }
+    }
     if let Some((name, map)) = &out.worst_flip {
         let img =
             RgbImage::from_raw(map.width as u32, map.height as u32, crate::measure::flip::flip_map_to_magma_rgb8(map))
@@ -254,6 +300,7 @@ pub fn figures(
                     "{name}: the per-pixel error maps as floats (channels {}; NaN = background), for tev",
                     names.join(", ")
                 ),
+                against: None,
             });
         }
         for (what, unit, map) in [
@@ -296,6 +343,38 @@ pub fn figures(
     }
     Ok((files, figs))
 }
+/// The largest crop of the A/B views (before magnification).
+const AB_CROP: [u32; 2] = [320, 180];
+
+/// The top-left corner of the `cw × ch` window of `values` (a `w × h` map) with the largest sum, on a grid of 8
+/// pixels (a summed-area table).
+fn busiest_window(values: &[f32], w: u32, h: u32, cw: u32, ch: u32) -> (u32, u32) {
+    let (wu, hu) = (w as usize, h as usize);
+    let mut sat = vec![0.0f64; (wu + 1) * (hu + 1)];
+    for y in 0..hu {
+        let mut row = 0.0f64;
+        for x in 0..wu {
+            let v = values[y * wu + x];
+            row += if v.is_finite() { f64::from(v) } else { 0.0 };
+            sat[(y + 1) * (wu + 1) + x + 1] = sat[y * (wu + 1) + x + 1] + row;
+        }
+    }
+    let sum = |x: u32, y: u32| {
+        let (x0, y0, x1, y1) = (x as usize, y as usize, (x + cw) as usize, (y + ch) as usize);
+        sat[y1 * (wu + 1) + x1] - sat[y0 * (wu + 1) + x1] - sat[y1 * (wu + 1) + x0] + sat[y0 * (wu + 1) + x0]
+    };
+    let mut best = (0, 0, f64::NEG_INFINITY);
+    for y in (0..=h - ch).step_by(8).chain(std::iter::once(h - ch)) {
+        for x in (0..=w - cw).step_by(8).chain(std::iter::once(w - cw)) {
+            let s = sum(x, y);
+            if s > best.2 {
+                best = (x, y, s);
+            }
+        }
+    }
+    (best.0, best.1)
+}
+
 /// The heatmap of how many surfaces each pixel holds (by identity when the frame has IDs, else by geometry; grey
 /// where no sample is covered): where MSAA G-buffer compression would keep more than one surface. `None` for a
 /// 1-sample frame or one without IDs and geometry.
@@ -320,7 +399,7 @@ pub fn surfaces_figure(
     );
     Ok(Some((
         Attachment { name: name.clone(), bytes: crate::base::picture::png_bytes(&img)? },
-        Figure { file: name, caption },
+        Figure { file: name, caption, against: None },
     )))
 }
 
@@ -350,6 +429,7 @@ pub fn shading_figures(
                 "Shading computations per pixel, {what}{} (same scale, top = {max})",
                 if stem == "deferred" { format!(" with `{detector}`") } else { String::new() }
             ),
+            against: None,
         });
     }
     Ok((files, figs))

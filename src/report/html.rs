@@ -27,6 +27,12 @@ tr:hover td { background: #fffbe6; }
 input.filter { margin: .3em 0; padding: .2em .4em; width: 20em; }
 figure { margin: 1em 0; } figure img, figure svg { max-width: 100%; height: auto; border: 1px solid #eee; }
 figcaption { font-size: 13px; color: #555; }
+.ab-view { position: relative; display: inline-block; cursor: pointer; line-height: 0; }
+.ab-view img { display: block; max-width: 100%; image-rendering: pixelated; }
+.ab-view img.ab-a { position: absolute; left: 0; top: 0; clip-path: inset(0 50% 0 0); }
+.ab-label { position: absolute; left: 4px; top: 4px; font: 12px/1.3 system-ui, sans-serif; color: #fff;
+  background: rgba(0,0,0,.6); padding: 0 .3em; border-radius: 3px; }
+input.ab-wipe { display: block; width: 20em; }
 ";
 
 /// Sorting and filtering, in plain JavaScript (no library, no request).
@@ -64,7 +70,24 @@ const SCRIPT: &str = r"
       });
     }
   });
+  document.querySelectorAll('figure.ab').forEach(function (fig) {
+    var view = fig.querySelector('.ab-view'), a = fig.querySelector('img.ab-a'), b = fig.querySelector('img.ab-b');
+    var label = fig.querySelector('.ab-label'), wipe = fig.querySelector('input.ab-wipe'), timer = null;
+    function show(v) {
+      a.style.clipPath = 'inset(0 ' + (100 - v) + '% 0 0)';
+      label.textContent = v >= 100 ? a.alt : v <= 0 ? b.alt : a.alt + ' | ' + b.alt;
+    }
+    wipe.addEventListener('input', function () { show(+wipe.value); });
+    view.addEventListener('click', function () {
+      if (timer) { clearInterval(timer); timer = null; show(+wipe.value); return; }
+      var on = true;
+      timer = setInterval(function () { on = !on; show(on ? 100 : 0); }, 500);
+      show(100);
+    });
+    show(+wipe.value);
+  });
   document.body.setAttribute('data-ready', String(document.querySelectorAll('table').length));
+  document.body.setAttribute('data-ab', String(document.querySelectorAll('figure.ab .ab-label').length));
 })();
 ";
 
@@ -154,6 +177,36 @@ fn figure(alt: &str, file: &str, files: &[Attachment]) -> String {
     format!("<figure>{body}<figcaption>{}</figcaption></figure>\n", inline(alt))
 }
 
+/// An A/B view: image `a` over image `b`, the same size; a click flickers between them (FLIP's own way to compare),
+/// the slider wipes from one to the other.
+fn ab_figure(alt: &str, a: &str, b: &str, files: &[Attachment]) -> String {
+    let uri = |name: &str| {
+        files
+            .iter()
+            .find(|f| f.name == name && name.ends_with(".png"))
+            .map(|f| format!("data:image/png;base64,{}", base64::engine::general_purpose::STANDARD.encode(&f.bytes)))
+    };
+    let (Some(ua), Some(ub)) = (uri(a), uri(b)) else {
+        return format!("<p>(A/B view {} against {} not in the report)</p>\n", escape(a), escape(b));
+    };
+    format!(
+        "<figure class=\"ab\"><div class=\"ab-view\" tabindex=\"0\" title=\"click: flicker\">\
+         <img class=\"ab-b\" alt=\"{b}\" src=\"{ub}\"><img class=\"ab-a\" alt=\"{a}\" src=\"{ua}\">\
+         <span class=\"ab-label\"></span></div>\
+         <input class=\"ab-wipe\" type=\"range\" min=\"0\" max=\"100\" value=\"50\" aria-label=\"wipe {a} against {b}\">\
+         <figcaption>{}</figcaption></figure>\n",
+        inline(alt),
+        a = escape(&label(a)),
+        b = escape(&label(b)),
+    )
+}
+
+/// What an A/B image is called on the page: its file name after `ab_`, without `.png` (`ab_fat_20.png`: `fat_20`).
+fn label(file: &str) -> String {
+    let stem = file.strip_suffix(".png").unwrap_or(file);
+    stem.rsplit_once("ab_").map_or(stem, |(_, s)| s).to_string()
+}
+
 /// The report page from its Markdown and its attachments.
 #[must_use]
 pub fn to_html(markdown: &str, files: &[Attachment]) -> String {
@@ -232,8 +285,11 @@ pub fn to_html(markdown: &str, files: &[Attachment]) -> String {
         } else if let Some(rest) = t.strip_prefix("![") {
             flush(&mut para, &mut o);
             if let Some((alt, after)) = rest.split_once("](") {
-                let file = after.trim_end_matches(')');
-                o.push_str(&figure(alt, file, files));
+                let target = after.trim_end_matches(')');
+                match target.split_once(" \"") {
+                    Some((file, b)) => o.push_str(&ab_figure(alt, file, b.trim_end_matches('"'), files)),
+                    None => o.push_str(&figure(alt, target, files)),
+                }
             }
             i += 1;
         } else if t.starts_with("- ") || t.starts_with("* ") {
@@ -269,6 +325,15 @@ mod tests {
         assert!(!h.contains("https://"), "no outside link or request");
         assert!(h.contains("<td>x &lt;y&gt;</td><td class=\"num\">1.5</td>"), "{h}");
         assert!(h.contains("src=\"data:image/png;base64,iVBORw==\""), "{h}");
+        // An A/B pair: one figure with both images, the slider and the label.
+        let ab = to_html(
+            "![A against B](a.png \"b.png\")\n",
+            &[Attachment { name: "a.png".into(), bytes: vec![1] }, Attachment { name: "b.png".into(), bytes: vec![2] }],
+        );
+        assert!(ab.contains("<figure class=\"ab\">") && ab.contains("class=\"ab-wipe\""), "{ab}");
+        assert!(ab.contains("alt=\"a\" src=\"data:image/png;base64,AQ==\"") && ab.contains("base64,Ag=="), "{ab}");
+        assert_eq!((label("f1_ab_fat_20.png"), label("ab_reference.png")), ("fat_20".into(), "reference".into()));
+        assert!(to_html("![A](a.png \"missing.png\")\n", &[]).contains("not in the report"));
         assert!(h.contains("<li>two</li>"));
         assert!(h.contains("Content-Security-Policy"));
     }

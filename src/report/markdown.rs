@@ -408,7 +408,9 @@ pub fn to_markdown(rep: &Report) -> String {
     if !rep.figures.is_empty() {
         s.push_str("\n## Figures\n\n");
         for f in rep.figures.iter().filter(|f| !f.file.ends_with(".exr")) {
-            let _ = writeln!(s, "![{}]({})\n\n*{}*\n", f.caption, f.file, f.caption);
+            // An A/B pair names its other image as the link title (report.html shows the two as one view).
+            let against = f.against.as_ref().map_or(String::new(), |b| format!(" \"{b}\""));
+            let _ = writeln!(s, "![{}]({}{against})\n\n*{}*\n", f.caption, f.file, f.caption);
         }
         let data: Vec<_> = rep.figures.iter().filter(|f| f.file.ends_with(".exr")).collect();
         if !data.is_empty() {
@@ -481,7 +483,8 @@ mod tests {
                 ..Default::default()
             },
         ];
-        let figures = vec![crate::analysis::record::Figure { file: "a.png".into(), caption: "A plot".into() }];
+        let figures =
+            vec![crate::analysis::record::Figure { file: "a.png".into(), caption: "A plot".into(), against: None }];
         let rep = crate::analysis::record::test_report("room", 4, 2, rows, figures);
         let md = to_markdown(&rep);
         assert!(md.contains("| fat-20 | 20 |"));
