@@ -251,9 +251,34 @@ impl ScatterPlot {
         render_png(self, w, h)
     }
 
-    /// Renders the plot as an SVG document (text as `<text>` in a sans-serif font).
+    /// Renders the plot as an SVG document (text as `<text>` in a sans-serif font). Each point's circle carries a
+    /// `<title>` (its label and values): a browser shows it as a tooltip.
     pub fn to_svg(&self, w: u32, h: u32) -> Result<String> {
-        render_svg(self, w, h)
+        let svg = render_svg(self, w, h)?;
+        // The points' circles come first in the document, in drawing order: the front's, then the others'.
+        let pts = self.finite();
+        let order = pts.iter().filter(|p| p.on_front).chain(pts.iter().filter(|p| !p.on_front));
+        let mut out = String::with_capacity(svg.len() + 64 * pts.len());
+        let mut rest = svg.as_str();
+        for p in order {
+            let Some(at) = rest.find("<circle") else { break };
+            let Some(end) = rest[at..].find("/>").map(|e| at + e) else { break };
+            out.push_str(&rest[..end]);
+            let tip = format!(
+                "{}: {} = {}, {} = {}{}",
+                p.label,
+                self.x_label,
+                fmt_tick(p.x),
+                self.y_label,
+                fmt_tick(p.y),
+                if p.on_front { " (Pareto front)" } else { "" }
+            );
+            let tip = tip.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;");
+            out.push_str(&format!("><title>{tip}</title></circle>"));
+            rest = &rest[end + 2..];
+        }
+        out.push_str(rest);
+        Ok(out)
     }
 
     fn draw_on<DB, X, Y>(&self, root: &DrawingArea<DB, Shift>, xc: X, yc: Y) -> Result<()>
@@ -589,6 +614,11 @@ mod tests {
         assert!(texts.iter().all(|t| has_text(&svg, t)), "title, axis labels, point labels and legend");
         assert!(!has_text(&svg, "L3"), "the NaN point is skipped");
         assert_eq!(svg.matches("<circle").count(), 3 + 2, "three finite points and two legend markers");
+        // Each point's circle has its tooltip (label and values), the legend markers none.
+        assert_eq!(svg.matches("<title>").count(), 3, "{svg}");
+        for l in ["L0", "L1", "L2"] {
+            assert!(svg.contains(&format!("<title>{l}: bytes per sample = ")), "tooltip of {l}");
+        }
         assert_eq!(svg.matches(r##"stroke="#C82828" stroke-width="2""##).count(), 2, "front line and its legend");
     }
 
