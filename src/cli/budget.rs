@@ -91,7 +91,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let (lights, _) = frame_lights(&loaded, args.lights, args.seed);
         Ok((loaded.gbuffer, lights))
     };
+    let pb = crate::cli::spinner(format!("searching layouts within the budget over {} frame(s)", names.len()));
     let (res, size) = search_frames(&names, load, &cfg).with_context(|| format!("budget over {}", names.join(", ")))?;
+    pb.finish_and_clear();
     let (rw, rh) = args.resolution.map_or((size.0, size.1), |r| (r.width, r.height));
     let msaa = args.msaa.unwrap_or(size.2);
     let layout = Layout::from_spec(res.winner.spec.clone())?;

@@ -4,7 +4,7 @@
 use anyhow::Context;
 use gbuf::codec::eval::{evaluate, evaluation_set, CodecRow, EvalOptions};
 use gbuf::codec::NormalScheme;
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 
 /// Flags of `gbuf codecs`.
 #[derive(clap::Args, Debug)]
@@ -96,18 +96,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         exhaustive: !args.no_exhaustive,
         timing_samples: args.timing_samples.min(inputs.len()),
     };
-    let progress = std::io::stderr().is_terminal();
+    let pb = crate::cli::progress_bar(jobs.len() as u64);
     let mut rows = Vec::with_capacity(jobs.len());
-    for (i, (scheme, bits)) in jobs.iter().enumerate() {
+    for (scheme, bits) in &jobs {
         let codec = scheme.codec(*bits).context("internal: planned an invalid codec")?;
-        if progress {
-            eprint!("\r[{}/{}] {:<24}", i + 1, jobs.len(), codec.name());
-        }
+        pb.set_message(codec.name());
         rows.push(evaluate(codec.as_ref(), scheme.name(), &inputs, &opts));
+        pb.inc(1);
     }
-    if progress {
-        eprintln!("\r{:<40}", "");
-    }
+    pb.finish_and_clear();
     if args.json {
         return crate::cli::common::print_json(&rows);
     }

@@ -29,6 +29,41 @@ pub fn quiet() -> bool {
     QUIET.load(std::sync::atomic::Ordering::Relaxed)
 }
 
+/// Are progress bars drawn? Only on a terminal, and not with `-q/--quiet`.
+fn progress_shown() -> bool {
+    use std::io::IsTerminal as _;
+    std::io::stderr().is_terminal() && !quiet()
+}
+
+/// The one progress style of every command: a bar of `len` steps on stderr (`{elapsed} [bar] pos/len message`),
+/// hidden off a terminal and with `-q`.
+pub fn progress_bar(len: u64) -> indicatif::ProgressBar {
+    let pb = indicatif::ProgressBar::with_draw_target(Some(len), indicatif::ProgressDrawTarget::stderr());
+    if !progress_shown() {
+        pb.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{elapsed:>4} [{bar:30}] {pos}/{len} {msg}") {
+        pb.set_style(style.progress_chars("=> "));
+    }
+    pb
+}
+
+/// The same style for a step of unknown length: a spinner with the elapsed time and `msg` (change it with
+/// `set_message` as the command moves on; `finish_and_clear` before printing results).
+pub fn spinner(msg: impl Into<std::borrow::Cow<'static, str>>) -> indicatif::ProgressBar {
+    let pb = indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
+    if !progress_shown() {
+        pb.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    } else {
+        pb.enable_steady_tick(std::time::Duration::from_millis(120));
+    }
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{elapsed:>4} {spinner} {msg}") {
+        pb.set_style(style);
+    }
+    pb.set_message(msg);
+    pb
+}
+
 /// Is this error (anywhere in its chain) a closed pipe? Then the reader went away and we exit quietly.
 pub fn is_broken_pipe(err: &anyhow::Error) -> bool {
     // serde_json keeps the io error inside its own (`gbuf … --json | head`), so ask it too.

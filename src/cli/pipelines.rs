@@ -93,6 +93,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let layout = Layout::by_name_or_path(&args.layout).with_context(|| format!("--layout {}", args.layout))?;
     let file = args.input.file.display().to_string();
+    let pb = crate::cli::spinner(format!("loading {file}"));
     let loaded = args.input.load().with_context(|| format!("loading {file}"))?;
     let (lights, lights_source) = frame_lights(&loaded, args.lights, args.seed);
     let gb = loaded.gbuffer;
@@ -120,10 +121,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         None => None,
     };
+    pb.set_message(format!("{file}: the every-sample reference"));
     let reference =
         gbuf::resolve::reference(&gb, &lights, &cfg.resolve).with_context(|| format!("{file}: reference"))?;
+    pb.set_message(format!(
+        "{file}: forward, deferred and visibility-buffer rows, anti-aliasing, compressed G-buffers{}",
+        if cfg.viewing.is_some() { ", FLIP" } else { "" }
+    ));
     let p = pipelines(&gb, &lights, &cfg, Some(&reference), single.as_ref())
         .with_context(|| format!("{file}: pipelines"))?;
+    pb.finish_and_clear();
     if let (Some(name), Some(e)) = (args.geometry, &p.rematerialise_error) {
         anyhow::bail!("{file}: --geometry {name}: {e}");
     }

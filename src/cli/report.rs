@@ -15,8 +15,6 @@ use gbuf::measure::image::Viewing;
 use gbuf::report::format::fmt_opt;
 use gbuf::resolve::{Culling, ResolveConfig};
 use gbuf::study::Assembly;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 /// The detectors a report sweeps by default: Lauritzen's 2010 test, the normal-angle test and Lauritzen + IDs.
@@ -97,18 +95,6 @@ impl SweepArgs {
             runs: self.runs as usize,
         })
     }
-}
-
-/// A progress bar on stderr, hidden when stderr is not a terminal.
-pub fn progress_bar() -> ProgressBar {
-    let pb = ProgressBar::with_draw_target(Some(1), ProgressDrawTarget::stderr());
-    if !std::io::stderr().is_terminal() || super::quiet() {
-        pb.set_draw_target(ProgressDrawTarget::hidden());
-    }
-    if let Ok(style) = ProgressStyle::with_template("{elapsed:>4} [{bar:30}] {pos}/{len} {msg}") {
-        pb.set_style(style.progress_chars("=> "));
-    }
-    pb
 }
 
 fn pareto_word(p: gbuf::analysis::row::ParetoFlags) -> &'static str {
@@ -274,7 +260,7 @@ pub fn run_frames(
     out: &Path,
     json: bool,
 ) -> anyhow::Result<Report> {
-    let pb = progress_bar();
+    let pb = crate::cli::progress_bar(1);
     let mut frames = Vec::new();
     let mut rows = Vec::new();
     let mut files = Vec::new();

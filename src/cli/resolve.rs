@@ -172,6 +172,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let det_cfg = args.thresholds.config()?;
     let file = args.input.file.display().to_string();
 
+    let pb = crate::cli::spinner(format!("loading {file}"));
     let (loaded, t_decode) = timed(|| args.input.load());
     let loaded = loaded.with_context(|| format!("loading {file}"))?;
     let gb: GBuffer = loaded.gbuffer;
@@ -213,6 +214,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     });
     let mask = mask.with_context(|| format!("{file}: edge detector {}", args.detector))?;
 
+    pb.set_message(format!("{file}: lighting"));
     let resolved = resolve::resolve(lit_gb, &lights, &mask, &cfg).with_context(|| format!("{file}: resolve"))?;
     anyhow::ensure!(
         resolved.stats.shading_evaluations > 0,
@@ -249,6 +251,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let (reference, t_ref) = if args.no_reference {
         (None, 0.0)
     } else {
+        pb.set_message(format!("{file}: the every-sample reference"));
         let (reference, t) = timed(|| resolve::reference(&gb, &lights, &cfg));
         let reference = reference.with_context(|| format!("{file}: reference"))?;
         resolve::check_meaningful(&gb, &lights, &reference).with_context(|| format!("{file}: nothing to compare"))?;
@@ -326,8 +329,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         heatmap_max,
     };
     if args.json {
+        pb.finish_and_clear();
         return print_json(&report);
     }
+    pb.finish_and_clear();
     print_human(&report)
 }
 

@@ -6,7 +6,7 @@ use anyhow::Context;
 use gbuf::scene::{self, SceneName};
 use gbuf::GBuffer;
 use std::collections::BTreeSet;
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -108,17 +108,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             anyhow::bail!("--lights {n}: at most {MAX_CLI_LIGHTS}");
         }
     }
-    let progress = std::io::stderr().is_terminal() && !args.json;
-    if progress {
-        eprint!("rendering {} at {}×{}, {}× MSAA…", args.name, args.width, args.height, args.msaa);
-    }
+    let pb =
+        crate::cli::spinner(format!("rendering {} at {}×{}, {}× MSAA", args.name, args.width, args.height, args.msaa));
     let t0 = Instant::now();
     let gb = scene::render(args.name, args.width, args.height, args.msaa)
         .with_context(|| format!("rendering scene {}", args.name))?;
     let render_seconds = t0.elapsed().as_secs_f64();
-    if progress {
-        eprintln!(" {render_seconds:.2} s");
-    }
+    pb.set_message(format!("writing {}", args.out.display()));
     let (lights, lights_source) = match args.lights {
         Some(n) => (scene::scatter_lights(&gb, n, args.seed), "scattered"),
         None => (scene::default_lights(args.name, &gb), "default"),
@@ -138,6 +134,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         gbuf::util::write_bytes_atomic(&sidecar, &text).with_context(|| format!("writing {}", sidecar.display()))?;
     }
     let write_seconds = t1.elapsed().as_secs_f64();
+    pb.finish_and_clear();
 
     let summary = Summary {
         scene: args.name.name(),
