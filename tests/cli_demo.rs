@@ -105,8 +105,11 @@ fn demo_writes_the_report_folder() {
     assert!(md.contains("re-materialised from the `room` scene's triangles") && md.contains("bit-identical"), "{md}");
     // Every image the markdown links exists.
     for line in md.lines().filter(|l| l.starts_with("![")) {
-        let file = line.split("](").nth(1).unwrap().trim_end_matches(')');
-        assert!(out.join(file).is_file(), "{file} linked but missing");
+        let target = line.split("](").nth(1).unwrap().trim_end_matches(')');
+        // An A/B pair names its other image as the title: `![…](a.png "b.png")`.
+        for file in target.split(" \"").map(|f| f.trim_end_matches('"')) {
+            assert!(out.join(file).is_file(), "{file} linked but missing");
+        }
     }
 }
 

@@ -41,6 +41,7 @@ fn assert_whole_files(dir: &Path, context: &str) -> usize {
                 bytes.ends_with(b"\n") && width > 0 && r.records().all(|rec| rec.is_ok_and(|rec| rec.len() == width))
             }
             "png" => image::load_from_memory(&bytes).is_ok(),
+            "exr" => gbuf::io::exr::read_raw_bytes(&bytes, &p, &Default::default()).is_ok(),
             "svg" => String::from_utf8_lossy(&bytes).trim_end().ends_with("</svg>"),
             "md" => bytes.ends_with(b"\n"),
             "html" => bytes.ends_with(b"</html>\n"),
