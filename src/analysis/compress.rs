@@ -38,7 +38,7 @@ use crate::analysis::surfaces::MERGE_DOT;
 use crate::base::mask::EdgeMask;
 use crate::detect::{self, Detector};
 use crate::error::{Error, Result};
-use crate::gbuffer::GBuffer;
+use crate::gbuffer::{Attribute, GBuffer, PlaneMapper};
 use crate::image::HdrImage;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -415,30 +415,17 @@ fn run_rows<S: Default + Send>(
     let (w, h) = (gb.width as usize, rows.len());
     let n = w * h * s as usize;
     let row = w * s as usize;
-    let zeros = |p: &Option<Vec<f32>>| p.as_ref().map(|_| vec![0.0f32; n]);
-    let zeros3 = |p: &Option<Vec<Vec3>>| p.as_ref().map(|_| vec![Vec3::ZERO; n]);
-    let zero_ids = |p: &Option<Vec<u32>>| p.as_ref().map(|_| vec![0u32; n]);
-    let mut out = GBuffer {
-        depth: zeros(&gb.depth),
-        position: Some(vec![Vec3::ZERO; n]),
-        normal: zeros3(&gb.normal),
-        albedo: zeros3(&gb.albedo),
-        specular: zeros(&gb.specular),
-        specular_power: zeros(&gb.specular_power),
-        roughness: zeros(&gb.roughness),
-        metallic: zeros(&gb.metallic),
-        motion: gb.motion.as_ref().map(|_| vec![Vec2::ZERO; n]),
-        material_id: zero_ids(&gb.material_id),
-        object_id: zero_ids(&gb.object_id),
-        primitive_id: zero_ids(&gb.primitive_id),
-        coverage: vec![false; n],
-        height: h as u32,
-        width: gb.width,
-        samples: gb.samples,
-        sample_positions: gb.sample_positions.clone(),
-        camera: gb.camera,
-        materials: gb.materials.clone(),
-    };
+    // Every plane the input has (and position), zero-filled: a plane mapper, so no list of planes here.
+    struct Zeros(usize);
+    impl PlaneMapper for Zeros {
+        fn map<T: Copy + Default + Send + Sync>(&mut self, _: Attribute, _: &[T]) -> Option<Vec<T>> {
+            Some(vec![T::default(); self.0])
+        }
+    }
+    let mut out = gb.map_planes((gb.width, h as u32, s), gb.sample_positions.clone(), vec![false; n], &mut Zeros(n));
+    if out.position.is_none() {
+        out.position = Some(vec![Vec3::ZERO; n]);
+    }
     let mut c = Compressed::empty(gb.width, h as u32, gb.samples, config, method, fragment_key(gb));
     let counts = {
         let GBuffer {
