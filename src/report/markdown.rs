@@ -8,14 +8,6 @@ use crate::measure::image::ErrorSet;
 use crate::report::format::fmt_opt;
 use std::fmt::Write as _;
 
-fn timing_cell(r: &Row, stage: &str) -> String {
-    match r.timings.get(stage) {
-        Some(t) if t.runs > 1 => format!("{:.1} ({:.1}–{:.1})", t.median_ms, t.min_ms, t.max_ms),
-        Some(t) => format!("{:.1}", t.median_ms),
-        None => "—".into(),
-    }
-}
-
 fn pct(v: Option<f64>) -> String {
     v.map_or("—".into(), |x| format!("{:.1}%", 100.0 * x))
 }
@@ -104,84 +96,65 @@ fn pareto_cell(p: ParetoFlags) -> &'static str {
     }
 }
 
-/// The results table of one frame.
+/// The columns of the results table: what decides between layouts (report.csv and report.json have every measure:
+/// footprint, PSNR, AA and total RMSE, precision and recall, decode ops, traffic, every stage's time).
+const DECIDING: [&str; 8] = [
+    "normal max °",
+    "layout RMSE",
+    "layout FLIP LDR / HDR",
+    "total FLIP LDR / HDR",
+    "shaded",
+    "decode ops",
+    "resolve pass ms",
+    "Pareto",
+];
+
+/// The results table of one frame: the columns that decide ([`DECIDING`]); the rest is in report.csv.
 #[must_use]
 pub fn rows_table(rows: &[Row]) -> String {
     let culling = rows.iter().any(|r| r.culling.is_some());
-    let mut s = String::from("| layout | B/sample | footprint MiB | detector |");
+    let mut s = String::from("| layout | B/sample | detector |");
     if culling {
         s.push_str(" culling |");
     }
-    let cols = [
-        "normal mean / max °",
-        "layout RMSE",
-        "layout PSNR dB",
-        "layout FLIP LDR / HDR",
-        "AA RMSE",
-        "total RMSE",
-        "total FLIP LDR / HDR",
-        "shaded",
-        "precision / recall",
-        "decode ops",
-        "traffic tiled / quad MB",
-        "decode ms",
-        "resolve ms",
-        "detect ms",
-        "encode ms (tool)",
-        "Pareto",
-    ];
-    for c in cols {
+    for c in DECIDING {
         let _ = write!(s, " {c} |");
     }
-    s.push_str("\n|---|--:|--:|---|");
+    s.push_str("\n|---|--:|---|");
     if culling {
         s.push_str("---|");
     }
-    for _ in 1..cols.len() {
+    for _ in 1..DECIDING.len() {
         s.push_str("--:|");
     }
     s.push_str("---|\n");
     for r in rows {
-        let _ = write!(
-            s,
-            "| {} | {} | {:.1} | {} |",
-            r.layout,
-            r.bytes_per_sample,
-            r.footprint_bytes as f64 / (1024.0 * 1024.0),
-            r.detector
-        );
+        let _ = write!(s, "| {} | {} | {} |", r.layout, r.bytes_per_sample, r.detector);
         if culling {
             let _ = write!(s, " {} |", r.culling.as_deref().unwrap_or("—"));
         }
         if let Some(e) = &r.error {
-            let _ = writeln!(s, " error: {} |{}", e.replace('|', "/"), " |".repeat(cols.len() - 1));
+            let _ = writeln!(s, " error: {} |{}", e.replace('|', "/"), " |".repeat(DECIDING.len() - 1));
             continue;
         }
-        let (l, a, t) = (r.layout_error.as_ref(), r.aa_error.as_ref(), r.total_error.as_ref());
+        let (l, t) = (r.layout_error.as_ref(), r.total_error.as_ref());
         let _ = writeln!(
             s,
-            " {} / {} | {} | {} | {} | {} | {} | {} | {} | {} / {} | {} | {} / {} | {} | {} | {} | {} | {} |",
-            fmt_opt(r.normal_mean_deg, 3),
+            " {} | {} | {} | {} | {} | {} | {} | {} |",
             fmt_opt(r.normal_max_deg, 3),
             fmt_opt(l.map(|e| e.rmse), 5),
-            fmt_opt(l.map(|e| e.psnr_db), 2),
             flip_pair(l),
-            fmt_opt(a.map(|e| e.rmse), 5),
-            fmt_opt(t.map(|e| e.rmse), 5),
             flip_pair(t),
             pct(r.shading_fraction),
-            fmt_opt(r.precision, 3),
-            fmt_opt(r.recall, 3),
             r.decode_ops_per_sample.map_or("—".into(), |n| n.to_string()),
-            fmt_opt(Some(r.bandwidth_mb.tiled), 1),
-            fmt_opt(r.bandwidth_mb.quad, 1),
-            timing_cell(r, "decode"),
-            timing_cell(r, "resolve"),
-            timing_cell(r, "detect"),
-            timing_cell(r, "encode"),
+            fmt_opt(r.resolve_pass_ms, 1),
             pareto_cell(r.pareto),
         );
     }
+    s.push_str(
+        "\nEvery other measure of these rows — footprint, PSNR, AA and total RMSE, precision and recall, traffic, each \
+         stage's time with its spread — is in report.csv (and report.json).\n",
+    );
     // Each note once: the detectors of a layout that share it are listed together (`fat-20 (lauritzen, normal,
     // combined): …`), in the rows' order.
     let mut grouped: Vec<(&str, &str, Vec<&str>)> = Vec::new();
