@@ -109,7 +109,7 @@ const DECIDING: [&str; 8] = [
     "Pareto",
 ];
 
-/// The results table of one frame: the columns that decide ([`DECIDING`]); the rest is in report.csv.
+/// The results table of one frame: the columns that decide (`DECIDING`); the rest is in report.csv.
 #[must_use]
 pub fn rows_table(rows: &[Row]) -> String {
     let culling = rows.iter().any(|r| r.culling.is_some());
