@@ -64,7 +64,8 @@ fn scatter<'a>(
 fn heat_plot(title: String, values: &[Option<f32>], gb: &GBuffer, max: f32, label: String) -> Result<RgbImage> {
     let grid_w = gb.width.clamp(1, MAX_PICTURE_WIDTH);
     let grid_h = (u64::from(gb.height) * u64::from(grid_w) / u64::from(gb.width.max(1))).max(1) as u32;
-    let (w, h) = (grid_w + 190, grid_h + 90);
+    // At least 300 pixels tall: the colour bar and its label need the room on a small frame.
+    let (w, h) = (grid_w + 190, (grid_h + 90).max(300));
     let (w, h) = (w.max(plot::MIN_SIZE.0), h.max(plot::MIN_SIZE.1));
     plot::Heatmap { title, values, width: gb.width, height: gb.height, max, label }.to_png_image(w, h)
 }
@@ -303,18 +304,20 @@ pub fn figures(
                 against: None,
             });
         }
-        for (what, unit, map) in [
-            ("normal", "degrees", &m.normal_deg),
-            ("depth", "relative", &m.depth_rel),
-            ("albedo", "absolute", &m.albedo_abs),
-            ("image", "absolute radiance against the exact G-buffer's image", &m.image_abs),
+        // The colour bar's label stays short (it runs along the bar, as tall as a small frame); the caption says it
+        // in full.
+        for (what, short, unit, map) in [
+            ("normal", "°", "degrees", &m.normal_deg),
+            ("depth", "relative", "relative", &m.depth_rel),
+            ("albedo", "absolute", "absolute", &m.albedo_abs),
+            ("image", "radiance", "absolute radiance against the exact G-buffer's image", &m.image_abs),
         ] {
             let Some(v) = map else { continue };
             let v: Vec<Option<f32>> = v.iter().map(|&e| (!e.is_nan()).then_some(e)).collect();
             let max = percentile_max(&v);
             png(
                 &format!("heatmap_{slug}_{what}.png"),
-                heat_plot(format!("{name}: {what} error"), &v, gb, max, format!("{what} error ({unit})"))?,
+                heat_plot(format!("{name}: {what} error"), &v, gb, max, format!("{what} error ({short})"))?,
                 format!("{name}: per-pixel {what} error ({unit}; the colour bar's top = {max:.3e} or more, grey = background)"),
                 &mut files,
                 &mut figs,
