@@ -28,6 +28,17 @@ fn help_fits_an_80_column_terminal_and_groups_the_loader_flags() {
             assert!(!text[own..input].contains("--max-memory"), "{cmd}");
         }
     }
+    // `-h` is the short form: the naming conventions and limits only under `--help`, and it says so.
+    for cmd in ["resolve", "report", "info", "budget"] {
+        let short = String::from_utf8(gbuf(&[cmd, "-h"], &[("COLUMNS", "80")]).stdout).unwrap();
+        let long = String::from_utf8(gbuf(&[cmd, "--help"], &[("COLUMNS", "80")]).stdout).unwrap();
+        assert!(
+            short.contains("--fold") && !short.contains("--max-memory") && !short.contains("--reversed-z"),
+            "{cmd}"
+        );
+        assert!(short.contains("see more with '--help'") && long.contains("--reversed-z"), "{cmd}");
+        assert!(short.lines().count() < long.lines().count(), "{cmd}");
+    }
     let top = String::from_utf8(gbuf(&["--help"], &[]).stdout).unwrap();
     assert!(top.contains("Exit status: 0 success") && top.contains("4 file error"), "{top}");
 }

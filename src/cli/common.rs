@@ -19,41 +19,41 @@ pub struct ReadArgs {
     pub fold: Option<u32>,
     /// Attribute → channel overrides: `normal=N.X;N.Y;N.Z,depth=Z` (components separated by `;`), or another
     /// file: `depth=DEPTH.exr:R`, `material_id=ids.png` (relative to the dump's directory).
-    #[arg(long, value_name = "ATTR=[FILE:]CHANNEL,…")]
+    #[arg(hide_short_help = true, long, value_name = "ATTR=[FILE:]CHANNEL,…")]
     pub map: Option<String>,
     /// File-set preset (default: detected from the file names): luxcore, unreal, unity-hdrp, blender-file-output.
-    #[arg(long, value_name = "NAME")]
+    #[arg(hide_short_help = true, long, value_name = "NAME")]
     pub preset: Option<String>,
     /// Space of positions and normals read by naming (`--map`, file sets): world needs the sidecar's camera.
-    #[arg(long)]
+    #[arg(hide_short_help = true, long)]
     pub space: Option<gbuf::io::conventions::Space>,
     /// What depth read by naming measures: view-z, ray (from the eye), ray-from-near, ndc.
-    #[arg(long)]
+    #[arg(hide_short_help = true, long)]
     pub depth: Option<gbuf::io::conventions::DepthKind>,
     /// Near plane for `--depth ray-from-near|ndc` (default: the camera's).
-    #[arg(long)]
+    #[arg(hide_short_help = true, long)]
     pub znear: Option<f32>,
     /// Far plane for `--depth ndc` (default: the camera's).
-    #[arg(long)]
+    #[arg(hide_short_help = true, long)]
     pub zfar: Option<f32>,
     /// With `--depth ndc`: 1 at the near plane.
-    #[arg(long)]
+    #[arg(hide_short_help = true, long)]
     pub reversed_z: bool,
     /// How IDs read by naming are stored: float, u32, rgb8 (R + 256·G + 65536·B).
-    #[arg(long, value_name = "ENCODING")]
+    #[arg(hide_short_help = true, long, value_name = "ENCODING")]
     pub id_encoding: Option<gbuf::io::conventions::IdEncoding>,
     /// Background marker for data read by naming: auto, inf, nan, alpha, or a depth value.
-    #[arg(long, value_name = "VALUE")]
+    #[arg(hide_short_help = true, long, value_name = "VALUE")]
     pub background: Option<String>,
     /// Normal encoding for data read by naming: signed, unorm (n·0.5 + 0.5).
-    #[arg(long)]
+    #[arg(hide_short_help = true, long)]
     pub normals: Option<gbuf::io::conventions::NormalEncoding>,
     /// Refuse files whose decoded samples would need more than this many MiB [default: a quarter of the
     /// machine's available memory].
-    #[arg(long, value_name = "MIB")]
+    #[arg(hide_short_help = true, long, value_name = "MIB")]
     pub max_memory: Option<u64>,
     /// Decode DWAA/DWAB-compressed EXRs (lossy; the decoder is less hardened).
-    #[arg(long)]
+    #[arg(hide_short_help = true, long)]
     pub allow_dwa: bool,
     /// The input is the packed render targets of this layout (a built-in name or a layout file): a folder of
     /// `<target>.dds|bin|png|exr` (RenderDoc DDS saves with samples as array slices; `gbuf pack` output). A folder
@@ -62,15 +62,15 @@ pub struct ReadArgs {
     pub input_layout: Option<String>,
     /// The images are RenderDoc "slices as grid" mosaics of a multisampled target: C×R tiles, tile s (row by
     /// row) holding sample s of every pixel (`--grid 2x2` for 4× MSAA).
-    #[arg(long, value_name = "CxR", value_parser = parse_grid)]
+    #[arg(hide_short_help = true, long, value_name = "CxR", value_parser = parse_grid)]
     pub grid: Option<(u32, u32)>,
     /// For a file-set folder holding a sequence (`Depth0001.exr`, `Depth0002.exr`, …): the frame to read.
     /// `report` and `budget` read every frame when it is not given.
-    #[arg(long, value_name = "N")]
+    #[arg(hide_short_help = true, long, value_name = "N")]
     pub frame: Option<u32>,
     /// A packed target's file, when it is not `<target>.<ext>` in the folder: `--target gbuffer_a=cap/rt1.dds`
     /// (also `coverage=FILE`, `material_table=FILE`). Repeat per target.
-    #[arg(long = "target", value_name = "NAME=FILE")]
+    #[arg(hide_short_help = true, long = "target", value_name = "NAME=FILE")]
     pub targets: Vec<String>,
 }
 
