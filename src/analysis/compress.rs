@@ -33,6 +33,10 @@
 //! the depth-tested coverage masks, `2·samples` bits rounded up to 4 bytes), and 8 bytes of slot count and order —
 //! the authors' 3 × (16 + 4) + 8 = 68 B against 16 × 8 = 128 B per pixel at 8× (their baseline G-buffer of 16 B per
 //! sample; neither counts the depth buffer).
+//!
+//! **Aggregates** ([`aggregate`], after Crassin et al.'s AGAA): the same write-back and lighting with depth layers
+//! of averaged fields instead of streamed slots. [`light_compressed`] compresses and lights a frame strip by strip
+//! ([`STRIP_ROWS`] rows), so no compressed copy of the whole frame is held: what `gbuf pipelines` and the report use.
 
 use crate::analysis::surfaces::MERGE_DOT;
 use crate::base::mask::EdgeMask;
