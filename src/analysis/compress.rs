@@ -558,7 +558,8 @@ pub fn compress(gb: &GBuffer, cfg: &StreamingConfig) -> Result<Compressed> {
 /// The streaming compressor of one pixel ([`compress`]).
 fn stream_pixel<'g>(gb: &'g GBuffer, cfg: &StreamingConfig) -> impl PixelFn<StreamScratch> + 'g {
     let key = fragment_key(gb);
-    let merge_geometry = cfg.merge && gb.normal.is_some() && detect::depth_plane(gb, Detector::Lauritzen).is_ok();
+    // Merging reads depth (the plane, or derived from positions as `detect::depth_plane` does) and normals.
+    let merge_geometry = cfg.merge && gb.normal.is_some() && (gb.depth.is_some() || gb.position.is_some());
     let k = cfg.slots as usize;
     let s = gb.samples as usize;
     move |src: &Source<'_>, p: usize, sc: &mut StreamScratch, out: &mut Vec<(u64, Fields)>| {
