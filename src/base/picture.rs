@@ -99,9 +99,55 @@ pub fn write_heatmap_png(path: &Path, width: u32, height: u32, counts: &[u32]) -
     Ok(max)
 }
 
+/// The top-left corner of the `cw × ch` window of `values` (a row-major `w × h` map) with the largest sum
+/// (non-finite values count 0; the first such window in row order on ties): where a crop shows the most of
+/// something — an error map's worst region. A summed-area table, every position tried.
+#[must_use]
+pub fn busiest_window(values: &[f32], w: u32, h: u32, cw: u32, ch: u32) -> (u32, u32) {
+    let (wu, hu, cw, ch) = (w as usize, h as usize, cw.min(w) as usize, ch.min(h) as usize);
+    if values.len() != wu * hu {
+        return (0, 0);
+    }
+    let w1 = wu + 1;
+    let mut sat = vec![0.0f64; w1 * (hu + 1)];
+    for y in 0..hu {
+        let mut row = 0.0f64;
+        for x in 0..wu {
+            let v = values[y * wu + x];
+            row += if v.is_finite() { f64::from(v) } else { 0.0 };
+            sat[(y + 1) * w1 + x + 1] = sat[y * w1 + x + 1] + row;
+        }
+    }
+    let mut best = (0, 0, f64::NEG_INFINITY);
+    for y in 0..=hu - ch {
+        for x in 0..=wu - cw {
+            let v = sat[(y + ch) * w1 + x + cw] - sat[y * w1 + x + cw] - sat[(y + ch) * w1 + x] + sat[y * w1 + x];
+            if v > best.2 {
+                best = (x as u32, y as u32, v);
+            }
+        }
+    }
+    (best.0, best.1)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_busiest_window_is_where_the_values_are() {
+        let (w, h) = (12u32, 9u32);
+        let mut v = vec![0.0f32; (w * h) as usize];
+        for (x, y) in [(7, 5), (8, 5), (8, 6)] {
+            v[(y * w + x) as usize] = 1.0;
+        }
+        v[0] = f32::NAN; // counts 0
+        v[1] = f32::INFINITY;
+        assert_eq!(busiest_window(&v, w, h, 3, 2), (6, 5));
+        assert_eq!(busiest_window(&vec![0.0; (w * h) as usize], w, h, 3, 2), (0, 0), "ties: the first window");
+        assert_eq!(busiest_window(&v, w, h, 40, 40), (0, 0), "a window larger than the map is the map");
+        assert_eq!(busiest_window(&v[1..], w, h, 3, 2), (0, 0), "a map of the wrong size");
+    }
 
     #[test]
     fn srgb_round_trips_and_has_the_standard_ends() {

@@ -208,7 +208,9 @@ pub fn figures(
         let (w, h) = (out.reference.width, out.reference.height);
         let (cw, ch) = (w.min(AB_CROP[0]), h.min(AB_CROP[1]));
         let (x0, y0) = match &out.worst_flip {
-            Some((_, map)) if map.values.len() == (w * h) as usize => busiest_window(&map.values, w, h, cw, ch),
+            Some((_, map)) if map.values.len() == (w * h) as usize => {
+                crate::base::picture::busiest_window(&map.values, w, h, cw, ch)
+            }
             _ => ((w - cw) / 2, (h - ch) / 2),
         };
         let zoom = 2;
@@ -348,35 +350,6 @@ pub fn figures(
 }
 /// The largest crop of the A/B views (before magnification).
 const AB_CROP: [u32; 2] = [320, 180];
-
-/// The top-left corner of the `cw × ch` window of `values` (a `w × h` map) with the largest sum, on a grid of 8
-/// pixels (a summed-area table).
-fn busiest_window(values: &[f32], w: u32, h: u32, cw: u32, ch: u32) -> (u32, u32) {
-    let (wu, hu) = (w as usize, h as usize);
-    let mut sat = vec![0.0f64; (wu + 1) * (hu + 1)];
-    for y in 0..hu {
-        let mut row = 0.0f64;
-        for x in 0..wu {
-            let v = values[y * wu + x];
-            row += if v.is_finite() { f64::from(v) } else { 0.0 };
-            sat[(y + 1) * (wu + 1) + x + 1] = sat[y * (wu + 1) + x + 1] + row;
-        }
-    }
-    let sum = |x: u32, y: u32| {
-        let (x0, y0, x1, y1) = (x as usize, y as usize, (x + cw) as usize, (y + ch) as usize);
-        sat[y1 * (wu + 1) + x1] - sat[y0 * (wu + 1) + x1] - sat[y1 * (wu + 1) + x0] + sat[y0 * (wu + 1) + x0]
-    };
-    let mut best = (0, 0, f64::NEG_INFINITY);
-    for y in (0..=h - ch).step_by(8).chain(std::iter::once(h - ch)) {
-        for x in (0..=w - cw).step_by(8).chain(std::iter::once(w - cw)) {
-            let s = sum(x, y);
-            if s > best.2 {
-                best = (x, y, s);
-            }
-        }
-    }
-    (best.0, best.1)
-}
 
 /// The heatmap of how many surfaces each pixel holds (by identity when the frame has IDs, else by geometry; grey
 /// where no sample is covered): where MSAA G-buffer compression would keep more than one surface. `None` for a

@@ -297,29 +297,10 @@ pub fn aa_crop(image: &HdrImage, reference: &HdrImage) -> (u32, u32, u32, u32) {
     if (image.width, image.height) != (w, h) || image.rgb.len() != reference.rgb.len() {
         return (0, 0, cw, ch);
     }
-    // Summed-area table of the differences, (w + 1) × (h + 1).
-    let (w1, h1) = (w as usize + 1, h as usize + 1);
-    let mut sat = vec![0.0f64; w1 * h1];
-    for y in 0..h as usize {
-        let mut row = 0.0;
-        for x in 0..w as usize {
-            let p = y * w as usize + x;
-            let d = (display_luma(image.rgb[p]) - display_luma(reference.rgb[p])).abs();
-            row += if d.is_finite() { f64::from(d) } else { 0.0 };
-            sat[(y + 1) * w1 + x + 1] = sat[y * w1 + x + 1] + row;
-        }
-    }
-    let (cw_, ch_) = (cw as usize, ch as usize);
-    let mut best = (0, 0, -1.0);
-    for y in 0..=(h - ch) as usize {
-        for x in 0..=(w - cw) as usize {
-            let v = sat[(y + ch_) * w1 + x + cw_] - sat[y * w1 + x + cw_] - sat[(y + ch_) * w1 + x] + sat[y * w1 + x];
-            if v > best.2 {
-                best = (x as u32, y as u32, v);
-            }
-        }
-    }
-    (best.0, best.1, cw, ch)
+    let diff: Vec<f32> =
+        image.rgb.iter().zip(&reference.rgb).map(|(&a, &b)| (display_luma(a) - display_luma(b)).abs()).collect();
+    let (x, y) = crate::base::picture::busiest_window(&diff, w, h, cw, ch);
+    (x, y, cw, ch)
 }
 
 /// The crop `(x, y, w, h)` of `img`, as the report shows images ([`image_picture`]: Reinhard, sRGB) and magnified
