@@ -663,8 +663,10 @@ impl Measure<'_> {
                 }
                 let (msaa_img, _) = self.run(&fm_mask, Culling::Tiled, Schedule::Deferred)?;
                 let msaa_err = self.err(&msaa_img.image);
+                // One image for three rows: keyed once (the batch compares each new image with those it holds).
+                let key = self.flips.image(&msaa_img.image, cfg.viewing.is_some());
                 for p in [Pipeline::ForwardMsaa, Pipeline::ForwardPlus, Pipeline::VisibilityBuffer] {
-                    self.flip(FlipSlot::Row(p), &msaa_img.image);
+                    self.flips.wants(FlipSlot::Row(p), key);
                 }
                 self.flip(FlipSlot::Row(Pipeline::Forward), &no_aa.resolved.image);
                 let util = |q: &QuadShading| if q.lanes > 0 { q.covered_lanes as f64 / q.lanes as f64 } else { 1.0 };
