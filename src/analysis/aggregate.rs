@@ -110,7 +110,7 @@ pub struct AggregateRow {
 impl AggregateRow {
     /// The layout error that ranks this row (`Over`), NaN when unknown or when a frame failed.
     #[must_use]
-    pub fn ranked_error(&self, over: Over) -> f64 {
+    fn ranked_error(&self, over: Over) -> f64 {
         if self.failed_frames > 0 {
             return f64::NAN;
         }
@@ -187,7 +187,7 @@ pub fn aggregate(rows: &[Row], over: Over) -> Vec<AggregateRow> {
 
 /// Marks the aggregate fronts: layout error (by `over`) against bytes per sample, and against the mean resolve
 /// pass time.
-pub fn mark_aggregate_pareto(rows: &mut [AggregateRow], over: Over) {
+fn mark_aggregate_pareto(rows: &mut [AggregateRow], over: Over) {
     let by_bytes: Vec<(f64, f64)> =
         rows.iter().map(|r| (f64::from(r.bytes_per_sample), r.ranked_error(over))).collect();
     let by_time: Vec<(f64, f64)> =
@@ -256,7 +256,7 @@ pub struct BudgetChoice {
 }
 
 impl BudgetChoice {
-    /// The choice among `rows` (see [`budget_choice`]).
+    /// The choice among `rows` (see `budget_choice`).
     #[must_use]
     pub fn of(rows: &[AggregateRow], max_bytes: u32, over: Over) -> Self {
         let c = budget_choice(rows, max_bytes, over);
@@ -274,7 +274,7 @@ impl BudgetChoice {
 /// The layout a byte budget picks over the aggregate: the least layout error (by `over`) among the rows of at
 /// most `max_bytes` per sample that were measured on every frame (ties → fewer bytes).
 #[must_use]
-pub fn budget_choice(rows: &[AggregateRow], max_bytes: u32, over: Over) -> Option<&AggregateRow> {
+fn budget_choice(rows: &[AggregateRow], max_bytes: u32, over: Over) -> Option<&AggregateRow> {
     rows.iter().filter(|r| r.bytes_per_sample <= max_bytes && r.ranked_error(over).is_finite()).min_by(|a, b| {
         a.ranked_error(over).total_cmp(&b.ranked_error(over)).then(a.bytes_per_sample.cmp(&b.bytes_per_sample))
     })

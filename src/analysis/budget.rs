@@ -804,7 +804,7 @@ pub fn propose(gb: &GBuffer, lights: &[Light], cfg: &BudgetConfig) -> Result<Pro
 }
 
 /// Adds `new` to `into` unless an equal spec is there; a different spec under a taken name gets a `#k` suffix.
-pub fn merge_candidates(into: &mut Vec<Candidate>, new: Vec<Candidate>) {
+fn merge_candidates(into: &mut Vec<Candidate>, new: Vec<Candidate>) {
     for mut c in new {
         if into.iter().any(|o| o.spec == c.spec) {
             continue;

@@ -41,7 +41,7 @@ pub fn layout_image_error(
 /// `gb` through `layout` [`lit`]: the edge pass and the lighting read the packed targets band by band when the
 /// layout packs smaller than its decoded planes ([`Layout::packs_smaller`]), else a decoded copy — the same image
 /// either way (tests/resolve_packed.rs), in the least memory.
-pub fn lit_layout(
+fn lit_layout(
     gb: &GBuffer,
     lights: &[Light],
     layout: &Layout,

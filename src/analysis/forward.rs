@@ -224,7 +224,7 @@ pub struct Utilisation {
 /// The pixel block a warp of `warp` lanes covers (GPU rasterizers walk pixels in small 2D blocks): 8 → 4×2,
 /// 16 → 4×4, 32 → 8×4, 64 → 8×8; other widths: a row of `warp` pixels.
 #[must_use]
-pub fn warp_block(warp: u32) -> (u32, u32) {
+fn warp_block(warp: u32) -> (u32, u32) {
     match warp {
         8 => (4, 2),
         16 => (4, 4),
@@ -236,7 +236,7 @@ pub fn warp_block(warp: u32) -> (u32, u32) {
 
 /// The lane utilisation of `schedule` on `mask` with GPU warps of `warp` lanes, modelled from the mask alone:
 /// `packed` fills warps from each tile's list (`tile_size` pixels square), idle lanes only in a tile's last warp;
-/// `per-pixel` runs a warp over a block of pixels ([`warp_block`]) for as many steps as its pixel with the most
+/// `per-pixel` runs a warp over a block of pixels (`warp_block`) for as many steps as its pixel with the most
 /// evaluations; `two-pass` launches the 2×2 quads that pass each pass's stencil test (pass 1: any covered pixel;
 /// pass 2: any edge pixel, at sample frequency, samples 1..), packed into warps per tile. The resolve runs the same
 /// three schedules on the CPU ([`crate::resolve::MsaaSchedule`]) and counts its own lane steps.

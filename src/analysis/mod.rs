@@ -1,6 +1,6 @@
 //! Analysis: the measured answers a report is made of — sweeps of layouts × detectors ([`sweep`]), the Pareto
 //! fronts ([`pareto`]), the byte-budget search ([`budget`]), what a scene does not need ([`needs`]) and the layouts
-//! pruned to it ([`prune`]), and the rows they produce ([`row`]).
+//! pruned to it (`prune`), and the rows they produce ([`row`]).
 //!
 //! Input: a G-buffer (loaded or rendered) with its lights. Output: rows of measured numbers (errors against the
 //! unquantized reference, measured times) and the Pareto front; `report` writes them for a person or a script.
@@ -13,7 +13,7 @@ pub mod forward;
 pub mod needs;
 pub mod pareto;
 pub mod pipelines;
-pub mod prune;
+pub(crate) mod prune;
 pub mod record;
 pub mod row;
 pub mod surfaces;

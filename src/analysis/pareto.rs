@@ -22,18 +22,17 @@ pub fn front(points: &[(f64, f64)]) -> Vec<bool> {
     points.iter().map(|&p| finite(p) && !points.iter().any(|&q| finite(q) && dominates(q, p))).collect()
 }
 
-/// The indices of the front sorted by cost (then error): the polyline a plot draws through the front.
-#[must_use]
-pub fn front_polyline(points: &[(f64, f64)]) -> Vec<usize> {
-    let on = front(points);
-    let mut idx: Vec<usize> = (0..points.len()).filter(|&i| on[i]).collect();
-    idx.sort_by(|&a, &b| points[a].0.total_cmp(&points[b].0).then(points[a].1.total_cmp(&points[b].1)));
-    idx
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The indices of the front sorted by cost (then error).
+    fn front_polyline(points: &[(f64, f64)]) -> Vec<usize> {
+        let on = front(points);
+        let mut idx: Vec<usize> = (0..points.len()).filter(|&i| on[i]).collect();
+        idx.sort_by(|&a, &b| points[a].0.total_cmp(&points[b].0).then(points[a].1.total_cmp(&points[b].1)));
+        idx
+    }
 
     #[test]
     fn hand_built_front() {

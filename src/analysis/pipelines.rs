@@ -59,14 +59,14 @@ pub struct PipelinesConfig {
     /// row's footprint and traffic, and the frame is packed and unpacked with it to check its IDs and depth survive.
     pub visibility_layout: Layout,
     /// Surface slots per pixel of the streaming-compression rows ([`crate::analysis::compress`]); `None`: 1 to 4
-    /// and the sample count ([`default_slots`]); empty: no compressed rows (nor the aggregates row).
+    /// and the sample count (`default_slots`); empty: no compressed rows (nor the aggregates row).
     pub compression_slots: Option<Vec<u32>>,
 }
 
 /// The slot counts the compressed-G-buffer rows try by default: 1 to 4 (Kerzner & Salvi keep 3 at 8×) and the
 /// sample count, at most the sample count.
 #[must_use]
-pub fn default_slots(samples: u32) -> Vec<u32> {
+fn default_slots(samples: u32) -> Vec<u32> {
     let mut k: Vec<u32> = (1..=4).filter(|&k| k <= samples).collect();
     if !k.contains(&samples) {
         k.push(samples);

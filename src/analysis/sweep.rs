@@ -148,15 +148,6 @@ fn per_pixel(band: &GBuffer, out: &mut [f32], f: impl Fn(usize) -> f32 + Sync) {
     });
 }
 
-/// Per-pixel error maps of `test` against `reference`.
-#[must_use]
-pub fn error_maps(layout: &str, reference: &GBuffer, test: &GBuffer) -> ErrorMaps {
-    let mut maps =
-        ErrorMaps { layout: layout.to_string(), normal_deg: None, depth_rel: None, albedo_abs: None, image_abs: None };
-    error_maps_into(reference, test, 0, &mut maps);
-    maps
-}
-
 /// The error maps of `test`, a band of `reference`'s rows starting at pixel `first_pixel` (the whole frame at 0),
 /// into `maps` (frame-sized maps created when both G-buffers have the attribute).
 fn error_maps_into(reference: &GBuffer, test: &GBuffer, first_pixel: usize, maps: &mut ErrorMaps) {
@@ -261,7 +252,7 @@ fn detector_results(
 }
 
 /// Marks the detectors on the front of anti-aliasing error (RMSE) against the shading they cost.
-pub fn mark_detector_front(results: &mut [DetectorResult]) {
+fn mark_detector_front(results: &mut [DetectorResult]) {
     let pts: Vec<(f64, f64)> = results
         .iter()
         .map(|r| (r.shading_fraction.unwrap_or(f64::NAN), r.aa_error.map_or(f64::NAN, |e| e.rmse)))

@@ -131,7 +131,7 @@ use Var::{B, C, C1, F, L, P, S, T, V};
 impl Pipeline {
     /// Bytes resident per frame.
     #[must_use]
-    pub fn footprint_model(self) -> Model {
+    fn footprint_model(self) -> Model {
         let own = |terms: &'static [Term]| Model { base: None, terms };
         match self {
             Pipeline::Forward => own(const { &[t(12.0, &[P], "D32 + RGBA16F")] }),

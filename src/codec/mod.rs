@@ -24,10 +24,10 @@ pub mod color;
 pub mod depth;
 pub mod eval;
 pub mod normal;
-pub mod scalar;
+pub(crate) mod scalar;
 pub mod simd;
 #[cfg(test)]
-pub mod strategies;
+pub(crate) mod strategies;
 
 use crate::base::isa::Isa;
 pub use color::color_codec;

@@ -8,8 +8,8 @@
 //! |----------------|---------------------------------------------------------------------------------------|
 //! | `lauritzen`    | some `|z_i − z_0| > |∂z/∂x| + |∂z/∂y|` or `n_i · n_0 < 0.99` ([`lauritzen`])          |
 //! | `depth`        | some `|z_i − z_0| > absolute + relative · z_0` ([`geometric`])                        |
-//! | `normal`       | some normal is more than the angle threshold away from `n_0` ([`geometric`])          |
-//! | `id`           | some material / object ID differs from sample 0's ([`id`])                            |
+//! | `normal`       | some normal is more than the angle threshold away from `n_0` (`geometric`)          |
+//! | `id`           | some material / object ID differs from sample 0's (`id`)                            |
 //! | `combined`     | `lauritzen` or `id` (IDs when present)                                                |
 //! | `forward-msaa` | baseline: shades once per distinct primitive covering the pixel ([`baselines`])       |
 //! | `ssaa`         | baseline: every sample                                                               |
@@ -35,11 +35,11 @@
 //! variation inside one surface that no G-buffer edge test sees.
 
 pub mod baselines;
-pub mod geometric;
-pub mod id;
+pub(crate) mod geometric;
+pub(crate) mod id;
 pub mod lauritzen;
 pub mod picture;
-pub mod thresholds;
+pub(crate) mod thresholds;
 pub mod truth;
 
 pub use crate::base::mask::EdgeMask;

@@ -39,7 +39,7 @@ pub struct DetectorConfig {
     /// `lauritzen`: sample `i` is on another surface when `|z_i − z_0| > gradient_scale · (|∂z/∂x| + |∂z/∂y|)
     /// + depth_slack · z_0`. 1.0 is Lauritzen's test.
     pub gradient_scale: f32,
-    /// `lauritzen`: relative slack added to the derivative bound (see [`DEFAULT_DEPTH_SLACK`]).
+    /// `lauritzen`: relative slack added to the derivative bound (see `DEFAULT_DEPTH_SLACK`).
     pub depth_slack: f32,
     /// `depth`: sample `i` is on another surface when `|z_i − z_0| > depth_absolute + depth_relative · z_0`.
     pub depth_relative: f32,

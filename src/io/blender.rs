@@ -7,7 +7,7 @@
 //!
 //! Conversions: `Depth.Z` is camera-space Z (background 1e10 → no surface); `Normal` and `Position` are in Blender's
 //! Z-up world space and are brought into our view space with the camera — from the sidecar, else recovered from the
-//! `Position` pass by [`super::camera_fit`]. Without either, depth is still view depth, normals stay in world space
+//! `Position` pass by `super::camera_fit`. Without either, depth is still view depth, normals stay in world space
 //! (flagged in their source note) and positions are dropped. `IndexMA`/`IndexOB` are float-coded integers;
 //! `GlossCol` becomes the scalar specular (mean of RGB); `Vector.XY` becomes the motion since the previous frame
 //! in pixels (+y down).

@@ -54,7 +54,7 @@ pub fn components(attr: Attribute) -> &'static [&'static str] {
 /// The canonical channel name of component `comp` of layer `layer` (an attribute name or [`COVERAGE`]) at
 /// sample `sample`.
 #[must_use]
-pub fn channel_name(sample: u32, layer: &str, comp: &str) -> String {
+fn channel_name(sample: u32, layer: &str, comp: &str) -> String {
     format!("s{sample}.{layer}.{comp}")
 }
 

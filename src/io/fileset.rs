@@ -140,12 +140,12 @@ pub fn preset(name: &str) -> Option<&'static Preset> {
 
 /// Every preset name, comma-separated.
 #[must_use]
-pub fn preset_names() -> String {
+fn preset_names() -> String {
     PRESETS.iter().map(|p| p.name).collect::<Vec<_>>().join(", ")
 }
 
 /// Image files (`.exr`, `.png`) directly in `dir`, sorted.
-pub fn images_in(dir: &Path) -> Result<Vec<PathBuf>> {
+fn images_in(dir: &Path) -> Result<Vec<PathBuf>> {
     let mut out: Vec<PathBuf> = std::fs::read_dir(dir)
         .map_err(|e| Error::io(dir, e))?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -245,7 +245,7 @@ fn assign(p: &Preset, files: &[PathBuf]) -> Result<Vec<(PresetFile, PathBuf)>> {
 /// The frame number a file's name ends with (`Depth0001.exr` → 1, `HighResScreenshot_BaseColor_00001.exr` → 1),
 /// `None` when its stem does not end in digits.
 #[must_use]
-pub fn frame_number(path: &Path) -> Option<u32> {
+fn frame_number(path: &Path) -> Option<u32> {
     let stem = path.file_stem()?.to_str()?;
     let digits = stem.len() - stem.trim_end_matches(|c: char| c.is_ascii_digit()).len();
     (digits > 0 && digits < stem.len()).then(|| stem[stem.len() - digits..].parse().ok()).flatten()

@@ -2,7 +2,7 @@
 //! sets of one image per buffer) and writing our canonical EXR. Conversions to the crate's view-space convention happen here and nowhere else.
 
 pub mod blender;
-pub mod camera_fit;
+pub(crate) mod camera_fit;
 pub mod canonical;
 pub mod conventions;
 pub mod exr;
@@ -14,7 +14,7 @@ pub mod mapped;
 pub mod mitsuba;
 pub mod plausible;
 pub mod raw;
-pub mod sanitize;
+pub(crate) mod sanitize;
 pub mod sidecar;
 pub mod stats;
 

@@ -6,17 +6,17 @@
 //! its render targets ([`Packed`]); [`Layout::unpack`] reads them back into the G-buffer the lighting pass would
 //! see. Layouts come from [`Layout::builtins`] or from TOML/JSON files ([`Layout::load`], docs/LAYOUTS.md).
 
-pub mod bits;
-pub mod builtin;
-pub mod coder;
+pub(crate) mod bits;
+pub(crate) mod builtin;
+pub(crate) mod coder;
 pub mod codespace;
 pub mod dds;
-pub mod formats;
+pub(crate) mod formats;
 pub mod material;
 pub mod pack;
 pub mod shader;
 pub mod spec;
-pub mod summary;
+pub(crate) mod summary;
 pub mod targets;
 pub mod texture;
 pub mod wgsl;

@@ -127,7 +127,7 @@ impl MaterialKey {
 
 /// The non-albedo material parameters: what the Destiny-style table holds by default.
 #[must_use]
-pub fn default_indirection_parameters() -> Vec<String> {
+fn default_indirection_parameters() -> Vec<String> {
     ["specular", "specular_power", "roughness", "metallic"].map(String::from).to_vec()
 }
 

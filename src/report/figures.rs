@@ -93,7 +93,7 @@ fn percentile_max(v: &[Option<f32>]) -> f32 {
 
 /// An edge-mask picture: per-sample pixels white, once-shaded pixels dim grey, background black.
 #[must_use]
-pub fn mask_picture(mask: &EdgeMask) -> RgbImage {
+fn mask_picture(mask: &EdgeMask) -> RgbImage {
     RgbImage::from_fn(mask.width, mask.height, |x, y| match mask.shade_count[(y * mask.width + x) as usize] {
         0 => Rgb([0, 0, 0]),
         1 => Rgb([70, 70, 70]),

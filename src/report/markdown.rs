@@ -14,7 +14,7 @@ fn pct(v: Option<f64>) -> String {
 
 /// The "what the scene needs" section.
 #[must_use]
-pub fn needs_section(n: &Needs) -> String {
+fn needs_section(n: &Needs) -> String {
     let mut s = String::from("| | |\n|---|---|\n");
     let list = |v: &[String]| if v.is_empty() { "none".to_string() } else { v.join(", ") };
     let constants: Vec<String> = n
@@ -111,7 +111,7 @@ const DECIDING: [&str; 8] = [
 
 /// The results table of one frame: the columns that decide (`DECIDING`); the rest is in report.csv.
 #[must_use]
-pub fn rows_table(rows: &[Row]) -> String {
+fn rows_table(rows: &[Row]) -> String {
     let culling = rows.iter().any(|r| r.culling.is_some());
     let mut s = String::from("| layout | B/sample | detector |");
     if culling {
@@ -196,7 +196,7 @@ fn stat_cell(st: &Option<Stat>, prec: usize, frames: bool) -> String {
 
 /// The table of the rows aggregated over frames: mean / worst (worst frame).
 #[must_use]
-pub fn aggregate_table(rows: &[AggregateRow]) -> String {
+fn aggregate_table(rows: &[AggregateRow]) -> String {
     let mut s = String::from(
         "| layout | B/sample | detector | culling | frames | layout RMSE mean / worst (frame) | layout FLIP LDR mean / \
          worst | AA RMSE mean / worst | total RMSE mean / worst | resolve pass ms mean / worst | traffic tiled MB \
@@ -227,7 +227,7 @@ pub fn aggregate_table(rows: &[AggregateRow]) -> String {
 
 /// The detector table: anti-aliasing error against the shading each detector costs.
 #[must_use]
-pub fn detector_table(rows: &[DetectorAggregate]) -> String {
+fn detector_table(rows: &[DetectorAggregate]) -> String {
     let mut s = String::from(
         "| detector | shaded (mean) | AA RMSE mean / worst | AA FLIP LDR mean / worst | AA FLIP HDR mean / worst | \
          on the front |\n|---|--:|--:|--:|--:|---|\n",

@@ -2,11 +2,11 @@
 //! `report.csv`), written from the analysis' record ([`crate::analysis::record::Report`]): tables, CSV, JSON and
 //! plot writers. Running the analysis that fills a report is the `study` module's.
 
-pub mod csv;
+pub(crate) mod csv;
 pub mod figures;
 pub mod format;
-pub mod html;
-pub mod markdown;
+pub(crate) mod html;
+pub(crate) mod markdown;
 pub mod pipelines;
-pub mod plot;
+pub(crate) mod plot;
 pub mod write;

@@ -291,7 +291,7 @@ pub const AA_CROP_ZOOM: u32 = 4;
 /// reading order). Images of another size than the
 /// reference give the top-left corner.
 #[must_use]
-pub fn aa_crop(image: &HdrImage, reference: &HdrImage) -> (u32, u32, u32, u32) {
+fn aa_crop(image: &HdrImage, reference: &HdrImage) -> (u32, u32, u32, u32) {
     let (w, h) = (reference.width, reference.height);
     let (cw, ch) = (AA_CROP.0.min(w), AA_CROP.1.min(h));
     if (image.width, image.height) != (w, h) || image.rgb.len() != reference.rgb.len() {
@@ -314,7 +314,7 @@ fn crop_picture(img: &HdrImage, (x0, y0, cw, ch): (u32, u32, u32, u32), zoom: u3
     image::imageops::resize(&image_picture(&crop), cw * zoom, ch * zoom, image::imageops::FilterType::Nearest)
 }
 
-/// The anti-aliasing picture: the same crop ([`aa_crop`] of the no-AA image) of the every-sample reference and of
+/// The anti-aliasing picture: the same crop (`aa_crop` of the no-AA image) of the every-sample reference and of
 /// each method's image in [`Pipelines::aa`], magnified [`AA_CROP_ZOOM`]×, each captioned with its method and error
 /// (LDR-FLIP when measured, else RMSE). Returns the picture and the crop.
 pub fn aa_crop_picture(p: &Pipelines, reference: &HdrImage) -> Result<(RgbImage, (u32, u32, u32, u32))> {

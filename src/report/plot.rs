@@ -239,7 +239,7 @@ impl ScatterPlot {
 
     /// Whether (x, y) are drawn on log axes, after the automatic choice.
     #[must_use]
-    pub fn log_axes(&self) -> (bool, bool) {
+    fn log_axes(&self) -> (bool, bool) {
         let pts = self.finite();
         let xs: Vec<f64> = pts.iter().map(|p| p.x).collect();
         let ys: Vec<f64> = pts.iter().map(|p| p.y).collect();

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 /// The JSON text of a report. Non-finite numbers become `null` (an infinite PSNR, i.e. an image identical to the
 /// reference, shows as `null` with `rmse` 0).
-pub fn to_json(rep: &Report) -> Result<String> {
+fn to_json(rep: &Report) -> Result<String> {
     serde_json::to_string_pretty(rep).map_err(json_err)
 }
 

@@ -45,7 +45,7 @@ pub fn shade(isa: Isa, it: &mut Items, range: std::ops::Range<usize>, lights: &L
 
 /// [`shade`] on the portable path whatever the CPU (to compare the vector paths against it).
 #[cfg_attr(not(test), allow(dead_code))] // the bound / scalar path the tests check against
-pub fn shade_portable(it: &mut Items, range: std::ops::Range<usize>, lights: &LightTable, quad: &QuadSoa, v: Variant) {
+fn shade_portable(it: &mut Items, range: std::ops::Range<usize>, lights: &LightTable, quad: &QuadSoa, v: Variant) {
     shade_with(None, it, range, lights, quad, v);
 }
 

@@ -31,7 +31,7 @@ use std::f64::consts::PI;
 /// (the light pre-pass's approximation too). The specular response to an environment needs prefiltered maps and
 /// is left out.
 #[must_use]
-pub fn environment_factor(albedo: DVec3, metallic: f64, brdf: Brdf) -> DVec3 {
+fn environment_factor(albedo: DVec3, metallic: f64, brdf: Brdf) -> DVec3 {
     match brdf {
         Brdf::Lambert => albedo,
         Brdf::BlinnPhong => albedo * PI,

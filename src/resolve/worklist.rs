@@ -78,7 +78,7 @@ macro_rules! soa {
                 $(self.$u.clear();)*
             }
             /// Appends a copy of its own item `i`.
-            pub fn push_copy(&mut self, i: usize) {
+            fn push_copy(&mut self, i: usize) {
                 $(let v = self.$f[i]; self.$f.push(v);)*
                 $(let v = self.$u[i]; self.$u.push(v);)*
             }

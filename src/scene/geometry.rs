@@ -57,14 +57,14 @@ impl Mesh {
     }
 
     /// Adds one triangle to object `obj`.
-    pub fn add_triangle(&mut self, obj: u32, v: [Vec3; 3], n: [Vec3; 3], smooth: bool) {
+    fn add_triangle(&mut self, obj: u32, v: [Vec3; 3], n: [Vec3; 3], smooth: bool) {
         let prim = self.prim_counts[obj as usize];
         self.prim_counts[obj as usize] += 1;
         self.triangles.push(Triangle { v, n, smooth, object: obj, prim });
     }
 
     /// Adds a planar quad `a b c d` (in order around the edge) as two flat triangles with the given exact normal.
-    pub fn add_quad(&mut self, obj: u32, [a, b, c, d]: [Vec3; 4], normal: Vec3) {
+    fn add_quad(&mut self, obj: u32, [a, b, c, d]: [Vec3; 4], normal: Vec3) {
         self.add_triangle(obj, [a, b, c], [normal; 3], false);
         self.add_triangle(obj, [a, c, d], [normal; 3], false);
     }

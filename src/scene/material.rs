@@ -35,7 +35,7 @@ pub fn blinn_phong_power(roughness: f32) -> f32 {
 }
 
 impl Material {
-    /// A material whose specular power follows from its roughness ([`blinn_phong_power`]).
+    /// A material whose specular power follows from its roughness (`blinn_phong_power`).
     #[must_use]
     pub fn pbr(name: &'static str, albedo: [f32; 3], specular: f32, roughness: f32, metallic: f32) -> Self {
         Material {

@@ -6,19 +6,19 @@
 //! ground truth for the rest of the crate: exact IDs, exact normals where the scene says so, depth and position
 //! consistent with the camera ray through each sample position.
 //!
-//! - [`room`]: a furnished interior with sky, thin bars, smooth spheres and a dozen materials.
+//! - `room`: a furnished interior with sky, thin bars, smooth spheres and a dozen materials.
 //! - [`stress`]: the extreme values and geometric corner cases, on an almost empty image.
 //!
-//! Rendering is parallel over image rows with rayon; see [`raycast`] for the conventions and [`bvh`] for the
+//! Rendering is parallel over image rows with rayon; see [`raycast`] for the conventions and `bvh` for the
 //! acceleration structure.
 
-pub mod bvh;
-pub mod geometry;
+pub(crate) mod bvh;
+pub(crate) mod geometry;
 pub mod lights;
-pub mod material;
+pub(crate) mod material;
 pub mod raycast;
 pub mod rematerialise;
-pub mod room;
+pub(crate) mod room;
 pub mod stress;
 
 pub use self::lights::{choose_lights, default_lights, scatter_lights, scene_sidecar, sidecar_light, LightsSource};
@@ -35,7 +35,7 @@ pub const MAX_RENDER_SAMPLES: u64 = 1 << 25;
 /// The built-in analytic scenes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SceneName {
-    /// A furnished room open to the sky (see [`room`]).
+    /// A furnished room open to the sky (see `room`).
     Room,
     /// Extreme values and corner cases on an almost empty image (see [`stress`]).
     Stress,

@@ -33,7 +33,7 @@ pub struct ViewScene {
 
 /// Nearest hit `t > 0` of the view ray `dir · t` (from the eye at the origin; `t` is the view depth when
 /// `dir.z = −1`) with the sphere of `centre` and `radius`; `None` for a miss or a non-finite `t`. The analytic
-/// scenes of the tests and of the resolve's fixture use it beside the triangle [`Bvh`].
+/// scenes of the tests and of the resolve's fixture use it beside the triangle `Bvh`.
 #[inline]
 #[must_use]
 pub fn ray_sphere(dir: Vec3, centre: Vec3, radius: f32) -> Option<f32> {

@@ -3,7 +3,7 @@
 //! one triangle (the barycentrics), interpolate, and look the material up — and compare with the G-buffer.
 //!
 //! For the analytic scenes the geometry is known, so this is exact: the renderer's own triangle test
-//! ([`super::bvh::intersect_triangle`]) and shading normal give the same bits (the error should be 0; a non-zero
+//! (`super::bvh::intersect_triangle`) and shading normal give the same bits (the error should be 0; a non-zero
 //! one means the dump is not that scene at that size). The work per sample is counted from the code
 //! ([`OPS_PER_SAMPLE`]): what a visibility-buffer renderer pays per shaded sample instead of reading a fat G-buffer.
 

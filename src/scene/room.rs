@@ -81,7 +81,7 @@ impl Builder {
 
 /// The room in world space (Y up), before the camera transform.
 #[must_use]
-pub fn world_mesh() -> Mesh {
+fn world_mesh() -> Mesh {
     let mut b = Builder { mesh: Mesh::default(), palette: room_palette() };
 
     // Floor: 6 × 9 tiles of 2 m, checkered.

@@ -570,33 +570,31 @@ impl Quantizer for F16Q {
     }
 }
 
-/// `v.round() as i32` for |v| < 2^31, without the libm call that `f32::round` becomes on baseline x86-64 (no
-/// SSE4.1) and in 32-bit lanes so it vectorises: truncate, then step away from zero when the fraction, which
-/// `v − trunc(v)` gives exactly, is at least one half.
-#[inline(always)]
+/// The tests' second route to `v.round() as i32` (|v| < 2^31), which `round_in_range` must match: truncate, then
+/// step away from zero when the fraction, which `v − trunc(v)` gives exactly, is at least one half.
+#[cfg(test)]
 #[must_use]
-pub fn round_half_away(v: f32) -> i32 {
+fn round_half_away(v: f32) -> i32 {
     let t = v as i32;
     let f = v - t as f32;
     t + i32::from(f >= 0.5) - i32::from(f <= -0.5)
 }
 
-/// `v.round() as i32` for f64 with |v| < 2^31 (saturating beyond, NaN → 0, like `as`): `f64::round` has no x86
-/// instruction and stays a libm call even inside vectorised loops; truncating and looking at the exact fraction
-/// `v − trunc(v)` gives the same integer and vectorises.
-#[inline(always)]
+/// [`round_half_away`] for f64 (saturating beyond ±2^31, NaN → 0, like `as`): the tests' second route to
+/// `round_in_range_f64`.
+#[cfg(test)]
 #[must_use]
-pub fn round_half_away_f64(v: f64) -> i32 {
+fn round_half_away_f64(v: f64) -> i32 {
     let t = v as i32;
     let f = v - f64::from(t);
     t + i32::from(f >= 0.5) - i32::from(f <= -0.5)
 }
 
-/// [`round_half_away_f64`] for a code before rounding (a unorm/snorm/depth code the caller has clamped to
+/// `v.round() as i32` for a code before rounding (a unorm/snorm/depth code the caller has clamped to
 /// |v| ≤ 2^24): the truncation skips the saturating checks of `as`, which otherwise turn the vectorised loop back
 /// into one scalar conversion per element. Safe for every input: NaN gives 0 and values beyond ±2^24 are clamped
 /// there first (a select and a min/max, which stay in vector lanes), so the unchecked truncation always fits.
-/// Equal to [`round_half_away_f64`] on |v| ≤ 2^24 (tested, with NaN and out-of-range inputs).
+/// Equal to `f64::round` on |v| ≤ 2^24 (tested, with NaN and out-of-range inputs).
 #[inline(always)]
 #[must_use]
 pub fn round_in_range_f64(v: f64) -> i32 {
