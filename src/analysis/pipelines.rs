@@ -27,6 +27,7 @@ use crate::resolve::{self, Culling, MsaaSchedule, ResolveConfig, Schedule};
 use crate::scene::rematerialise::{rematerialise, Rematerialised};
 use crate::scene::SceneName;
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 use std::time::Instant;
 
 pub use crate::analysis::traffic::Pipeline;
@@ -267,14 +268,14 @@ fn schedule_runs(
     lights: &[Light],
     mask: &EdgeMask,
     resolve_cfg: &ResolveConfig,
-    tiled: Option<&(resolve::Resolved, f64)>,
+    tiled: Option<&Tiled>,
     gbuffer_bytes: u32,
 ) -> Result<Vec<ScheduleRun>> {
     let mut schedules: Vec<ScheduleRun> = Vec::new();
-    let mut first_image: Option<HdrImage> = None;
+    let mut first_image: Option<Arc<HdrImage>> = None;
     for sched in MsaaSchedule::ALL {
-        let (r, ms) = match (tiled, sched) {
-            (Some((r, ms)), MsaaSchedule::Packed) => (r.clone(), *ms),
+        let (image, stats, ms) = match (tiled, sched) {
+            (Some(t), MsaaSchedule::Packed) => (Arc::clone(&t.image.image), t.stats.clone(), t.ms),
             _ => {
                 let rc = ResolveConfig {
                     culling: Culling::Tiled,
@@ -284,21 +285,21 @@ fn schedule_runs(
                 };
                 let t = Instant::now();
                 let r = resolve::resolve(gb, lights, mask, &rc)?;
-                (r, t.elapsed().as_secs_f64() * 1e3)
+                (Arc::new(r.image), r.stats, t.elapsed().as_secs_f64() * 1e3)
             }
         };
-        let same_image = first_image.as_ref().is_none_or(|p| p.rgb == r.image.rgb);
+        let same_image = first_image.as_ref().is_none_or(|p| p.rgb == image.rgb);
         schedules.push(ScheduleRun {
             schedule: sched,
             ms,
-            evaluations: r.stats.shading_evaluations,
-            lane_steps: r.stats.lane_steps,
-            light_pairs: r.stats.light_pairs_tested,
-            bytes_read: r.stats.shading_evaluations * u64::from(gbuffer_bytes),
+            evaluations: stats.shading_evaluations,
+            lane_steps: stats.lane_steps,
+            light_pairs: stats.light_pairs_tested,
+            bytes_read: stats.shading_evaluations * u64::from(gbuffer_bytes),
             same_image,
         });
         if first_image.is_none() {
-            first_image = Some(r.image);
+            first_image = Some(image);
         }
     }
     Ok(schedules)
@@ -384,8 +385,16 @@ enum FlipKey {
 /// are not computed again.
 struct FlipBatch<'a> {
     known: &'a [KnownFlip<'a>],
-    images: std::cell::RefCell<Vec<HdrImage>>,
+    images: std::cell::RefCell<Vec<Arc<HdrImage>>>,
     wants: std::cell::RefCell<Vec<(FlipSlot, Option<FlipKey>)>>,
+}
+
+/// An image a stage made, shared with the FLIP batch when the batch keeps it (no copy), and where its FLIP comes
+/// from (`None`: FLIP not wanted).
+#[derive(Clone)]
+struct Shared {
+    image: Arc<HdrImage>,
+    key: Option<FlipKey>,
 }
 
 impl<'a> FlipBatch<'a> {
@@ -393,25 +402,28 @@ impl<'a> FlipBatch<'a> {
         FlipBatch { known, images: Default::default(), wants: Default::default() }
     }
 
-    /// Where the FLIP of `img` comes from (a new distinct image is added), or `None` when FLIP is not wanted.
-    fn image(&self, img: &HdrImage, wanted: bool) -> Option<FlipKey> {
+    /// `img` with where its FLIP comes from: a new distinct image is kept (shared, not copied); one equal to an
+    /// image the batch holds is dropped for that one; one equal to a known image keeps its known numbers.
+    fn share(&self, img: HdrImage, wanted: bool) -> Shared {
         if !wanted {
-            return None;
+            return Shared { image: Arc::new(img), key: None };
         }
         let same = |m: &HdrImage| m.width == img.width && m.height == img.height && m.rgb == img.rgb;
         if let Some(k) = self.known.iter().position(|k| same(k.image)) {
-            return Some(FlipKey::Known(k));
+            return Shared { image: Arc::new(img), key: Some(FlipKey::Known(k)) };
         }
         let mut images = self.images.borrow_mut();
-        Some(FlipKey::New(images.iter().position(same).unwrap_or_else(|| {
-            images.push(img.clone());
-            images.len() - 1
-        })))
+        if let Some(k) = images.iter().position(|m| same(m)) {
+            return Shared { image: Arc::clone(&images[k]), key: Some(FlipKey::New(k)) };
+        }
+        let image = Arc::new(img);
+        images.push(Arc::clone(&image));
+        Shared { image, key: Some(FlipKey::New(images.len() - 1)) }
     }
 
-    /// Row `slot` gets the FLIP of image `key`.
-    fn wants(&self, slot: FlipSlot, key: Option<FlipKey>) {
-        self.wants.borrow_mut().push((slot, key));
+    /// Row `slot` gets the FLIP of `img`.
+    fn wants(&self, slot: FlipSlot, img: &Shared) {
+        self.wants.borrow_mut().push((slot, img.key));
     }
 
     /// Computes the FLIPs and writes them into the rows' error sets.
@@ -424,7 +436,7 @@ impl<'a> FlipBatch<'a> {
         compressed: &mut [CompressedRow],
     ) {
         let images = self.images.into_inner();
-        let tests: Vec<&HdrImage> = images.iter().collect();
+        let tests: Vec<&HdrImage> = images.iter().map(|i| &**i).collect();
         let results = if tests.is_empty() { Vec::new() } else { flip_many(reference, &tests, viewing) };
         for (slot, key) in self.wants.into_inner() {
             let flip = match key {
@@ -510,9 +522,13 @@ pub fn pipelines_with(
     let (mut aa, aa_images, mlaa_stats) = m.aa_rows(no_aa, tiled)?;
     let mut compressed = m.compressed_rows()?;
     let Measure { flips, .. } = m;
-    if let Some(v) = cfg.viewing.as_ref() {
-        flips.fill(reference, v, &mut rows, &mut aa, &mut compressed);
+    match cfg.viewing.as_ref() {
+        Some(v) => flips.fill(reference, v, &mut rows, &mut aa, &mut compressed),
+        None => drop(flips),
     }
+    // The batch is gone: each image is the anti-aliasing rows' own again (a copy only where two rows share one).
+    let aa_images: Vec<HdrImage> =
+        aa_images.into_iter().map(|i| Arc::try_unwrap(i).unwrap_or_else(|i| (*i).clone())).collect();
     let (rematerialised, rematerialise_error) = match cfg.geometry {
         Some(name) => match rematerialise(name, gb) {
             Ok(r) => (Some(r), None),
@@ -558,11 +574,20 @@ struct Measure<'a> {
     flips: FlipBatch<'a>,
 }
 
-/// The no-AA image: one sample per pixel through the tiled resolve, the time it took, and where its samples come from.
+/// The no-AA image: one sample per pixel through the tiled resolve (its image moved to `image`), the time it took,
+/// and where its samples come from.
 struct NoAa {
     resolved: resolve::Resolved,
+    image: Shared,
     ms: f64,
     note: &'static str,
+}
+
+/// The tiled deferred run with the packed MSAA schedule: the schedules and the detector's anti-aliasing row are it.
+struct Tiled {
+    image: Shared,
+    stats: resolve::ResolveStats,
+    ms: f64,
 }
 
 /// The forward rows' measurements, kept in [`Pipelines`] (each `None` when the G-buffer cannot give it).
@@ -579,9 +604,14 @@ impl Measure<'_> {
         error_set(self.reference, img, None)
     }
 
-    /// Row `slot` gets the FLIP of `img` (when FLIP is wanted).
-    fn flip(&self, slot: FlipSlot, img: &HdrImage) {
-        self.flips.wants(slot, self.flips.image(img, self.cfg.viewing.is_some()));
+    /// `img`, handed to the FLIP batch (kept there without a copy when FLIP is wanted).
+    fn share(&self, img: HdrImage) -> Shared {
+        self.flips.share(img, self.cfg.viewing.is_some())
+    }
+
+    /// Row `slot` gets the FLIP of `img`.
+    fn flip(&self, slot: FlipSlot, img: &Shared) {
+        self.flips.wants(slot, img);
     }
 
     /// Lights `gb` with `mask` under `culling` and `schedule`, timed in milliseconds.
@@ -595,7 +625,7 @@ impl Measure<'_> {
     /// One sample per pixel through the tiled resolve: `single` when given, else every pixel's sample 0.
     fn no_aa(&self, single: Option<&GBuffer>) -> Result<NoAa> {
         let cfg = self.cfg;
-        let (resolved, ms) = match single {
+        let (mut resolved, ms) = match single {
             Some(one) => {
                 let none = detect::detect(one, Detector::None, &cfg.detector_config)?;
                 let rc = ResolveConfig { culling: Culling::Tiled, schedule: Schedule::Deferred, ..cfg.resolve };
@@ -615,7 +645,8 @@ impl Measure<'_> {
         } else {
             "the 1-sample dump"
         };
-        Ok(NoAa { resolved, ms, note })
+        let image = self.share(std::mem::take(&mut resolved.image));
+        Ok(NoAa { resolved, image, ms, note })
     }
 
     /// The forward, forward MSAA, forward+ and visibility-buffer rows (skipped, with the reason, without primitive
@@ -663,12 +694,12 @@ impl Measure<'_> {
                 }
                 let (msaa_img, _) = self.run(&fm_mask, Culling::Tiled, Schedule::Deferred)?;
                 let msaa_err = self.err(&msaa_img.image);
-                // One image for three rows: keyed once (the batch compares each new image with those it holds).
-                let key = self.flips.image(&msaa_img.image, cfg.viewing.is_some());
+                // One image for three rows: shared once (the batch compares each new image with those it holds).
+                let msaa = self.share(msaa_img.image);
                 for p in [Pipeline::ForwardMsaa, Pipeline::ForwardPlus, Pipeline::VisibilityBuffer] {
-                    self.flips.wants(FlipSlot::Row(p), key);
+                    self.flip(FlipSlot::Row(p), &msaa);
                 }
-                self.flip(FlipSlot::Row(Pipeline::Forward), &no_aa.resolved.image);
+                self.flip(FlipSlot::Row(Pipeline::Forward), &no_aa.image);
                 let util = |q: &QuadShading| if q.lanes > 0 { q.covered_lanes as f64 / q.lanes as f64 } else { 1.0 };
                 let vb = cfg.visibility_layout.bytes_per_sample() as f64;
                 let n = Counts {
@@ -707,7 +738,7 @@ impl Measure<'_> {
                     Pipeline::Forward,
                     f1,
                     f1.lanes * n_lights,
-                    self.err(&no_aa.resolved.image),
+                    self.err(&no_aa.image.image),
                     forward_note.into(),
                 ));
                 rows.push(row(
@@ -763,7 +794,7 @@ impl Measure<'_> {
     /// The deferred rows (quad lights, tiled, light pre-pass): `mask`, the chosen detector's, through the resolve.
     /// Returns the tiled deferred run when the packed MSAA schedule made it (the schedules and the detector's
     /// anti-aliasing row reuse it).
-    fn deferred_rows(&self, mask: &EdgeMask, rows: &mut Vec<PipelineRow>) -> Result<Option<(resolve::Resolved, f64)>> {
+    fn deferred_rows(&self, mask: &EdgeMask, rows: &mut Vec<PipelineRow>) -> Result<Option<Tiled>> {
         let (gb, cfg) = (self.gb, self.cfg);
         let b = cfg.gbuffer_bytes;
         let ts = cfg.resolve.tile_size;
@@ -777,16 +808,19 @@ impl Measure<'_> {
             ..Counts::default()
         };
         let footprint = |p: Pipeline| p.footprint(&n).expect("every count is known");
-        let mut tiled: Option<(resolve::Resolved, f64)> = None;
+        let mut tiled: Option<Tiled> = None;
         for (pipeline, culling, schedule) in [
             (Pipeline::DeferredQuad, Culling::Quad, Schedule::Deferred),
             (Pipeline::TiledDeferred, Culling::Tiled, Schedule::Deferred),
             (Pipeline::LightPrepass, Culling::Tiled, Schedule::LightPrepass),
         ] {
-            let (r, ms) = self.run(mask, culling, schedule)?;
+            let (mut r, ms) = self.run(mask, culling, schedule)?;
+            let error = self.err(&r.image);
+            let image = self.share(std::mem::take(&mut r.image));
+            self.flip(FlipSlot::Row(pipeline), &image);
             if pipeline == Pipeline::TiledDeferred && cfg.resolve.msaa == MsaaSchedule::Packed {
                 // The packed schedule's run and the detector's anti-aliasing row below are this resolve.
-                tiled = Some((r.clone(), ms));
+                tiled = Some(Tiled { image, stats: r.stats.clone(), ms });
             }
             let st = &r.stats;
             let (footprint, traffic, note) = match pipeline {
@@ -815,22 +849,17 @@ impl Measure<'_> {
                 light_pairs: st.light_pairs_tested,
                 utilisation: packed.ratio,
                 cpu_ms: Some(ms),
-                error: Some(self.err(&r.image)),
+                error: Some(error),
                 estimated: false,
                 note,
             });
-            self.flip(FlipSlot::Row(pipeline), &r.image);
         }
         Ok(tiled)
     }
 
     /// Anti-aliasing: the no-AA image, MLAA on it, adaptive MSAA with each detector, SSAA. Returns the rows, their
     /// images (in row order) and MLAA's statistics.
-    fn aa_rows(
-        &self,
-        no_aa: NoAa,
-        tiled: Option<(resolve::Resolved, f64)>,
-    ) -> Result<(Vec<AaRow>, Vec<HdrImage>, MlaaStats)> {
+    fn aa_rows(&self, no_aa: NoAa, tiled: Option<Tiled>) -> Result<(Vec<AaRow>, Vec<Arc<HdrImage>>, MlaaStats)> {
         let (gb, cfg) = (self.gb, self.cfg);
         let (w, h, s) = (gb.width, gb.height, gb.samples);
         let pixels = f64::from(w) * f64::from(h);
@@ -838,51 +867,54 @@ impl Measure<'_> {
         let mut aa = Vec::new();
         let mut aa_images = Vec::new();
         let t = Instant::now();
-        let (smoothed, mlaa_stats) = mlaa(&no_aa.resolved.image.rgb, w, h, &cfg.mlaa);
+        let (smoothed, mlaa_stats) = mlaa(&no_aa.image.image.rgb, w, h, &cfg.mlaa);
         let mlaa_ms = t.elapsed().as_secs_f64() * 1e3;
         let smoothed = HdrImage { width: w, height: h, rgb: smoothed };
         let evals = no_aa.resolved.stats.shading_evaluations;
-        self.flip(FlipSlot::Aa(aa.len()), &no_aa.resolved.image);
+        self.flip(FlipSlot::Aa(aa.len()), &no_aa.image);
         aa.push(AaRow {
             method: "no-aa".into(),
             evaluations: evals,
             footprint_mb: gbuf_mb(1),
             ms: no_aa.ms,
-            error: self.err(&no_aa.resolved.image),
+            error: self.err(&no_aa.image.image),
             note: no_aa.note.into(),
         });
         // MLAA's buffers on a GPU: an RG8 edge texture and an RGBA8 blend-weight texture.
+        let error = self.err(&smoothed);
+        let smoothed = self.share(smoothed);
         self.flip(FlipSlot::Aa(aa.len()), &smoothed);
         aa.push(AaRow {
             method: "mlaa".into(),
             evaluations: evals,
             footprint_mb: gbuf_mb(1) + 6.0 * pixels / 1e6,
             ms: no_aa.ms + mlaa_ms,
-            error: self.err(&smoothed),
+            error,
             note: format!("on {}", no_aa.note),
         });
-        aa_images.push(no_aa.resolved.image);
-        aa_images.push(smoothed);
+        aa_images.push(no_aa.image.image);
+        aa_images.push(smoothed.image);
         let mut methods: Vec<(String, Detector)> = cfg.aa_detectors.iter().map(|&d| (format!("msaa:{d}"), d)).collect();
         methods.push(("ssaa".into(), Detector::Ssaa));
         for (method, d) in methods {
-            let (r, ms) = match &tiled {
-                Some((r, ms)) if d == cfg.detector => (r.clone(), *ms),
+            let (image, evaluations, ms) = match &tiled {
+                Some(t) if d == cfg.detector => (t.image.clone(), t.stats.shading_evaluations, t.ms),
                 _ => {
                     let Ok(m) = detect::detect(gb, d, &cfg.detector_config) else { continue };
-                    self.run(&m, Culling::Tiled, Schedule::Deferred)?
+                    let (r, ms) = self.run(&m, Culling::Tiled, Schedule::Deferred)?;
+                    (self.share(r.image), r.stats.shading_evaluations, ms)
                 }
             };
-            self.flip(FlipSlot::Aa(aa.len()), &r.image);
+            self.flip(FlipSlot::Aa(aa.len()), &image);
             aa.push(AaRow {
                 method,
-                evaluations: r.stats.shading_evaluations,
+                evaluations,
                 footprint_mb: gbuf_mb(s),
                 ms,
-                error: self.err(&r.image),
+                error: self.err(&image.image),
                 note: String::new(),
             });
-            aa_images.push(r.image);
+            aa_images.push(image.image);
         }
         Ok((aa, aa_images, mlaa_stats))
     }
@@ -911,11 +943,12 @@ impl Measure<'_> {
         );
         for (method, k) in runs {
             let t = Instant::now();
-            let lit =
+            let mut lit =
                 light_compressed(gb, method, &StreamingConfig { slots: k, merge: true }, self.lights, &rc, STRIP_ROWS)?;
             let ms = t.elapsed().as_secs_f64() * 1e3;
             let f = footprint(cfg.gbuffer_bytes, gb.samples, k);
-            self.flip(FlipSlot::Compressed(rows.len()), &lit.image);
+            let error = self.err(&lit.image);
+            self.flip(FlipSlot::Compressed(rows.len()), &self.share(std::mem::take(&mut lit.image)));
             rows.push(CompressedRow {
                 method,
                 slots: k,
@@ -930,7 +963,7 @@ impl Measure<'_> {
                 evicted_fraction: if covered > 0.0 { lit.evicted_samples as f64 / covered } else { 0.0 },
                 discarded_pixels: lit.discarded_pixels,
                 ms,
-                error: self.err(&lit.image),
+                error,
             });
         }
         Ok(rows)

@@ -720,7 +720,7 @@ fn ldr_many(
     let mut maps: Vec<Vec<f32>> = tests.iter().map(|_| vec![0.0f32; npix]).collect();
     if npix > 0 && !tests.is_empty() {
         let ctx = Ctx::new(width, height, opts.pixels_per_degree);
-        run_bands_many(&ctx, reference, tests, Encoding::Srgb, &mut maps, None);
+        run_bands_many(&ctx, reference, tests, Encoding::Srgb, &mut maps, Merge::Store);
     }
     maps.into_iter()
         .map(|values| {
@@ -747,25 +747,7 @@ pub fn hdr_flip_many(
     height: usize,
     opts: &FlipOptions,
 ) -> Vec<HdrFlip> {
-    for t in tests {
-        check_sizes(reference_linear, t, width, height);
-    }
-    let tm = ToneMapper::default();
-    let (start, stop) = compute_exposures(reference_linear, tm);
-    let n = exposure_count(start, stop);
-    let exposures = exposure_list(start, stop, n);
-    let npix = width * height;
-    let mut maxes: Vec<Vec<f32>> = tests.iter().map(|_| vec![0.0f32; npix]).collect();
-    let mut tags: Vec<Vec<f32>> = tests.iter().map(|_| vec![0.0f32; npix]).collect();
-    if npix > 0 && !tests.is_empty() {
-        let ctx = Ctx::new(width, height, opts.pixels_per_degree);
-        for (i, &e) in exposures.iter().enumerate() {
-            let enc = Encoding::Hdr { scale: 2.0f32.powf(e), tm };
-            let tag = i as f32 / (n - 1) as f32;
-            let tests: Vec<Pixels<'_>> = tests.iter().map(|t| Pixels::F32(t)).collect();
-            run_bands_many(&ctx, Pixels::F32(reference_linear), &tests, enc, &mut maxes, Some((&mut tags, tag)));
-        }
-    }
+    let (exposures, start, stop, tm, maxes, tags) = hdr_many(reference_linear, tests, width, height, opts, true);
     maxes
         .into_iter()
         .zip(tags)
@@ -783,6 +765,62 @@ pub fn hdr_flip_many(
         .collect()
 }
 
+/// The mean HDR-FLIP of each test ([`hdr_flip_many`]'s `map.mean`, bit for bit) without its exposure map: a third
+/// of the memory per test while the exposures run (the per-pixel maximum only), and nothing kept after.
+#[must_use]
+pub fn hdr_flip_means(
+    reference_linear: &[f32],
+    tests: &[&[f32]],
+    width: usize,
+    height: usize,
+    opts: &FlipOptions,
+) -> Vec<f64> {
+    let (.., maxes, _) = hdr_many(reference_linear, tests, width, height, opts, false);
+    maxes.iter().map(|m| mean_f64(m)).collect()
+}
+
+/// What [`hdr_flip_many`] computes: the exposures, the range and tone mapper they came from, each test's per-pixel
+/// maximum over the exposures and, when `tagged`, its exposure map (else empty vectors).
+#[allow(clippy::type_complexity)]
+fn hdr_many(
+    reference_linear: &[f32],
+    tests: &[&[f32]],
+    width: usize,
+    height: usize,
+    opts: &FlipOptions,
+    tagged: bool,
+) -> (Vec<f32>, f32, f32, ToneMapper, Vec<Vec<f32>>, Vec<Vec<f32>>) {
+    for t in tests {
+        check_sizes(reference_linear, t, width, height);
+    }
+    let tm = ToneMapper::default();
+    let (start, stop) = compute_exposures(reference_linear, tm);
+    let n = exposure_count(start, stop);
+    let exposures = exposure_list(start, stop, n);
+    let npix = width * height;
+    let mut maxes: Vec<Vec<f32>> = tests.iter().map(|_| vec![0.0f32; npix]).collect();
+    let mut tags: Vec<Vec<f32>> = tests.iter().map(|_| if tagged { vec![0.0f32; npix] } else { Vec::new() }).collect();
+    if npix > 0 && !tests.is_empty() {
+        let ctx = Ctx::new(width, height, opts.pixels_per_degree);
+        for (i, &e) in exposures.iter().enumerate() {
+            let enc = Encoding::Hdr { scale: 2.0f32.powf(e), tm };
+            let tag = i as f32 / (n - 1) as f32;
+            let tests: Vec<Pixels<'_>> = tests.iter().map(|t| Pixels::F32(t)).collect();
+            let merge = if tagged { Merge::Tagged(&mut tags, tag) } else { Merge::Max };
+            run_bands_many(&ctx, Pixels::F32(reference_linear), &tests, enc, &mut maxes, merge);
+        }
+    }
+    (exposures, start, stop, tm, maxes, tags)
+}
+
+/// How [`run_bands_many`] writes each test's errors: as they are (LDR-FLIP), or into a running per-pixel maximum
+/// (HDR-FLIP's exposures), with the exposure maps and this exposure's tag when they are kept.
+enum Merge<'a> {
+    Store,
+    Max,
+    Tagged(&'a mut [Vec<f32>], f32),
+}
+
 /// One test's rows of a band: its error map's, and its exposure map's when merging.
 type BandRows<'a> = (&'a mut [f32], Option<&'a mut [f32]>);
 
@@ -793,7 +831,7 @@ fn run_bands_many(
     tests: &[Pixels<'_>],
     enc: Encoding,
     outs: &mut [Vec<f32>],
-    merge: Option<(&mut [Vec<f32>], f32)>,
+    merge: Merge<'_>,
 ) {
     let (w, h) = (ctx.w, ctx.h);
     let threads = rayon::current_num_threads().max(1);
@@ -802,9 +840,10 @@ fn run_bands_many(
     let band_h = h.div_ceil(nbands).next_multiple_of(2);
     // Per band, the rows of every test's output (and exposure map).
     let mut bands: Vec<Vec<BandRows<'_>>> = (0..h.div_ceil(band_h)).map(|_| Vec::new()).collect();
+    let max = !matches!(merge, Merge::Store);
     let (tag, mut tag_maps) = match merge {
-        Some((m, tag)) => (tag, Some(m.iter_mut().map(|m| m.chunks_mut(band_h * w)).collect::<Vec<_>>())),
-        None => (0.0, None),
+        Merge::Tagged(m, tag) => (tag, Some(m.iter_mut().map(|m| m.chunks_mut(band_h * w)).collect::<Vec<_>>())),
+        Merge::Store | Merge::Max => (0.0, None),
     };
     for (k, out) in outs.iter_mut().enumerate() {
         for (b, rows) in out.chunks_mut(band_h * w).enumerate() {
@@ -812,17 +851,28 @@ fn run_bands_many(
             bands[b].push((rows, e));
         }
     }
-    let merging = tag_maps.is_some();
     bands.into_par_iter().enumerate().for_each(|(b, mut outs)| {
         let y0 = b * band_h;
         let rows = outs[0].0.len() / w;
         let mut feats = vec![0.0f32; FEATURES * rows * w];
         band_features(ctx, r, enc, y0, rows, &mut Sink::Store(&mut feats));
         for (k, (out, em)) in outs.iter_mut().enumerate() {
-            let merge = if merging { em.as_deref_mut().map(|e| (e, tag)) } else { None };
-            band_features(ctx, tests[k], enc, y0, rows, &mut Sink::Compare { reference: &feats, out, merge });
+            let keep = match em.as_deref_mut() {
+                Some(e) => Keep::Tagged(e, tag),
+                None if max => Keep::Max,
+                None => Keep::Store,
+            };
+            band_features(ctx, tests[k], enc, y0, rows, &mut Sink::Compare { reference: &feats, out, keep });
         }
     });
+}
+
+/// What a test's band pass does with each error row: store it, keep the running per-pixel maximum, or keep the
+/// maximum and tag where it grew (HDR-FLIP's exposure map).
+enum Keep<'a> {
+    Store,
+    Max,
+    Tagged(&'a mut [f32], f32),
 }
 
 /// What a one-image band pass does with each tile row's features: store them (the reference's), or compare them
@@ -830,7 +880,7 @@ fn run_bands_many(
 /// tagging where it grew (HDR-FLIP's exposures). Buffers are band-sized, `FEATURES` planes of `rows × w`.
 enum Sink<'a> {
     Store(&'a mut [f32]),
-    Compare { reference: &'a [f32], out: &'a mut [f32], merge: Option<(&'a mut [f32], f32)> },
+    Compare { reference: &'a [f32], out: &'a mut [f32], keep: Keep<'a> },
 }
 
 /// Hands tile row `ry` (columns `x0..x0 + n`) of the features `f` to `sink`.
@@ -845,7 +895,7 @@ fn sink_row(ctx: &Ctx, sink: &mut Sink<'_>, rows: usize, ry: usize, x0: usize, f
                 feats[at(p)..at(p) + n].copy_from_slice(&plane[..n]);
             }
         }
-        Sink::Compare { reference, out, merge } => {
+        Sink::Compare { reference, out, keep } => {
             let (cmax, pccmax) = (ctx.cmax, ctx.pccmax);
             let r = |p: usize| &reference[at(p)..at(p) + n];
             let (lr, ar, br, er, pr) = (r(0), r(1), r(2), r(3), r(4));
@@ -855,9 +905,10 @@ fn sink_row(ctx: &Ctx, sink: &mut Sink<'_>, rows: usize, ry: usize, x0: usize, f
                 e[i] = flip_error(cd, er[i], pr[i], f[3][i], f[4][i]);
             }
             let orow = &mut out[ry * w + x0..ry * w + x0 + n];
-            match merge {
-                None => orow.copy_from_slice(&e[..n]),
-                Some((em, tag)) => keep_max(orow, &mut em[ry * w + x0..ry * w + x0 + n], &e[..n], *tag),
+            match keep {
+                Keep::Store => orow.copy_from_slice(&e[..n]),
+                Keep::Max => orow.iter_mut().zip(&e[..n]).for_each(|(o, &v)| *o = if v > *o { v } else { *o }),
+                Keep::Tagged(em, tag) => keep_max(orow, &mut em[ry * w + x0..ry * w + x0 + n], &e[..n], *tag),
             }
         }
     }
@@ -1583,6 +1634,9 @@ mod tests {
                 );
             }
             assert!(hdr[0].exposures.len() >= 2 && hdr[2].mean() > hdr[0].mean());
+            // The means alone, without exposure maps: the same bits.
+            let means = hdr_flip_means(&ha, &[&hb, &ha, &hc], w, h, &opts);
+            assert_eq!(means, hdr.iter().map(HdrFlip::mean).collect::<Vec<_>>(), "HDR means, generic {generic}");
         }
         force(None);
         assert!(ldr_flip_many(&a, &[], w, h, &opts).is_empty());

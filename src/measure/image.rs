@@ -213,8 +213,9 @@ fn shown(img: &HdrImage, viewing: &Viewing) -> Vec<u8> {
 
 /// FLIP of several tests against one reference (`None` for a test of another size): each test's numbers are those
 /// of `flip::ldr_flip` / `flip::hdr_flip` on the pair bit for bit, with the reference filtered once per pass instead
-/// of once per test: the LDR pass of every test, then
-/// the HDR exposures. The displayed and linear copies of the tests exist one kind at a time.
+/// of once per test. The HDR exposures run first and keep only each test's running maximum (no exposure map), then
+/// the LDR pass makes the maps: the two kinds of per-test buffers never exist at once, and the displayed and linear
+/// copies of the tests exist one kind at a time.
 #[must_use]
 pub fn flip_many(reference: &HdrImage, tests: &[&HdrImage], viewing: &Viewing) -> Vec<Option<(flip::FlipMap, f64)>> {
     let same = |t: &&HdrImage| {
@@ -223,18 +224,18 @@ pub fn flip_many(reference: &HdrImage, tests: &[&HdrImage], viewing: &Viewing) -
     let fit: Vec<&HdrImage> = tests.iter().copied().filter(same).collect();
     let (w, h) = (reference.width as usize, reference.height as usize);
     let opts = flip::FlipOptions { pixels_per_degree: viewing.pixels_per_degree };
+    let hdr = {
+        let tests: Vec<Cow<'_, [f32]>> = fit.iter().map(|t| linear(t)).collect();
+        let views: Vec<&[f32]> = tests.iter().map(|t| &**t).collect();
+        flip::hdr_flip_means(&linear(reference), &views, w, h, &opts)
+    };
     let ldr = {
         // The displayed images as bytes: a quarter of their floats (a 1080p test is 6 MB instead of 25).
         let tests: Vec<Vec<u8>> = fit.iter().map(|t| shown(t, viewing)).collect();
         let views: Vec<&[u8]> = tests.iter().map(Vec::as_slice).collect();
         flip::ldr_flip_many_srgb8(&shown(reference, viewing), &views, w, h, &opts)
     };
-    let hdr = {
-        let tests: Vec<Cow<'_, [f32]>> = fit.iter().map(|t| linear(t)).collect();
-        let views: Vec<&[f32]> = tests.iter().map(|t| &**t).collect();
-        flip::hdr_flip_many(&linear(reference), &views, w, h, &opts)
-    };
-    let mut results = ldr.into_iter().zip(hdr).map(|(l, h)| Some((l, h.mean())));
+    let mut results = ldr.into_iter().zip(hdr).map(|(l, h)| Some((l, h)));
     tests.iter().map(|t| if same(t) { results.next().expect("one result per fitting test") } else { None }).collect()
 }
 
