@@ -221,7 +221,10 @@ pub fn flip_many(reference: &HdrImage, tests: &[&HdrImage], viewing: &Viewing) -
     let same = |t: &&HdrImage| {
         t.width == reference.width && t.height == reference.height && t.rgb.len() == reference.rgb.len()
     };
-    let fit: Vec<&HdrImage> = tests.iter().copied().filter(same).collect();
+    // A test equal to the reference bit for bit has FLIP 0 everywhere (equal features at every exposure): it is
+    // not filtered. The report's lossless layout gives such an image.
+    let equal = |t: &&HdrImage| same(t) && t.rgb == reference.rgb;
+    let fit: Vec<&HdrImage> = tests.iter().copied().filter(|t| same(t) && !equal(t)).collect();
     let (w, h) = (reference.width as usize, reference.height as usize);
     let opts = flip::FlipOptions { pixels_per_degree: viewing.pixels_per_degree };
     let hdr = {
@@ -236,7 +239,15 @@ pub fn flip_many(reference: &HdrImage, tests: &[&HdrImage], viewing: &Viewing) -
         flip::ldr_flip_many_srgb8(&shown(reference, viewing), &views, w, h, &opts)
     };
     let mut results = ldr.into_iter().zip(hdr).map(|(l, h)| Some((l, h)));
-    tests.iter().map(|t| if same(t) { results.next().expect("one result per fitting test") } else { None }).collect()
+    let zero = || flip::FlipMap { width: w, height: h, values: vec![0.0; w * h], mean: 0.0 };
+    tests
+        .iter()
+        .map(|t| match (same(t), equal(t)) {
+            (true, true) => Some((zero(), 0.0)),
+            (true, false) => results.next().expect("one result per fitting test"),
+            (false, _) => None,
+        })
+        .collect()
 }
 
 /// An image as HDR-FLIP takes it: interleaved linear RGB, finite and non-negative. What the resolve writes already
@@ -457,5 +468,29 @@ mod tests {
         assert!(small.flip_hdr.unwrap() > 0.0 && large.flip_hdr.unwrap() > small.flip_hdr.unwrap());
         assert_eq!(error_set(&a, &b, None).flip_ldr, None);
         assert_eq!(error_set(&a, &HdrImage::new(2, 2), Some(&v)).flip_ldr, None, "sizes differ: no FLIP");
+    }
+
+    #[test]
+    fn a_test_equal_to_the_reference_skips_the_filters_with_their_numbers() {
+        let mut a = HdrImage::new(40, 24);
+        for (i, c) in a.rgb.iter_mut().enumerate() {
+            *c = Vec3::new((i % 7) as f32 * 0.3, (i % 5) as f32 * 2.0, (i % 11) as f32 * 0.05);
+        }
+        let mut b = a.clone();
+        b.rgb[100] += Vec3::splat(0.5);
+        let v = Viewing::default();
+        let got = flip_many(&a, &[&a, &b, &a], &v);
+        // What the filters give for the equal pair, computed through them.
+        let opts = flip::FlipOptions { pixels_per_degree: v.pixels_per_degree };
+        let shown_a = shown(&a, &v);
+        let ldr = flip::ldr_flip_many_srgb8(&shown_a, &[&shown_a], 40, 24, &opts).remove(0);
+        let hdr = flip::hdr_flip_means(&linear(&a), &[&linear(&a)], 40, 24, &opts)[0];
+        for k in [0, 2] {
+            let (map, mean) = got[k].as_ref().expect("same size");
+            assert_eq!((&map.values, map.mean, *mean), (&ldr.values, ldr.mean, hdr), "test {k}");
+        }
+        let (map, mean) = got[1].as_ref().expect("same size");
+        assert!(map.mean > 0.0 && *mean > 0.0);
+        assert_eq!(map.values, flip_pair(&a, &b, &v).unwrap().0.values, "the other test is filtered as before");
     }
 }
