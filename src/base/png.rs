@@ -1,4 +1,5 @@
-//! PNG output through the `png` crate: 8-bit RGB, zlib level [`LEVEL`] with the crate's adaptive filtering, an
+//! PNG output through the `png` crate: 8-bit RGB, the crate's fastest DEFLATE (`fdeflate`'s one-pass coder) with
+//! its adaptive filtering, an
 //! `sRGB` chunk (the pixels are sRGB-encoded: every picture gbuf writes goes through `base::picture`'s transfer
 //! function or a colour map) and provenance text chunks (`Software`: gbuf and its version; `Source`: the command
 //! line).
@@ -8,23 +9,31 @@
 
 use crate::error::{Error, Result};
 
-/// The DEFLATE level: zlib level 3. Against the image crate's default (level 6) on a resolved 1280×720 room frame,
-/// same run (`cargo bench --bench frame_io`, AMD EPYC Zen 4, AVX-512): 12.6 against 38.3 ms for a file 7.9% larger
+/// Encodes 8-bit RGB pixels (row-major, `width × height × 3` bytes) as a PNG file's bytes, with the crate's
+/// fastest DEFLATE. Against zlib level 3 (gbuf's earlier choice) on resolved 1280×720 frames of the ISPC peer
+/// (one thread, best of 7, AMD EPYC Zen 4): 3.4 against 36.7 ms for a file 15% larger (the Blender frame), 3.9
+/// against 24.3 ms for one 27% larger (the room); at 1920×1080 7.8 against 45.7 ms, 28% larger
 /// (docs/DECISIONS.md, "Writing PNGs").
-pub const LEVEL: u8 = 3;
-
-/// Encodes 8-bit RGB pixels (row-major, `width × height × 3` bytes) as a PNG file's bytes.
 pub fn encode_rgb8(width: u32, height: u32, rgb: &[u8]) -> Result<Vec<u8>> {
-    encode(width, height, rgb, LEVEL)
+    encode_with(width, height, rgb, png::DeflateCompression::FdeflateUltraFast)
 }
 
-/// [`encode_rgb8`] with the DEFLATE level given (0: stored, 1–9 zlib levels).
+/// [`encode_rgb8`] with the DEFLATE level given (0: stored, 1–9 zlib levels): smaller files, slower.
 pub fn encode(width: u32, height: u32, rgb: &[u8], level: u8) -> Result<Vec<u8>> {
-    if width == 0 || height == 0 {
-        return Err(Error::Argument(format!("PNG encoding: a {width}×{height} picture cannot be written")));
-    }
     if level > 9 {
         return Err(Error::Argument(format!("PNG encoding: DEFLATE level {level} is not in 0–9")));
+    }
+    let compression = if level == 0 {
+        png::DeflateCompression::NoCompression
+    } else {
+        png::DeflateCompression::Level(level)
+    };
+    encode_with(width, height, rgb, compression)
+}
+
+fn encode_with(width: u32, height: u32, rgb: &[u8], compression: png::DeflateCompression) -> Result<Vec<u8>> {
+    if width == 0 || height == 0 {
+        return Err(Error::Argument(format!("PNG encoding: a {width}×{height} picture cannot be written")));
     }
     let expected = 3 * u128::from(width) * u128::from(height);
     if rgb.len() as u128 != expected {
@@ -39,11 +48,7 @@ pub fn encode(width: u32, height: u32, rgb: &[u8], level: u8) -> Result<Vec<u8>>
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
     enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-    enc.set_deflate_compression(if level == 0 {
-        png::DeflateCompression::NoCompression
-    } else {
-        png::DeflateCompression::Level(level)
-    });
+    enc.set_deflate_compression(compression);
     enc.set_filter(png::Filter::Adaptive);
     // Provenance: the tool and the command that wrote the picture (PNG's registered `Software` and `Source`
     // keywords), so a figure pasted anywhere still says where it came from.
@@ -112,11 +117,15 @@ mod tests {
     fn every_level_round_trips_and_declares_srgb() {
         let (w, h) = (67, 41);
         let px = picture(w, h, 7);
-        for level in [0, 1, LEVEL, 9] {
+        for level in [0, 1, 3, 9] {
             let png = encode(w, h, &px, level).unwrap();
             assert_eq!(decode(&png), (w, h, px.clone()), "level {level}");
             assert!(png.windows(4).any(|c| c == b"sRGB"), "an sRGB chunk at level {level}");
         }
+        // The default (the fastest coder) too, and it compresses (stored would be 3 B a pixel and more).
+        let png = encode_rgb8(w, h, &px).unwrap();
+        assert_eq!(decode(&png), (w, h, px.clone()), "default");
+        assert!(png.len() < px.len(), "{} bytes for {} of pixels", png.len(), px.len());
     }
 
     #[test]
@@ -131,7 +140,8 @@ mod tests {
         fn random_pictures_round_trip(w in 1u32..40, h in 1u32..40, seed in any::<u32>(), level in 0u8..=9) {
             let px = picture(w, h, seed);
             let png = encode(w, h, &px, level).unwrap();
-            prop_assert_eq!(decode(&png), (w, h, px));
+            prop_assert_eq!(decode(&png), (w, h, px.clone()));
+            prop_assert_eq!(decode(&encode_rgb8(w, h, &px).unwrap()), (w, h, px));
         }
     }
 }
