@@ -91,6 +91,48 @@ fn packed_input_lights_every_layout_as_its_unpacked_gbuffer() {
     assert!(checked >= 2 * 8 * 3 * 3 * 10 * Isa::available().len(), "{checked} combinations");
 }
 
+/// A pixel shaded once whose sample 0 is unusable (nearer than the eye's minimum depth) is lit from its other
+/// samples: from a packed band as from the unpacked G-buffer, bit for bit.
+#[test]
+fn a_pixel_whose_first_sample_is_unusable_is_lit_from_its_other_samples() {
+    let (_, mut gb, lights) = frames().remove(0);
+    let s = gb.samples as usize;
+    let mut spoiled = Vec::new();
+    for p in (0..gb.len() / s).step_by(7) {
+        if gb.coverage[p * s] && gb.coverage[p * s + 1] {
+            // In front of the eye but nearer than any usable position (the resolve's MIN_VIEW_DEPTH).
+            let d = &mut gb.depth.as_mut().unwrap()[p * s];
+            let scale = 1e-9 / *d;
+            *d = 1e-9;
+            gb.position.as_mut().unwrap()[p * s] *= scale;
+            spoiled.push(p);
+        }
+    }
+    assert!(spoiled.len() > 100, "{} pixels", spoiled.len());
+    let det_cfg = DetectorConfig::default();
+    let mut near_kept = 0;
+    for layout in Layout::builtins() {
+        let packed = layout.pack(&gb).unwrap();
+        let unpacked = layout.unpack(&packed, &gb).unwrap();
+        let frame = layout.frame(&packed, &gb).unwrap();
+        let first_near = spoiled.iter().filter(|&&p| unpacked.depth.as_ref().unwrap()[p * s] < 1e-6).count();
+        near_kept += usize::from(first_near == spoiled.len());
+        for d in [Detector::None, Detector::Lauritzen] {
+            let mask = detect(&unpacked, d, &det_cfg).unwrap();
+            let cfg = ResolveConfig::default();
+            let a = resolve_isa(Isa::detect(), &unpacked, &lights, &mask, &cfg).unwrap();
+            let b = resolve_isa(Isa::detect(), &frame, &lights, &mask, &cfg).unwrap();
+            same(&a, &b, &format!("{} / {d}", layout.name()));
+            if first_near == spoiled.len() {
+                // Lit from the other samples: not the blank a pixel without a usable sample gets.
+                let lit = spoiled.iter().filter(|&&p| b.lights_per_pixel[p] > 0).count();
+                assert!(4 * lit > 3 * spoiled.len(), "{} / {d}: {lit} of {} lit", layout.name(), spoiled.len());
+            }
+        }
+    }
+    assert!(near_kept > 0, "no layout keeps the near depth: the case is not exercised");
+}
+
 #[test]
 fn packed_input_is_independent_of_thread_count_and_tile_size() {
     let (_, gb, lights) = frames().remove(0);

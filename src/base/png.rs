@@ -23,11 +23,8 @@ pub fn encode(width: u32, height: u32, rgb: &[u8], level: u8) -> Result<Vec<u8>>
     if level > 9 {
         return Err(Error::Argument(format!("PNG encoding: DEFLATE level {level} is not in 0–9")));
     }
-    let compression = if level == 0 {
-        png::DeflateCompression::NoCompression
-    } else {
-        png::DeflateCompression::Level(level)
-    };
+    let compression =
+        if level == 0 { png::DeflateCompression::NoCompression } else { png::DeflateCompression::Level(level) };
     encode_with(width, height, rgb, compression)
 }
 

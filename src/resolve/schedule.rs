@@ -659,52 +659,85 @@ fn gather(
         let row = y as usize * width;
         let local_row = (y - tile.y0) as usize * width + x0;
         let counts_row = &frame.mask.shade_count[row + x0..row + x0 + tw];
-        if let Some(plane) = plane {
-            // The common case first, a whole row at once: every pixel's sample 0 covered with a usable stored
-            // position (checked without branches). Otherwise pixel by pixel below.
-            let first = at.first(row + x0);
-            let end = first + (tw - 1) * stride + 1;
-            let (pos, cov) = (&plane[first..end], &gb.coverage[first..end]);
-            // `abs() < ∞` is `is_finite` without a branch per component (the loops vectorise).
-            let usable = |a: bool, (p, &c): (&Vec3, &bool)| {
-                a & c
-                    & (p.x.abs() < f32::INFINITY)
-                    & (p.y.abs() < f32::INFINITY)
-                    & (p.z.abs() < f32::INFINITY)
-                    & (-p.z > MIN_VIEW_DEPTH)
-            };
-            let ok = if stride == 1 {
-                pos.iter().zip(cov).fold(true, usable)
-            } else {
-                pos.iter().step_by(stride).zip(cov.iter().step_by(stride)).fold(true, usable)
-            };
-            if ok {
-                let n = it.px.len();
+        // The common case first, a whole row at once: every pixel's sample 0 covered with a usable position,
+        // stored or derived from depth (checked without branches). Otherwise pixel by pixel below.
+        let first = at.first(row + x0);
+        let end = first + (tw - 1) * stride + 1;
+        let n = it.px.len();
+        let taken = match (plane, gb.depth.as_deref(), rd.rays()) {
+            (Some(plane), ..) => {
+                let (pos, cov) = (&plane[first..end], &gb.coverage[first..end]);
+                // `abs() < ∞` is `is_finite` without a branch per component (the loops vectorise).
+                let usable = |a: bool, (p, &c): (&Vec3, &bool)| {
+                    a & c
+                        & (p.x.abs() < f32::INFINITY)
+                        & (p.y.abs() < f32::INFINITY)
+                        & (p.z.abs() < f32::INFINITY)
+                        & (-p.z > MIN_VIEW_DEPTH)
+                };
+                let ok = if stride == 1 {
+                    pos.iter().zip(cov).fold(true, usable)
+                } else {
+                    pos.iter().step_by(stride).zip(cov.iter().step_by(stride)).fold(true, usable)
+                };
+                if ok {
+                    for v in [&mut it.px, &mut it.py, &mut it.pz] {
+                        v.resize(n + tw, 0.0);
+                    }
+                    let (dx, dy, dz) = (&mut it.px[n..], &mut it.py[n..], &mut it.pz[n..]);
+                    if stride == 1 {
+                        for (((p, x), y), z) in pos.iter().zip(dx).zip(dy).zip(dz) {
+                            (*x, *y, *z) = (p.x, p.y, p.z);
+                        }
+                    } else {
+                        for (((p, x), y), z) in pos.iter().step_by(stride).zip(dx).zip(dy).zip(dz) {
+                            (*x, *y, *z) = (p.x, p.y, p.z);
+                        }
+                    }
+                }
+                ok
+            }
+            (None, Some(depth), Some(rays)) => {
+                // `SurfaceReader::position`'s derivation for sample 0 of each pixel, bit for bit: the ray through
+                // the sample times its depth. Written tentatively; dropped again when some pixel's is unusable.
+                let o = gb.sample_positions[0];
+                let yc = y as f32 + 0.5 + o.y;
                 for v in [&mut it.px, &mut it.py, &mut it.pz] {
                     v.resize(n + tw, 0.0);
                 }
                 let (dx, dy, dz) = (&mut it.px[n..], &mut it.py[n..], &mut it.pz[n..]);
-                if stride == 1 {
-                    for (((p, x), y), z) in pos.iter().zip(dx).zip(dy).zip(dz) {
-                        (*x, *y, *z) = (p.x, p.y, p.z);
-                    }
-                } else {
-                    for (((p, x), y), z) in pos.iter().step_by(stride).zip(dx).zip(dy).zip(dz) {
-                        (*x, *y, *z) = (p.x, p.y, p.z);
+                let mut ok = true;
+                for (k, ((x, y), z)) in dx.iter_mut().zip(dy).zip(dz).enumerate() {
+                    let i = first + k * stride;
+                    let p = rays.ray(glam::Vec2::new((x0 + k) as f32 + 0.5 + o.x, yc)) * depth[i];
+                    ok &= gb.coverage[i]
+                        & (p.x.abs() < f32::INFINITY)
+                        & (p.y.abs() < f32::INFINITY)
+                        & (p.z.abs() < f32::INFINITY)
+                        & (-p.z > MIN_VIEW_DEPTH);
+                    (*x, *y, *z) = (p.x, p.y, p.z);
+                }
+                if !ok {
+                    for v in [&mut it.px, &mut it.py, &mut it.pz] {
+                        v.truncate(n);
                     }
                 }
-                it.pixel.extend(local_row as u32..(local_row + tw) as u32);
-                sc.src.extend((first..end).step_by(stride));
-                if counts_row.iter().fold(true, |a, &c| a & (c <= 1)) {
-                    it.weight.resize(n + tw, 1.0);
-                } else {
-                    it.weight.extend(counts_row.iter().map(|&c| if c > 1 { weight } else { 1.0 }));
-                    for (k, _) in counts_row.iter().enumerate().filter(|&(_, &c)| c > 1) {
-                        sc.edge_px.push(((x0 + k) as u32, y, true));
-                    }
-                }
-                continue;
+                ok
             }
+            _ => false,
+        };
+        if taken {
+            it.pixel.extend(local_row as u32..(local_row + tw) as u32);
+            sc.src.extend((first..end).step_by(stride));
+            if counts_row.iter().fold(true, |a, &c| a & (c <= 1)) {
+                it.weight.resize(n + tw, 1.0);
+            } else {
+                it.weight.extend(counts_row.iter().map(|&c| if c > 1 { weight } else { 1.0 }));
+                for (k, _) in counts_row.iter().enumerate().filter(|&(_, &c)| c > 1) {
+                    sc.edge_px.push(((x0 + k) as u32, y, true));
+                }
+            }
+            continue;
         }
         for (k, &count) in counts_row.iter().enumerate() {
             let x = (x0 + k) as u32;
