@@ -14,7 +14,7 @@ use super::lights::LightTable;
 use super::simd::Portable;
 #[cfg(target_arch = "x86_64")]
 use super::simd::{Avx2, Avx512};
-use super::surface::{Reads, SanitizedCounts, SurfaceReader, MIN_VIEW_DEPTH};
+use super::surface::{position_from_depth, usable_position, Reads, SanitizedCounts, SurfaceReader};
 use super::worklist::{Items, QuadSoa, PAD_PIXEL};
 use crate::base::isa::Isa;
 use crate::base::mask::EdgeMask;
@@ -667,14 +667,7 @@ fn gather(
         let taken = match (plane, gb.depth.as_deref(), rd.rays()) {
             (Some(plane), ..) => {
                 let (pos, cov) = (&plane[first..end], &gb.coverage[first..end]);
-                // `abs() < ∞` is `is_finite` without a branch per component (the loops vectorise).
-                let usable = |a: bool, (p, &c): (&Vec3, &bool)| {
-                    a & c
-                        & (p.x.abs() < f32::INFINITY)
-                        & (p.y.abs() < f32::INFINITY)
-                        & (p.z.abs() < f32::INFINITY)
-                        & (-p.z > MIN_VIEW_DEPTH)
-                };
+                let usable = |a: bool, (&p, &c): (&Vec3, &bool)| a & c & usable_position(p);
                 let ok = if stride == 1 {
                     pos.iter().zip(cov).fold(true, usable)
                 } else {
@@ -698,24 +691,19 @@ fn gather(
                 ok
             }
             (None, Some(depth), Some(rays)) => {
-                // `SurfaceReader::position`'s derivation for sample 0 of each pixel, bit for bit: the ray through
-                // the sample times its depth. Written tentatively; dropped again when some pixel's is unusable.
+                // `SurfaceReader::position`'s derivation for sample 0 of each pixel, written tentatively: dropped
+                // again when some pixel's is unusable.
                 let o = gb.sample_positions[0];
-                let yc = y as f32 + 0.5 + o.y;
                 for v in [&mut it.px, &mut it.py, &mut it.pz] {
                     v.resize(n + tw, 0.0);
                 }
                 let (dx, dy, dz) = (&mut it.px[n..], &mut it.py[n..], &mut it.pz[n..]);
                 let mut ok = true;
-                for (k, ((x, y), z)) in dx.iter_mut().zip(dy).zip(dz).enumerate() {
+                for (k, ((px, py), pz)) in dx.iter_mut().zip(dy).zip(dz).enumerate() {
                     let i = first + k * stride;
-                    let p = rays.ray(glam::Vec2::new((x0 + k) as f32 + 0.5 + o.x, yc)) * depth[i];
-                    ok &= gb.coverage[i]
-                        & (p.x.abs() < f32::INFINITY)
-                        & (p.y.abs() < f32::INFINITY)
-                        & (p.z.abs() < f32::INFINITY)
-                        & (-p.z > MIN_VIEW_DEPTH);
-                    (*x, *y, *z) = (p.x, p.y, p.z);
+                    let p = position_from_depth(&rays, (x0 + k) as u32, y, o, depth[i]);
+                    ok &= gb.coverage[i] & usable_position(p);
+                    (*px, *py, *pz) = (p.x, p.y, p.z);
                 }
                 if !ok {
                     for v in [&mut it.px, &mut it.py, &mut it.pz] {
@@ -757,7 +745,7 @@ fn gather(
                 // The common case first: sample 0 covered, with a usable stored position (else the loop below
                 // looks at every sample again, counting what it must).
                 let p = plane[first];
-                if gb.coverage[first] && p.is_finite() && -p.z > MIN_VIEW_DEPTH {
+                if gb.coverage[first] && usable_position(p) {
                     push(it, &mut sc.src, p, first, local, 1.0);
                     continue;
                 }

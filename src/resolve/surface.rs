@@ -33,6 +33,23 @@ pub const MAX_SPECULAR_POWER: f32 = 1e6;
 /// Samples closer to the eye plane than this (view units) cannot be projected and are treated as background.
 pub const MIN_VIEW_DEPTH: f32 = 1e-6;
 
+/// Whether the lighting can use view-space position `p`: finite, and in front of the eye beyond
+/// [`MIN_VIEW_DEPTH`]. Branch-free (`abs() < ∞` is `is_finite`), so loops over whole rows vectorise.
+#[inline(always)]
+#[must_use]
+pub fn usable_position(p: Vec3) -> bool {
+    (p.x.abs() < f32::INFINITY) & (p.y.abs() < f32::INFINITY) & (p.z.abs() < f32::INFINITY) & (-p.z > MIN_VIEW_DEPTH)
+}
+
+/// The view-space position of the sample at offset `o` in pixel (`x`, `y`) with view depth `depth`: the camera ray
+/// through it times the depth ([`crate::Camera::view_position`] and `GBuffer::fill_position_from_depth` bit for
+/// bit, principal point included: an off-centre camera shifts the rays, it does not scale them).
+#[inline(always)]
+#[must_use]
+pub(crate) fn position_from_depth(rays: &RayCaster, x: u32, y: u32, o: Vec2, depth: f32) -> Vec3 {
+    rays.ray(Vec2::new(x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y)) * depth
+}
+
 /// Perceptual roughness equivalent to a Blinn-Phong power: Beckmann-matched `α² = 2 / (p + 2)`, and glTF's
 /// `α = roughness²`, so `roughness = (2 / (p + 2))^¼`. Power 0 gives roughness ≈ 1; power 10⁴ about 0.12.
 #[must_use]
@@ -270,14 +287,11 @@ impl<'a> SurfaceReader<'a> {
         let p = match (&gb.position, &gb.depth, &self.rays) {
             (Some(pos), _, _) => pos[i],
             (None, Some(depth), Some(rays)) => {
-                // Camera::view_position (and GBuffer::fill_position_from_depth) bit for bit, principal point
-                // included: an off-centre camera shifts the rays, it does not scale them.
-                let o = gb.sample_positions[s as usize];
-                rays.ray(Vec2::new(x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y)) * depth[i]
+                position_from_depth(rays, x, y, gb.sample_positions[s as usize], depth[i])
             }
             _ => Vec3::NAN,
         };
-        if !p.is_finite() || -p.z <= MIN_VIEW_DEPTH {
+        if !usable_position(p) {
             counts.position += 1;
             return None;
         }
