@@ -195,6 +195,20 @@ impl InputArgs {
         Ok(loaded)
     }
 
+    /// The dump as its own arrays, when it is one the resolve reads band by band (an ISPC `.bin`, not folded or
+    /// remapped: [`gbuf::io::open_packed`]), with its plausibility warnings printed; `None`: [`InputArgs::load`] it.
+    pub fn open_packed(&self) -> anyhow::Result<Option<gbuf::io::PackedDump>> {
+        let input = self.read.packed()?;
+        if input.is_given() || gbuf::layout::targets::is_packed_dir(&self.file) {
+            return Ok(None);
+        }
+        let dump = gbuf::io::open_packed(&self.file, &self.options()?)?;
+        if let Some(d) = &dump {
+            print_warnings(&self.file, &d.loaded);
+        }
+        Ok(dump)
+    }
+
     /// Reads another file (a companion of the dump) with the same flags.
     pub fn load_path(&self, path: &std::path::Path) -> anyhow::Result<Loaded> {
         let loaded = self.read.load(path)?;

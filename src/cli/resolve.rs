@@ -173,10 +173,36 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let file = args.input.file.display().to_string();
 
     let pb = crate::cli::spinner(format!("loading {file}"));
-    let (loaded, t_decode) = timed(|| args.input.load());
-    let loaded = loaded.with_context(|| format!("loading {file}"))?;
+    // An ISPC `.bin` is lit from its own arrays, decoded band by band inside the edge pass and the resolve (as the
+    // example's shading loop reads it): no decoded copy of the frame, unless the reference needs one. Not with a
+    // layout (which packs the decoded frame) or scattered lights (placed from the decoded depths).
+    let bin = args.layout.is_none() && args.lights.is_none();
+    let (opened, t_decode) = timed(|| -> anyhow::Result<(gbuf::io::Loaded, Option<gbuf::io::ispc::Arrays>)> {
+        if bin {
+            if let Some(dump) = args.input.open_packed()? {
+                return Ok((dump.loaded, Some(dump.arrays)));
+            }
+        }
+        args.input.load().map(|l| (l, None))
+    });
+    let (loaded, arrays) = opened.with_context(|| format!("loading {file}"))?;
     let gb: GBuffer = loaded.gbuffer;
     let (lights, lights_source) = pick_lights(loaded.lights, args.lights, args.seed, &gb, &file)?;
+    let bin_frame = match &arrays {
+        Some(a) => Some(a.frame(&gb).with_context(|| format!("{file}: its arrays"))?),
+        None => None,
+    };
+    // What reads every plane at once (the reference) gets the frame decoded whole.
+    let (whole, t_whole) = timed(|| match (&bin_frame, args.no_reference) {
+        (Some(f), false) => {
+            let mut whole = GBuffer::default();
+            f.decode_rows(0..gb.height, &mut whole).map(|()| Some(whole))
+        }
+        _ => Ok(None),
+    });
+    let whole = whole.with_context(|| format!("{file}: decoding the frame for the reference"))?;
+    let t_decode = t_decode + t_whole;
+    let planes: &GBuffer = whole.as_ref().unwrap_or(&gb);
 
     // With a layout the G-buffer is packed into its render targets, and the edge pass and the lighting read those
     // targets band by band, as a GPU does: no decoded copy of the frame is made.
@@ -198,7 +224,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         prepared.with_context(|| format!("{file}: packing with layout {}", args.layout.as_deref().unwrap_or("")))?;
     let frame = match (&layout, &packed) {
         (Some(l), Some(p)) => Some(l.frame(p, &gb).with_context(|| format!("{file}: layout {}", l.name()))?),
-        _ => None,
+        _ => bin_frame,
     };
     let lit_gb: resolve::ResolveInput<'_> = match (&frame, &copy) {
         (Some(f), _) => f.into(),
@@ -252,9 +278,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         (None, 0.0)
     } else {
         pb.set_message(format!("{file}: the every-sample reference"));
-        let (reference, t) = timed(|| resolve::reference(&gb, &lights, &cfg));
+        let (reference, t) = timed(|| resolve::reference(planes, &lights, &cfg));
         let reference = reference.with_context(|| format!("{file}: reference"))?;
-        resolve::check_meaningful(&gb, &lights, &reference).with_context(|| format!("{file}: nothing to compare"))?;
+        resolve::check_meaningful(planes, &lights, &reference)
+            .with_context(|| format!("{file}: nothing to compare"))?;
         (Some(reference), t)
     };
     let triad = error_triad(&resolved.image, exact.as_ref(), reference.as_ref(), flip);

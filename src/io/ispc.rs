@@ -16,12 +16,14 @@
 use super::{AttributeSource, LoadOptions, Loaded, SourceFormat};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
-use crate::gbuffer::GBuffer;
+use crate::gbuffer::{Attribute, GBuffer};
 use crate::io::sidecar::Sidecar;
+use crate::layout::{BandSource, PackedFrame};
 use crate::light::{Light, LightKind};
 use glam::Vec3;
 use half::f16;
 use std::io::Read;
+use std::ops::Range;
 use std::path::Path;
 
 /// Size of the file header in bytes.
@@ -255,24 +257,10 @@ pub fn header_problem(head: &[u8], file_len: u64) -> String {
 /// Reads an ISPC `deferred` input file into a single-sample G-buffer with its lights. Only the header and the
 /// declared chunk are read, after the chunk size has been checked against the file length and the memory limit.
 pub fn read(path: &Path, sidecar: Option<&Sidecar>, opts: &LoadOptions) -> Result<Loaded> {
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let file_len = file.metadata().map_err(|e| Error::io(path, e))?.len();
-    let mut head = Vec::with_capacity(HEADER_BYTES);
-    let mut reader = std::io::BufReader::new(file);
-    (&mut reader).take(HEADER_BYTES as u64).read_to_end(&mut head).map_err(|e| Error::io(path, e))?;
-    let h = check_header(&head, file_len, path, opts)?;
-    let mut bytes = head;
-    let want = HEADER_BYTES + h.chunk_size as usize;
-    bytes.reserve_exact(want - bytes.len());
-    // Read into the reserved capacity (no zero fill first); the header check bounded the size by the file's length.
-    (&mut reader).take(h.chunk_size as u64).read_to_end(&mut bytes).map_err(|e| Error::io(path, e))?;
-    if bytes.len() != want {
-        return Err(Error::invalid(
-            path,
-            format!("ISPC deferred .bin: the chunk declares {} bytes, the file holds {}", h.chunk_size, bytes.len()),
-        ));
-    }
-    read_bytes(&bytes, path, sidecar, opts)
+    let arrays = Arrays::read(path, opts)?;
+    let mut loaded = decode(&arrays.header, arrays.chunk(), path)?;
+    apply_sidecar(&mut loaded, sidecar, path)?;
+    Ok(loaded)
 }
 
 /// Decodes an ISPC `deferred` input file held in memory (`path` only names it in errors). Same checks as
@@ -281,12 +269,17 @@ pub fn read_bytes(bytes: &[u8], path: &Path, sidecar: Option<&Sidecar>, opts: &L
     let h = check_header(bytes, bytes.len() as u64, path, opts)?;
     let chunk = &bytes[HEADER_BYTES..HEADER_BYTES + h.chunk_size as usize];
     let mut loaded = decode(&h, chunk, path)?;
+    apply_sidecar(&mut loaded, sidecar, path)?;
+    Ok(loaded)
+}
+
+/// Lights the user supplied beside the file win over the file's own; they are given in the file's view space
+/// unless the sidecar says otherwise (its camera, if any, is the file's world→view).
+fn apply_sidecar(loaded: &mut Loaded, sidecar: Option<&Sidecar>, path: &Path) -> Result<()> {
     if let Some(sc) = sidecar.filter(|s| !s.lights.is_empty()) {
-        // Lights the user supplied beside the file win over the file's own; they are given in the file's view
-        // space unless the sidecar says otherwise (its camera, if any, is the file's world→view).
         loaded.lights = Some(sc.view_lights(loaded.gbuffer.camera.as_ref(), path)?);
     }
-    Ok(loaded)
+    Ok(())
 }
 
 /// Parses and validates the header against the file length and the memory limit.
@@ -316,122 +309,303 @@ fn check_header(head: &[u8], file_len: u64, path: &Path, opts: &LoadOptions) -> 
     Ok(h)
 }
 
+/// An ISPC `.bin` held in memory as the file's own arrays (15 bytes a pixel), its header checked: what a
+/// [`PackedFrame`] over it ([`Arrays::frame`]) decodes a band of rows at a time inside the resolve and the edge
+/// pass, as the example's own shading loop reads the file, instead of converting the frame into planes first
+/// (49 bytes a pixel). A band's planes are [`read`]'s for those rows after [`crate::io::load`]'s sanitising, bit
+/// for bit: both run the same conversion ([`Arrays::survey`] says what the load's checks would).
+#[derive(Debug)]
+pub struct Arrays {
+    header: Header,
+    /// The header's bytes and the chunk's.
+    bytes: Vec<u8>,
+}
+
+/// One band's part of a [`Survey`]: depths out of range, NaN and ±Inf replaced, the checks' counts.
+type BandSurvey = (u64, Vec<(&'static str, u64, u64)>, crate::io::plausible::Survey);
+
+/// What one pass over a `.bin`'s decoded bands finds: what [`crate::io::load`] reports of the whole decoded frame.
+pub(crate) struct Survey {
+    /// The frame without planes: its size, camera and coverage (what [`Arrays::frame`] needs).
+    pub like: GBuffer,
+    /// Pixels whose depth has no surface in front of the camera (besides the cleared `z = 1`).
+    pub out_of_range: u64,
+    /// NaN and ±Inf replaced, per plane (as [`crate::io::load`]'s sanitising reports them).
+    pub sanitized: Vec<(&'static str, u64, u64)>,
+    /// The plausibility checks' counts.
+    pub checks: crate::io::plausible::Survey,
+}
+
+impl Arrays {
+    /// Reads and checks the file (the header against the file length and the memory limit, every array's byte
+    /// range): the same checks and errors as [`read`], without decoding.
+    pub fn read(path: &Path, opts: &LoadOptions) -> Result<Arrays> {
+        let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+        let file_len = file.metadata().map_err(|e| Error::io(path, e))?.len();
+        let mut head = Vec::with_capacity(HEADER_BYTES);
+        let mut reader = std::io::BufReader::new(file);
+        (&mut reader).take(HEADER_BYTES as u64).read_to_end(&mut head).map_err(|e| Error::io(path, e))?;
+        let header = check_header(&head, file_len, path, opts)?;
+        let mut bytes = head;
+        let want = HEADER_BYTES + header.chunk_size as usize;
+        bytes.reserve_exact(want - bytes.len());
+        // Read into the reserved capacity (no zero fill first); the header check bounded the size by the file's
+        // length.
+        (&mut reader).take(header.chunk_size as u64).read_to_end(&mut bytes).map_err(|e| Error::io(path, e))?;
+        if bytes.len() != want {
+            return Err(Error::invalid(
+                path,
+                format!(
+                    "ISPC deferred .bin: the chunk declares {} bytes, the file holds {}",
+                    header.chunk_size,
+                    bytes.len()
+                ),
+            ));
+        }
+        Ok(Arrays { header, bytes })
+    }
+
+    /// The decoded header.
+    #[must_use]
+    pub fn header(&self) -> &Header {
+        &self.header
+    }
+
+    fn chunk(&self) -> &[u8] {
+        &self.bytes[HEADER_BYTES..]
+    }
+
+    /// The file's lights, in our view space (`path` names the file in errors).
+    pub fn lights(&self, path: &Path) -> Result<Vec<Light>> {
+        lights(&self.header, self.chunk(), path)
+    }
+
+    /// Decodes every band once, in parallel, keeping none: the frame's coverage, and what the load's
+    /// sanitising and checks count on the decoded frame.
+    pub(crate) fn survey(&self) -> Result<Survey> {
+        use rayon::prelude::*;
+        let h = &self.header;
+        let mut like = GBuffer::new(h.width as u32, h.height as u32, 1)?;
+        like.camera = Some(h.camera());
+        let band_px = h.width as usize * BAND_ROWS;
+        let parts: Vec<BandSurvey> = like
+            .coverage
+            .par_chunks_mut(band_px)
+            .enumerate()
+            .map_init(GBuffer::default, |band, (k, coverage)| {
+                let y0 = (k * BAND_ROWS) as u32;
+                let out_of_range = self.decode_band(y0..y0 + (coverage.len() / h.width as usize) as u32, band, None);
+                let sanitized = crate::io::sanitize::sanitize(band);
+                coverage.copy_from_slice(&band.coverage);
+                (out_of_range, sanitized, crate::io::plausible::Survey::of(band))
+            })
+            .collect();
+        let mut survey =
+            Survey { like, out_of_range: 0, sanitized: Vec::new(), checks: crate::io::plausible::Survey::default() };
+        for (out_of_range, sanitized, checks) in parts {
+            survey.out_of_range += out_of_range;
+            survey.checks = survey.checks.add(checks);
+            for (plane, nan, inf) in sanitized {
+                match survey.sanitized.iter_mut().find(|s| s.0 == plane) {
+                    Some(s) => (s.1, s.2) = (s.1 + nan, s.2 + inf),
+                    None => survey.sanitized.push((plane, nan, inf)),
+                }
+            }
+        }
+        // In the canonical attribute order, as the whole frame's sanitising lists them.
+        survey.sanitized.sort_by_key(|s| Attribute::ALL.iter().position(|a| a.name() == s.0));
+        Ok(survey)
+    }
+
+    /// Rows `rows` into `out` (a G-buffer of `width × rows` pixels, its planes reused): the planes of `only`
+    /// (`None`: all) as [`read`] converts them, not yet sanitised. Returns the pixels whose depth is out of range.
+    fn decode_band(&self, rows: Range<u32>, out: &mut GBuffer, only: Option<&[Attribute]>) -> u64 {
+        let h = &self.header;
+        let (w, n) = (h.width as u32, h.width as usize * rows.len());
+        (out.width, out.height, out.samples) = (w, rows.end - rows.start, 1);
+        if out.sample_positions.len() != 1 {
+            out.sample_positions = vec![glam::Vec2::ZERO];
+        }
+        out.camera = Some(h.camera());
+        out.coverage.clear();
+        out.coverage.resize(n, false);
+        let want = |a: Attribute| only.is_none_or(|o| o.contains(&a));
+        fn plane<T: Copy>(p: &mut Option<Vec<T>>, want: bool, n: usize, zero: T) -> Option<&mut [T]> {
+            if !want {
+                *p = None;
+                return None;
+            }
+            let v = p.get_or_insert_with(Vec::new);
+            v.resize(n, zero);
+            Some(v)
+        }
+        let geometry = want(Attribute::Depth) || want(Attribute::Position);
+        let planes = Planes {
+            y0: rows.start as usize,
+            coverage: &mut out.coverage,
+            depth: plane(&mut out.depth, geometry, n, 0.0),
+            position: plane(&mut out.position, geometry, n, Vec3::ZERO),
+            normal: plane(&mut out.normal, want(Attribute::Normal), n, Vec3::ZERO),
+            albedo: plane(&mut out.albedo, want(Attribute::Albedo), n, Vec3::ZERO),
+            spec: plane(&mut out.specular, want(Attribute::Specular), n, 0.0),
+            power: plane(&mut out.specular_power, want(Attribute::SpecularPower), n, 0.0),
+        };
+        planes.convert(h, self.chunk())
+    }
+
+    /// The frame its bands are decoded from, of the size, camera and coverage of `like` ([`Survey::like`]).
+    pub fn frame<'a>(&'a self, like: &'a GBuffer) -> Result<PackedFrame<'a>> {
+        let h = &self.header;
+        if (like.width, like.height, like.samples) != (h.width as u32, h.height as u32, 1) {
+            return Err(Error::Mismatch(format!(
+                "the ISPC .bin is {}×{}×1, the frame it is read as {}×{}×{}",
+                h.width, h.height, like.width, like.height, like.samples
+            )));
+        }
+        PackedFrame::of_source(like, self)
+    }
+}
+
+impl BandSource for Arrays {
+    fn describe(&self) -> String {
+        "the ISPC .bin's arrays".into()
+    }
+
+    fn decode_rows(
+        &self,
+        _like: &GBuffer,
+        rows: Range<u32>,
+        out: &mut GBuffer,
+        only: Option<&[Attribute]>,
+    ) -> Result<()> {
+        self.decode_band(rows, out, only);
+        // What the load does to the whole frame, on the band: NaN and ±Inf replaced (the counts are the survey's).
+        crate::io::sanitize::sanitize(out);
+        Ok(())
+    }
+}
+
 /// Rows converted per parallel task.
 const BAND_ROWS: usize = 16;
 
-/// One band of rows of the G-buffer's planes, converted from the file's arrays by one task.
-struct Band<'a> {
+/// Rows `y0..` of the G-buffer's planes, converted from the file's arrays by one task: slices of a whole frame's
+/// planes or a band's own. A plane that is `None` is not converted.
+struct Planes<'a> {
     y0: usize,
     coverage: &'a mut [bool],
-    depth: &'a mut [f32],
-    position: &'a mut [Vec3],
-    normal: &'a mut [Vec3],
-    albedo: &'a mut [Vec3],
-    spec: &'a mut [f32],
-    power: &'a mut [f32],
+    depth: Option<&'a mut [f32]>,
+    position: Option<&'a mut [Vec3]>,
+    normal: Option<&'a mut [Vec3]>,
+    albedo: Option<&'a mut [Vec3]>,
+    spec: Option<&'a mut [f32]>,
+    power: Option<&'a mut [f32]>,
 }
 
-impl Band<'_> {
-    /// Converts the band's pixels; returns how many have a depth with no surface in front of the camera. Row by
-    /// row: the half-float arrays are converted a row at a time (F16C where the CPU has it), then each pixel.
-    fn convert(self, h: &Header, chunk: &[u8], w: usize, ht: usize) -> u64 {
-        use half::slice::{HalfBitsSliceExt, HalfFloatSliceExt};
-        let p = &h.proj;
-        let mut out_of_range = 0u64;
-        let mut bits = vec![0u16; w];
-        let mut halves = [vec![0.0f32; w], vec![0.0f32; w], vec![0.0f32; w], vec![0.0f32; w]];
-        for r in 0..self.coverage.len() / w {
-            let y = self.y0 + r;
-            // Array `k` (elements of `elem` bytes) over this row; the header check bounded every array by the chunk.
-            let row = |k: usize, elem: usize| {
-                let o = h.offsets[k] as usize + elem * y * w;
-                &chunk[o..o + elem * w]
-            };
-            for (k, out) in halves.iter_mut().enumerate() {
-                for (b, v) in row(1 + k, 2).chunks_exact(2).zip(bits.iter_mut()) {
-                    *v = u16::from_le_bytes([b[0], b[1]]);
-                }
-                bits.reinterpret_cast::<f16>().convert_to_f32_slice(out);
-            }
-            let [ex, ey, spec, power] = &halves;
-            let (zs, ar, ag, ab) = (row(0, 4), row(5, 1), row(6, 1), row(7, 1));
-            let o = r * w;
-            for x in 0..w {
-                let z = f32::from_le_bytes([zs[4 * x], zs[4 * x + 1], zs[4 * x + 2], zs[4 * x + 3]]);
-                // z = 1 is the cleared depth buffer (sky); anything outside [0, 1) has no surface in front of the
-                // camera.
-                if !(0.0..1.0).contains(&z) {
-                    if z != 1.0 {
-                        out_of_range += 1;
-                    }
-                    continue;
-                }
-                let view_z = p[3][2] / (z - p[2][2]);
-                if !(view_z.is_finite() && view_z > 0.0) {
-                    out_of_range += 1;
-                    continue;
-                }
-                let j = o + x;
-                self.coverage[j] = true;
-                self.depth[j] = view_z;
-                let sx = (x as f32 + 0.5) * 2.0 / w as f32 - 1.0;
-                let sy = -(((y as f32 + 0.5) * 2.0 / ht as f32) - 1.0);
-                self.position[j] = Vec3::new(sx * view_z / p[0][0], sy * view_z / p[1][1], -view_z);
-                self.normal[j] = decode_spheremap(ex[x], ey[x]);
-                self.spec[j] = spec[x];
-                self.power[j] = power[x];
-                self.albedo[j] = Vec3::new(f32::from(ar[x]), f32::from(ag[x]), f32::from(ab[x])) / 255.0;
-            }
-        }
+impl Planes<'_> {
+    /// Converts the rows' pixels (every sample of every plane written, uncovered ones 0); returns how many have a
+    /// depth with no surface in front of the camera. Row by row: coverage and geometry first, then each plane the
+    /// caller wants, the half-float arrays converted a row at a time (F16C where the CPU has it). Each loop is
+    /// branch-free over its row, compiled for the widest instruction set the CPU has
+    /// ([`crate::codec::simd::run`]): the same IEEE operations in the same order on every path (no contraction),
+    /// so the planes are the same bits everywhere.
+    fn convert(self, h: &Header, chunk: &[u8]) -> u64 {
+        let mut out_of_range = 0;
+        crate::codec::simd::run(
+            crate::base::isa::Isa::detect(),
+            Convert { planes: self, h, chunk, out_of_range: &mut out_of_range },
+        );
         out_of_range
     }
 }
 
-fn decode(h: &Header, chunk: &[u8], path: &Path) -> Result<Loaded> {
-    let (w, ht) = (h.width as u32, h.height as u32);
-    let camera = h.camera();
-    let mut gb = GBuffer::new(w, ht, 1)?;
-    gb.camera = Some(camera);
-    let n = gb.len();
-    let off = |k: usize| h.offsets[k] as usize;
-    // Zeroed allocations (the OS zeroes pages as the parallel conversion first writes them).
-    let zeroed = crate::util::zeroed_vec3;
-    let (mut depth, mut position, mut normal) = (vec![0.0; n], zeroed(n), zeroed(n));
-    let (mut albedo, mut spec, mut power) = (zeroed(n), vec![0.0; n], vec![0.0; n]);
-    // Bands of rows converted in parallel: the conversion is a fixed cost of every run on a `.bin`.
-    let width = w as usize;
-    let band = width * BAND_ROWS;
-    let bands: Vec<Band> = gb
-        .coverage
-        .chunks_mut(band)
-        .zip(depth.chunks_mut(band))
-        .zip(position.chunks_mut(band))
-        .zip(normal.chunks_mut(band))
-        .zip(albedo.chunks_mut(band))
-        .zip(spec.chunks_mut(band))
-        .zip(power.chunks_mut(band))
-        .enumerate()
-        .map(|(k, ((((((coverage, depth), position), normal), albedo), spec), power))| Band {
-            y0: k * BAND_ROWS,
-            coverage,
-            depth,
-            position,
-            normal,
-            albedo,
-            spec,
-            power,
-        })
-        .collect();
-    use rayon::prelude::*;
-    let out_of_range: u64 = bands.into_par_iter().map(|b| b.convert(h, chunk, width, ht as usize)).sum();
-    gb.depth = Some(depth);
-    gb.position = Some(position);
-    gb.normal = Some(normal);
-    gb.albedo = Some(albedo);
-    gb.specular = Some(spec);
-    gb.specular_power = Some(power);
-    gb.validate()?;
+/// [`Planes::convert`]'s work, run under [`crate::codec::simd::run`].
+struct Convert<'a, 'b> {
+    planes: Planes<'a>,
+    h: &'b Header,
+    chunk: &'b [u8],
+    out_of_range: &'b mut u64,
+}
 
+impl crate::codec::simd::Kernel for Convert<'_, '_> {
+    #[inline(always)]
+    fn run(self) {
+        use half::slice::{HalfBitsSliceExt, HalfFloatSliceExt};
+        let Convert { planes, h, chunk, out_of_range } = self;
+        let (w, ht) = (h.width as usize, h.height as usize);
+        let p = &h.proj;
+        let (p22, p32, p00, p11) = (p[2][2], p[3][2], p[0][0], p[1][1]);
+        let Planes { y0, coverage, mut depth, mut position, mut normal, mut albedo, mut spec, mut power } = planes;
+        let mut bits = vec![0u16; w];
+        let mut halves = [vec![0.0f32; w], vec![0.0f32; w]];
+        let mut view = vec![0.0f32; w];
+        // Array `k` (elements of `elem` bytes) over row `y`; the header check bounded every array by the chunk.
+        let row = |k: usize, elem: usize, y: usize| {
+            let o = h.offsets[k] as usize + elem * y * w;
+            &chunk[o..o + elem * w]
+        };
+        let mut f16_row = |k: usize, y: usize, out: &mut Vec<f32>| {
+            for (b, v) in row(k, 2, y).chunks_exact(2).zip(bits.iter_mut()) {
+                *v = u16::from_le_bytes([b[0], b[1]]);
+            }
+            bits.reinterpret_cast::<f16>().convert_to_f32_slice(out);
+        };
+        let mut oor = 0u64;
+        for r in 0..coverage.len() / w {
+            let y = y0 + r;
+            let o = r * w;
+            let cov = &mut coverage[o..o + w];
+            // z = 1 is the cleared depth buffer (sky); anything outside [0, 1), or whose view depth is not finite
+            // and positive, has no surface in front of the camera.
+            for ((c, v), zb) in cov.iter_mut().zip(view.iter_mut()).zip(row(0, 4, y).chunks_exact(4)) {
+                let z = f32::from_le_bytes([zb[0], zb[1], zb[2], zb[3]]);
+                let view_z = p32 / (z - p22);
+                let in_front = (0.0..1.0).contains(&z) & view_z.is_finite() & (view_z > 0.0);
+                oor += u64::from(!in_front & (z != 1.0));
+                *c = in_front;
+                *v = if in_front { view_z } else { 0.0 };
+            }
+            if let (Some(d), Some(pos)) = (depth.as_deref_mut(), position.as_deref_mut()) {
+                let sy = -(((y as f32 + 0.5) * 2.0 / ht as f32) - 1.0);
+                let rows = d[o..o + w].iter_mut().zip(pos[o..o + w].iter_mut());
+                for (x, ((d, pos), &vz)) in rows.zip(view.iter()).enumerate() {
+                    let sx = (x as f32 + 0.5) * 2.0 / w as f32 - 1.0;
+                    // An uncovered pixel's view depth is 0: its position comes out 0 too.
+                    *d = vz;
+                    *pos = Vec3::new(sx * vz / p00, sy * vz / p11, -vz);
+                }
+            }
+            if let Some(n) = normal.as_deref_mut() {
+                let [ex, ey] = &mut halves;
+                f16_row(1, y, ex);
+                f16_row(2, y, ey);
+                for (((n, &c), &x), &y) in n[o..o + w].iter_mut().zip(cov.iter()).zip(ex.iter()).zip(ey.iter()) {
+                    let v = decode_spheremap(x, y);
+                    *n = if c { v } else { Vec3::ZERO };
+                }
+            }
+            for (k, plane) in [(3, spec.as_deref_mut()), (4, power.as_deref_mut())] {
+                if let Some(v) = plane {
+                    f16_row(k, y, &mut halves[0]);
+                    for ((v, &c), &s) in v[o..o + w].iter_mut().zip(cov.iter()).zip(&halves[0]) {
+                        *v = if c { s } else { 0.0 };
+                    }
+                }
+            }
+            if let Some(a) = albedo.as_deref_mut() {
+                let (ar, ag, ab) = (row(5, 1, y), row(6, 1, y), row(7, 1, y));
+                for ((((a, &c), &r), &g), &b) in a[o..o + w].iter_mut().zip(cov.iter()).zip(ar).zip(ag).zip(ab) {
+                    let v = Vec3::new(f32::from(r), f32::from(g), f32::from(b)) / 255.0;
+                    *a = if c { v } else { Vec3::ZERO };
+                }
+            }
+        }
+        *out_of_range = oor;
+    }
+}
+
+/// The file's lights, in our view space (z negated).
+fn lights(h: &Header, chunk: &[u8], path: &Path) -> Result<Vec<Light>> {
+    let off = |k: usize| h.offsets[k] as usize;
     let mut lights = Vec::with_capacity(h.num_lights as usize);
     for l in 0..h.num_lights as usize {
         let at = |k: usize| f32_at(chunk, off(k) + 4 * l);
@@ -446,7 +620,11 @@ fn decode(h: &Header, chunk: &[u8], path: &Path) -> Result<Loaded> {
         }
         lights.push(Light { kind: LightKind::Point, position: pos, color, intensity: 1.0, range: end, begin });
     }
+    Ok(lights)
+}
 
+/// Where each attribute came from; `out_of_range` pixels had a depth with no surface in front of the camera.
+pub(crate) fn sources(out_of_range: u64) -> Vec<AttributeSource> {
     let src = |attribute: &'static str, arrays: &[&str], file_type: &str, note: Option<String>| AttributeSource {
         attribute,
         channels: arrays.iter().map(|s| (*s).to_string()).collect(),
@@ -457,7 +635,7 @@ fn decode(h: &Header, chunk: &[u8], path: &Path) -> Result<Loaded> {
     if out_of_range > 0 {
         depth_note.push_str(&format!("; {out_of_range} pixels with z outside [0, 1) treated as background"));
     }
-    let sources = vec![
+    vec![
         src("depth", &["zBuffer"], "float", Some(depth_note)),
         src(
             "position",
@@ -474,12 +652,55 @@ fn decode(h: &Header, chunk: &[u8], path: &Path) -> Result<Loaded> {
         src("albedo", &["albedo_x", "albedo_y", "albedo_z"], "unorm8", None),
         src("specular", &["specularAmount"], "half", None),
         src("specular_power", &["specularPower"], "half", None),
-    ];
+    ]
+}
+
+fn decode(h: &Header, chunk: &[u8], path: &Path) -> Result<Loaded> {
+    let (w, ht) = (h.width as u32, h.height as u32);
+    let mut gb = GBuffer::new(w, ht, 1)?;
+    gb.camera = Some(h.camera());
+    let n = gb.len();
+    // Zeroed allocations (the OS zeroes pages as the parallel conversion first writes them).
+    let zeroed = crate::util::zeroed_vec3;
+    let (mut depth, mut position, mut normal) = (vec![0.0; n], zeroed(n), zeroed(n));
+    let (mut albedo, mut spec, mut power) = (zeroed(n), vec![0.0; n], vec![0.0; n]);
+    // Bands of rows converted in parallel: the conversion is a fixed cost of every run on a `.bin`.
+    let band = w as usize * BAND_ROWS;
+    let bands: Vec<Planes> = gb
+        .coverage
+        .chunks_mut(band)
+        .zip(depth.chunks_mut(band))
+        .zip(position.chunks_mut(band))
+        .zip(normal.chunks_mut(band))
+        .zip(albedo.chunks_mut(band))
+        .zip(spec.chunks_mut(band))
+        .zip(power.chunks_mut(band))
+        .enumerate()
+        .map(|(k, ((((((coverage, depth), position), normal), albedo), spec), power))| Planes {
+            y0: k * BAND_ROWS,
+            coverage,
+            depth: Some(depth),
+            position: Some(position),
+            normal: Some(normal),
+            albedo: Some(albedo),
+            spec: Some(spec),
+            power: Some(power),
+        })
+        .collect();
+    use rayon::prelude::*;
+    let out_of_range: u64 = bands.into_par_iter().map(|b| b.convert(h, chunk)).sum();
+    gb.depth = Some(depth);
+    gb.position = Some(position);
+    gb.normal = Some(normal);
+    gb.albedo = Some(albedo);
+    gb.specular = Some(spec);
+    gb.specular_power = Some(power);
+    gb.validate()?;
     Ok(Loaded {
         gbuffer: gb,
         format: SourceFormat::IspcBin,
-        sources,
-        lights: Some(lights),
+        sources: sources(out_of_range),
+        lights: Some(lights(h, chunk, path)?),
         camera_source: super::CameraSource::File,
         compression: None,
         sanitized: Vec::new(),

@@ -163,6 +163,80 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     finish(loaded, path, side.as_ref().map(|(s, p)| (s, p.as_path())), opts)
 }
 
+/// A dump loaded as its own arrays, not decoded into planes ([`open_packed`]): what [`load`] reports of it, and
+/// the arrays its bands are decoded from inside the resolve and the edge pass ([`PackedDump::frame`]).
+#[derive(Debug)]
+pub struct PackedDump {
+    /// What [`load`] returns (lights, sources, sanitising counts, warnings), but its G-buffer has no planes: its
+    /// size, camera, sample positions and coverage only.
+    pub loaded: Loaded,
+    /// The file's arrays.
+    pub arrays: ispc::Arrays,
+}
+
+impl PackedDump {
+    /// The frame the resolve ([`crate::resolve::resolve`]) and the edge pass ([`crate::detect::detect_packed`])
+    /// read band by band: every band's planes are [`load`]'s for those rows, bit for bit.
+    pub fn frame(&self) -> Result<crate::layout::PackedFrame<'_>> {
+        self.arrays.frame(&self.loaded.gbuffer)
+    }
+
+    /// The whole frame decoded into planes: [`load`]'s G-buffer (for what reads every plane at once, such as the
+    /// every-sample reference).
+    pub fn decode(&self, path: &Path) -> Result<GBuffer> {
+        let mut gb = GBuffer::default();
+        self.frame()?.decode_rows(0..self.loaded.gbuffer.height, &mut gb)?;
+        gb.materials.clone_from(&self.loaded.gbuffer.materials);
+        gb.validate().map_err(|e| Error::invalid(path, e.to_string()))?;
+        Ok(gb)
+    }
+}
+
+/// [`load`] without decoding, for a dump whose own arrays the resolve reads band by band as a GPU reads its
+/// G-buffer (an ISPC `.bin`: 15 bytes a pixel, where the decoded planes take 49): the lights, sources, sanitising
+/// counts and plausibility warnings are [`load`]'s, from one pass over the decoded bands that keeps none.
+/// `Ok(None)` when `path` is no such dump, or `opts` change its samples (folding, a grid, `--map`, file lists):
+/// [`load`] it instead.
+pub fn open_packed(path: &Path, opts: &LoadOptions) -> Result<Option<PackedDump>> {
+    if path.is_dir() || !opts.files.is_empty() || !opts.map.is_empty() || opts.grid.is_some() || opts.fold.is_some() {
+        return Ok(None);
+    }
+    crate::util::protect_input(path);
+    let side = resolve_sidecar(path, opts)?;
+    if side.as_ref().is_some_and(|(s, _)| s.supersample.is_some_and(|k| k > 1)) {
+        return Ok(None);
+    }
+    let (head, len) = read_head(path)?;
+    if head.starts_with(&EXR_MAGIC) || !ispc::matches_file(&head, len) {
+        return Ok(None);
+    }
+    let arrays = ispc::Arrays::read(path, opts)?;
+    let survey = arrays.survey()?;
+    let mut loaded = Loaded {
+        gbuffer: survey.like,
+        format: SourceFormat::IspcBin,
+        sources: ispc::sources(survey.out_of_range),
+        lights: Some(arrays.lights(path)?),
+        camera_source: CameraSource::File,
+        compression: None,
+        sanitized: survey.sanitized,
+        warnings: Vec::new(),
+        reading: None,
+        positions_assumed: false,
+    };
+    if let Some((s, sp)) = &side {
+        if !s.lights.is_empty() {
+            loaded.lights = Some(s.view_lights(loaded.gbuffer.camera.as_ref(), path)?);
+        }
+        apply_sidecar(&mut loaded, path, s, sp, 1)?;
+    }
+    loaded.gbuffer.validate().map_err(|e| Error::invalid(path, e.to_string()))?;
+    // The checks `load` runs on the whole frame, from the bands' counts: the positions are derived from depth
+    // (nothing to check against the camera), so the counts are all they need.
+    loaded.warnings = plausible::judge(&survey.checks, &loaded.gbuffer, false, path, |_, _| {})?;
+    Ok(Some(PackedDump { loaded, arrays }))
+}
+
 /// Loads a dump (EXR or ISPC `.bin`) held in memory, exactly as [`load`] would from a file (`path` names it in
 /// errors and locates the default sidecar beside it).
 pub fn load_bytes(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<Loaded> {
@@ -351,32 +425,7 @@ fn finish(mut loaded: Loaded, path: &Path, side: Option<(&Sidecar, &Path)>, opts
         })?;
     }
     if let Some((s, sp)) = side {
-        if let Some(sc) = &s.camera {
-            let (w, h) = (loaded.gbuffer.width, loaded.gbuffer.height);
-            let k = fold_k.unwrap_or(1).max(1);
-            let c = sc.to_camera_for(w * k, h * k);
-            let image_aspect = w as f32 / h.max(1) as f32;
-            if (c.aspect / image_aspect - 1.0).abs() > ASPECT_TOLERANCE {
-                return Err(Error::Parse {
-                    path: sp.into(),
-                    what: format!(
-                        "camera aspect {} does not match the image {} ({w}×{h} pixels, aspect {image_aspect:.4})",
-                        c.aspect,
-                        path.display()
-                    ),
-                });
-            }
-            if loaded.gbuffer.camera.is_none() {
-                loaded.gbuffer.camera = Some(c);
-                loaded.camera_source = CameraSource::Sidecar;
-            }
-        }
-        if loaded.gbuffer.materials.is_empty() {
-            loaded.gbuffer.materials.clone_from(&s.materials);
-        }
-        if loaded.lights.is_none() && !s.lights.is_empty() {
-            loaded.lights = Some(s.view_lights(loaded.gbuffer.camera.as_ref(), sp)?);
-        }
+        apply_sidecar(&mut loaded, path, s, sp, fold_k.unwrap_or(1).max(1))?;
     }
     if loaded.gbuffer.depth.is_none() && loaded.gbuffer.derive_depth_or_position() == Some(Attribute::Depth) {
         loaded.sources.push(AttributeSource {
@@ -394,6 +443,37 @@ fn finish(mut loaded: Loaded, path: &Path, side: Option<(&Sidecar, &Path)>, opts
     let mut warnings = plausible::check(&loaded.gbuffer, depth_read, positions_read, loaded.positions_assumed, path)?;
     loaded.warnings.append(&mut warnings);
     Ok(loaded)
+}
+
+/// The sidecar `s` (at `sp`) applied to a dump read from `path`, folded by `k`: its camera (checked against the
+/// image's aspect; used when the file has none), its materials and its lights (when the file has none).
+fn apply_sidecar(loaded: &mut Loaded, path: &Path, s: &Sidecar, sp: &Path, k: u32) -> Result<()> {
+    if let Some(sc) = &s.camera {
+        let (w, h) = (loaded.gbuffer.width, loaded.gbuffer.height);
+        let c = sc.to_camera_for(w * k, h * k);
+        let image_aspect = w as f32 / h.max(1) as f32;
+        if (c.aspect / image_aspect - 1.0).abs() > ASPECT_TOLERANCE {
+            return Err(Error::Parse {
+                path: sp.into(),
+                what: format!(
+                    "camera aspect {} does not match the image {} ({w}×{h} pixels, aspect {image_aspect:.4})",
+                    c.aspect,
+                    path.display()
+                ),
+            });
+        }
+        if loaded.gbuffer.camera.is_none() {
+            loaded.gbuffer.camera = Some(c);
+            loaded.camera_source = CameraSource::Sidecar;
+        }
+    }
+    if loaded.gbuffer.materials.is_empty() {
+        loaded.gbuffer.materials.clone_from(&s.materials);
+    }
+    if loaded.lights.is_none() && !s.lights.is_empty() {
+        loaded.lights = Some(s.view_lights(loaded.gbuffer.camera.as_ref(), sp)?);
+    }
+    Ok(())
 }
 
 /// A sidecar camera's aspect may differ from the image's by this fraction: engines round the aspect they export

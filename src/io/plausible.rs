@@ -106,6 +106,41 @@ fn count(gb: &GBuffer) -> Counts {
         .reduce(Counts::default, Counts::add)
 }
 
+/// What one pass over a G-buffer's samples counts for the checks, with the planes it has: of a whole frame
+/// ([`Survey::of`]), or summed over its bands (a frame decoded band by band, never whole).
+#[derive(Clone, Copy, Default)]
+pub(crate) struct Survey {
+    counts: Counts,
+    samples: u64,
+    normal: bool,
+    position: bool,
+    depth: bool,
+}
+
+impl Survey {
+    /// The survey of `gb`'s samples.
+    pub(crate) fn of(gb: &GBuffer) -> Survey {
+        Survey {
+            counts: count(gb),
+            samples: gb.len() as u64,
+            normal: gb.normal.is_some(),
+            position: gb.position.is_some(),
+            depth: gb.depth.is_some(),
+        }
+    }
+
+    /// The survey of two disjoint parts of one frame.
+    pub(crate) fn add(self, o: Survey) -> Survey {
+        Survey {
+            counts: self.counts.add(o.counts),
+            samples: self.samples + o.samples,
+            normal: self.normal | o.normal,
+            position: self.position | o.position,
+            depth: self.depth | o.depth,
+        }
+    }
+}
+
 /// Runs every check on `gb`. `depth_read` says the depth plane came from the file (not derived from positions);
 /// `positions_read` that the positions did (not derived from depth through the camera, which makes them agree
 /// with depth and reproject exactly by construction: those two checks are skipped); `positions_assumed` that the
@@ -117,70 +152,12 @@ pub fn check(
     positions_assumed: bool,
     path: &Path,
 ) -> Result<Vec<Warning>> {
-    let mut out = Vec::new();
     // One pass counts what every check below needs, without a list of the covered samples' indices (8 bytes per
     // sample: 66 MB on a 1080p × 4 dump, on top of the G-buffer).
-    let counts = count(gb);
-    let covered = || (0..gb.len()).into_par_iter().filter(|&i| gb.coverage[i]);
-    let nc = counts.covered;
-    let pct = |k: u64| 100.0 * k as f64 / nc.max(1) as f64;
-    if nc == 0 {
-        out.push(Warning {
-            code: "no-surface",
-            count: gb.len() as u64,
-            of: gb.len() as u64,
-            message: "every sample is background: nothing to shade (is the background marker right? --background)"
-                .into(),
-        });
-        return Ok(out);
-    }
-    if gb.normal.is_some() {
-        let (zero, bad) = (counts.zero_normal, counts.bad_normal);
-        if bad > 0 {
-            out.push(Warning {
-                code: "invalid-normals",
-                count: bad,
-                of: nc,
-                message: format!(
-                    "{bad} of {nc} covered samples ({:.2}%) have invalid normals: {zero} zero, {} not unit length \
-                     (|len − 1| > {UNIT_TOLERANCE}); codec errors skip them{}",
-                    pct(bad),
-                    bad - zero,
-                    if bad * 2 > nc {
-                        " — most normals are not unit: is another buffer mapped as normal?"
-                    } else {
-                        ""
-                    }
-                ),
-            });
-        }
-        let away = counts.away;
-        if away * 4 > nc {
-            out.push(Warning {
-                code: "normals-face-away",
-                count: away,
-                of: nc,
-                message: format!(
-                    "{away} of {nc} covered normals ({:.1}%) face away from the camera: world-space normals read \
-                     as view space (--space world), a flipped axis, or n·0.5+0.5 read as signed (--normals unorm)?",
-                    pct(away)
-                ),
-            });
-        }
-    }
-    if let Some(p) = &gb.position {
-        let behind = counts.behind;
-        if behind > 0 {
-            let msg = format!(
-                "{behind} of {nc} covered positions ({:.1}%) are behind the camera (z ≥ 0 in view space): \
-                 world-space positions read as view space? (--space world with a camera, or the preset)",
-                pct(behind)
-            );
-            if behind as f64 >= BEHIND_CAMERA_FAIL * nc as f64 {
-                return Err(Error::invalid(path, format!("{msg}. These cannot be view-space positions.")));
-            }
-            out.push(Warning { code: "behind-camera", count: behind, of: nc, message: msg });
-        }
+    let survey = Survey::of(gb);
+    judge(&survey, gb, positions_assumed, path, |out, nc| {
+        let Some(p) = &gb.position else { return };
+        let covered = || (0..gb.len()).into_par_iter().filter(|&i| gb.coverage[i]);
         if let (Some(d), true, true) = (&gb.depth, depth_read, positions_read) {
             let off: Vec<usize> =
                 covered().filter(|&i| (-p[i].z - d[i]).abs() > POSITION_DEPTH_REL * d[i].abs().max(1e-3)).collect();
@@ -221,8 +198,84 @@ pub fn check(
                 });
             }
         }
+    })
+}
+
+/// The checks on a frame's survey: `like` gives its camera and sample count (its planes are not read: `survey`
+/// says which the frame has). `read_positions` adds, after the behind-camera check of a frame with positions,
+/// the checks that need the planes themselves (positions read from the file against depth and the camera); it is
+/// given the covered count.
+pub(crate) fn judge(
+    survey: &Survey,
+    like: &GBuffer,
+    positions_assumed: bool,
+    path: &Path,
+    read_positions: impl FnOnce(&mut Vec<Warning>, u64),
+) -> Result<Vec<Warning>> {
+    let mut out = Vec::new();
+    let counts = survey.counts;
+    let nc = counts.covered;
+    let pct = |k: u64| 100.0 * k as f64 / nc.max(1) as f64;
+    if nc == 0 {
+        out.push(Warning {
+            code: "no-surface",
+            count: survey.samples,
+            of: survey.samples,
+            message: "every sample is background: nothing to shade (is the background marker right? --background)"
+                .into(),
+        });
+        return Ok(out);
     }
-    if let (Some(_), Some(cam)) = (&gb.depth, &gb.camera) {
+    if survey.normal {
+        let (zero, bad) = (counts.zero_normal, counts.bad_normal);
+        if bad > 0 {
+            out.push(Warning {
+                code: "invalid-normals",
+                count: bad,
+                of: nc,
+                message: format!(
+                    "{bad} of {nc} covered samples ({:.2}%) have invalid normals: {zero} zero, {} not unit length \
+                     (|len − 1| > {UNIT_TOLERANCE}); codec errors skip them{}",
+                    pct(bad),
+                    bad - zero,
+                    if bad * 2 > nc {
+                        " — most normals are not unit: is another buffer mapped as normal?"
+                    } else {
+                        ""
+                    }
+                ),
+            });
+        }
+        let away = counts.away;
+        if away * 4 > nc {
+            out.push(Warning {
+                code: "normals-face-away",
+                count: away,
+                of: nc,
+                message: format!(
+                    "{away} of {nc} covered normals ({:.1}%) face away from the camera: world-space normals read \
+                     as view space (--space world), a flipped axis, or n·0.5+0.5 read as signed (--normals unorm)?",
+                    pct(away)
+                ),
+            });
+        }
+    }
+    if survey.position {
+        let behind = counts.behind;
+        if behind > 0 {
+            let msg = format!(
+                "{behind} of {nc} covered positions ({:.1}%) are behind the camera (z ≥ 0 in view space): \
+                 world-space positions read as view space? (--space world with a camera, or the preset)",
+                pct(behind)
+            );
+            if behind as f64 >= BEHIND_CAMERA_FAIL * nc as f64 {
+                return Err(Error::invalid(path, format!("{msg}. These cannot be view-space positions.")));
+            }
+            out.push(Warning { code: "behind-camera", count: behind, of: nc, message: msg });
+        }
+        read_positions(&mut out, nc);
+    }
+    if let (true, Some(cam)) = (survey.depth, &like.camera) {
         let below = counts.below_near;
         if below * 2 > nc {
             out.push(Warning {
@@ -238,15 +291,15 @@ pub fn check(
             });
         }
     }
-    if positions_assumed && gb.samples > 1 {
+    if positions_assumed && like.samples > 1 {
         out.push(Warning {
             code: "sample-positions-assumed",
-            count: gb.len() as u64,
-            of: gb.len() as u64,
+            count: survey.samples,
+            of: survey.samples,
             message: format!(
                 "the file gives no sample positions: assumed the standard D3D/Vulkan {}× pattern (an OpenGL dump \
                  stored top row first has it mirrored in y); give gbuf.sample_positions to be sure",
-                gb.samples
+                like.samples
             ),
         });
     }

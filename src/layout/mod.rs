@@ -24,7 +24,7 @@ pub mod wgsl;
 pub use coder::{CodecKind, Slot};
 pub use formats::{Component, ComponentKind, Format};
 pub use material::MaterialTable;
-pub use pack::{Packed, PackedFrame, Roundtrip, TargetPlane};
+pub use pack::{BandSource, Packed, PackedFrame, Roundtrip, TargetPlane};
 pub use spec::{
     ConstantValue, FieldSpec, IndirectionSpec, LayoutSpec, MaterialKey, SpecSyntax, TargetSpec, DEFAULT_DEPTH_RANGE,
 };

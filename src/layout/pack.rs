@@ -776,7 +776,7 @@ impl Layout {
     pub fn frame<'a>(&'a self, packed: &'a Packed, like: &'a GBuffer) -> Result<PackedFrame<'a>> {
         self.check(packed, like)?;
         let coders = self.coders(packed.depth_range)?;
-        Ok(PackedFrame { layout: self, packed, like, coders })
+        Ok(PackedFrame { like, source: Source::Layout { layout: self, packed, coders } })
     }
 
     fn check(&self, packed: &Packed, like: &GBuffer) -> Result<()> {
@@ -932,38 +932,87 @@ pub fn field_code(packed: &Packed, field: &Field, i: usize) -> u64 {
     extract(load_le(&t.bytes[i * size..(i + 1) * size]), field.offset, field.bits) & mask(field.bits)
 }
 
-/// A packed G-buffer with what decoding it needs, built once ([`Layout::frame`]): what a lighting pass reads. A
-/// band of rows is decoded into a small G-buffer of its own ([`PackedFrame::decode_rows`]), so a frame can be lit
-/// (or analysed) band by band without its decoded copy ever existing whole.
+/// Storage other than a layout's render targets that a frame's samples are decoded from a band of rows at a time:
+/// a dump's own arrays (the ISPC `.bin`'s, [`crate::io::ispc::Arrays`]). [`PackedFrame::of_source`] makes it a
+/// frame the resolve and the edge pass read band by band, as they read a layout's packed targets.
+pub trait BandSource: Sync {
+    /// What the samples are stored as, for messages ("the ISPC .bin's arrays").
+    fn describe(&self) -> String;
+
+    /// Decodes rows `rows` of the frame `like` into `out`, as [`PackedFrame::decode_rows`] documents (`only`: the
+    /// planes to decode, as in [`PackedFrame::decode_rows_only`]; `None`: every plane). Each plane must be what
+    /// the storage's whole-frame reader gives for those samples, bit for bit.
+    fn decode_rows(
+        &self,
+        like: &GBuffer,
+        rows: Range<u32>,
+        out: &mut GBuffer,
+        only: Option<&[Attribute]>,
+    ) -> Result<()>;
+}
+
+/// A packed G-buffer with what decoding it needs, built once ([`Layout::frame`], or [`PackedFrame::of_source`] over
+/// a dump's own arrays): what a lighting pass reads. A band of rows is decoded into a small G-buffer of its own
+/// ([`PackedFrame::decode_rows`]), so a frame can be lit (or analysed) band by band without its decoded copy ever
+/// existing whole.
 pub struct PackedFrame<'a> {
-    layout: &'a Layout,
-    packed: &'a Packed,
     like: &'a GBuffer,
-    coders: Vec<Coder>,
+    source: Source<'a>,
+}
+
+/// Where a [`PackedFrame`]'s samples are.
+enum Source<'a> {
+    /// A layout's packed render targets.
+    Layout { layout: &'a Layout, packed: &'a Packed, coders: Vec<Coder> },
+    /// Other storage (a dump's own arrays).
+    Other(&'a dyn BandSource),
 }
 
 impl std::fmt::Debug for PackedFrame<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let p = self.packed;
-        f.debug_struct("PackedFrame")
-            .field("layout", &self.layout.name())
-            .field("size", &(p.width, p.height, p.samples))
-            .field("bytes", &p.total_bytes())
-            .finish_non_exhaustive()
+        let l = self.like;
+        let mut d = f.debug_struct("PackedFrame");
+        d.field("source", &self.describe()).field("size", &(l.width, l.height, l.samples));
+        if let Source::Layout { packed, .. } = &self.source {
+            d.field("bytes", &packed.total_bytes());
+        }
+        d.finish_non_exhaustive()
     }
 }
 
 impl<'a> PackedFrame<'a> {
-    /// The layout.
-    #[must_use]
-    pub fn layout(&self) -> &'a Layout {
-        self.layout
+    /// A frame decoded from `source`, of the size, sample positions, camera and coverage of `like` (whose planes,
+    /// if any, are not read). Fails when `like` is not a valid G-buffer.
+    pub fn of_source(like: &'a GBuffer, source: &'a dyn BandSource) -> Result<Self> {
+        like.validate()?;
+        Ok(PackedFrame { like, source: Source::Other(source) })
     }
 
-    /// The packed targets.
+    /// The layout, when the frame is a layout's packed targets.
     #[must_use]
-    pub fn packed(&self) -> &'a Packed {
-        self.packed
+    pub fn layout(&self) -> Option<&'a Layout> {
+        match &self.source {
+            Source::Layout { layout, .. } => Some(layout),
+            Source::Other(_) => None,
+        }
+    }
+
+    /// The packed targets, when the frame is a layout's.
+    #[must_use]
+    pub fn packed(&self) -> Option<&'a Packed> {
+        match &self.source {
+            Source::Layout { packed, .. } => Some(packed),
+            Source::Other(_) => None,
+        }
+    }
+
+    /// What the samples are stored as, for messages (`layout "lauritzen-15"`, `the ISPC .bin's arrays`).
+    #[must_use]
+    pub fn describe(&self) -> String {
+        match &self.source {
+            Source::Layout { layout, .. } => format!("layout {:?}", layout.name()),
+            Source::Other(s) => s.describe(),
+        }
     }
 
     /// The G-buffer whose size, sample positions, camera and coverage the packed targets have.
@@ -999,11 +1048,15 @@ impl<'a> PackedFrame<'a> {
         if rows.start > rows.end || rows.end > like.height {
             return Err(Error::Mismatch(format!("rows {rows:?} outside the frame's {} rows", like.height)));
         }
-        let row = like.width as usize * like.samples as usize;
-        let range = rows.start as usize * row..rows.end as usize * row;
-        let p = self.packed;
-        let band = Band::of(&p.targets, range, p.material_table.as_ref(), &p.present);
-        self.layout.decode_band(&band, &self.coders, like, rows, out, only)
+        match &self.source {
+            Source::Layout { layout, packed: p, coders } => {
+                let row = like.width as usize * like.samples as usize;
+                let range = rows.start as usize * row..rows.end as usize * row;
+                let band = Band::of(&p.targets, range, p.material_table.as_ref(), &p.present);
+                layout.decode_band(&band, coders, like, rows, out, only)
+            }
+            Source::Other(s) => s.decode_rows(like, rows, out, only),
+        }
     }
 }
 

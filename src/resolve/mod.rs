@@ -267,11 +267,11 @@ fn packed_reader<'a>(p: &'a crate::layout::PackedFrame<'a>) -> Result<surface::S
     let derivable = probe.depth.is_some() && like.camera.is_some();
     if probe.position.is_none() && !derivable && like.coverage.iter().any(|&c| c) {
         return Err(Error::Mismatch(format!(
-            "the resolve needs view-space positions: layout {:?} stores no position, and no depth with a camera to \
-             derive one",
-            p.layout().name()
+            "the resolve needs view-space positions: {} stores no position, and no depth with a camera to derive \
+             one",
+            p.describe()
         )));
     }
     // Only the camera's rays and the frame's size are read through it: every band is decoded on its own.
-    surface::SurfaceReader::with_order(like, surface::SampleOrder::Interleaved)
+    surface::SurfaceReader::frame_rays(like)
 }

@@ -232,6 +232,15 @@ impl<'a> SurfaceReader<'a> {
         Ok(SurfaceReader { gb, rays, at })
     }
 
+    /// A reader of a packed frame's size and camera rays only (its planes, if any, are never read: each band is
+    /// read through [`SurfaceReader::band`]); the caller has checked that the bands give positions.
+    pub(crate) fn frame_rays(gb: &'a GBuffer) -> Result<Self> {
+        gb.validate()?;
+        let rays = gb.camera.map(|c| c.ray_caster(gb.width, gb.height));
+        let at = SampleIndex::new(SampleOrder::Interleaved, gb.pixel_count(), gb.samples as usize);
+        Ok(SurfaceReader { gb, rays, at })
+    }
+
     /// Reads `band`, rows `y0..y0 + band.height` of a frame decoded on their own (interleaved order, see
     /// [`crate::layout::PackedFrame::decode_rows`]), with the frame's pixel coordinates: `rays` are the frame's
     /// (positions derived from depth are the whole frame's bit for bit).
