@@ -3,26 +3,34 @@
 //!
 //! For a formula `f: [0, 1] → 0..=255` that grows with `x`, the code of `x` is the number of thresholds
 //! `t_1 ≤ … ≤ t_255` at or below it, where `t_k` is the smallest f32 with `f(t_k) ≥ k`, found once by bisection
-//! over f32 bit patterns with the formula itself. A bucket table on `x` gives the code at the bucket's start; a few
-//! threshold compares finish it. The result equals the formula's wherever the formula is monotone; each user's
-//! test sweeps every threshold's neighbourhood and a dense grid of [0, 1] against its formula.
+//! over f32 bit patterns with the formula itself. A table indexed by the top bits of `x`'s bit pattern (buckets
+//! as fine, relative to `x`, as 1/256 of a binade) holds the code at each bucket's start and the next threshold;
+//! no bucket holds two thresholds (checked when the table is built), so one compare finishes the code, without a
+//! branch. The result equals the formula's wherever the formula is monotone; each user's test sweeps every
+//! threshold's neighbourhood and a dense grid of [0, 1] against its formula.
 
-/// The thresholds and bucket starts of one formula.
+/// The thresholds and buckets of one formula.
 pub struct CodeLut {
     /// `t[k]` for k in 1..=255 (`t[0]` = 0).
     thresholds: [f32; 256],
-    /// The code of each bucket's lower end, [`CodeLut::BUCKETS`] buckets over [0, 1].
+    /// The bucket of `t_1` (every bucket below it has code 0 and the same next threshold): bucket `b` of an input
+    /// is `max(bits >> SHIFT, low) − low`.
+    low: u32,
+    /// The code at each bucket's start.
     start: Vec<u8>,
+    /// The smallest threshold above each bucket's start (+∞ when none).
+    next: Vec<f32>,
 }
 
 impl CodeLut {
-    /// Buckets over [0, 1].
-    pub const BUCKETS: usize = 4096;
+    /// A bucket is the bit patterns sharing all but their low `SHIFT` bits: 1/256 of a binade.
+    const SHIFT: u32 = 15;
 
     /// The table of `formula`, which must give 0 at 0, 255 at 1 and grow with `x` in between.
     ///
     /// # Panics
-    /// When `formula(0) != 0` or `formula(1) != 255`: a programming error in the caller's formula.
+    /// When `formula(0) != 0` or `formula(1) != 255`, or two of its thresholds are closer than a bucket (a code
+    /// narrower than 1/256 of its input's binade): a programming error in the caller's formula.
     pub fn build(formula: impl Fn(f32) -> u8) -> CodeLut {
         assert_eq!((formula(0.0), formula(1.0)), (0, 255), "CodeLut: the formula must map [0, 1] onto 0..=255");
         let mut thresholds = [0.0f32; 256];
@@ -39,13 +47,18 @@ impl CodeLut {
             }
             *t = f32::from_bits(lo);
         }
-        let start = (0..Self::BUCKETS)
-            .map(|b| {
-                let x = b as f32 / Self::BUCKETS as f32;
-                thresholds[1..].partition_point(|&t| t <= x) as u8
-            })
-            .collect();
-        CodeLut { thresholds, start }
+        let low = thresholds[1].to_bits() >> Self::SHIFT;
+        let (mut start, mut next) = (Vec::new(), Vec::new());
+        for b in low..=1.0f32.to_bits() >> Self::SHIFT {
+            let (first, end) = (b << Self::SHIFT, (b + 1) << Self::SHIFT);
+            // Thresholds at or below the bucket's first input, and inside it.
+            let code = thresholds[1..].partition_point(|t| t.to_bits() <= first);
+            let inside = thresholds[1..].partition_point(|t| t.to_bits() < end) - code;
+            assert!(inside <= 1, "CodeLut: {inside} thresholds in the bucket from {}", f32::from_bits(first));
+            start.push(code as u8);
+            next.push(thresholds.get(code + 1).copied().unwrap_or(f32::INFINITY));
+        }
+        CodeLut { thresholds, low, start, next }
     }
 
     /// The code of `x`, which the caller has clamped to [0, 1] (NaN replaced).
@@ -53,12 +66,9 @@ impl CodeLut {
     #[must_use]
     pub fn encode_unit(&self, x: f32) -> u8 {
         debug_assert!((0.0..=1.0).contains(&x), "{x}");
-        let b = ((x * Self::BUCKETS as f32) as usize).min(Self::BUCKETS - 1);
-        let mut code = self.start[b];
-        while code < 255 && x >= self.thresholds[usize::from(code) + 1] {
-            code += 1;
-        }
-        code
+        // The sign bit cleared: −0 is 0. `b` is then at most the bucket of 1.0, the tables' last.
+        let b = (((x.to_bits() & 0x7fff_ffff) >> Self::SHIFT).max(self.low) - self.low) as usize;
+        self.start[b] + u8::from(x >= self.next[b])
     }
 
     /// `t_1 … t_255`: the smallest input of each code, for the users' tests.

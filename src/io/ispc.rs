@@ -318,7 +318,24 @@ fn check_header(head: &[u8], file_len: u64, path: &Path, opts: &LoadOptions) -> 
 pub struct Arrays {
     header: Header,
     /// The header's bytes and the chunk's.
-    bytes: Vec<u8>,
+    bytes: Bytes,
+}
+
+/// A file's bytes: mapped (no copy, no page faults of a fresh buffer), or read when the file cannot be mapped.
+#[derive(Debug)]
+enum Bytes {
+    Mapped(memmap2::Mmap),
+    Read(Vec<u8>),
+}
+
+impl std::ops::Deref for Bytes {
+    type Target = [u8];
+    fn deref(&self) -> &[u8] {
+        match self {
+            Bytes::Mapped(m) => m,
+            Bytes::Read(v) => v,
+        }
+    }
 }
 
 /// One band's part of a [`Survey`]: depths out of range, NaN and ±Inf replaced, the checks' counts.
@@ -343,11 +360,19 @@ impl Arrays {
         let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
         let file_len = file.metadata().map_err(|e| Error::io(path, e))?.len();
         let mut head = Vec::with_capacity(HEADER_BYTES);
-        let mut reader = std::io::BufReader::new(file);
+        let mut reader = std::io::BufReader::new(&file);
         (&mut reader).take(HEADER_BYTES as u64).read_to_end(&mut head).map_err(|e| Error::io(path, e))?;
         let header = check_header(&head, file_len, path, opts)?;
-        let mut bytes = head;
         let want = HEADER_BYTES + header.chunk_size as usize;
+        // SAFETY: the map is read-only and its length was checked against the file's (`check_header`); every
+        // read of it is a bounds-checked slice of that length. What mapping a file cannot rule out is another
+        // process changing or truncating it while gbuf runs (values read would change, or the process would get
+        // SIGBUS): the same hazard every tool that maps its input takes (docs/DECISIONS.md, "Mapping a .bin").
+        let mapped = unsafe { memmap2::MmapOptions::new().len(want).populate().map(&file) };
+        if let Ok(m) = mapped {
+            return Ok(Arrays { header, bytes: Bytes::Mapped(m) });
+        }
+        let mut bytes = head;
         bytes.reserve_exact(want - bytes.len());
         // Read into the reserved capacity (no zero fill first); the header check bounded the size by the file's
         // length.
@@ -362,7 +387,7 @@ impl Arrays {
                 ),
             ));
         }
-        Ok(Arrays { header, bytes })
+        Ok(Arrays { header, bytes: Bytes::Read(bytes) })
     }
 
     /// The decoded header.
