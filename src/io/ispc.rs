@@ -338,6 +338,10 @@ impl std::ops::Deref for Bytes {
     }
 }
 
+/// The planes the survey decodes: what the load's sanitising and checks can find anything in.
+const SURVEYED: [Attribute; 5] =
+    [Attribute::Depth, Attribute::Position, Attribute::Normal, Attribute::Specular, Attribute::SpecularPower];
+
 /// One band's part of a [`Survey`]: depths out of range, NaN and ±Inf replaced, the checks' counts.
 type BandSurvey = (u64, Vec<(&'static str, u64, u64)>, crate::io::plausible::Survey);
 
@@ -419,7 +423,9 @@ impl Arrays {
             .enumerate()
             .map_init(GBuffer::default, |band, (k, coverage)| {
                 let y0 = (k * BAND_ROWS) as u32;
-                let out_of_range = self.decode_band(y0..y0 + (coverage.len() / h.width as usize) as u32, band, None);
+                // Every plane but albedo (unorm8: never sanitised, never checked).
+                let rows = y0..y0 + (coverage.len() / h.width as usize) as u32;
+                let out_of_range = self.decode_band(rows, band, Some(&SURVEYED));
                 let sanitized = crate::io::sanitize::sanitize(band);
                 coverage.copy_from_slice(&band.coverage);
                 (out_of_range, sanitized, crate::io::plausible::Survey::of(band))
