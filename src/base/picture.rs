@@ -80,12 +80,15 @@ pub const HEATMAP_LEGEND_ROWS: u32 = 8;
 /// from 0 (left) to the maximum (right). Returns the maximum, which the caller should print (the PNG carries no
 /// text).
 pub fn write_heatmap_png(path: &Path, width: u32, height: u32, counts: &[u32]) -> Result<u32> {
+    let (png, max) = heatmap_png(width, height, counts).map_err(|e| Error::invalid(path, e.to_string()))?;
+    write_bytes_atomic(path, &png)?;
+    Ok(max)
+}
+
+/// [`write_heatmap_png`]'s file, encoded in memory: the PNG's bytes and the maximum.
+pub fn heatmap_png(width: u32, height: u32, counts: &[u32]) -> Result<(Vec<u8>, u32)> {
     if counts.len() != width as usize * height as usize {
-        return Err(Error::Mismatch(format!(
-            "{}: {} counts for a {width}×{height} heatmap",
-            path.display(),
-            counts.len()
-        )));
+        return Err(Error::Mismatch(format!("{} counts for a {width}×{height} heatmap", counts.len())));
     }
     let max = counts.iter().copied().max().unwrap_or(0);
     let scale = if max > 0 { 1.0 / max as f32 } else { 0.0 };
@@ -95,8 +98,7 @@ pub fn write_heatmap_png(path: &Path, width: u32, height: u32, counts: &[u32]) -
             bytes.extend(colormap(x as f32 / (width.max(2) - 1) as f32));
         }
     }
-    write_rgb8_png(path, width, height + HEATMAP_LEGEND_ROWS, bytes)?;
-    Ok(max)
+    Ok((crate::base::png::encode_rgb8(width, height + HEATMAP_LEGEND_ROWS, &bytes)?, max))
 }
 
 /// The top-left corner of the `cw × ch` window of `values` (a row-major `w × h` map) with the largest sum

@@ -5,7 +5,7 @@
 
 use crate::cli::common::{print_json, InputArgs, ThresholdArgs};
 use anyhow::Context;
-use gbuf::base::picture::write_heatmap_png;
+use gbuf::base::picture::heatmap_png;
 use gbuf::base::timing::{timed, StageMs};
 use gbuf::detect::{self, Detector};
 use gbuf::image::{LdrEncoding, ToneCurve, ToneMap};
@@ -174,9 +174,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
     let pb = crate::cli::spinner(format!("loading {file}"));
     // An ISPC `.bin` is lit from its own arrays, decoded band by band inside the edge pass and the resolve (as the
-    // example's shading loop reads it): no decoded copy of the frame, unless the reference needs one. Not with a
-    // layout (which packs the decoded frame) or scattered lights (placed from the decoded depths).
-    let bin = args.layout.is_none() && args.lights.is_none();
+    // example's shading loop reads it): no decoded copy of the frame. Not with a layout (which packs the decoded
+    // frame), scattered lights (placed from the decoded depths) or the reference (which reads every plane at once:
+    // the frame decoded whole once serves it and the resolve).
+    let bin = args.layout.is_none() && args.lights.is_none() && args.no_reference;
     let (opened, t_decode) = timed(|| -> anyhow::Result<(gbuf::io::Loaded, Option<gbuf::io::ispc::Arrays>)> {
         if bin {
             if let Some(dump) = args.input.open_packed()? {
@@ -192,17 +193,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(a) => Some(a.frame(&gb).with_context(|| format!("{file}: its arrays"))?),
         None => None,
     };
-    // What reads every plane at once (the reference) gets the frame decoded whole.
-    let (whole, t_whole) = timed(|| match (&bin_frame, args.no_reference) {
-        (Some(f), false) => {
-            let mut whole = GBuffer::default();
-            f.decode_rows(0..gb.height, &mut whole).map(|()| Some(whole))
-        }
-        _ => Ok(None),
-    });
-    let whole = whole.with_context(|| format!("{file}: decoding the frame for the reference"))?;
-    let t_decode = t_decode + t_whole;
-    let planes: &GBuffer = whole.as_ref().unwrap_or(&gb);
 
     // With a layout the G-buffer is packed into its render targets, and the edge pass and the lighting read those
     // targets band by band, as a GPU does: no decoded copy of the frame is made.
@@ -252,64 +242,82 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut stage = StageMs { decode: t_decode + resolved.stats.ms.decode, detect: t_detect, ..resolved.stats.ms };
     stage.total += t_decode + t_detect;
 
-    // The light pre-pass approximates full deferred shading; its own error is measured against that, on the same
-    // input, apart from the error against the reference (which also holds the detector's and the layout's).
-    let (prepass_vs_deferred, t_deferred) = if cfg.schedule == Schedule::LightPrepass {
-        let (e, t) = against_full_deferred(lit_gb, &lights, &mask, &cfg, &resolved.image)
-            .with_context(|| format!("{file}: full deferred resolve for the pre-pass comparison"))?;
-        (Some(e), t)
-    } else {
-        (None, 0.0)
-    };
-
     anyhow::ensure!(args.ppd.is_finite() && args.ppd > 0.0, "--ppd must be a positive number, got {}", args.ppd);
     let viewing = Viewing { tone_map: args.tonemap, exposure: args.exposure, pixels_per_degree: args.ppd };
     let flip = (!args.no_flip).then_some(&viewing);
-    // With a layout, the exact G-buffer lit the same way separates the layout's loss from the detector's.
-    let exact = match &layout {
-        Some(_) => Some(
-            gbuf::analysis::errors::lit(&gb, &lights, args.detector, &det_cfg, &cfg)
-                .with_context(|| format!("{file}: exact resolve"))?
-                .image,
-        ),
-        None => None,
-    };
-    let (reference, t_ref) = if args.no_reference {
-        (None, 0.0)
-    } else {
-        pb.set_message(format!("{file}: the every-sample reference"));
-        let (reference, t) = timed(|| resolve::reference(planes, &lights, &cfg));
-        let reference = reference.with_context(|| format!("{file}: reference"))?;
-        resolve::check_meaningful(planes, &lights, &reference)
-            .with_context(|| format!("{file}: nothing to compare"))?;
-        (Some(reference), t)
-    };
-    let triad = error_triad(&resolved.image, exact.as_ref(), reference.as_ref(), flip);
-    let (layout_error, total_error, aa_error) = (triad.layout, triad.total, triad.aa);
-    let error = reference.as_ref().map(|r| compare(r, &resolved.image));
-
-    let (heatmap_max, t_output) = timed(|| -> anyhow::Result<Option<u32>> {
-        if let Some(out) = &args.output {
-            resolved.image.write_exr(out).with_context(|| format!("writing {}", out.display()))?;
-        }
-        if let Some(out) = &args.png {
-            let r = if args.ldr.is_some() {
-                resolved.image.write_ldr_gamma22_png(out)
-            } else {
-                resolved.image.write_png(out, ToneMap::new(args.tonemap, args.exposure))
-            };
-            r.with_context(|| format!("writing {}", out.display()))?;
-        }
-        let heatmap_max = match &args.heatmap {
-            Some(out) => Some(
-                write_heatmap_png(out, gb.width, gb.height, &resolved.lights_per_pixel)
-                    .with_context(|| format!("writing {}", out.display()))?,
+    // The measurements (the pre-pass comparison, the exact G-buffer's image, the reference, FLIP) run while the
+    // pictures are encoded in memory beside them; the files are written once both have succeeded.
+    let analysis = || -> anyhow::Result<Analysis> {
+        // The light pre-pass approximates full deferred shading; its own error is measured against that, on the
+        // same input, apart from the error against the reference (which also holds the detector's and the
+        // layout's).
+        let (prepass_vs_deferred, t_deferred) = if cfg.schedule == Schedule::LightPrepass {
+            let (e, t) = against_full_deferred(lit_gb, &lights, &mask, &cfg, &resolved.image)
+                .with_context(|| format!("{file}: full deferred resolve for the pre-pass comparison"))?;
+            (Some(e), t)
+        } else {
+            (None, 0.0)
+        };
+        // With a layout, the exact G-buffer lit the same way separates the layout's loss from the detector's.
+        let exact = match &layout {
+            Some(_) => Some(
+                gbuf::analysis::errors::lit(&gb, &lights, args.detector, &det_cfg, &cfg)
+                    .with_context(|| format!("{file}: exact resolve"))?
+                    .image,
             ),
             None => None,
         };
-        Ok(heatmap_max)
+        let (reference, t_ref) = if args.no_reference {
+            (None, 0.0)
+        } else {
+            pb.set_message(format!("{file}: the every-sample reference"));
+            let (reference, t) = timed(|| resolve::reference(&gb, &lights, &cfg));
+            let reference = reference.with_context(|| format!("{file}: reference"))?;
+            resolve::check_meaningful(&gb, &lights, &reference)
+                .with_context(|| format!("{file}: nothing to compare"))?;
+            (Some(reference), t)
+        };
+        let triad = error_triad(&resolved.image, exact.as_ref(), reference.as_ref(), flip);
+        let error = reference.as_ref().map(|r| compare(r, &resolved.image));
+        Ok(Analysis { prepass_vs_deferred, t_deferred, t_ref, triad, error })
+    };
+    let encode = || -> anyhow::Result<Encoded> {
+        let mut files = Vec::new();
+        if let Some(out) = &args.png {
+            let (w, h) = (resolved.image.width, resolved.image.height);
+            let rgb = if args.ldr.is_some() {
+                resolved.image.to_ldr_gamma22()
+            } else {
+                resolved.image.to_srgb8(ToneMap::new(args.tonemap, args.exposure))
+            };
+            let png =
+                gbuf::base::png::encode_rgb8(w, h, &rgb).with_context(|| format!("encoding {}", out.display()))?;
+            files.push((out.clone(), png));
+        }
+        let mut heatmap_max = None;
+        if let Some(out) = &args.heatmap {
+            let (png, max) = heatmap_png(gb.width, gb.height, &resolved.lights_per_pixel)
+                .with_context(|| format!("encoding {}", out.display()))?;
+            files.push((out.clone(), png));
+            heatmap_max = Some(max);
+        }
+        Ok(Encoded { files, heatmap_max })
+    };
+    let (encoded, analysed) = rayon::join(|| timed(encode), analysis);
+    let Analysis { prepass_vs_deferred, t_deferred, t_ref, triad, error } = analysed?;
+    let (layout_error, total_error, aa_error) = (triad.layout, triad.total, triad.aa);
+    let (Encoded { files, heatmap_max }, t_encode) = (encoded.0?, encoded.1);
+    let (written, t_write) = timed(|| -> anyhow::Result<()> {
+        if let Some(out) = &args.output {
+            resolved.image.write_exr(out).with_context(|| format!("writing {}", out.display()))?;
+        }
+        for (path, bytes) in &files {
+            gbuf::util::write_bytes_atomic(path, bytes).with_context(|| format!("writing {}", path.display()))?;
+        }
+        Ok(())
     });
-    let heatmap_max = heatmap_max?;
+    written?;
+    let t_output = t_encode + t_write;
     let writes = args.output.is_some() || args.png.is_some() || args.heatmap.is_some();
     let t_output = if writes { t_output } else { 0.0 };
 
@@ -361,6 +369,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     pb.finish_and_clear();
     print_human(&report)
+}
+
+/// The pictures `gbuf resolve` writes, encoded: (file, bytes), and the heatmap's maximum.
+struct Encoded {
+    files: Vec<(PathBuf, Vec<u8>)>,
+    heatmap_max: Option<u32>,
+}
+
+/// What `gbuf resolve` measures beside encoding its pictures.
+struct Analysis {
+    prepass_vs_deferred: Option<ImageError>,
+    t_deferred: f64,
+    t_ref: f64,
+    triad: gbuf::measure::image::ErrorTriad,
+    error: Option<ImageError>,
 }
 
 /// Lights by the rule of every command ([`gbuf::scene::choose_lights`]), with no fallback: an error saying how to
