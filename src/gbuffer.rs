@@ -662,6 +662,25 @@ pub fn checked_len(width: u32, height: u32, samples: u32) -> Result<usize> {
     Ok(n as usize)
 }
 
+/// Storage other than a layout's render targets that a frame's samples are decoded from a band of rows at a time:
+/// a dump's own arrays (the ISPC `.bin`'s, `io::ispc::Arrays`). `layout::PackedFrame::of_source` makes it a frame
+/// the resolve and the edge pass read band by band, as they read a layout's packed targets.
+pub trait BandSource: Sync {
+    /// What the samples are stored as, for messages ("the ISPC .bin's arrays").
+    fn describe(&self) -> String;
+
+    /// Decodes rows `rows` of the frame `like` into `out`, as `layout::PackedFrame::decode_rows` documents (`only`: the
+    /// planes to decode, as in `PackedFrame::decode_rows_only`; `None`: every plane). Each plane must be what
+    /// the storage's whole-frame reader gives for those samples, bit for bit.
+    fn decode_rows(
+        &self,
+        like: &GBuffer,
+        rows: std::ops::Range<u32>,
+        out: &mut GBuffer,
+        only: Option<&[Attribute]>,
+    ) -> Result<()>;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

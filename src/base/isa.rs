@@ -101,6 +101,46 @@ fn detect_uncached() -> Isa {
     Isa::Baseline
 }
 
+/// Work to run under [`run`], compiled for the instruction set it picks (the codecs' slice loops, the `.bin`
+/// conversion). Implementations mark `run` `#[inline(always)]` so that its body is compiled
+/// inside each `#[target_feature]` wrapper.
+pub trait Kernel {
+    /// Does the work.
+    fn run(self);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn run_avx2<K: Kernel>(k: K) {
+    k.run();
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
+unsafe fn run_avx512<K: Kernel>(k: K) {
+    k.run();
+}
+
+/// Runs `k` compiled for `isa`, or for the widest level below it that this CPU has.
+#[inline]
+pub fn run<K: Kernel>(isa: Isa, k: K) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        match isa.min(Isa::detect()) {
+            // SAFETY: the CPU supports the features each wrapper enables (checked by `Isa::detect`).
+            Isa::Avx512 => unsafe { run_avx512(k) },
+            // SAFETY: as above.
+            Isa::Avx2 => unsafe { run_avx2(k) },
+            Isa::Baseline => k.run(),
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = isa;
+        k.run();
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

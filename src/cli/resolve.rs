@@ -190,7 +190,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let gb: GBuffer = loaded.gbuffer;
     let (lights, lights_source) = pick_lights(loaded.lights, args.lights, args.seed, &gb, &file)?;
     let bin_frame = match &arrays {
-        Some(a) => Some(a.frame(&gb).with_context(|| format!("{file}: its arrays"))?),
+        Some(a) => Some(gbuf::layout::PackedFrame::of_source(&gb, a).with_context(|| format!("{file}: its arrays"))?),
         None => None,
     };
 

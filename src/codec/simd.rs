@@ -4,7 +4,7 @@
 //! Every cheap codec writes its per-element work once, as an `#[inline(always)]` branch-free body that the
 //! scalar `encode`/`decode` call too. The slice paths run that body in a plain loop (which LLVM auto-vectorises)
 //! compiled three times: at the x86-64 baseline, inside an `avx2,fma` `#[target_feature]` wrapper, and inside an
-//! AVX-512 one. [`Isa::detect`] picks the widest the CPU has at run time. No path uses fused multiply-add or any
+//! AVX-512 one. [`crate::base::isa::Isa::detect`] picks the widest the CPU has at run time. No path uses fused multiply-add or any
 //! other contraction (Rust never contracts `a*b + c`), so every path computes the same IEEE operations in the
 //! same order and the results are bit-identical to the scalar path — `tests/codec_slices.rs` checks it for every
 //! codec × bit count × instruction set on adversarial and random input.
@@ -13,47 +13,9 @@
 //! chunk runs the codec's single-threaded slice path.
 
 use super::Codec;
-use crate::base::isa::Isa;
 use rayon::prelude::*;
 
-/// A slice loop to run under [`run`]. Implementations mark `run` `#[inline(always)]` so that its body is compiled
-/// inside each `#[target_feature]` wrapper.
-pub trait Kernel {
-    /// Does the work.
-    fn run(self);
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn run_avx2<K: Kernel>(k: K) {
-    k.run();
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
-unsafe fn run_avx512<K: Kernel>(k: K) {
-    k.run();
-}
-
-/// Runs `k` compiled for `isa`, or for the widest level below it that this CPU has.
-#[inline]
-pub fn run<K: Kernel>(isa: Isa, k: K) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        match isa.min(Isa::detect()) {
-            // SAFETY: the CPU supports the features each wrapper enables (checked by `Isa::detect`).
-            Isa::Avx512 => unsafe { run_avx512(k) },
-            // SAFETY: as above.
-            Isa::Avx2 => unsafe { run_avx2(k) },
-            Isa::Baseline => k.run(),
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        let _ = isa;
-        k.run();
-    }
-}
+pub use crate::base::isa::{run, Kernel};
 
 /// A per-element function for [`MapKernel`]: implemented by small wrappers around a codec reference whose
 /// `apply` is `#[inline(always)]`, so the codec's per-element body is compiled into the `#[target_feature]`
@@ -214,6 +176,7 @@ pub fn par_decode<C: Codec + ?Sized>(codec: &C, codes: &[u64], out: &mut [C::Val
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::base::isa::Isa;
 
     #[test]
     fn f16_decode_matches_half_on_every_code() {

@@ -16,9 +16,8 @@
 use super::{AttributeSource, LoadOptions, Loaded, SourceFormat};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
-use crate::gbuffer::{Attribute, GBuffer};
+use crate::gbuffer::{Attribute, BandSource, GBuffer};
 use crate::io::sidecar::Sidecar;
-use crate::layout::{BandSource, PackedFrame};
 use crate::light::{Light, LightKind};
 use glam::Vec3;
 use half::f16;
@@ -309,11 +308,11 @@ fn check_header(head: &[u8], file_len: u64, path: &Path, opts: &LoadOptions) -> 
     Ok(h)
 }
 
-/// An ISPC `.bin` held in memory as the file's own arrays (15 bytes a pixel), its header checked: what a
-/// [`PackedFrame`] over it ([`Arrays::frame`]) decodes a band of rows at a time inside the resolve and the edge
-/// pass, as the example's own shading loop reads the file, instead of converting the frame into planes first
+/// An ISPC `.bin` held in memory as the file's own arrays (15 bytes a pixel), its header checked: a
+/// [`BandSource`] that a packed frame over it (`layout::PackedFrame::of_source`) decodes a band of rows at a time
+/// inside the resolve and the edge pass, as the example's own shading loop reads the file, instead of converting the frame into planes first
 /// (49 bytes a pixel). A band's planes are [`read`]'s for those rows after [`crate::io::load`]'s sanitising, bit
-/// for bit: both run the same conversion ([`Arrays::survey`] says what the load's checks would).
+/// for bit: both run the same conversion (`Arrays::survey` says what the load's checks would).
 #[derive(Debug)]
 pub struct Arrays {
     header: Header,
@@ -483,18 +482,6 @@ impl Arrays {
         };
         planes.convert(h, self.chunk())
     }
-
-    /// The frame its bands are decoded from, of the size, camera and coverage of `like` ([`Survey::like`]).
-    pub fn frame<'a>(&'a self, like: &'a GBuffer) -> Result<PackedFrame<'a>> {
-        let h = &self.header;
-        if (like.width, like.height, like.samples) != (h.width as u32, h.height as u32, 1) {
-            return Err(Error::Mismatch(format!(
-                "the ISPC .bin is {}×{}×1, the frame it is read as {}×{}×{}",
-                h.width, h.height, like.width, like.height, like.samples
-            )));
-        }
-        PackedFrame::of_source(like, self)
-    }
 }
 
 impl BandSource for Arrays {
@@ -537,11 +524,11 @@ impl Planes<'_> {
     /// depth with no surface in front of the camera. Row by row: coverage and geometry first, then each plane the
     /// caller wants, the half-float arrays converted a row at a time (F16C where the CPU has it). Each loop is
     /// branch-free over its row, compiled for the widest instruction set the CPU has
-    /// ([`crate::codec::simd::run`]): the same IEEE operations in the same order on every path (no contraction),
+    /// ([`crate::base::isa::run`]): the same IEEE operations in the same order on every path (no contraction),
     /// so the planes are the same bits everywhere.
     fn convert(self, h: &Header, chunk: &[u8]) -> u64 {
         let mut out_of_range = 0;
-        crate::codec::simd::run(
+        crate::base::isa::run(
             crate::base::isa::Isa::detect(),
             Convert { planes: self, h, chunk, out_of_range: &mut out_of_range },
         );
@@ -549,7 +536,7 @@ impl Planes<'_> {
     }
 }
 
-/// [`Planes::convert`]'s work, run under [`crate::codec::simd::run`].
+/// [`Planes::convert`]'s work, run under [`crate::base::isa::run`].
 struct Convert<'a, 'b> {
     planes: Planes<'a>,
     h: &'b Header,
@@ -557,7 +544,7 @@ struct Convert<'a, 'b> {
     out_of_range: &'b mut u64,
 }
 
-impl crate::codec::simd::Kernel for Convert<'_, '_> {
+impl crate::base::isa::Kernel for Convert<'_, '_> {
     #[inline(always)]
     fn run(self) {
         use half::slice::{HalfBitsSliceExt, HalfFloatSliceExt};

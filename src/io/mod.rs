@@ -164,29 +164,26 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
 }
 
 /// A dump loaded as its own arrays, not decoded into planes ([`open_packed`]): what [`load`] reports of it, and
-/// the arrays its bands are decoded from inside the resolve and the edge pass ([`PackedDump::frame`]).
+/// the arrays its bands are decoded from inside the resolve and the edge pass (`layout::PackedFrame::of_source`
+/// over `loaded.gbuffer` and `arrays`).
 #[derive(Debug)]
 pub struct PackedDump {
     /// What [`load`] returns (lights, sources, sanitising counts, warnings), but its G-buffer has no planes: its
     /// size, camera, sample positions and coverage only.
     pub loaded: Loaded,
-    /// The file's arrays.
+    /// The file's arrays: every band's planes are [`load`]'s for those rows, bit for bit.
     pub arrays: ispc::Arrays,
 }
 
 impl PackedDump {
-    /// The frame the resolve ([`crate::resolve::resolve`]) and the edge pass ([`crate::detect::detect_packed`])
-    /// read band by band: every band's planes are [`load`]'s for those rows, bit for bit.
-    pub fn frame(&self) -> Result<crate::layout::PackedFrame<'_>> {
-        self.arrays.frame(&self.loaded.gbuffer)
-    }
-
     /// The whole frame decoded into planes: [`load`]'s G-buffer (for what reads every plane at once, such as the
     /// every-sample reference).
     pub fn decode(&self, path: &Path) -> Result<GBuffer> {
+        use crate::gbuffer::BandSource;
+        let like = &self.loaded.gbuffer;
         let mut gb = GBuffer::default();
-        self.frame()?.decode_rows(0..self.loaded.gbuffer.height, &mut gb)?;
-        gb.materials.clone_from(&self.loaded.gbuffer.materials);
+        self.arrays.decode_rows(like, 0..like.height, &mut gb, None)?;
+        gb.materials.clone_from(&like.materials);
         gb.validate().map_err(|e| Error::invalid(path, e.to_string()))?;
         Ok(gb)
     }

@@ -21,10 +21,11 @@ pub mod targets;
 pub mod texture;
 pub mod wgsl;
 
+pub use crate::gbuffer::BandSource;
 pub use coder::{CodecKind, Slot};
 pub use formats::{Component, ComponentKind, Format};
 pub use material::MaterialTable;
-pub use pack::{BandSource, Packed, PackedFrame, Roundtrip, TargetPlane};
+pub use pack::{Packed, PackedFrame, Roundtrip, TargetPlane};
 pub use spec::{
     ConstantValue, FieldSpec, IndirectionSpec, LayoutSpec, MaterialKey, SpecSyntax, TargetSpec, DEFAULT_DEPTH_RANGE,
 };

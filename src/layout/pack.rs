@@ -13,7 +13,7 @@ use super::coder::{encode_id, Coder, Slot};
 use super::material::MaterialTable;
 use super::{Field, Format, Layout, DEFAULT_DEPTH_RANGE};
 use crate::error::{Error, Result};
-use crate::gbuffer::{Attribute, GBuffer};
+use crate::gbuffer::{Attribute, BandSource, GBuffer};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::ops::Range;
@@ -930,25 +930,6 @@ pub fn field_code(packed: &Packed, field: &Field, i: usize) -> u64 {
     let t = &packed.targets[field.target];
     let size = t.format.bytes();
     extract(load_le(&t.bytes[i * size..(i + 1) * size]), field.offset, field.bits) & mask(field.bits)
-}
-
-/// Storage other than a layout's render targets that a frame's samples are decoded from a band of rows at a time:
-/// a dump's own arrays (the ISPC `.bin`'s, [`crate::io::ispc::Arrays`]). [`PackedFrame::of_source`] makes it a
-/// frame the resolve and the edge pass read band by band, as they read a layout's packed targets.
-pub trait BandSource: Sync {
-    /// What the samples are stored as, for messages ("the ISPC .bin's arrays").
-    fn describe(&self) -> String;
-
-    /// Decodes rows `rows` of the frame `like` into `out`, as [`PackedFrame::decode_rows`] documents (`only`: the
-    /// planes to decode, as in [`PackedFrame::decode_rows_only`]; `None`: every plane). Each plane must be what
-    /// the storage's whole-frame reader gives for those samples, bit for bit.
-    fn decode_rows(
-        &self,
-        like: &GBuffer,
-        rows: Range<u32>,
-        out: &mut GBuffer,
-        only: Option<&[Attribute]>,
-    ) -> Result<()>;
 }
 
 /// A packed G-buffer with what decoding it needs, built once ([`Layout::frame`], or [`PackedFrame::of_source`] over
