@@ -500,3 +500,19 @@ fn lighting_roundtrip_leaves_positions_to_the_lighting_with_the_same_image() {
     }
     assert!(derived >= 4, "most built-ins store depth only ({derived})");
 }
+
+/// `roundtrip_matches` says whether a layout's lighting G-buffer is the input bit for bit, band by band: true for
+/// the lossless reference layout, false for a lossy one. The sampled timing runs compare nothing and give finite,
+/// non-negative times for any stride, a lossy layout's included.
+#[test]
+fn roundtrip_matches_tells_lossless_from_lossy_and_sampled_timing_compares_nothing() {
+    let gb = gbuf::scene::render(gbuf::scene::SceneName::Room, 61, 300, 4).unwrap();
+    let lossless = Layout::by_name("reference-f32").unwrap();
+    let lossy = Layout::by_name("lauritzen-15").unwrap();
+    assert!(lossless.roundtrip_matches(&gb).unwrap().0, "reference-f32 keeps the room");
+    assert!(!lossy.roundtrip_matches(&gb).unwrap().0, "lauritzen-15 quantises the room");
+    for stride in [1, 8, 1000] {
+        let (enc, dec) = lossy.roundtrip_time_sampled(&gb, stride).unwrap();
+        assert!(enc.is_finite() && dec.is_finite() && enc >= 0.0 && dec >= 0.0, "stride {stride}: {enc} {dec}");
+    }
+}

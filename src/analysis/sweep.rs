@@ -718,9 +718,10 @@ fn prepare(layout: &Layout, gb: &GBuffer, runs: usize) -> Result<Prepared> {
     }
     let (same, enc, dec) = layout.roundtrip_matches(gb)?;
     if same {
+        // The other timing runs estimate from every TIMING_STRIDE-th band, as the packed layouts' do.
         let (mut encode_ms, mut decode_ms) = (vec![enc], vec![dec]);
         for _ in 1..runs.max(1) {
-            let (_, enc, dec) = layout.roundtrip_matches(gb)?;
+            let (enc, dec) = layout.roundtrip_time_sampled(gb, resolve::TIMING_STRIDE)?;
             encode_ms.push(enc);
             decode_ms.push(dec);
         }
@@ -743,43 +744,55 @@ const BAND_ROWS: u32 = 64;
 type Measured = (Result<measure::gbuffer::AttributeErrors>, ErrorMaps, bool, Vec<f64>);
 
 /// The attribute errors, error maps and decode times of a packed frame, decoded band by band against the input
-/// `gb` (the first run of the decode also measures; `runs − 1` more decode every band again, timed only).
+/// `gb` (the first run of the decode also measures; `runs − 1` more decode every band again, timed only). In the
+/// first run each band is decoded while the one before it is measured: the statistics are carried from band to
+/// band in sample order (the numbers are `compare`'s bit for bit), so the measuring itself stays in order, with the
+/// error maps beside it.
 fn band_pass(frame: &PackedFrame<'_>, gb: &GBuffer, runs: usize) -> Result<Measured> {
     let mut compare = measure::gbuffer::CompareBands::new(gb)?;
     let mut compared: Result<()> = Ok(());
     let mut maps =
         ErrorMaps { layout: String::new(), normal_deg: None, depth_rel: None, albedo_abs: None, image_abs: None };
-    let mut band = GBuffer::default();
     let mut decode_ms = Vec::new();
     let row = gb.width as usize * gb.samples as usize;
     let mut derived = false;
     let bands = gb.height.div_ceil(BAND_ROWS).max(1);
-    for run in 0..runs.max(1) {
-        // The first run decodes (and measures) every band; the others time every TIMING_STRIDE-th, scaled.
-        let stride = if run == 0 { 1 } else { resolve::TIMING_STRIDE };
-        let mut dec = std::time::Duration::ZERO;
-        let mut y = 0;
-        while y < gb.height {
-            let rows = y..(y + BAND_ROWS).min(gb.height);
-            if !(y / BAND_ROWS).is_multiple_of(stride) {
-                y = rows.end;
-                continue;
-            }
-            let t = std::time::Instant::now();
-            frame.decode_rows(rows.clone(), &mut band)?;
-            dec += t.elapsed();
-            if run == 0 {
-                let start = rows.start as usize * row;
-                if compared.is_ok() {
-                    compared = compare.add(start, &band);
-                }
-                error_maps_into(gb, &band, start / gb.samples as usize, &mut maps);
+    let rows_of = |b: u32| b * BAND_ROWS..((b + 1) * BAND_ROWS).min(gb.height);
+    let timed_decode = |b: u32, out: &mut GBuffer| -> Result<std::time::Duration> {
+        let t = std::time::Instant::now();
+        frame.decode_rows(rows_of(b), out)?;
+        Ok(t.elapsed())
+    };
+    let (mut band, mut next) = (GBuffer::default(), GBuffer::default());
+    let mut dec = timed_decode(0, &mut band)?;
+    for b in 0..bands {
+        let start = rows_of(b).start as usize * row;
+        let (decoded, ()) = rayon::join(
+            || if b + 1 < bands { timed_decode(b + 1, &mut next) } else { Ok(std::time::Duration::ZERO) },
+            || {
+                rayon::join(
+                    || {
+                        if compared.is_ok() {
+                            compared = compare.add(start, &band);
+                        }
+                    },
+                    || error_maps_into(gb, &band, start / gb.samples as usize, &mut maps),
+                );
                 derived = band.position.is_none() && band.depth.is_some() && band.camera.is_some();
-            }
-            y = rows.end;
+            },
+        );
+        dec += decoded?;
+        std::mem::swap(&mut band, &mut next);
+    }
+    decode_ms.push(dec.as_secs_f64() * 1e3);
+    // The other runs time every TIMING_STRIDE-th band, scaled.
+    let stride = resolve::TIMING_STRIDE;
+    for _ in 1..runs.max(1) {
+        let mut dec = std::time::Duration::ZERO;
+        for b in (0..bands).step_by(stride as usize) {
+            dec += timed_decode(b, &mut band)?;
         }
-        let sampled = bands.div_ceil(stride);
-        decode_ms.push(dec.as_secs_f64() * 1e3 * f64::from(bands) / f64::from(sampled));
+        decode_ms.push(dec.as_secs_f64() * 1e3 * f64::from(bands) / f64::from(bands.div_ceil(stride)));
     }
     let errors = compared.map(|()| compare.finish());
     Ok((errors, maps, derived, decode_ms))
