@@ -9,7 +9,9 @@
 //! - `resolve/tiled/1x/1280x720/threads-1` and `threads-2`: thread scaling (local rayon pools);
 //! - `resolve/layout/<layout>/packed|unpack-then-resolve|unpacked-copy/…`: a layout's packed targets lit directly
 //!   (decoded a tile row at a time inside the resolve) against unpacking the frame first, and against lighting an
-//!   unpacked copy made beforehand.
+//!   unpacked copy made beforehand;
+//! - `resolve/bin/loaded-then-resolve|arrays/1x/1280x720`: an ISPC `.bin` loaded whole then lit, against lit from
+//!   its own arrays (issue 34: the file's conversion inside the resolve).
 //!
 //! The G-buffer is built in code once, outside the timed loop. Run briefly:
 //! `cargo bench --bench resolve -- --warm-up-time 1 --measurement-time 3`.
@@ -112,6 +114,27 @@ fn benches(c: &mut Criterion) {
             b.iter(|| resolve(black_box(&unpacked), black_box(&lights), &mask4, &tiled).unwrap())
         });
     }
+    // An ISPC `.bin` (the room at 1280×720 with the bench's lights, written once to a temporary file): loaded whole
+    // into planes then lit, against lit from its own arrays (`io::open_packed`: one pass for the load's report,
+    // then each tile row converted inside the resolve). Both from the file, the load's checks included; the same
+    // image bit for bit (tests/resolve_bin.rs).
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let bin = dir.path().join("room720.bin");
+    gbuf::io::ispc::write(&bin, &gb1, &lights).expect("write .bin");
+    let opts = gbuf::io::LoadOptions::default();
+    g.bench_function("bin/loaded-then-resolve/1x/1280x720", |b| {
+        b.iter(|| {
+            let loaded = gbuf::io::load(black_box(&bin), &opts).unwrap();
+            resolve(&loaded.gbuffer, black_box(&lights), &mask1, &tiled).unwrap()
+        })
+    });
+    g.bench_function("bin/arrays/1x/1280x720", |b| {
+        b.iter(|| {
+            let dump = gbuf::io::open_packed(black_box(&bin), &opts).unwrap().expect("a .bin");
+            let frame = gbuf::layout::PackedFrame::of_source(&dump.loaded.gbuffer, &dump.arrays).unwrap();
+            resolve(&frame, black_box(&lights), &mask1, &tiled).unwrap()
+        })
+    });
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
         g.bench_function(format!("tiled/1x/1280x720/threads-{threads}"), |b| {
