@@ -258,3 +258,44 @@ fn the_cli_resolve_of_a_bin_warns_and_lights_as_the_loaded_frame() {
         assert_eq!(x.to_array().map(f32::to_bits), y.to_array().map(f32::to_bits), "pixel {i}");
     }
 }
+
+/// Hostile files: every prefix of the fixture (in steps) and seeded byte flips in its header open as arrays
+/// exactly when they load, with the same error, and what opens lights as what loads: no panic, no hang.
+#[test]
+fn damaged_bins_open_as_they_load() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/ispc_deferred.bin")).unwrap();
+    let opts = LoadOptions::default();
+    let mut variants: Vec<Vec<u8>> = (0..good.len()).step_by(997).map(|n| good[..n].to_vec()).collect();
+    let mut rng = gbuf::util::SplitMix64::new(34);
+    for _ in 0..200 {
+        let mut b = good.clone();
+        let at = (rng.next_u64() % HEADER_BYTES as u64) as usize;
+        b[at] ^= 1 << (rng.next_u64() % 8);
+        variants.push(b);
+    }
+    let (mut opened, mut refused) = (0, 0);
+    for (k, bytes) in variants.iter().enumerate() {
+        let path = dir.path().join(format!("v{k}.bin"));
+        std::fs::write(&path, bytes).unwrap();
+        let (a, b) = (open_packed(&path, &opts), load(&path, &opts));
+        match (a, b) {
+            (Ok(Some(dump)), Ok(loaded)) => {
+                assert_eq!(dump.loaded.warnings, loaded.warnings, "variant {k}");
+                assert_eq!(dump.loaded.gbuffer.coverage, loaded.gbuffer.coverage, "variant {k}");
+                opened += 1;
+            }
+            // Not recognised as a `.bin` at all: `load` names the file's problem.
+            (Ok(None), Err(e)) => {
+                assert!(e.to_string().contains(&format!("v{k}.bin")), "{e}");
+                refused += 1;
+            }
+            (Err(a), Err(b)) => {
+                assert_eq!(a.to_string(), b.to_string(), "variant {k}");
+                refused += 1;
+            }
+            (a, b) => panic!("variant {k}: open {:?} but load {:?}", a.map(|d| d.is_some()), b.map(|_| ())),
+        }
+    }
+    assert!(opened > 10 && refused > 10, "{opened} opened, {refused} refused");
+}
