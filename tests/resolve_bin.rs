@@ -13,23 +13,11 @@ use gbuf::gbuffer::Attribute;
 use gbuf::io::ispc::{Header, HEADER_BYTES};
 use gbuf::io::{load, open_packed, LoadOptions, Loaded, PackedDump};
 use gbuf::layout::PackedFrame;
-use gbuf::resolve::{resolve_isa, Brdf, Culling, MsaaSchedule, ResolveConfig, Resolved, Schedule};
+use gbuf::resolve::{resolve_isa, ResolveConfig};
 use gbuf::scene::{render, SceneName};
 use gbuf::GBuffer;
 use half::f16;
 use std::path::{Path, PathBuf};
-
-/// Everything but the timings.
-fn same(a: &Resolved, b: &Resolved, what: &str) {
-    assert_eq!((a.image.width, a.image.height), (b.image.width, b.image.height), "{what}");
-    for (i, (x, y)) in a.image.rgb.iter().zip(&b.image.rgb).enumerate() {
-        assert!(x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits), "{what}: pixel {i}: {x} vs {y}");
-    }
-    assert_eq!(a.lights_per_pixel, b.lights_per_pixel, "{what}: heatmap");
-    let (mut sa, mut sb) = (a.stats.clone(), b.stats.clone());
-    (sa.ms, sb.ms) = (Default::default(), Default::default());
-    assert_eq!(sa, sb, "{what}: statistics");
-}
 
 /// The room written as a `.bin` (71×37: not a whole number of bands or tiles), its arrays then spoiled: NaN and
 /// ±Inf in the half floats, depths outside [0, 1) and NaN, normal pairs that decode to nothing.
@@ -173,26 +161,14 @@ fn the_arrays_light_as_the_loaded_frame_on_every_path() {
         for d in [Detector::Lauritzen, Detector::Ssaa, Detector::None] {
             let mask = detect(gb, d, &det_cfg).unwrap();
             assert_eq!(detect_packed(&frame, d, &det_cfg).unwrap().shade_count, mask.shade_count, "{name}: {d}");
-            for brdf in Brdf::ALL {
-                for culling in Culling::ALL {
-                    for (schedule, msaa) in [
-                        (Schedule::Deferred, MsaaSchedule::Packed),
-                        (Schedule::Deferred, MsaaSchedule::PerPixel),
-                        (Schedule::LightPrepass, MsaaSchedule::TwoPass),
-                    ] {
-                        let cfg = ResolveConfig { brdf, culling, schedule, msaa, ..Default::default() };
-                        if cfg.validate().is_err() {
-                            continue; // per-pixel with clustered culling
-                        }
-                        for isa in Isa::available() {
-                            let what = format!("{name} / {d} / {brdf} / {culling} / {schedule} / {msaa} / {isa:?}");
-                            let a = resolve_isa(isa, gb, &lights, &mask, &cfg).unwrap();
-                            let b = resolve_isa(isa, &frame, &lights, &mask, &cfg).unwrap();
-                            assert!(a.stats.shading_evaluations > 0, "{what}: nothing shaded");
-                            same(&a, &b, &what);
-                            checked += 1;
-                        }
-                    }
+            for (cfg, label) in support::resolve_configs() {
+                for isa in Isa::available() {
+                    let what = format!("{name} / {d} / {label} / {isa:?}");
+                    let a = resolve_isa(isa, gb, &lights, &mask, &cfg).unwrap();
+                    let b = resolve_isa(isa, &frame, &lights, &mask, &cfg).unwrap();
+                    assert!(a.stats.shading_evaluations > 0, "{what}: nothing shaded");
+                    support::assert_same_resolve(&a, &b, &what);
+                    checked += 1;
                 }
             }
         }
@@ -204,7 +180,7 @@ fn the_arrays_light_as_the_loaded_frame_on_every_path() {
             for threads in 1..=3 {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
                 let b = pool.install(|| resolve_isa(Isa::detect(), &frame, &lights, &mask, &cfg).unwrap());
-                same(&a, &b, &format!("{name} / tile {tile_size} / {threads} threads"));
+                support::assert_same_resolve(&a, &b, &format!("{name} / tile {tile_size} / {threads} threads"));
             }
         }
     }

@@ -8,21 +8,9 @@ use gbuf::base::isa::Isa;
 use gbuf::detect::{detect, Detector, DetectorConfig};
 use gbuf::layout::Layout;
 use gbuf::light::Light;
-use gbuf::resolve::{resolve_isa, Brdf, Culling, MsaaSchedule, ResolveConfig, Resolved, Schedule};
+use gbuf::resolve::{resolve_isa, ResolveConfig};
 use gbuf::scene::{default_lights, render, SceneName};
 use gbuf::GBuffer;
-
-/// Everything but the timings.
-fn same(a: &Resolved, b: &Resolved, what: &str) {
-    assert_eq!((a.image.width, a.image.height), (b.image.width, b.image.height), "{what}");
-    for (i, (x, y)) in a.image.rgb.iter().zip(&b.image.rgb).enumerate() {
-        assert!(x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits), "{what}: pixel {i}: {x} vs {y}");
-    }
-    assert_eq!(a.lights_per_pixel, b.lights_per_pixel, "{what}: heatmap");
-    let (mut sa, mut sb) = (a.stats.clone(), b.stats.clone());
-    (sa.ms, sb.ms) = (Default::default(), Default::default());
-    assert_eq!(sa, sb, "{what}: statistics");
-}
 
 /// The room (materials, IDs, a camera: depth-only layouts derive positions) at a size that is not a whole number
 /// of tiles, and a frame with every attribute (roughness and metallic for GGX, values out of every codec's range).
@@ -59,29 +47,14 @@ fn packed_input_lights_every_layout_as_its_unpacked_gbuffer() {
             let unpacked = layout.unpack(&packed, &gb).unwrap();
             let frame = layout.frame(&packed, &gb).unwrap();
             for (d, mask) in &masks {
-                for brdf in Brdf::ALL {
-                    for culling in Culling::ALL {
-                        for (schedule, msaa) in [
-                            (Schedule::Deferred, MsaaSchedule::Packed),
-                            (Schedule::Deferred, MsaaSchedule::PerPixel),
-                            (Schedule::LightPrepass, MsaaSchedule::TwoPass),
-                        ] {
-                            let cfg = ResolveConfig { brdf, culling, schedule, msaa, ..Default::default() };
-                            if cfg.validate().is_err() {
-                                continue; // per-pixel with clustered culling
-                            }
-                            for isa in Isa::available() {
-                                let what = format!(
-                                    "{name} / {} / {d} / {brdf} / {culling} / {schedule} / {msaa} / {isa:?}",
-                                    layout.name()
-                                );
-                                let a = resolve_isa(isa, &unpacked, &lights, mask, &cfg).unwrap();
-                                let b = resolve_isa(isa, &frame, &lights, mask, &cfg).unwrap();
-                                assert!(a.stats.shading_evaluations > 0, "{what}: nothing shaded");
-                                same(&a, &b, &what);
-                                checked += 1;
-                            }
-                        }
+                for (cfg, label) in support::resolve_configs() {
+                    for isa in Isa::available() {
+                        let what = format!("{name} / {} / {d} / {label} / {isa:?}", layout.name());
+                        let a = resolve_isa(isa, &unpacked, &lights, mask, &cfg).unwrap();
+                        let b = resolve_isa(isa, &frame, &lights, mask, &cfg).unwrap();
+                        assert!(a.stats.shading_evaluations > 0, "{what}: nothing shaded");
+                        support::assert_same_resolve(&a, &b, &what);
+                        checked += 1;
                     }
                 }
             }
@@ -122,7 +95,7 @@ fn a_pixel_whose_first_sample_is_unusable_is_lit_from_its_other_samples() {
             let cfg = ResolveConfig::default();
             let a = resolve_isa(Isa::detect(), &unpacked, &lights, &mask, &cfg).unwrap();
             let b = resolve_isa(Isa::detect(), &frame, &lights, &mask, &cfg).unwrap();
-            same(&a, &b, &format!("{} / {d}", layout.name()));
+            support::assert_same_resolve(&a, &b, &format!("{} / {d}", layout.name()));
             if first_near == spoiled.len() {
                 // Lit from the other samples: not the blank a pixel without a usable sample gets.
                 let lit = spoiled.iter().filter(|&&p| b.lights_per_pixel[p] > 0).count();
@@ -146,7 +119,11 @@ fn packed_input_is_independent_of_thread_count_and_tile_size() {
             let a = pool(1).install(|| resolve_isa(Isa::detect(), &unpacked, &lights, &mask, &cfg).unwrap());
             for threads in [1, 2, 3] {
                 let b = pool(threads).install(|| resolve_isa(Isa::detect(), &frame, &lights, &mask, &cfg).unwrap());
-                same(&a, &b, &format!("{} / tile {tile_size} / {threads} threads", layout.name()));
+                support::assert_same_resolve(
+                    &a,
+                    &b,
+                    &format!("{} / tile {tile_size} / {threads} threads", layout.name()),
+                );
             }
         }
     }

@@ -7,10 +7,12 @@
 pub mod alloc;
 pub mod detect;
 pub mod io;
+pub mod resolve;
 pub mod scene;
 
 pub use detect::*;
 pub use io::*;
+pub use resolve::*;
 pub use scene::*;
 
 use std::path::Path;
