@@ -275,3 +275,29 @@ fn damaged_bins_open_as_they_load() {
     }
     assert!(opened > 10 && refused > 10, "{opened} opened, {refused} refused");
 }
+
+/// A sidecar beside the `.bin` (its default `<stem>.json`) gives the lights, which win over the file's, and its
+/// camera is checked against the image: opened as arrays exactly as loaded, a wrong aspect refused by both.
+#[test]
+fn a_sidecar_beside_the_bin_applies_as_when_loading() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = spoiled_room(dir.path());
+    let side = dir.path().join("spoiled.json");
+    std::fs::write(
+        &side,
+        r#"{"lights_space": "view", "lights": [
+            {"type": "point", "position": [0.5, 0.2, -3.0], "color": [1, 0.5, 0.25], "intensity": 2, "range": 6}]}"#,
+    )
+    .unwrap();
+    let opts = LoadOptions::default();
+    let (dump, loaded) = (open_packed(&path, &opts).unwrap().unwrap(), load(&path, &opts).unwrap());
+    let lights = dump.loaded.lights.as_ref().unwrap();
+    assert_eq!(lights.len(), 1, "the sidecar's light, not the file's 40");
+    assert_eq!(dump.loaded.lights, loaded.lights);
+    let camera = r#""camera": {"world_to_view": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]],
+        "yfov": 0.9, "aspect": 3.0, "znear": 0.1, "zfar": 100}"#;
+    std::fs::write(&side, format!("{{ {camera} }}")).unwrap();
+    let (a, b) = (open_packed(&path, &opts).unwrap_err().to_string(), load(&path, &opts).unwrap_err().to_string());
+    assert_eq!(a, b);
+    assert!(a.contains("spoiled.json") && a.contains("aspect"), "{a}");
+}

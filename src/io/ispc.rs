@@ -274,7 +274,7 @@ pub fn read_bytes(bytes: &[u8], path: &Path, sidecar: Option<&Sidecar>, opts: &L
 
 /// Lights the user supplied beside the file win over the file's own; they are given in the file's view space
 /// unless the sidecar says otherwise (its camera, if any, is the file's world→view).
-fn apply_sidecar(loaded: &mut Loaded, sidecar: Option<&Sidecar>, path: &Path) -> Result<()> {
+pub(crate) fn apply_sidecar(loaded: &mut Loaded, sidecar: Option<&Sidecar>, path: &Path) -> Result<()> {
     if let Some(sc) = sidecar.filter(|s| !s.lights.is_empty()) {
         loaded.lights = Some(sc.view_lights(loaded.gbuffer.camera.as_ref(), path)?);
     }

@@ -221,10 +221,9 @@ pub fn open_packed(path: &Path, opts: &LoadOptions) -> Result<Option<PackedDump>
         reading: None,
         positions_assumed: false,
     };
+    // What `load` does with a sidecar: the `.bin` reader's (its lights win over the file's), then every reader's.
+    ispc::apply_sidecar(&mut loaded, side.as_ref().map(|(s, _)| s), path)?;
     if let Some((s, sp)) = &side {
-        if !s.lights.is_empty() {
-            loaded.lights = Some(s.view_lights(loaded.gbuffer.camera.as_ref(), path)?);
-        }
         apply_sidecar(&mut loaded, path, s, sp, 1)?;
     }
     loaded.gbuffer.validate().map_err(|e| Error::invalid(path, e.to_string()))?;
