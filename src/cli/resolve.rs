@@ -284,15 +284,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let encode = || -> anyhow::Result<Encoded> {
         let mut files = Vec::new();
         if let Some(out) = &args.png {
-            let (w, h) = (resolved.image.width, resolved.image.height);
-            let rgb = if args.ldr.is_some() {
-                resolved.image.to_ldr_gamma22()
+            let png = if args.ldr.is_some() {
+                resolved.image.ldr_gamma22_png()
             } else {
-                resolved.image.to_srgb8(ToneMap::new(args.tonemap, args.exposure))
+                resolved.image.png(ToneMap::new(args.tonemap, args.exposure))
             };
-            let png =
-                gbuf::base::png::encode_rgb8(w, h, &rgb).with_context(|| format!("encoding {}", out.display()))?;
-            files.push((out.clone(), png));
+            files.push((out.clone(), png.with_context(|| format!("encoding {}", out.display()))?));
         }
         let mut heatmap_max = None;
         if let Some(out) = &args.heatmap {

@@ -15,9 +15,10 @@ pub mod file;
 pub mod mlaa;
 
 use crate::base::lut::CodeLut;
-use crate::base::picture::{srgb_encode, write_rgb8_png};
+use crate::base::picture::srgb_encode;
 use crate::error::{Error, Result};
 use crate::io::exr::{write_raw, RawChannel, RawData, RawImage};
+use crate::util::write_bytes_atomic;
 use glam::Vec3;
 use std::path::Path;
 
@@ -145,14 +146,24 @@ impl HdrImage {
         self.encode_rgb8(|x| lut.encode(x))
     }
 
-    /// Writes a tone-mapped sRGB PNG.
-    pub fn write_png(&self, path: &Path, tone: ToneMap) -> Result<()> {
-        write_rgb8_png(path, self.width, self.height, self.to_srgb8(tone))
+    /// A tone-mapped sRGB PNG ([`HdrImage::to_srgb8`]), encoded in memory.
+    pub fn png(&self, tone: ToneMap) -> Result<Vec<u8>> {
+        crate::base::png::encode_rgb8(self.width, self.height, &self.to_srgb8(tone))
     }
 
-    /// Writes the demo's gamma-2.2 LDR output ([`HdrImage::to_ldr_gamma22`]) as a PNG.
+    /// The demo's gamma-2.2 LDR output ([`HdrImage::to_ldr_gamma22`]) as a PNG, encoded in memory.
+    pub fn ldr_gamma22_png(&self) -> Result<Vec<u8>> {
+        crate::base::png::encode_rgb8(self.width, self.height, &self.to_ldr_gamma22())
+    }
+
+    /// Writes a tone-mapped sRGB PNG ([`HdrImage::png`]), atomically.
+    pub fn write_png(&self, path: &Path, tone: ToneMap) -> Result<()> {
+        write_bytes_atomic(path, &self.png(tone).map_err(|e| Error::invalid(path, e.to_string()))?)
+    }
+
+    /// Writes the demo's gamma-2.2 LDR output ([`HdrImage::ldr_gamma22_png`]) as a PNG, atomically.
     pub fn write_ldr_gamma22_png(&self, path: &Path) -> Result<()> {
-        write_rgb8_png(path, self.width, self.height, self.to_ldr_gamma22())
+        write_bytes_atomic(path, &self.ldr_gamma22_png().map_err(|e| Error::invalid(path, e.to_string()))?)
     }
 
     /// Writes a lossless EXR with f32 channels `R`, `G`, `B`.
