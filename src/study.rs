@@ -14,6 +14,7 @@ use crate::error::Result;
 use crate::measure::image::Viewing;
 use crate::report::figures;
 use crate::report::format::Attachment;
+use crate::resolve::Lighting;
 
 /// One frame's part of a report: its description, its rows, and its figures (file names prefixed as asked).
 #[derive(Clone, Debug)]
@@ -175,7 +176,7 @@ pub fn pipelines_config(cfg: &SweepConfig) -> crate::analysis::pipelines::Pipeli
 }
 
 /// How per-frame results are put together: the settings they were measured with and how to aggregate them.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Assembly {
     /// Timing runs per stage.
     pub runs: usize,
@@ -187,13 +188,22 @@ pub struct Assembly {
     pub over: Over,
     /// A byte budget to pick the winning layout for.
     pub max_bytes: Option<u32>,
+    /// The lighting model the rows were lit with, and why.
+    pub lighting: Option<Lighting>,
 }
 
 impl Assembly {
-    /// The settings of `cfg`, aggregated by `over`.
+    /// The settings of `cfg`, aggregated by `over`; its lighting is `cfg.resolve`'s, for the reason `why`.
     #[must_use]
-    pub fn of(cfg: &SweepConfig, over: Over, max_bytes: Option<u32>) -> Self {
-        Assembly { runs: cfg.runs.max(1), viewing: cfg.viewing, flip: cfg.flip, over, max_bytes }
+    pub fn of(cfg: &SweepConfig, over: Over, max_bytes: Option<u32>, why: &str) -> Self {
+        Assembly {
+            runs: cfg.runs.max(1),
+            viewing: cfg.viewing,
+            flip: cfg.flip,
+            over,
+            max_bytes,
+            lighting: Some(Lighting::of(&cfg.resolve, why)),
+        }
     }
 }
 
@@ -223,6 +233,7 @@ pub fn assemble(
         viewing: how.viewing,
         flip: how.flip,
         over,
+        lighting: how.lighting.clone(),
         rows,
         aggregate: aggregate_rows,
         detectors,
@@ -239,7 +250,8 @@ pub fn run(
     progress: sweep::Progress<'_>,
 ) -> Result<(Report, Vec<Attachment>)> {
     let f = run_frame(input, cfg, true, "", progress)?;
-    let (rep, mut files) = assemble(vec![f.frame], f.rows, f.figures, &Assembly::of(cfg, Over::default(), None))?;
+    let (rep, mut files) =
+        assemble(vec![f.frame], f.rows, f.figures, &Assembly::of(cfg, Over::default(), None, "as configured"))?;
     files.extend(f.files);
     Ok((rep, files))
 }

@@ -57,25 +57,56 @@ pub fn check_not_input(path: &Path) -> Result<()> {
 /// is left at worst, under a `.gbuf-tmp-` name). A file this run read as input is never replaced
 /// ([`protect_input`]).
 pub fn write_atomic(path: &Path, write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>) -> Result<()> {
-    check_not_input(path)?;
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let mut tmp = tempfile::Builder::new().prefix(".gbuf-tmp-").tempfile_in(dir).map_err(|e| Error::io(path, e))?;
-    // tempfile creates files readable by the owner only; an output should get the usual permissions (those of the
-    // file it replaces, else rw-r--r-- before the umask's say, as a plain File::create would give).
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        let mode = std::fs::metadata(path).map(|m| m.permissions().mode()).unwrap_or(0o644);
-        std::fs::set_permissions(tmp.path(), std::fs::Permissions::from_mode(mode & 0o7777))
-            .map_err(|e| Error::io(path, e))?;
+    let mut staged = Staged::default();
+    staged.stage(path, write)?;
+    staged.commit()
+}
+
+/// Several outputs of one command, written all or nothing: each is written to a temporary file beside its
+/// destination ([`Staged::stage`]), and [`Staged::commit`] renames them all into place once every one was
+/// written. Dropped without a commit (a later step failed), it removes its temporary files and leaves every
+/// destination as it was.
+#[derive(Default)]
+pub struct Staged {
+    files: Vec<(tempfile::NamedTempFile, std::path::PathBuf)>,
+}
+
+impl Staged {
+    /// Writes `path`'s future contents to a temporary file beside it (refused when `path` is an input of this run).
+    pub fn stage(&mut self, path: &Path, write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>) -> Result<()> {
+        check_not_input(path)?;
+        let dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let mut tmp = tempfile::Builder::new().prefix(".gbuf-tmp-").tempfile_in(dir).map_err(|e| Error::io(path, e))?;
+        // tempfile creates files readable by the owner only; an output should get the usual permissions (those of
+        // the file it replaces, else rw-r--r-- before the umask's say, as a plain File::create would give).
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(path).map(|m| m.permissions().mode()).unwrap_or(0o644);
+            std::fs::set_permissions(tmp.path(), std::fs::Permissions::from_mode(mode & 0o7777))
+                .map_err(|e| Error::io(path, e))?;
+        }
+        write(tmp.as_file_mut()).map_err(|e| Error::io(path, e))?;
+        tmp.as_file_mut().flush().map_err(|e| Error::io(path, e))?;
+        self.files.push((tmp, path.to_path_buf()));
+        Ok(())
     }
-    write(tmp.as_file_mut()).map_err(|e| Error::io(path, e))?;
-    tmp.as_file_mut().flush().map_err(|e| Error::io(path, e))?;
-    tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
-    Ok(())
+
+    /// [`Staged::stage`] of `bytes`.
+    pub fn stage_bytes(&mut self, path: &Path, bytes: &[u8]) -> Result<()> {
+        self.stage(path, |f| f.write_all(bytes))
+    }
+
+    /// Renames every staged file into place, in the order staged.
+    pub fn commit(self) -> Result<()> {
+        for (tmp, path) in self.files {
+            tmp.persist(&path).map_err(|e| Error::io(&path, e.error))?;
+        }
+        Ok(())
+    }
 }
 
 /// Writes `bytes` to `path` atomically (see [`write_atomic`]).

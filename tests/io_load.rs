@@ -99,7 +99,13 @@ fn broken_sidecar_is_named() {
     let dir = tempfile::tempdir().unwrap();
     let p = write(dir.path(), "b.exr", &canonical_bytes(&plausible(4, 4, 1, 4)));
     write(dir.path(), "b.json", b"{\"camera\": {\"yfov\": ");
-    let e = err(&p, &LoadOptions::default());
+    // Found beside the dump, a file that is not JSON may be any program's: ignored, with the reason.
+    let l = load(&p, &LoadOptions::default()).unwrap();
+    let w = l.warnings.iter().find(|w| w.code == gbuf::io::SIDECAR_IGNORED).expect("a warning");
+    assert!(w.message.contains("b.json") && w.message.contains("not JSON"), "{}", w.message);
+    // Named with --scene, it is an error that names it.
+    let named = LoadOptions { sidecar: Some(dir.path().join("b.json")), ..Default::default() };
+    let e = err(&p, &named);
     assert!(matches!(e, Error::Parse { .. }), "{e:?}");
     assert!(e.to_string().contains("b.json"), "{e}");
     write(dir.path(), "b.json", br#"{"lights": [{"type": "laser"}], "lights_space": "view"}"#);

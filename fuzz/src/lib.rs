@@ -188,22 +188,6 @@ pub fn sidecar_file(text: &[u8]) -> PathBuf {
 // ---------------------------------------------------------------------------------------------------------------
 // Load options from text (the `load_options` target's first line; docs/FUZZING.md).
 
-/// Parses a `--map` value as the CLI does (`attr=ch;ch;ch,attr=ch`), skipping malformed items (the CLI refuses
-/// them before loading) and file entries.
-#[must_use]
-pub fn parse_map(spec: &str) -> Vec<(Attribute, Vec<String>)> {
-    let mut out = Vec::new();
-    for item in spec.split(',').filter(|s| !s.trim().is_empty()) {
-        let Some((attr, chans)) = item.split_once('=') else { continue };
-        let Some(a) = Attribute::from_name(attr.trim()) else { continue };
-        let chans: Vec<String> = chans.split(';').map(|c| c.trim().to_string()).filter(|c| !c.is_empty()).collect();
-        if chans.len() == a.components() {
-            out.push((a, chans));
-        }
-    }
-    out
-}
-
 /// Load options from a line of space-separated tokens: `fold=K`, `dwa`, `max=MIB` (at most
 /// [`max_declared_bytes`]), `map=SPEC`, `space=…`, `depth=…`, `reversed`, `znear=F`, `zfar=F`, `ids=…`,
 /// `background=…`, `normals=…`. Unknown or malformed tokens are ignored.
@@ -222,7 +206,12 @@ pub fn parse_options(line: &str, sidecar: Option<PathBuf>) -> LoadOptions {
                     o.limits.max_bytes = m.saturating_mul(1 << 20).min(max_declared_bytes());
                 }
             }
-            "map" => o.map.extend(parse_map(v)),
+            "map" => {
+                // The CLI's own grammar; a malformed value is refused before loading, so it maps nothing here.
+                if let Ok(m) = gbuf::io::mapped::parse_map(v) {
+                    o.map.extend(m.channels);
+                }
+            }
             "space" => c.space = v.parse().ok(),
             "depth" => c.depth = v.parse().ok(),
             "reversed" => c.reversed_z = true,

@@ -228,19 +228,43 @@ fn gbuffer_arg(planes: &Bound<'_, PyDict>) -> PyResult<GBuffer> {
     Ok(gb)
 }
 
-/// Reads a dump gbuf reads (canonical or multilayer EXR, Blender/Mitsuba EXRs, a file-set folder, the ISPC `.bin`)
-/// and returns its planes as numpy arrays. `fold`: fold k×k pixel blocks of a supersampled dump into k² samples;
-/// `preset`: the file-set preset, as `--preset`.
+/// Reads anything the command line reads (canonical or multilayer EXR, Blender/Mitsuba EXRs, a file-set folder, the
+/// ISPC `.bin`, packed render targets: a `gbuf pack` folder, or an engine's with `input_layout`) and returns its
+/// planes as numpy arrays. As the command line's flags: `fold` (`--fold`), `preset` (`--preset`), `scene`
+/// (`--scene`: the sidecar to use), `no_scene` (`--no-scene`: none, not even one beside the dump), `input_layout`
+/// (`--input-layout`: the layout an engine's targets were written with, a built-in name or a layout file), `map`
+/// (`--map`: `attr=channel;…,attr=FILE[:channel;…]`) and `frame` (`--frame`: one frame of a sequence folder).
 #[pyfunction]
-#[pyo3(signature = (path, fold=None, preset=None))]
+#[pyo3(signature = (path, fold=None, preset=None, scene=None, no_scene=false, input_layout=None, map=None, frame=None))]
+#[allow(clippy::too_many_arguments)] // the command line's flags, by name
 fn load<'py>(
     py: Python<'py>,
     path: PathBuf,
     fold: Option<u32>,
     preset: Option<String>,
+    scene: Option<PathBuf>,
+    no_scene: bool,
+    input_layout: Option<String>,
+    map: Option<String>,
+    frame: Option<u32>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let opts = gbuf_core::io::LoadOptions { fold, preset, ..Default::default() };
-    let loaded = gbuf_core::io::load(&path, &opts).map_err(value_error)?;
+    if scene.is_some() && no_scene {
+        return Err(value_error("scene and no_scene exclude each other"));
+    }
+    let map = map.as_deref().map(gbuf_core::io::mapped::parse_map).transpose().map_err(value_error)?.unwrap_or_default();
+    let opts = gbuf_core::io::LoadOptions {
+        fold,
+        preset,
+        sidecar: scene,
+        no_sidecar: no_scene,
+        map: map.channels,
+        files: map.files,
+        frame,
+        ..Default::default()
+    };
+    let layout = input_layout.as_deref().map(Layout::by_name_or_path).transpose().map_err(value_error)?;
+    let input = gbuf_core::layout::targets::PackedInput { layout, targets: Vec::new() };
+    let loaded = gbuf_core::layout::targets::load(&path, &input, &opts).map_err(value_error)?;
     gbuffer_dict(py, &loaded.gbuffer)
 }
 

@@ -83,6 +83,9 @@ pub struct Report {
     pub flip: FlipRows,
     /// What the aggregate fronts rank by: each layout's mean or worst frame.
     pub over: Over,
+    /// The lighting model every row was lit with, and why (absent in reports written before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lighting: Option<crate::resolve::Lighting>,
     /// One row per frame × combination; the fronts are marked within each frame.
     pub rows: Vec<Row>,
     /// One row per combination over every frame (mean and worst frame); the fronts rank by [`Report::over`].
@@ -124,6 +127,7 @@ pub(crate) fn test_report(input: &str, width: u32, height: u32, rows: Vec<Row>, 
         viewing: Viewing::default(),
         flip: FlipRows::default(),
         over: Over::default(),
+        lighting: None,
         aggregate: crate::analysis::aggregate::aggregate(&rows, Over::default()),
         detectors: vec![],
         budget: None,

@@ -3,7 +3,7 @@
 //! dumps (each candidate's worst frame by default, or its mean; or the smallest under an error cap), why it won,
 //! how far the search's prediction was off, and a layout file `--layout` accepts.
 
-use crate::cli::common::{print_json, FramesArgs, Resolution};
+use crate::cli::common::{print_json, say_lighting, FramesArgs, LightingArgs, Resolution};
 use crate::cli::report::frame_lights;
 use anyhow::Context;
 use gbuf::analysis::aggregate::Over;
@@ -47,6 +47,9 @@ pub struct Args {
     /// Seed for scattered lights.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// The lighting model the candidates are measured under (the budget keeps the bits its BRDF reads).
+    #[command(flatten)]
+    pub lighting: LightingArgs,
     /// Write the winning layout here (TOML, or JSON for `.json`).
     #[arg(short = 'o', long = "out", value_name = "LAYOUT.toml")]
     pub out: Option<PathBuf>,
@@ -63,6 +66,7 @@ pub struct Args {
 struct Output<'a> {
     #[serde(flatten)]
     result: &'a BudgetResult,
+    lighting: &'a gbuf::resolve::Lighting,
     resolution: [u32; 2],
     msaa: u32,
     footprint_bytes: u64,
@@ -76,20 +80,30 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         anyhow::ensure!(e.is_finite() && e >= 0.0, "--max-error must be a finite number ≥ 0, got {e}");
     }
     let paths = args.input.frames()?;
+    // The first frame decides the lighting model (the data's choice unless --brdf); it is loaded once, here, and
+    // handed to the search as its first visit.
+    let load_frame = |i: usize| -> anyhow::Result<(gbuf::GBuffer, Vec<gbuf::Light>)> {
+        let loaded = args.input.load(&paths[i])?;
+        let (lights, _) = frame_lights(&loaded, args.lights, args.seed);
+        Ok((loaded.gbuffer, lights))
+    };
+    let first = load_frame(0)?;
+    let lighting = args.lighting.choose(&first.0.attributes());
+    say_lighting(&lighting);
+    let mut first = Some(first);
     let cfg = BudgetConfig {
         max_bytes: args.max_bytes,
         max_error: args.max_error,
         detector,
         detector_config: DetectorConfig::default(),
-        resolve: ResolveConfig::default(),
+        resolve: lighting.apply(ResolveConfig::default()),
         over: args.over,
         shader_code: args.emit.is_some(),
     };
     let names: Vec<String> = paths.iter().map(super::common::FrameRef::name).collect();
-    let load = |i: usize| -> anyhow::Result<(gbuf::GBuffer, Vec<gbuf::Light>)> {
-        let loaded = args.input.load(&paths[i])?;
-        let (lights, _) = frame_lights(&loaded, args.lights, args.seed);
-        Ok((loaded.gbuffer, lights))
+    let load = |i: usize| match first.take() {
+        Some(f) if i == 0 => Ok(f),
+        _ => load_frame(i),
     };
     let pb = crate::cli::spinner(format!("searching layouts within the budget over {} frame(s)", names.len()));
     let (res, size) = search_frames(&names, load, &cfg).with_context(|| format!("budget over {}", names.join(", ")))?;
@@ -110,6 +124,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.json {
         return print_json(&Output {
             result: &res,
+            lighting: &lighting,
             resolution: [rw, rh],
             msaa,
             footprint_bytes: footprint,
@@ -131,6 +146,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.detector
     );
     println!("  {}", w.summary);
+    println!("  measured under {}", lighting.summary());
     if names.len() > 1 {
         for m in &w.frames {
             println!(

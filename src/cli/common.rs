@@ -11,9 +11,13 @@ use std::path::PathBuf;
 /// How to read a dump (every flag but the file itself).
 #[derive(clap::Args, Debug, Clone)]
 pub struct ReadArgs {
-    /// Scene sidecar (camera + lights). Default: `<file stem>.json` beside the dump, if present.
-    #[arg(long)]
+    /// Scene sidecar (camera + lights). Default: `<file stem>.json` beside the dump (a file set's `scene.json` or
+    /// only JSON) when it is a gbuf sidecar; another program's JSON there is ignored with a warning.
+    #[arg(long, conflicts_with = "no_scene")]
     pub scene: Option<PathBuf>,
+    /// Use no sidecar, not even one found beside the dump.
+    #[arg(long)]
+    pub no_scene: bool,
     /// Fold k×k pixel blocks of a supersampled dump into k² samples per pixel.
     #[arg(long, value_name = "K")]
     pub fold: Option<u32>,
@@ -94,42 +98,13 @@ impl ReadArgs {
 
     /// Library load options from the flags.
     pub fn options(&self) -> anyhow::Result<LoadOptions> {
-        let mut map = Vec::new();
-        let mut files = Vec::new();
-        if let Some(spec) = &self.map {
-            for item in spec.split(',').filter(|s| !s.trim().is_empty()) {
-                let (attr, chans) =
-                    item.split_once('=').with_context(|| format!("--map: {item:?} is not attr=channel"))?;
-                let a = Attribute::from_name(attr.trim()).with_context(|| {
-                    format!("--map: unknown attribute {attr:?}; known: {}", Attribute::ALL.map(|a| a.name()).join(", "))
-                })?;
-                let chans = chans.trim();
-                let is_image = |f: &str| {
-                    let f = f.to_ascii_lowercase();
-                    f.ends_with(".exr") || f.ends_with(".png")
-                };
-                let (file, chans) = match chans.split_once(':') {
-                    Some((f, c)) if is_image(f) => (Some(f), c),
-                    _ if is_image(chans) => (Some(chans), ""),
-                    _ => (None, chans),
-                };
-                let chans: Vec<String> =
-                    chans.split(';').map(|c| c.trim().to_string()).filter(|c| !c.is_empty()).collect();
-                if let Some(f) = file {
-                    if !chans.is_empty() && chans.len() != a.components() {
-                        anyhow::bail!("--map: {} needs {} channel(s), got {}", a.name(), a.components(), chans.len());
-                    }
-                    files.push((a, PathBuf::from(f), chans));
-                    continue;
-                }
-                if chans.len() != a.components() {
-                    anyhow::bail!("--map: {} needs {} channel(s), got {}", a.name(), a.components(), chans.len());
-                }
-                map.push((a, chans));
-            }
-        }
+        let gbuf::io::mapped::MapSpec { channels: map, files } = match &self.map {
+            Some(spec) => gbuf::io::mapped::parse_map(spec).map_err(|e| anyhow::anyhow!(e))?,
+            None => Default::default(),
+        };
         Ok(LoadOptions {
             sidecar: self.scene.clone(),
+            no_sidecar: self.no_scene,
             fold: self.fold,
             map,
             files,
@@ -365,6 +340,53 @@ pub fn print_json<T: serde::Serialize>(value: &T) -> anyhow::Result<()> {
 }
 
 /// Detector threshold flags, shared by every command that runs a detector (flatten it into their `Args`).
+/// Checks, before any work, that every output's folder exists: a command that would fail writing its last output
+/// fails first instead.
+pub fn check_output_folders<'a>(outputs: impl IntoIterator<Item = &'a std::path::Path>) -> anyhow::Result<()> {
+    for p in outputs {
+        let dir = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+        anyhow::ensure!(
+            dir.is_dir(),
+            "{}: its folder {} does not exist (nothing was written; create it or choose another path)",
+            p.display(),
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// The lighting model of a command that lights (`--brdf`, `--falloff`): the user's, or the data's choice
+/// ([`gbuf::resolve::Lighting`]).
+#[derive(clap::Args, Debug, Clone, Copy, Default)]
+pub struct LightingArgs {
+    /// BRDF: lambert, blinn-phong or ggx (default: from the frame — ggx when it stores roughness or metallic,
+    /// else blinn-phong).
+    #[arg(long, value_name = "B")]
+    pub brdf: Option<gbuf::resolve::Brdf>,
+    /// Distance falloff: linear or gltf (default: linear).
+    #[arg(long, value_name = "F")]
+    pub falloff: Option<gbuf::resolve::Falloff>,
+}
+
+impl LightingArgs {
+    /// The lighting for a frame that stores `attributes`.
+    #[must_use]
+    pub fn choose(&self, attributes: &[Attribute]) -> gbuf::resolve::Lighting {
+        let mut l = gbuf::resolve::Lighting::choose(self.brdf, self.falloff, attributes);
+        if self.brdf.is_none() {
+            l.why.push_str("; --brdf to choose another");
+        } else {
+            l.why = "--brdf".into();
+        }
+        l
+    }
+}
+
+/// Prints the lighting a command lights with on stderr (stdout may be JSON).
+pub fn say_lighting(l: &gbuf::resolve::Lighting) {
+    eprintln!("lighting: {}", l.summary());
+}
+
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct ThresholdArgs {
     /// lauritzen: multiplier on |∂z/∂x| + |∂z/∂y| (default 1).

@@ -6,7 +6,6 @@ use anyhow::Context;
 use gbuf::base::names::{NameParser, Named};
 use gbuf::detect::{self, Detector, DetectorConfig};
 use gbuf::measure::edges::{true_fraction, truth_agreement, MaskScores, ShadingTolerance, TruthAgreement, Truths};
-use gbuf::resolve::{Brdf, Falloff};
 use gbuf::GBuffer;
 use std::io::Write;
 use std::path::PathBuf;
@@ -101,12 +100,9 @@ pub struct Args {
     /// Default: id when the dump has object IDs, else shading when it has lights.
     #[arg(long, value_name = "TRUTH")]
     pub mask_truth: Option<MaskTruth>,
-    /// BRDF of the shading truth's reference.
-    #[arg(long, value_name = "B", default_value = "blinn-phong")]
-    pub brdf: Brdf,
-    /// Distance falloff of the shading truth's reference.
-    #[arg(long, value_name = "F", default_value = "linear")]
-    pub falloff: Falloff,
+    /// Lighting model of the shading truth's reference.
+    #[command(flatten)]
+    pub lighting: crate::cli::common::LightingArgs,
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
@@ -179,9 +175,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     tolerance.validate().context("--shading-tolerance / --exposure")?;
     let loaded = args.input.load()?;
     let gb = &loaded.gbuffer;
-    // The shading truth needs the reference radiance, so lights: from the sidecar or the dump.
-    let resolve_cfg = gbuf::resolve::ResolveConfig { brdf: args.brdf, falloff: args.falloff, ..Default::default() };
     let lights = loaded.lights.as_deref();
+    // The shading truth needs the reference radiance, so lights: from the sidecar or the dump.
+    let lighting = args.lighting.choose(&gb.attributes());
+    if lights.is_some() {
+        crate::cli::common::say_lighting(&lighting);
+    }
+    let resolve_cfg = lighting.apply(gbuf::resolve::ResolveConfig::default());
     let truths = Truths::of(gb, lights, &resolve_cfg, tolerance)
         .with_context(|| format!("{}: reference shading", args.input.file.display()))?;
     let mut rows = Vec::new();

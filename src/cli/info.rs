@@ -37,12 +37,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             let (loaded, frame) =
                 gbuf::layout::targets::load_packed_frame(path, &layout, &input.targets, &args.input.options()?)
                     .with_context(|| format!("cannot load {}", path.display()))?;
-            super::common::print_warnings(path, &loaded);
             let rows = gbuf::layout::codespace::code_space(&layout, &frame.packed, &loaded.gbuffer.coverage);
             (loaded, Some((layout.name().to_string(), rows)))
         }
-        None => (args.input.load().with_context(|| format!("cannot load {}", path.display()))?, None),
+        None => (args.input.read.load(path).with_context(|| format!("cannot load {}", path.display()))?, None),
     };
+    // The text lists the warnings itself (WARNING lines); beside JSON they go to stderr, once.
+    if args.json {
+        super::common::print_warnings(path, &loaded);
+    }
     let info = gbuf::io::stats::info(&loaded, &args.input.file);
     let needs = gbuf::analysis::needs_with_pruned_layout(&loaded.gbuffer);
     let surfaces = gbuf::analysis::surfaces::surfaces_per_pixel(&loaded.gbuffer);

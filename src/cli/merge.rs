@@ -60,6 +60,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 f.viewing,
                 rep.viewing
             );
+            let (a, b) =
+                (f.lighting.as_ref().map(|l| (l.brdf, l.falloff)), rep.lighting.as_ref().map(|l| (l.brdf, l.falloff)));
+            anyhow::ensure!(
+                a == b,
+                "{} and {}: the frames were lit with different lighting models ({} and {}); their errors do not \
+                 compare (give `gbuf report` the same --brdf and --falloff)",
+                fp.display(),
+                p.display(),
+                f.lighting.as_ref().map_or("not recorded".into(), gbuf::resolve::Lighting::summary),
+                rep.lighting.as_ref().map_or("not recorded".into(), gbuf::resolve::Lighting::summary)
+            );
         }
         for f in &rep.frames {
             anyhow::ensure!(
@@ -76,7 +87,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     let (_, f) = first.context("no report given")?;
-    let how = Assembly { runs: f.runs, viewing: f.viewing, flip: f.flip, over: args.over, max_bytes: args.max_bytes };
+    let how = Assembly {
+        runs: f.runs,
+        viewing: f.viewing,
+        flip: f.flip,
+        over: args.over,
+        max_bytes: args.max_bytes,
+        lighting: f.lighting.clone(),
+    };
     let (rep, files) = gbuf::study::assemble(frames, rows, vec![], &how)?;
     write_and_print(&rep, &files, &args.out, args.json)
 }

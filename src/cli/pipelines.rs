@@ -10,7 +10,7 @@ use gbuf::detect::{self, Detector};
 use gbuf::image::mlaa::MlaaConfig;
 use gbuf::layout::Layout;
 use gbuf::measure::image::Viewing;
-use gbuf::resolve::{Brdf, Falloff, ResolveConfig};
+use gbuf::resolve::ResolveConfig;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -37,12 +37,9 @@ pub struct Args {
     /// Warp widths of the MSAA schedules' utilisation table.
     #[arg(long, value_name = "LIST", value_delimiter = ',', default_value = "8,16,32,64")]
     pub warps: Vec<u32>,
-    /// BRDF of the resolve and the reference.
-    #[arg(long, value_name = "B", default_value = "blinn-phong")]
-    pub brdf: Brdf,
-    /// Distance falloff.
-    #[arg(long, value_name = "F", default_value = "linear")]
-    pub falloff: Falloff,
+    /// Lighting model of the resolve and the reference.
+    #[command(flatten)]
+    pub lighting: crate::cli::common::LightingArgs,
     /// Scatter N point lights (replacing the dump's own, if any); without it, the dump's or sidecar's lights, or 64
     /// scattered when it brings none.
     #[arg(long, value_name = "N")]
@@ -91,16 +88,27 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             None => crate::usage!("--slots: counts of at least 1 separated by commas, or none; got {list:?}"),
         },
     };
+    crate::cli::common::check_output_folders(
+        [&args.aa_crops, &args.heatmap].into_iter().flatten().map(std::path::PathBuf::as_path),
+    )?;
     let layout = Layout::by_name_or_path(&args.layout).with_context(|| format!("--layout {}", args.layout))?;
     let file = args.input.file.display().to_string();
     let pb = crate::cli::spinner(format!("loading {file}"));
     let loaded = args.input.load().with_context(|| format!("loading {file}"))?;
     let (lights, lights_source) = frame_lights(&loaded, args.lights, args.seed);
     let gb = loaded.gbuffer;
+    if args.heatmap.is_some() && !gb.has(gbuf::gbuffer::Attribute::PrimitiveId) {
+        anyhow::bail!(
+            "--heatmap: {file} has no primitive IDs, so forward shading's quads cannot be counted (nothing was \
+             written)"
+        );
+    }
+    let lighting = args.lighting.choose(&gb.attributes());
+    pb.suspend(|| crate::cli::common::say_lighting(&lighting));
     let cfg = PipelinesConfig {
         detector: args.detector,
         detector_config: args.thresholds.config()?,
-        resolve: ResolveConfig { brdf: args.brdf, falloff: args.falloff, ..ResolveConfig::default() },
+        resolve: lighting.apply(ResolveConfig::default()),
         gbuffer_bytes: layout.bytes_per_sample() as u32,
         layout: layout.name().to_string(),
         warps: args.warps.clone(),
@@ -134,22 +142,31 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let (Some(name), Some(e)) = (args.geometry, &p.rematerialise_error) {
         anyhow::bail!("{file}: --geometry {name}: {e}");
     }
+    // Both pictures are staged and renamed into place together: a failure leaves neither.
+    let mut staged = gbuf::util::Staged::default();
+    let mut said = Vec::new();
     if let Some(path) = &args.aa_crops {
         let (pic, (x, y, w, h)) = gbuf::report::pipelines::aa_crop_picture(&p, &reference)?;
-        gbuf::base::picture::write_png(path, &pic).with_context(|| format!("writing {}", path.display()))?;
-        eprintln!("wrote {}: the {w}×{h} crop at ({x}, {y}) under each anti-aliasing method", path.display());
+        let png = gbuf::base::picture::png_bytes(&pic).with_context(|| format!("encoding {}", path.display()))?;
+        staged.stage_bytes(path, &png).with_context(|| format!("writing {}", path.display()))?;
+        said.push(format!("wrote {}: the {w}×{h} crop at ({x}, {y}) under each anti-aliasing method", path.display()));
     }
     if let Some(path) = &args.heatmap {
         let fwd = p.forward_msaa.as_ref().with_context(|| {
             format!("--heatmap: {file} has no primitive IDs, so forward shading's quads cannot be counted")
         })?;
         let mask = detect::detect(&gb, args.detector, &cfg.detector_config)?;
-        let max = gbuf::report::pipelines::write_shading_heatmaps(path, fwd, &mask)
-            .with_context(|| format!("writing {}", path.display()))?;
-        eprintln!(
+        let (png, max) = gbuf::report::pipelines::shading_heatmaps_png(fwd, &mask)
+            .with_context(|| format!("encoding {}", path.display()))?;
+        staged.stage_bytes(path, &png).with_context(|| format!("writing {}", path.display()))?;
+        said.push(format!(
             "wrote {}: forward MSAA lanes (left) and deferred evaluations (right) per pixel, scale 0..{max}",
             path.display()
-        );
+        ));
+    }
+    staged.commit().context("renaming the pictures into place")?;
+    for s in said {
+        eprintln!("{s}");
     }
     if args.json {
         return print_json(&p);

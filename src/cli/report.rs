@@ -3,7 +3,7 @@
 //! another, and write the report folder with per-frame and aggregated rows. Also the pieces `gbuf demo` and
 //! `gbuf merge` reuse: the sweep flags, the progress bar, the human summary.
 
-use crate::cli::common::{print_json, FramesArgs};
+use crate::cli::common::{print_json, say_lighting, FramesArgs, LightingArgs};
 use anyhow::Context;
 use gbuf::analysis::aggregate::Over;
 use gbuf::analysis::record::Report;
@@ -55,6 +55,9 @@ pub struct SweepArgs {
     /// Exposure of the displayed image (as `gbuf resolve --exposure`).
     #[arg(long, value_name = "E", default_value_t = 1.0)]
     pub exposure: f32,
+    /// The lighting model the layouts are ranked under.
+    #[command(flatten)]
+    pub lighting: LightingArgs,
 }
 
 fn split(list: &str) -> impl Iterator<Item = &str> {
@@ -212,12 +215,16 @@ pub fn print_summary(rep: &Report, dir: &Path) {
     }
     let secs: f64 = rep.frames.iter().map(|f| f.sweep_seconds).sum();
     println!(
-        "sweep: {} rows over {} frame(s) in {:.1} s; report written to {}",
+        "sweep: {} rows over {} frame(s) in {:.1} s; report written to {} (and report.md, report.json, \
+         report.csv beside it)",
         rep.rows.len(),
         rep.frames.len(),
         secs,
-        dir.join("report.md").display()
+        dir.join("report.html").display()
     );
+    if let Some(l) = &rep.lighting {
+        println!("lit with {}", l.summary());
+    }
     let stages = gbuf::report::format::stage_summary(rep.frames.iter().flat_map(|f| &f.stage_seconds));
     if !stages.is_empty() {
         println!("sweep time by stage: {stages}");
@@ -256,10 +263,13 @@ pub fn run_frames(
     count: usize,
     mut next: impl FnMut(usize) -> anyhow::Result<FrameInput>,
     cfg: &SweepConfig,
+    lighting: LightingArgs,
     how: &Assembly,
     out: &Path,
     json: bool,
 ) -> anyhow::Result<Report> {
+    let mut cfg = cfg.clone();
+    let mut how = how.clone();
     let pb = crate::cli::progress_bar(1);
     let mut frames = Vec::new();
     let mut rows = Vec::new();
@@ -269,6 +279,29 @@ pub fn run_frames(
         let t = std::time::Instant::now();
         let f = next(i)?;
         let load_seconds = t.elapsed().as_secs_f64();
+        // One lighting model for every frame (their rows aggregate): the first frame's, named once.
+        let here = lighting.choose(&f.gbuffer.attributes());
+        match &how.lighting {
+            Some(chosen) if i > 0 => {
+                if chosen.brdf != here.brdf {
+                    pb.suspend(|| {
+                        eprintln!(
+                            "warning: {}: its data would choose BRDF {} ({}); every frame of the report is lit as the \
+                             first: {}",
+                            f.name,
+                            here.brdf,
+                            here.why,
+                            chosen.summary()
+                        );
+                    });
+                }
+            }
+            _ => {
+                pb.suspend(|| say_lighting(&here));
+                cfg.resolve = here.apply(cfg.resolve);
+                how.lighting = Some(here);
+            }
+        }
         let mut progress = |done: usize, total: usize, what: &str| {
             pb.set_length(total as u64);
             pb.set_position(done as u64);
@@ -285,7 +318,7 @@ pub fn run_frames(
         };
         let prefix =
             if count > 1 { format!("frame{:0w$}_", i + 1, w = count.to_string().len()) } else { String::new() };
-        let r = gbuf::study::run_frame(&input, cfg, count == 1, &prefix, &mut progress)
+        let r = gbuf::study::run_frame(&input, &cfg, count == 1, &prefix, &mut progress)
             .with_context(|| format!("{}: report", f.name))?;
         let mut frame = r.frame;
         frame.other_seconds.insert(0, ("reading the input".to_string(), load_seconds));
@@ -295,7 +328,7 @@ pub fn run_frames(
         figures.extend(r.figures);
     }
     pb.finish_and_clear();
-    let (rep, plots) = gbuf::study::assemble(frames, rows, figures, how)?;
+    let (rep, plots) = gbuf::study::assemble(frames, rows, figures, &how)?;
     files.extend(plots);
     write_and_print(&rep, &files, out, json)?;
     Ok(rep)
@@ -319,9 +352,16 @@ pub fn write_and_print(
 }
 
 /// Sweeps one in-memory frame (what `gbuf demo` runs).
-pub fn run_and_write(frame: FrameInput, cfg: &SweepConfig, out: &Path, json: bool) -> anyhow::Result<Report> {
+pub fn run_and_write(
+    frame: FrameInput,
+    cfg: &SweepConfig,
+    lighting: LightingArgs,
+    out: &Path,
+    json: bool,
+) -> anyhow::Result<Report> {
     let mut frame = Some(frame);
-    run_frames(1, |_| frame.take().context("one frame"), cfg, &Assembly::of(cfg, Over::default(), None), out, json)
+    let how = Assembly::of(cfg, Over::default(), None, "");
+    run_frames(1, |_| frame.take().context("one frame"), cfg, lighting, &how, out, json)
 }
 
 /// Flags of `gbuf report`.
@@ -397,6 +437,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .collect();
         Ok(FrameInput { name: p.name(), gbuffer: loaded.gbuffer, lights, lights_source, single, geometry: None, notes })
     };
-    run_frames(paths.len(), next, &cfg, &Assembly::of(&cfg, args.over, args.max_bytes), &args.out, args.json)?;
+    let how = Assembly::of(&cfg, args.over, args.max_bytes, "");
+    run_frames(paths.len(), next, &cfg, args.sweep.lighting, &how, &args.out, args.json)?;
     Ok(())
 }

@@ -11,7 +11,7 @@ use gbuf::detect::{self, Detector};
 use gbuf::image::{LdrEncoding, ToneCurve, ToneMap};
 use gbuf::light::Light;
 use gbuf::measure::image::{against_full_deferred, compare, error_triad, ErrorSet, ImageError, Viewing};
-use gbuf::resolve::{self, Brdf, Culling, Falloff, ResolveConfig, ResolveStats, Schedule};
+use gbuf::resolve::{self, Culling, Lighting, ResolveConfig, ResolveStats, Schedule};
 use gbuf::GBuffer;
 use serde::Serialize;
 use std::io::Write;
@@ -42,12 +42,9 @@ pub struct Args {
     /// Light culling.
     #[arg(long, value_name = "C", default_value = "tiled")]
     pub culling: Culling,
-    /// BRDF.
-    #[arg(long, value_name = "B", default_value = "blinn-phong")]
-    pub brdf: Brdf,
-    /// Distance falloff.
-    #[arg(long, value_name = "F", default_value = "linear")]
-    pub falloff: Falloff,
+    /// Lighting model.
+    #[command(flatten)]
+    pub lighting: crate::cli::common::LightingArgs,
     /// Schedule.
     #[arg(long, value_name = "S", default_value = "deferred")]
     pub schedule: Schedule,
@@ -122,6 +119,8 @@ struct Report {
     detector: &'static str,
     /// The instruction set the light loop ran with (`GBUF_ISA` caps it).
     isa: &'static str,
+    /// The BRDF and falloff, and why (`config` holds them too).
+    lighting: Lighting,
     config: ResolveConfig,
     shading_fraction: f64,
     edge_fraction: f64,
@@ -155,12 +154,11 @@ struct Report {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let cfg = ResolveConfig {
         culling: args.culling,
-        brdf: args.brdf,
-        falloff: args.falloff,
         schedule: args.schedule,
         tile_size: args.tile_size,
         depth_slices: args.depth_slices,
         msaa: args.msaa_schedule,
+        ..ResolveConfig::default()
     };
     cfg.validate().context("resolve configuration")?;
     if args.ldr.is_some() && args.png.is_none() {
@@ -169,6 +167,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
         anyhow::bail!("--exposure must be a positive number, got {}", args.exposure);
     }
+    crate::cli::common::check_output_folders(
+        [&args.output, &args.png, &args.heatmap].into_iter().flatten().map(PathBuf::as_path),
+    )?;
     let det_cfg = args.thresholds.config()?;
     let file = args.input.file.display().to_string();
 
@@ -188,6 +189,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     });
     let (loaded, arrays) = opened.with_context(|| format!("loading {file}"))?;
     let gb: GBuffer = loaded.gbuffer;
+    // The lighting model: --brdf, or the data's choice (a .bin's arrays hold a specular power, no roughness).
+    let lighting = args.lighting.choose(&gb.attributes());
+    let cfg = lighting.apply(cfg);
+    pb.suspend(|| crate::cli::common::say_lighting(&lighting));
     let (lights, lights_source) = pick_lights(loaded.lights, args.lights, args.seed, &gb, &file)?;
     let bin_frame = match &arrays {
         Some(a) => Some(gbuf::layout::PackedFrame::of_source(&gb, a).with_context(|| format!("{file}: its arrays"))?),
@@ -283,6 +288,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let encode = || -> anyhow::Result<Encoded> {
         let mut files = Vec::new();
+        if let Some(out) = &args.output {
+            files.push((
+                out.clone(),
+                resolved.image.exr_bytes(out).with_context(|| format!("encoding {}", out.display()))?,
+            ));
+        }
         if let Some(out) = &args.png {
             let png = if args.ldr.is_some() {
                 resolved.image.ldr_gamma22_png()
@@ -304,14 +315,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let Analysis { prepass_vs_deferred, t_deferred, t_ref, triad, error } = analysed?;
     let (layout_error, total_error, aa_error) = (triad.layout, triad.total, triad.aa);
     let (Encoded { files, heatmap_max }, t_encode) = (encoded.0?, encoded.1);
+    // Every file is staged beside its destination and renamed into place only when all were written: a failure
+    // leaves none of them half done or alone.
     let (written, t_write) = timed(|| -> anyhow::Result<()> {
-        if let Some(out) = &args.output {
-            resolved.image.write_exr(out).with_context(|| format!("writing {}", out.display()))?;
-        }
+        let mut staged = gbuf::util::Staged::default();
         for (path, bytes) in &files {
-            gbuf::util::write_bytes_atomic(path, bytes).with_context(|| format!("writing {}", path.display()))?;
+            staged.stage_bytes(path, bytes).with_context(|| format!("writing {}", path.display()))?;
         }
-        Ok(())
+        staged.commit().context("renaming the outputs into place")
     });
     written?;
     let t_output = t_encode + t_write;
@@ -328,6 +339,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         layout: args.layout.clone(),
         detector: args.detector.name(),
         isa: gbuf::resolve::instruction_set(),
+        lighting,
         config: cfg,
         shading_fraction: s.shading_fraction,
         edge_fraction: s.edge_fraction,

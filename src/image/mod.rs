@@ -168,6 +168,17 @@ impl HdrImage {
 
     /// Writes a lossless EXR with f32 channels `R`, `G`, `B`.
     pub fn write_exr(&self, path: &Path) -> Result<()> {
+        write_raw(path, &self.raw(path)?)
+    }
+
+    /// The file [`HdrImage::write_exr`] writes, as bytes (`name` names it in errors): for outputs staged until all
+    /// of a command's are ready.
+    pub fn exr_bytes(&self, name: &Path) -> Result<Vec<u8>> {
+        crate::io::exr::raw_to_bytes(name, &self.raw(name)?)
+    }
+
+    /// The image as EXR channels `R`, `G`, `B` (f32).
+    fn raw(&self, path: &Path) -> Result<RawImage> {
         if self.width == 0 || self.height == 0 {
             return Err(Error::Argument(format!("{}: cannot write an empty image", path.display())));
         }
@@ -175,13 +186,12 @@ impl HdrImage {
             name: name.into(),
             data: RawData::F32(self.rgb.iter().map(|c| c[k]).collect()),
         };
-        let raw = RawImage {
+        Ok(RawImage {
             width: self.width,
             height: self.height,
             channels: vec![chan("R", 0), chan("G", 1), chan("B", 2)],
             ..Default::default()
-        };
-        write_raw(path, &raw)
+        })
     }
 }
 

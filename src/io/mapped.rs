@@ -21,6 +21,48 @@ pub use crate::io::conventions::BACKGROUND_DEPTH;
 pub const MAP_HINT: &str = "name the channels with --map attr=channel,… (components separated by `;`), e.g. \
                             --map 'depth=Z,normal=N.X;N.Y;N.Z,albedo=C.R;C.G;C.B'";
 
+/// What a `--map` value names: channels of the dump per attribute, and attributes read from other files.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct MapSpec {
+    /// Attribute → its channels in the dump ([`LoadOptions::map`]).
+    pub channels: Vec<(Attribute, Vec<String>)>,
+    /// Attribute → file (relative to the dump's directory) and channels, empty for the default
+    /// ([`LoadOptions::files`]).
+    pub files: Vec<(Attribute, std::path::PathBuf, Vec<String>)>,
+}
+
+/// Parses the `--map` grammar, `attr=ch;ch;ch,attr=FILE[:ch;…],…` (components separated by `;`, a value ending in
+/// `.exr` or `.png` before an optional `:` names a file), or says what is wrong with it.
+pub fn parse_map(spec: &str) -> std::result::Result<MapSpec, String> {
+    let mut out = MapSpec::default();
+    for item in spec.split(',').filter(|s| !s.trim().is_empty()) {
+        let (attr, chans) = item.split_once('=').ok_or_else(|| format!("--map: {item:?} is not attr=channel"))?;
+        let a = Attribute::from_name(attr.trim()).ok_or_else(|| {
+            format!("--map: unknown attribute {attr:?}; known: {}", Attribute::ALL.map(|a| a.name()).join(", "))
+        })?;
+        let chans = chans.trim();
+        let is_image = |f: &str| {
+            let f = f.to_ascii_lowercase();
+            f.ends_with(".exr") || f.ends_with(".png")
+        };
+        let (file, chans) = match chans.split_once(':') {
+            Some((f, c)) if is_image(f) => (Some(f), c),
+            _ if is_image(chans) => (Some(chans), ""),
+            _ => (None, chans),
+        };
+        let chans: Vec<String> = chans.split(';').map(|c| c.trim().to_string()).filter(|c| !c.is_empty()).collect();
+        let wrong = || format!("--map: {} needs {} channel(s), got {}", a.name(), a.components(), chans.len());
+        match file {
+            Some(f) if chans.is_empty() || chans.len() == a.components() => {
+                out.files.push((a, std::path::PathBuf::from(f), chans));
+            }
+            None if chans.len() == a.components() => out.channels.push((a, chans)),
+            _ => return Err(wrong()),
+        }
+    }
+    Ok(out)
+}
+
 /// Looks up channel `name`, or says which channels exist.
 pub fn channel<'a>(raw: &'a RawImage, path: &Path, name: &str) -> Result<&'a RawChannel> {
     raw.channel(name).ok_or_else(|| Error::MissingChannel {

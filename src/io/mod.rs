@@ -50,8 +50,11 @@ pub enum SourceFormat {
 /// How to load a dump.
 #[derive(Clone, Debug, Default)]
 pub struct LoadOptions {
-    /// Sidecar path; when `None`, `<file stem>.json` next to the dump is used if it exists.
+    /// Sidecar path; when `None`, the JSON found beside the dump (`<file stem>.json`, a file set's `scene.json` or
+    /// only JSON) is used when it is a gbuf sidecar, and ignored with a warning when it is not.
     pub sidecar: Option<PathBuf>,
+    /// Use no sidecar at all, not even one found beside the dump (`--no-scene`).
+    pub no_sidecar: bool,
     /// Fold k×k pixel blocks into k² samples (overrides the sidecar's `supersample`).
     pub fold: Option<u32>,
     /// Explicit attribute → channel mapping (`--map attr=channel,…`); channels are comma-free names.
@@ -137,7 +140,21 @@ pub struct Loaded {
 /// by finite values (counted in [`Loaded::sanitized`]) and validates the result.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     crate::util::protect_input(path);
-    let side = resolve_sidecar(path, opts)?;
+    let (side, ignored) = resolve_sidecar(path, opts)?;
+    with_warning(load_with(path, opts, side), ignored)
+}
+
+/// `loaded` with the warning about an ignored JSON first among its warnings.
+fn with_warning(loaded: Result<Loaded>, ignored: Option<plausible::Warning>) -> Result<Loaded> {
+    let mut loaded = loaded?;
+    if let Some(w) = ignored {
+        loaded.warnings.insert(0, w);
+    }
+    Ok(loaded)
+}
+
+/// [`load`] with the sidecar resolved.
+fn load_with(path: &Path, opts: &LoadOptions, side: Option<(Sidecar, PathBuf)>) -> Result<Loaded> {
     if path.is_dir() || !opts.files.is_empty() {
         let camera = side.as_ref().and_then(|(s, _)| s.camera.as_ref());
         let loaded = fileset::read(path, camera, opts)?;
@@ -199,7 +216,7 @@ pub fn open_packed(path: &Path, opts: &LoadOptions) -> Result<Option<PackedDump>
         return Ok(None);
     }
     crate::util::protect_input(path);
-    let side = resolve_sidecar(path, opts)?;
+    let (side, ignored) = resolve_sidecar(path, opts)?;
     if side.as_ref().is_some_and(|(s, _)| s.supersample.is_some_and(|k| k > 1)) {
         return Ok(None);
     }
@@ -230,6 +247,7 @@ pub fn open_packed(path: &Path, opts: &LoadOptions) -> Result<Option<PackedDump>
     // The checks `load` runs on the whole frame, from the bands' counts: the positions are derived from depth
     // (nothing to check against the camera), so the counts are all they need.
     loaded.warnings = plausible::judge(&survey.checks, &loaded.gbuffer, false, path, |_, _| {})?;
+    loaded.warnings.splice(0..0, ignored);
     Ok(Some(PackedDump { loaded, arrays }))
 }
 
@@ -237,7 +255,12 @@ pub fn open_packed(path: &Path, opts: &LoadOptions) -> Result<Option<PackedDump>
 /// errors and locates the default sidecar beside it).
 pub fn load_bytes(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     crate::util::protect_input(path);
-    let side = resolve_sidecar(path, opts)?;
+    let (side, ignored) = resolve_sidecar(path, opts)?;
+    with_warning(load_bytes_with(bytes, path, opts, side), ignored)
+}
+
+/// [`load_bytes`] with the sidecar resolved.
+fn load_bytes_with(bytes: &[u8], path: &Path, opts: &LoadOptions, side: Option<(Sidecar, PathBuf)>) -> Result<Loaded> {
     let loaded = if bytes.starts_with(&EXR_MAGIC) {
         let raw = exr::read_raw_bytes(bytes, path, &opts.limits)?;
         read_exr(raw, path, side.as_ref().map(|s| &s.0), opts)?
@@ -279,24 +302,52 @@ fn read_head(path: &Path) -> Result<(Vec<u8>, u64)> {
     Ok((head, len))
 }
 
-/// The sidecar to use and its path: `opts.sidecar`, else `<stem>.json` beside the dump when it exists.
-fn resolve_sidecar(path: &Path, opts: &LoadOptions) -> Result<Option<(Sidecar, PathBuf)>> {
+/// The sidecar to use and its path: `opts.sidecar`, none with `opts.no_sidecar`, else the JSON found beside the
+/// dump when it is a gbuf sidecar. A found JSON that is not one (a renderer's own `<stem>.json`) is ignored, and the
+/// warning saying so is returned for the loaded dump's warnings.
+fn resolve_sidecar(
+    path: &Path,
+    opts: &LoadOptions,
+) -> Result<(Option<(Sidecar, PathBuf)>, Option<plausible::Warning>)> {
+    if opts.no_sidecar {
+        return Ok((None, None));
+    }
     let p = match &opts.sidecar {
-        Some(p) => p.clone(),
+        Some(p) => return Ok((Some((Sidecar::load(p)?, p.clone())), None)),
         None if path.is_dir() => match dir_sidecar(path)? {
             Some(p) => p,
-            None => return Ok(None),
+            None => return Ok((None, None)),
         },
         None => {
             let p = path.with_extension("json");
             if p == path || !p.is_file() {
-                return Ok(None);
+                return Ok((None, None));
             }
             p
         }
     };
-    Ok(Some((Sidecar::load(&p)?, p)))
+    match Sidecar::load_found(&p)? {
+        sidecar::Found::Sidecar(s) => Ok((Some((s, p)), None)),
+        sidecar::Found::Other(why) => Ok((None, Some(ignored_json(&p, &why)))),
+    }
 }
+
+/// The warning for a JSON beside a dump that is not a gbuf sidecar.
+fn ignored_json(p: &Path, why: &str) -> plausible::Warning {
+    plausible::Warning {
+        code: SIDECAR_IGNORED,
+        count: 1,
+        of: 1,
+        message: format!(
+            "{} is not a gbuf sidecar ({why}) and was ignored: no camera or lights from it. Name a sidecar with \
+             --scene FILE, or give --no-scene to look for none",
+            p.display()
+        ),
+    }
+}
+
+/// The warning code of a JSON found beside a dump and ignored because it is not a gbuf sidecar.
+pub const SIDECAR_IGNORED: &str = "sidecar-ignored";
 
 /// The file name of a packed frame's material table (`gbuf pack` writes it; never taken for a sidecar).
 pub const MATERIAL_TABLE_FILE: &str = "material_table.json";
@@ -314,6 +365,15 @@ fn dir_sidecar(dir: &Path) -> Result<Option<PathBuf>> {
         // The material table of packed render targets (`gbuf pack`) is not a sidecar.
         .filter(|p| !p.file_name().is_some_and(|n| n.eq_ignore_ascii_case(MATERIAL_TABLE_FILE)))
         .collect();
+    // Of several, only those that read as gbuf sidecars are candidates.
+    let jsons = if jsons.len() > 1 {
+        jsons
+            .into_iter()
+            .filter(|p| matches!(Sidecar::load_found(p), Ok(sidecar::Found::Sidecar(_)) | Err(_)))
+            .collect()
+    } else {
+        jsons
+    };
     match jsons.as_slice() {
         [one] => Ok(Some(one.clone())),
         [] => {
@@ -323,7 +383,8 @@ fn dir_sidecar(dir: &Path) -> Result<Option<PathBuf>> {
         many => Err(Error::invalid(
             dir,
             format!(
-                "{} JSON files and none is scene.json: name the sidecar with --scene ({})",
+                "{} JSON files read as gbuf sidecars and none is scene.json: name the one to use with --scene, or \
+                 give --no-scene ({})",
                 many.len(),
                 many.iter().filter_map(|p| p.file_name()?.to_str()).collect::<Vec<_>>().join(", ")
             ),
@@ -334,15 +395,15 @@ fn dir_sidecar(dir: &Path) -> Result<Option<PathBuf>> {
 /// The sidecar [`load`] would use for `path` and its path (for readers above `io`, such as the packed render
 /// targets of `layout::targets`, which need the camera before they decode).
 pub fn sidecar_for(path: &Path, opts: &LoadOptions) -> Result<Option<(Sidecar, PathBuf)>> {
-    resolve_sidecar(path, opts)
+    resolve_sidecar(path, opts).map(|(side, _)| side)
 }
 
 /// What [`load`] does after its reader, for readers above `io`: folding, the sidecar's camera, lights and
 /// materials, derived depth, sanitising, validation and the plausibility checks.
 pub fn finish_loaded(loaded: Loaded, path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     crate::util::protect_input(path);
-    let side = resolve_sidecar(path, opts)?;
-    finish(loaded, path, side.as_ref().map(|(s, p)| (s, p.as_path())), opts)
+    let (side, ignored) = resolve_sidecar(path, opts)?;
+    with_warning(finish(loaded, path, side.as_ref().map(|(s, p)| (s, p.as_path())), opts), ignored)
 }
 
 /// Picks the EXR reader: canonical; the `--map` reader when the map names depth or position; Blender; Mitsuba;

@@ -151,63 +151,151 @@ pub const MAX_LIGHTS: usize = 1 << 16;
 /// catalogue, so that parsing stays within a few hundred MB.
 pub const MAX_SIDECAR_BYTES: u64 = 64 << 20;
 
+/// The top-level keys of a sidecar (`generator` names the program that wrote it and is not read).
+pub const KEYS: [&str; 7] =
+    ["camera", "supersample", "lights", "lights_space", "materials", "sample_positions", "generator"];
+
+/// What a JSON found beside a dump is ([`Sidecar::load_found`]).
+#[derive(Clone, Debug)]
+pub enum Found {
+    /// A gbuf sidecar.
+    Sidecar(Sidecar),
+    /// Some other program's JSON: why it is not taken for a sidecar.
+    Other(String),
+}
+
+/// `problems` as one message: `2 problems: camera: …; lights_space "x" …`.
+fn problem_list(problems: &[String]) -> String {
+    match problems {
+        [one] => format!("sidecar: {one}"),
+        many => format!("sidecar, {} problems: {}", many.len(), many.join("; ")),
+    }
+}
+
+/// The text of a sidecar file, refused above [`MAX_SIDECAR_BYTES`].
+fn read_capped(path: &Path) -> Result<String> {
+    crate::util::protect_input(path);
+    let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
+    if len > MAX_SIDECAR_BYTES {
+        return Err(Error::Parse {
+            path: path.into(),
+            what: format!(
+                "sidecar of {len} bytes, over the {} MiB a sidecar may have ({MAX_LIGHTS} lights take about {} MiB \
+                 of JSON)",
+                MAX_SIDECAR_BYTES >> 20,
+                (MAX_LIGHTS as u64 * 200) >> 20
+            ),
+        });
+    }
+    std::fs::read_to_string(path).map_err(|e| Error::io(path, e))
+}
+
 impl Sidecar {
     /// Reads and parses a sidecar file.
     pub fn load(path: &Path) -> Result<Sidecar> {
-        crate::util::protect_input(path);
-        let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
-        if len > MAX_SIDECAR_BYTES {
-            return Err(Error::Parse {
-                path: path.into(),
-                what: format!(
-                    "sidecar of {len} bytes, over the {} MiB a sidecar may have ({MAX_LIGHTS} lights take about \
-                     {} MiB of JSON)",
-                    MAX_SIDECAR_BYTES >> 20,
-                    (MAX_LIGHTS as u64 * 200) >> 20
-                ),
-            });
-        }
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        Sidecar::parse(&text, path)
+        Sidecar::parse(&read_capped(path)?, path)
     }
 
-    /// Parses sidecar JSON (`path` only names the source in errors).
+    /// Parses sidecar JSON (`path` only names the source in errors). Every problem is reported at once, in one
+    /// error.
     pub fn parse(text: &str, path: &Path) -> Result<Sidecar> {
-        let s: Sidecar = serde_json::from_str(text)
+        let value: serde_json::Value = serde_json::from_str(text)
             .map_err(|e| Error::Parse { path: path.into(), what: format!("sidecar JSON: {e}") })?;
+        let (s, problems) = Sidecar::from_value(&value);
+        if problems.is_empty() {
+            Ok(s)
+        } else {
+            Err(Error::Parse { path: path.into(), what: problem_list(&problems) })
+        }
+    }
+
+    /// Reads a JSON found beside a dump, which the user did not name: a gbuf sidecar, or a file of some other
+    /// program (a renderer's own `<stem>.json`), which is no reason to stop. A JSON is taken for a sidecar when its
+    /// top-level keys are all a sidecar's ([`KEYS`]), or when it has some of them and reads as one; a sidecar that
+    /// has errors is an error, listing all of them.
+    pub fn load_found(path: &Path) -> Result<Found> {
+        let text = read_capped(path)?;
+        let value: serde_json::Value = match serde_json::from_str(&text) {
+            Ok(v) => v,
+            Err(e) => return Ok(Found::Other(format!("not JSON: {e}"))),
+        };
+        let Some(obj) = value.as_object() else {
+            return Ok(Found::Other("a JSON document whose top level is not an object".into()));
+        };
+        let ours = obj.keys().filter(|k| KEYS.contains(&k.as_str()) && *k != "generator").count();
+        let theirs: Vec<&str> = obj.keys().map(String::as_str).filter(|k| !KEYS.contains(k)).collect();
+        if ours == 0 {
+            return Ok(Found::Other(format!(
+                "none of its keys is a sidecar's ({})",
+                KEYS.iter().filter(|k| **k != "generator").copied().collect::<Vec<_>>().join(", ")
+            )));
+        }
+        let (s, problems) = Sidecar::from_value(&value);
+        match (problems.is_empty(), theirs.is_empty()) {
+            (true, _) => Ok(Found::Sidecar(s)),
+            (false, false) => Ok(Found::Other(format!(
+                "keys no sidecar has ({}), and read as a sidecar: {}",
+                theirs.join(", "),
+                problem_list(&problems)
+            ))),
+            (false, true) => Err(Error::Parse { path: path.into(), what: problem_list(&problems) }),
+        }
+    }
+
+    /// The sidecar in `value`, and every problem found in it (a field that does not read is left at its default).
+    fn from_value(value: &serde_json::Value) -> (Sidecar, Vec<String>) {
+        let mut problems = Vec::new();
+        let Some(obj) = value.as_object() else {
+            return (Sidecar::default(), vec!["the top level is not a JSON object".into()]);
+        };
+        fn field<T: serde::de::DeserializeOwned + Default>(
+            obj: &serde_json::Map<String, serde_json::Value>,
+            key: &str,
+            problems: &mut Vec<String>,
+        ) -> T {
+            match obj.get(key) {
+                None => T::default(),
+                Some(v) => serde_json::from_value(v.clone()).unwrap_or_else(|e| {
+                    problems.push(format!("{key}: {e}"));
+                    T::default()
+                }),
+            }
+        }
+        let s = Sidecar {
+            camera: field(obj, "camera", &mut problems),
+            supersample: field(obj, "supersample", &mut problems),
+            lights: field(obj, "lights", &mut problems),
+            lights_space: field(obj, "lights_space", &mut problems),
+            materials: field(obj, "materials", &mut problems),
+            sample_positions: field(obj, "sample_positions", &mut problems),
+        };
         if let Some(c) = &s.camera {
             let intrinsics_ok =
                 c.intrinsics.is_none_or(|v| v.iter().all(|x| x.is_finite()) && v[0] > 0.0 && v[1] > 0.0);
             let probe = if c.intrinsics.is_some() { c.to_camera_for(2, 2) } else { c.to_camera() };
             if !intrinsics_ok || !probe.is_valid() {
-                return Err(Error::Parse {
-                    path: path.into(),
-                    what: "sidecar camera is not usable (need finite invertible matrix, 0 < yfov < π and aspect > 0 or intrinsics fx, fy > 0, 0 < znear < zfar)".into(),
-                });
+                problems.push(
+                    "camera: not usable (need finite invertible matrix, 0 < yfov < π and aspect > 0 or intrinsics \
+                     fx, fy > 0, 0 < znear < zfar)"
+                        .into(),
+                );
             }
         }
         if let Some(k) = s.supersample {
             if !(1..=8).contains(&k) {
-                return Err(Error::Parse { path: path.into(), what: format!("supersample {k} outside 1..=8") });
+                problems.push(format!("supersample {k} outside 1..=8"));
             }
         }
         if s.lights.len() > MAX_LIGHTS {
-            return Err(Error::Parse {
-                path: path.into(),
-                what: format!("{} lights, more than the {MAX_LIGHTS} a sidecar may hold", s.lights.len()),
-            });
+            problems.push(format!("{} lights, more than the {MAX_LIGHTS} a sidecar may hold", s.lights.len()));
         }
-        MaterialParams::validate_all(&s.materials).map_err(|what| Error::Parse { path: path.into(), what })?;
-        match s.lights_space.as_deref() {
-            None | Some("world") | Some("view") => {}
-            Some(other) => {
-                return Err(Error::Parse {
-                    path: path.into(),
-                    what: format!("lights_space {other:?} (expected \"world\" or \"view\")"),
-                })
-            }
+        if let Err(what) = MaterialParams::validate_all(&s.materials) {
+            problems.push(what);
         }
-        Ok(s)
+        if let Some(other) = s.lights_space.as_deref().filter(|l| !matches!(*l, "world" | "view")) {
+            problems.push(format!("lights_space {other:?} (expected \"world\" or \"view\")"));
+        }
+        (s, problems)
     }
 
     /// The lights in view space. World-space lights need the camera (`camera` overrides the sidecar's own).

@@ -303,6 +303,18 @@ pub fn to_markdown(rep: &Report) -> String {
     } else {
         let _ = writeln!(s, "# gbuf report: {}\n", rep.frames.first().map_or("(no frame)", |f| f.input.as_str()));
     }
+    match &rep.lighting {
+        Some(l) => {
+            let _ = writeln!(
+                s,
+                "**Lighting:** every image is lit with the **{}** BRDF and the {} falloff: {}. A layout's ranking \
+                 depends on what the BRDF reads (GGX reads roughness and metallic; Blinn-Phong a specular amount and \
+                 power).\n",
+                l.brdf, l.falloff, l.why
+            );
+        }
+        None => s.push_str("**Lighting:** not recorded in this report.\n\n"),
+    }
     let v = &rep.viewing;
     let _ = writeln!(
         s,

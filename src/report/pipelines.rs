@@ -5,7 +5,6 @@
 use crate::analysis::forward::QuadShading;
 use crate::analysis::pipelines::{Pipeline, Pipelines};
 use crate::base::mask::EdgeMask;
-use crate::base::picture::write_heatmap_png;
 use crate::error::{Error, Result};
 use crate::image::mlaa::display_luma;
 use crate::image::HdrImage;
@@ -14,7 +13,6 @@ use crate::report::format::fmt_opt;
 use crate::report::plot::Panels;
 use image::RgbImage;
 use std::fmt::Write as _;
-use std::path::Path;
 
 /// The pipelines table, the schedules' utilisation table and the traffic formulas, as markdown. `level` is the
 /// heading level of the sub-headings (`###` in a report, `##` alone).
@@ -258,14 +256,13 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
     s
 }
 
-/// Writes forward MSAA's lanes per pixel (left) beside the deferred mask's evaluations per pixel (right), on one
-/// colour scale, as a heatmap PNG (a 2-pixel black gap between). Returns the scale's maximum.
-pub fn write_shading_heatmaps(path: &Path, forward: &QuadShading, deferred: &EdgeMask) -> Result<u32> {
+/// Forward MSAA's lanes per pixel (left) beside the deferred mask's evaluations per pixel (right), on one
+/// colour scale, as a heatmap PNG in memory (a 2-pixel black gap between), and the scale's maximum.
+pub fn shading_heatmaps_png(forward: &QuadShading, deferred: &EdgeMask) -> Result<(Vec<u8>, u32)> {
     let (w, h) = (deferred.width as usize, deferred.height as usize);
     if forward.lanes_per_pixel.len() != w * h {
         return Err(Error::Mismatch(format!(
-            "{}: forward counts for {} pixels, mask of {w}×{h}",
-            path.display(),
+            "forward counts for {} pixels, mask of {w}×{h}",
             forward.lanes_per_pixel.len()
         )));
     }
@@ -278,7 +275,7 @@ pub fn write_shading_heatmaps(path: &Path, forward: &QuadShading, deferred: &Edg
             counts[y * width + w + GAP + x] = u32::from(deferred.shade_count[y * w + x]);
         }
     }
-    write_heatmap_png(path, width as u32, h as u32, &counts)
+    crate::base::picture::heatmap_png(width as u32, h as u32, &counts)
 }
 
 /// Size of the anti-aliasing crop in image pixels (smaller images are shown whole) and its magnification.

@@ -50,6 +50,73 @@ crate::named_enum! {
     }
 }
 
+/// The lighting model a command lights with, and why: every output that lights names it (report header and JSON,
+/// budget, resolve, pipelines), because a layout's ranking depends on what the BRDF reads.
+///
+/// Chosen from the data unless the user names one ([`Lighting::choose`]): a frame that stores roughness or
+/// metallic is a metallic-roughness material and is lit with [`Brdf::Ggx`]; any other frame (a specular amount and
+/// power, as the 2010 demo and the ISPC sample store, or nothing at all) with [`Brdf::BlinnPhong`]. The falloff
+/// defaults to [`Falloff::Linear`] either way (the calibration of scattered lights and of the demo's own).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Lighting {
+    /// The BRDF.
+    pub brdf: Brdf,
+    /// The distance falloff.
+    pub falloff: Falloff,
+    /// Why this BRDF, in words ("chosen with --brdf", "the frame stores roughness and metallic").
+    pub why: String,
+}
+
+impl Lighting {
+    /// The lighting for a frame whose stored attributes are `attributes`: `brdf` and `falloff` where given, the
+    /// data's choice where not (see [`Lighting`]).
+    #[must_use]
+    pub fn choose(brdf: Option<Brdf>, falloff: Option<Falloff>, attributes: &[crate::gbuffer::Attribute]) -> Self {
+        use crate::gbuffer::Attribute;
+        let falloff = falloff.unwrap_or(Falloff::Linear);
+        if let Some(brdf) = brdf {
+            return Lighting { brdf, falloff, why: "chosen by the user".into() };
+        }
+        let pbr: Vec<&str> = [Attribute::Roughness, Attribute::Metallic]
+            .into_iter()
+            .filter(|a| attributes.contains(a))
+            .map(|a| a.name())
+            .collect();
+        if pbr.is_empty() {
+            let why = if attributes.contains(&Attribute::SpecularPower) {
+                "the frame stores a specular power and no roughness or metallic"
+            } else {
+                "the frame stores no roughness or metallic"
+            };
+            Lighting { brdf: Brdf::BlinnPhong, falloff, why: why.into() }
+        } else {
+            Lighting {
+                brdf: Brdf::Ggx,
+                falloff,
+                why: format!("the frame stores {}: a metallic-roughness material", pbr.join(" and ")),
+            }
+        }
+    }
+
+    /// The lighting `cfg` already holds, `why` given by the caller.
+    #[must_use]
+    pub fn of(cfg: &ResolveConfig, why: &str) -> Self {
+        Lighting { brdf: cfg.brdf, falloff: cfg.falloff, why: why.into() }
+    }
+
+    /// `cfg` lit this way.
+    #[must_use]
+    pub fn apply(&self, cfg: ResolveConfig) -> ResolveConfig {
+        ResolveConfig { brdf: self.brdf, falloff: self.falloff, ..cfg }
+    }
+
+    /// One line for people: `BRDF ggx, falloff linear (the frame stores roughness: …)`.
+    #[must_use]
+    pub fn summary(&self) -> String {
+        format!("BRDF {}, falloff {} ({})", self.brdf, self.falloff, self.why)
+    }
+}
+
 crate::named_enum! {
     /// How the shading work is organised.
     #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -153,6 +220,30 @@ impl ResolveConfig {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn lighting_follows_the_data_unless_named() {
+        use crate::gbuffer::Attribute::{Albedo, Metallic, Normal, Roughness, Specular, SpecularPower};
+        for (attrs, brdf) in [
+            (&[Normal, Albedo, Roughness][..], Brdf::Ggx),
+            (&[Normal, Metallic][..], Brdf::Ggx),
+            (&[Normal, Albedo, Specular, SpecularPower, Roughness, Metallic][..], Brdf::Ggx),
+            (&[Normal, Albedo, Specular, SpecularPower][..], Brdf::BlinnPhong),
+            (&[][..], Brdf::BlinnPhong),
+        ] {
+            let l = Lighting::choose(None, None, attrs);
+            assert_eq!((l.brdf, l.falloff), (brdf, Falloff::Linear), "{attrs:?}");
+            assert!(!l.why.is_empty());
+            if brdf == Brdf::Ggx {
+                assert!(l.why.contains("roughness") || l.why.contains("metallic"), "{}", l.why);
+            }
+            // Named choices win whatever the data holds.
+            let named = Lighting::choose(Some(Brdf::Lambert), Some(Falloff::Gltf), attrs);
+            assert_eq!((named.brdf, named.falloff), (Brdf::Lambert, Falloff::Gltf));
+            let cfg = named.apply(ResolveConfig::default());
+            assert_eq!((cfg.brdf, cfg.falloff, cfg.culling), (Brdf::Lambert, Falloff::Gltf, Culling::Tiled));
+        }
+    }
+
     use super::*;
 
     #[test]

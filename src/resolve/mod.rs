@@ -27,7 +27,7 @@ mod surface;
 mod worklist;
 
 pub use config::{
-    Brdf, Culling, Falloff, MsaaSchedule, ResolveConfig, Schedule, DEFAULT_DEPTH_SLICES, DEFAULT_TILE_SIZE,
+    Brdf, Culling, Falloff, Lighting, MsaaSchedule, ResolveConfig, Schedule, DEFAULT_DEPTH_SLICES, DEFAULT_TILE_SIZE,
     MAX_DEPTH_SLICES, MAX_TILE_SIZE,
 };
 pub use kernel::instruction_set;

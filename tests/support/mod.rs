@@ -44,7 +44,10 @@ pub fn python_has(modules: &str) -> bool {
             std::env::var_os("CI").is_none(),
             "CI is set but python3 cannot import {modules}: the cross-check must run in CI (.ci/run installs it)"
         );
-        eprintln!("note: python3 cannot import {modules}; skipping the cross-check (it is required in CI)");
+        skipped(
+            &format!("python3 cannot import {modules}"),
+            "python3 -m pip install openexr numpy flip-evaluator moderngl glcontext",
+        );
     }
     ok
 }
@@ -58,7 +61,16 @@ pub fn tool_has(tool: &str) -> bool {
             std::env::var_os("CI").is_none(),
             "CI is set but {tool} is missing: the cross-check must run in CI (.ci/run installs it)"
         );
-        eprintln!("note: {tool} is missing; skipping the cross-check (it is required in CI)");
+        skipped(&format!("{tool} is missing"), "apt-get install glslang-tools spirv-cross chromium (see .ci/run)");
     }
     ok
+}
+
+/// Says that a cross-check was skipped, past the test harness's capture (a plain write to the process's stderr, not
+/// `eprintln!`), so that `cargo test` shows it without `--nocapture`: which test, why, and how to install what it
+/// needs.
+fn skipped(why: &str, install: &str) {
+    use std::io::Write as _;
+    let test = std::thread::current().name().unwrap_or("a test").to_string();
+    let _ = writeln!(std::io::stderr(), "SKIPPED cross-check in {test}: {why} (required in CI; install: {install})");
 }
