@@ -100,6 +100,10 @@ pub enum Error {
     /// A parameter given by the caller is out of range or inconsistent (no file involved).
     #[error("invalid argument: {0}")]
     Argument(String),
+    /// A name given by the caller names nothing (a mistyped layout or codec name): the message lists the names or
+    /// suggests the closest. The command line treats it as a usage error (exit 2).
+    #[error("{0}")]
+    UnknownName(String),
     /// Inputs that are each valid but do not fit together (a mask of another size than the G-buffer, data packed with
     /// another layout, a detector or resolve given a G-buffer without the planes it reads).
     #[error("{0}")]

@@ -75,6 +75,9 @@ impl Staged {
     /// Writes `path`'s future contents to a temporary file beside it (refused when `path` is an input of this run).
     pub fn stage(&mut self, path: &Path, write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>) -> Result<()> {
         check_not_input(path)?;
+        if path.is_dir() {
+            return Err(Error::io(path, std::io::Error::other("is a directory, not a file")));
+        }
         let dir = match path.parent() {
             Some(p) if !p.as_os_str().is_empty() => p,
             _ => Path::new("."),
@@ -100,10 +103,21 @@ impl Staged {
         self.stage(path, |f| f.write_all(bytes))
     }
 
-    /// Renames every staged file into place, in the order staged.
+    /// Renames every staged file into place, in the order staged. Should a rename fail, the files this commit
+    /// created are removed again (a file it replaced stays replaced: the rename is the only step that touches it).
     pub fn commit(self) -> Result<()> {
+        let mut created = Vec::new();
         for (tmp, path) in self.files {
-            tmp.persist(&path).map_err(|e| Error::io(&path, e.error))?;
+            let existed = path.exists();
+            if let Err(e) = tmp.persist(&path) {
+                for p in created {
+                    let _ = std::fs::remove_file(p);
+                }
+                return Err(Error::io(&path, e.error));
+            }
+            if !existed {
+                created.push(path);
+            }
         }
         Ok(())
     }

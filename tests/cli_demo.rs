@@ -165,9 +165,12 @@ fn report_on_a_canonical_dump_and_bad_input() {
     assert_eq!(o.status.code(), Some(1));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("bad.exr") && !err.contains("panicked"), "{err}");
-    // Unknown layout / detector names: exit 1 with the known names.
+    // Unknown layout / detector names: usage errors (exit 2) with the known names, and the nearest when close.
     let o = gbuf().arg("report").arg(&exr).args(["--layouts", "nope"]).output().unwrap();
-    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(o.status.code(), Some(2));
+    let o = gbuf().arg("report").arg(&exr).args(["--layouts", "lauritzen15x"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("did you mean \"lauritzen-15\""));
     // An unknown name in an enum flag is a usage error (exit 2) like every other flag value clap refuses.
     let o = gbuf().arg("report").arg(&exr).args(["--detectors", "nope"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2));

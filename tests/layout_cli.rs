@@ -105,8 +105,9 @@ fn roundtrip_errors_are_clear() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing.exr"));
     let gb = render(SceneName::Room, 8, 8, 1).unwrap();
     gbuf::io::canonical::write(&dir.path().join("r.exr"), &gb).unwrap();
+    // A layout name that names nothing is a usage error (exit 2), listing the built-ins.
     let out = gbuf(dir.path(), &["roundtrip", "r.exr", "--layout", "nope"]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("nope") && err.contains("fat-20"), "{err}");
 }

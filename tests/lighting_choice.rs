@@ -38,7 +38,7 @@ fn budget_under_ggx_keeps_roughness_and_beats_destiny_on_a_textured_pbr_scene() 
     let spec: toml::Value = toml::from_str(&layout).unwrap();
     let summary = j["winner"]["summary"].as_str().unwrap();
     let roughness_bits = summary
-        .split(|c: char| c == ',' || c == '[' || c == ']')
+        .split([',', '[', ']'])
         .filter_map(|f| f.trim().strip_prefix("roughness unorm-"))
         .filter_map(|b| b.parse::<u32>().ok())
         .max();

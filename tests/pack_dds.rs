@@ -84,7 +84,7 @@ fn bad_input_is_an_error_naming_it() {
     let dir = tempfile::tempdir().unwrap();
     let dump = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/raster_4x.exr");
     let o = gbuf(dir.path(), &["pack", dump.to_str().unwrap(), "--layout", "nosuch", "-o", "out"]);
-    assert_eq!(o.status.code(), Some(1), "{}", support::stderr(&o));
+    assert_eq!(o.status.code(), Some(2), "a name that names nothing is a usage error: {}", support::stderr(&o));
     assert!(support::stderr(&o).contains("nosuch"), "{}", support::stderr(&o));
     let o = gbuf(dir.path(), &["pack", "missing.exr", "--layout", "fat-20", "-o", "out"]);
     assert_eq!(o.status.code(), Some(1));

@@ -47,6 +47,10 @@ fn the_report_page_loads_in_chromium_without_a_console_message_and_renders() {
     // One A/B view per layout of the sweep (8 built-ins), each with its two images and a slider.
     assert_eq!((ab, html.matches("<figure class=\"ab\">").count()), (8, 8));
     assert!(!html.contains("not in the report"), "no figure is missing");
+    // Each caption once, as its figure's caption: not again as a literal `*…*` paragraph.
+    assert_eq!(html.matches("<figcaption>").count(), figures, "one caption per figure");
+    assert!(!html.contains("<p>*"), "a caption repeated as literal Markdown");
+    assert!(html.contains("Lighting:"), "the page names the lighting model");
     if !support::tool_has("chromium") {
         return;
     }

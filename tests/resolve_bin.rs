@@ -216,7 +216,8 @@ fn the_cli_resolve_of_a_bin_warns_and_lights_as_the_loaded_frame() {
     let dir = tempfile::tempdir().unwrap();
     let path = spoiled_room(dir.path());
     let p = path.to_str().unwrap();
-    let info = support::gbuf(dir.path(), &["info", p]);
+    // With --json, `info` prints its warnings on stderr as every command does (its text lists them itself).
+    let info = support::gbuf(dir.path(), &["info", p, "--json"]);
     assert!(info.status.success(), "{}", support::stderr(&info));
     let out = dir.path().join("lit.exr");
     let res = support::gbuf(dir.path(), &["resolve", p, "--no-reference", "-o", out.to_str().unwrap()]);

@@ -4,7 +4,6 @@
 pub mod gen;
 pub mod seeds;
 
-use gbuf::gbuffer::Attribute;
 use gbuf::io::conventions::{Background, Overrides};
 use gbuf::io::{LoadOptions, ReadLimits};
 use std::collections::HashSet;

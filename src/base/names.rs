@@ -38,10 +38,72 @@ pub trait Named: Copy + PartialEq + Send + Sync + 'static {
         Self::all().iter().map(|v| v.name()).collect::<Vec<_>>().join(", ")
     }
 
-    /// Parses `s`, or says what was expected: `unknown BRDF "x"; known: lambert, blinn-phong, ggx`.
+    /// Parses `s`, or says what was expected: `unknown BRDF "gxx"; did you mean "ggx"? (known: lambert,
+    /// blinn-phong, ggx)`.
     fn parse(s: &str) -> Result<Self, String> {
-        Self::from_name(s).ok_or_else(|| format!("unknown {} {s:?}; known: {}", Self::KIND, Self::names()))
+        Self::from_name(s).ok_or_else(|| {
+            let names: Vec<&str> = Self::all().iter().map(|v| v.name()).collect();
+            unknown(Self::KIND, s, &names, &Self::names())
+        })
     }
+}
+
+/// The one of `known` that `input` most likely misspells: the nearest under the spelling rule ([`normalize`]) by
+/// edit distance, when that distance is small for the name's length (at most a third of it, 1 to 3 edits), or
+/// the only name that `input` starts or ends. `None` when nothing is close.
+#[must_use]
+pub fn closest<'a>(input: &str, known: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    let want = normalize(input);
+    if want.is_empty() {
+        return None;
+    }
+    let known: Vec<&str> = known.into_iter().collect();
+    let limit = (want.chars().count() / 3).clamp(1, 3);
+    let best = known
+        .iter()
+        .map(|k| (edit_distance(&want, &normalize(k)), *k))
+        .filter(|(d, _)| *d <= limit)
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, k)| k);
+    best.or_else(|| {
+        let mut partial = known.iter().filter(|k| {
+            let k = normalize(k);
+            k.starts_with(&want) || want.starts_with(&k) || k.ends_with(&want)
+        });
+        match (partial.next(), partial.next()) {
+            (Some(one), None) => Some(*one),
+            _ => None,
+        }
+    })
+}
+
+/// The message for a name not among `known`: a suggestion when one is close ([`closest`]), and `listing` (the
+/// names, or a shorter way to say them) unless a suggestion stands in for a long list.
+#[must_use]
+pub fn unknown(kind: &str, input: &str, known: &[&str], listing: &str) -> String {
+    match closest(input, known.iter().copied()) {
+        Some(s) if listing.len() > 200 => {
+            format!("unknown {kind} {input:?}; did you mean {s:?}? ({} valid names in all)", known.len())
+        }
+        Some(s) => format!("unknown {kind} {input:?}; did you mean {s:?}? (known: {listing})"),
+        None => format!("unknown {kind} {input:?}; known: {listing}"),
+    }
+}
+
+/// Levenshtein distance between two strings, by characters.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diag = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let next = (row[j + 1] + 1).min(row[j] + 1).min(diag + usize::from(ca != *cb));
+            diag = row[j + 1];
+            row[j + 1] = next;
+        }
+    }
+    row[b.len()]
 }
 
 /// The spelling rule: ASCII lower case without white space, `-` or `_`.
@@ -74,8 +136,12 @@ impl<T: Named> TypedValueParser for NameParser<T> {
             let mut err = clap::Error::new(ErrorKind::InvalidValue).with_cmd(cmd);
             let flag = arg.map_or_else(|| "value".to_string(), ToString::to_string);
             err.insert(ContextKind::InvalidArg, ContextValue::String(flag));
+            let near = closest(&s, T::all().iter().map(|v| v.name()));
             err.insert(ContextKind::InvalidValue, ContextValue::String(s.into_owned()));
-            let names = T::all().iter().map(|v| v.name().to_string()).collect();
+            let names: Vec<String> = T::all().iter().map(|v| v.name().to_string()).collect();
+            if let Some(near) = near {
+                err.insert(ContextKind::SuggestedValue, ContextValue::String(near.to_string()));
+            }
             err.insert(ContextKind::ValidValue, ContextValue::Strings(names));
             err
         })
@@ -182,6 +248,25 @@ pub use crate::{named, named_enum};
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_typo_gets_the_name_it_misspells_and_a_stranger_gets_none() {
+        let layouts = ["fat-20", "rgba16f-2x", "lauritzen-15", "destiny-96", "unreal-like", "minimal-8"];
+        assert_eq!(closest("lauritzen15", layouts), Some("lauritzen-15"));
+        assert_eq!(closest("destiny96", layouts), Some("destiny-96"));
+        assert_eq!(closest("unreal", layouts), Some("unreal-like"));
+        assert_eq!(closest("minmal-8", layouts), Some("minimal-8"));
+        assert_eq!(closest("fat-21", layouts), Some("fat-20"));
+        assert_eq!(closest("gbuffer", layouts), None);
+        assert_eq!(closest("", layouts), None);
+        assert_eq!(closest("gxx", ["lambert", "blinn-phong", "ggx"]), Some("ggx"));
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+        let long = "x".repeat(300);
+        let m = unknown("codec", "octahedrl-16", &["octahedral-16", "octahedral-24"], &long);
+        assert!(m.contains("did you mean \"octahedral-16\"") && !m.contains(&long), "{m}");
+        let m = unknown("BRDF", "phong2", &["lambert", "ggx"], "lambert, ggx");
+        assert_eq!(m, "unknown BRDF \"phong2\"; known: lambert, ggx");
+    }
     #[cfg(feature = "cli")]
     use clap::Parser;
 

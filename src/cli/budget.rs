@@ -80,6 +80,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         anyhow::ensure!(e.is_finite() && e >= 0.0, "--max-error must be a finite number ≥ 0, got {e}");
     }
     let paths = args.input.frames()?;
+    if let Some(out) = &args.out {
+        crate::cli::common::check_output_folders([out.as_path()])?;
+    }
     // The first frame decides the lighting model (the data's choice unless --brdf); it is loaded once, here, and
     // handed to the search as its first visit.
     let load_frame = |i: usize| -> anyhow::Result<(gbuf::GBuffer, Vec<gbuf::Light>)> {
@@ -111,14 +114,24 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let (rw, rh) = args.resolution.map_or((size.0, size.1), |r| (r.width, r.height));
     let msaa = args.msaa.unwrap_or(size.2);
     let layout = Layout::from_spec(res.winner.spec.clone())?;
-    if let Some(path) = &args.out {
-        layout.save(path).with_context(|| format!("writing the layout to {}", path.display()))?;
+    if let (Some(lang), None) = (args.emit, &args.out) {
+        return super::layouts::emit(&layout, lang, None);
     }
-    if let Some(lang) = args.emit {
-        match &args.out {
-            Some(path) => super::layouts::emit(&layout, lang, Some(&path.with_extension(lang.name())))?,
-            None => return super::layouts::emit(&layout, lang, None),
+    // The layout file and its shader code are staged and renamed into place together: a failure leaves neither.
+    if let Some(path) = &args.out {
+        let mut staged = gbuf::util::Staged::default();
+        let text = layout.spec().to_text(gbuf::layout::SpecSyntax::detect(path, ""))?;
+        staged
+            .stage_bytes(path, text.as_bytes())
+            .with_context(|| format!("writing the layout to {}", path.display()))?;
+        if let Some(lang) = args.emit {
+            let code_path = path.with_extension(lang.name());
+            let code = gbuf::layout::shader::emit(&layout, lang)?;
+            staged
+                .stage_bytes(&code_path, code.as_bytes())
+                .with_context(|| format!("writing {}", code_path.display()))?;
         }
+        staged.commit().context("renaming the layout files into place")?;
     }
     let footprint = layout.footprint_bytes(rw, rh, msaa);
     if args.json {

@@ -340,8 +340,8 @@ pub fn print_json<T: serde::Serialize>(value: &T) -> anyhow::Result<()> {
 }
 
 /// Detector threshold flags, shared by every command that runs a detector (flatten it into their `Args`).
-/// Checks, before any work, that every output's folder exists: a command that would fail writing its last output
-/// fails first instead.
+/// Checks, before any work, that every output's folder exists and the output is no folder itself: a command that
+/// would fail writing its last output fails first instead.
 pub fn check_output_folders<'a>(outputs: impl IntoIterator<Item = &'a std::path::Path>) -> anyhow::Result<()> {
     for p in outputs {
         let dir = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
@@ -351,6 +351,7 @@ pub fn check_output_folders<'a>(outputs: impl IntoIterator<Item = &'a std::path:
             p.display(),
             dir.display()
         );
+        anyhow::ensure!(!p.is_dir(), "{}: is a folder, not a file (nothing was written)", p.display());
     }
     Ok(())
 }

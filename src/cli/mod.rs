@@ -94,7 +94,11 @@ macro_rules! usage {
     };
 }
 
-/// Is this error a usage error (exit 2)?
+/// Is this error a usage error (exit 2)? The CLI's own, and the library's [`gbuf::Error::UnknownName`] (a mistyped
+/// layout or codec name).
 pub fn is_usage(err: &anyhow::Error) -> bool {
-    err.chain().any(|c| c.downcast_ref::<UsageError>().is_some())
+    err.chain().any(|c| {
+        c.downcast_ref::<UsageError>().is_some()
+            || matches!(c.downcast_ref::<gbuf::Error>(), Some(gbuf::Error::UnknownName(_)))
+    })
 }

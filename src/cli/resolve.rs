@@ -171,6 +171,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         [&args.output, &args.png, &args.heatmap].into_iter().flatten().map(PathBuf::as_path),
     )?;
     let det_cfg = args.thresholds.config()?;
+    // With a layout the G-buffer is packed into its render targets, and the edge pass and the lighting read those
+    // targets band by band, as a GPU does: no decoded copy of the frame is made. Named before any work.
+    let layout = match &args.layout {
+        Some(name) => Some(gbuf::layout::Layout::by_name_or_path(name).with_context(|| format!("--layout {name}"))?),
+        None => None,
+    };
     let file = args.input.file.display().to_string();
 
     let pb = crate::cli::spinner(format!("loading {file}"));
@@ -199,12 +205,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => None,
     };
 
-    // With a layout the G-buffer is packed into its render targets, and the edge pass and the lighting read those
-    // targets band by band, as a GPU does: no decoded copy of the frame is made.
-    let layout = match &args.layout {
-        Some(name) => Some(gbuf::layout::Layout::by_name_or_path(name).with_context(|| format!("--layout {name}"))?),
-        None => None,
-    };
     // A layout whose packed frame is no smaller than its decoded planes (a lossless 84-byte layout) gains nothing
     // from it: that one is unpacked band by band into a copy as before (`Layout::roundtrip_for_lighting`).
     let in_cpu_copy = layout.as_ref().filter(|l| !l.packs_smaller(&gb));

@@ -314,21 +314,36 @@ pub fn try_normal_codec(name: &str) -> Result<Box<dyn NormalCodec>> {
     normal_codec(name).ok_or_else(|| {
         let valid: Vec<String> =
             NormalScheme::ALL.iter().map(|s| format!("{}-{{{}}}", s.name(), join(&s.valid_bits()))).collect();
-        Error::Argument(format!("unknown normal codec {name:?}; valid: {}", valid.join(", ")))
+        let every: Vec<String> = NormalScheme::ALL
+            .iter()
+            .flat_map(|s| s.valid_bits().into_iter().map(move |b| format!("{}-{b}", s.name())))
+            .collect();
+        let every: Vec<&str> = every.iter().map(String::as_str).collect();
+        Error::UnknownName(crate::base::names::unknown("normal codec", name, &every, &valid.join(", ")))
     })
 }
 
 /// Like [`scalar_codec`], but an unknown name is an error listing the valid ones.
 pub fn try_scalar_codec(name: &str) -> Result<Box<dyn ScalarCodec>> {
     scalar_codec(name).ok_or_else(|| {
-        Error::Argument(format!("unknown scalar codec {name:?}; valid: {}", scalar::VALID_NAMES.join(", ")))
+        Error::UnknownName(crate::base::names::unknown(
+            "scalar codec",
+            name,
+            scalar::VALID_NAMES,
+            &scalar::VALID_NAMES.join(", "),
+        ))
     })
 }
 
 /// Like [`color_codec`], but an unknown name is an error listing the valid ones.
 pub fn try_color_codec(name: &str) -> Result<Box<dyn ColorCodec>> {
     color_codec(name).ok_or_else(|| {
-        Error::Argument(format!("unknown colour codec {name:?}; valid: {}", color::VALID_NAMES.join(", ")))
+        Error::UnknownName(crate::base::names::unknown(
+            "colour codec",
+            name,
+            color::VALID_NAMES,
+            &color::VALID_NAMES.join(", "),
+        ))
     })
 }
 
@@ -340,7 +355,12 @@ pub fn try_depth_codec(name: &str, znear: f32, zfar: f32) -> Result<Box<dyn Dept
         )));
     }
     depth_codec(name, znear, zfar).ok_or_else(|| {
-        Error::Argument(format!("unknown depth codec {name:?}; valid: {}", depth::VALID_NAMES.join(", ")))
+        Error::UnknownName(crate::base::names::unknown(
+            "depth codec",
+            name,
+            depth::VALID_NAMES,
+            &depth::VALID_NAMES.join(", "),
+        ))
     })
 }
 
@@ -396,7 +416,10 @@ mod tests {
 
     #[test]
     fn unknown_names_are_errors_listing_valid_names() {
+        // A typo gets the nearest name instead of the whole list; a stranger gets the list.
         let e = try_normal_codec("oct-17").err().unwrap().to_string();
+        assert!(e.contains("did you mean \"oct-1"), "{e}");
+        let e = try_normal_codec("quaternion").err().unwrap().to_string();
         assert!(e.contains("oct-{") && e.contains("oct-precise-{"), "{e}");
         assert!(try_scalar_codec("unorm-99").is_err());
         assert!(try_color_codec("srgb9").is_err());

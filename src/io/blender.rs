@@ -193,9 +193,18 @@ pub fn read(raw: &RawImage, path: &Path, sidecar: Option<&Sidecar>, opts: &LoadO
         sources.push(src("albedo", c, ch.type_of(&c[0]), None));
     }
     for (attr, c) in &scalar_ch {
+        // Cycles' glossy colour pass is the tint of the specular lobe (1 for an untinted one), not a specular
+        // level: said beside the source, since it reads as specular = 1 on every untinted surface.
+        let gloss = c.first().is_some_and(|n| n.contains("GlossCol") || n.contains("Glossy Color"));
         let (plane, note) = if c.len() == 3 {
             let rgb = ch.vec3(c)?;
-            (rgb.iter().map(|v| (v.x + v.y + v.z) / 3.0).collect(), Some("scalar = mean of the RGB channels"))
+            let note = if gloss {
+                "scalar = mean of the RGB channels of Cycles' glossy colour, the specular lobe's tint (1 when \
+                 untinted), not the material's specular level: a `Specular` AOV gives that"
+            } else {
+                "scalar = mean of the RGB channels"
+            };
+            (rgb.iter().map(|v| (v.x + v.y + v.z) / 3.0).collect(), Some(note))
         } else {
             (ch.floats(&c[0])?, None)
         };

@@ -154,7 +154,7 @@ fn with_warning(loaded: Result<Loaded>, ignored: Option<plausible::Warning>) -> 
 }
 
 /// [`load`] with the sidecar resolved.
-fn load_with(path: &Path, opts: &LoadOptions, side: Option<(Sidecar, PathBuf)>) -> Result<Loaded> {
+fn load_with(path: &Path, opts: &LoadOptions, side: Side) -> Result<Loaded> {
     if path.is_dir() || !opts.files.is_empty() {
         let camera = side.as_ref().and_then(|(s, _)| s.camera.as_ref());
         let loaded = fileset::read(path, camera, opts)?;
@@ -260,7 +260,7 @@ pub fn load_bytes(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<Loade
 }
 
 /// [`load_bytes`] with the sidecar resolved.
-fn load_bytes_with(bytes: &[u8], path: &Path, opts: &LoadOptions, side: Option<(Sidecar, PathBuf)>) -> Result<Loaded> {
+fn load_bytes_with(bytes: &[u8], path: &Path, opts: &LoadOptions, side: Side) -> Result<Loaded> {
     let loaded = if bytes.starts_with(&EXR_MAGIC) {
         let raw = exr::read_raw_bytes(bytes, path, &opts.limits)?;
         read_exr(raw, path, side.as_ref().map(|s| &s.0), opts)?
@@ -305,10 +305,7 @@ fn read_head(path: &Path) -> Result<(Vec<u8>, u64)> {
 /// The sidecar to use and its path: `opts.sidecar`, none with `opts.no_sidecar`, else the JSON found beside the
 /// dump when it is a gbuf sidecar. A found JSON that is not one (a renderer's own `<stem>.json`) is ignored, and the
 /// warning saying so is returned for the loaded dump's warnings.
-fn resolve_sidecar(
-    path: &Path,
-    opts: &LoadOptions,
-) -> Result<(Option<(Sidecar, PathBuf)>, Option<plausible::Warning>)> {
+fn resolve_sidecar(path: &Path, opts: &LoadOptions) -> Result<(Side, Option<plausible::Warning>)> {
     if opts.no_sidecar {
         return Ok((None, None));
     }
@@ -331,6 +328,9 @@ fn resolve_sidecar(
         sidecar::Found::Other(why) => Ok((None, Some(ignored_json(&p, &why)))),
     }
 }
+
+/// A sidecar found for a dump, and its path.
+type Side = Option<(Sidecar, PathBuf)>;
 
 /// The warning for a JSON beside a dump that is not a gbuf sidecar.
 fn ignored_json(p: &Path, why: &str) -> plausible::Warning {

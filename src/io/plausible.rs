@@ -50,6 +50,9 @@ struct Counts {
     away: u64,
     behind: u64,
     below_near: u64,
+    /// Covered albedos with a channel above 1 (more light reflected than arrives), and the largest channel.
+    bright_albedo: u64,
+    albedo_max: f32,
 }
 
 impl Counts {
@@ -61,6 +64,8 @@ impl Counts {
             away: self.away + o.away,
             behind: self.behind + o.behind,
             below_near: self.below_near + o.below_near,
+            bright_albedo: self.bright_albedo + o.bright_albedo,
+            albedo_max: self.albedo_max.max(o.albedo_max),
         }
     }
 }
@@ -74,6 +79,7 @@ const CHUNK: usize = 1 << 14;
 fn count(gb: &GBuffer) -> Counts {
     let near = gb.camera.as_ref().map(|c| c.znear * 0.999);
     let (normal, position, depth) = (gb.normal.as_deref(), gb.position.as_deref(), gb.depth.as_deref());
+    let albedo = gb.albedo.as_deref();
     gb.coverage
         .par_chunks(CHUNK)
         .enumerate()
@@ -101,6 +107,13 @@ fn count(gb: &GBuffer) -> Counts {
             if let (Some(d), Some(near)) = (d, near) {
                 c.below_near = d.iter().zip(cov).map(|(d, &cv)| u64::from(cv && *d < near)).sum();
             }
+            if let Some(a) = albedo.map(|x| &x[k * CHUNK..k * CHUNK + cov.len()]) {
+                for (a, &cv) in a.iter().zip(cov) {
+                    let m = if cv { a.max_element() } else { 0.0 };
+                    c.bright_albedo += u64::from(m > 1.0);
+                    c.albedo_max = c.albedo_max.max(m);
+                }
+            }
             c
         })
         .reduce(Counts::default, Counts::add)
@@ -115,6 +128,7 @@ pub(crate) struct Survey {
     normal: bool,
     position: bool,
     depth: bool,
+    albedo: bool,
 }
 
 impl Survey {
@@ -126,6 +140,7 @@ impl Survey {
             normal: gb.normal.is_some(),
             position: gb.position.is_some(),
             depth: gb.depth.is_some(),
+            albedo: gb.albedo.is_some(),
         }
     }
 
@@ -137,6 +152,7 @@ impl Survey {
             normal: self.normal | o.normal,
             position: self.position | o.position,
             depth: self.depth | o.depth,
+            albedo: self.albedo | o.albedo,
         }
     }
 }
@@ -291,6 +307,22 @@ pub(crate) fn judge(
             });
         }
     }
+    if survey.albedo && counts.bright_albedo > 0 {
+        let bright = counts.bright_albedo;
+        out.push(Warning {
+            code: "albedo-above-one",
+            count: bright,
+            of: nc,
+            message: format!(
+                "{bright} of {nc} covered albedos ({:.2}%) have a channel above 1 (up to {:.3}): a surface cannot \
+                 reflect more light than arrives. A renderer's colour pass that holds more than the base colour \
+                 (emission, a texture's unclamped range, a multiplied tint)? Codecs for [0, 1] clamp these, and the \
+                 clamp shows up as layout error",
+                pct(bright),
+                counts.albedo_max
+            ),
+        });
+    }
     if positions_assumed && like.samples > 1 {
         out.push(Warning {
             code: "sample-positions-assumed",
@@ -298,7 +330,8 @@ pub(crate) fn judge(
             of: survey.samples,
             message: format!(
                 "the file gives no sample positions: assumed the standard D3D/Vulkan {}× pattern (an OpenGL dump \
-                 stored top row first has it mirrored in y); give gbuf.sample_positions to be sure",
+                 stored top row first has it mirrored in y); give them to be sure: the `gbuf.sample_positions` header \
+                 attribute of an EXR, or `sample_positions` in the sidecar for packed targets and file sets",
                 like.samples
             ),
         });
@@ -380,6 +413,25 @@ mod tests {
 
     /// Positions read from a file are reprojected through the camera; positions the loader derived from depth
     /// through that camera agree by construction, and the check is skipped.
+    #[test]
+    fn albedo_above_one_is_counted_on_covered_samples_only_with_its_largest_channel() {
+        let mut gb = frame(Camera::identity(0.9, 40.0 / 30.0, 0.1, 100.0), &[], &[], &[]);
+        let mut albedo = vec![Vec3::splat(0.5); gb.len()];
+        albedo[1] = Vec3::new(0.2, 3.81, 0.4); // covered
+        albedo[8] = Vec3::new(1.5, 0.0, 0.0); // covered
+        albedo[0] = Vec3::splat(9.0); // background: not counted
+        gb.albedo = Some(albedo);
+        let c = count(&gb);
+        assert_eq!((c.bright_albedo, c.albedo_max), (2, 3.81));
+        let w = check(&gb, true, true, false, Path::new("f")).unwrap();
+        let bright: Vec<&Warning> = w.iter().filter(|w| w.code == "albedo-above-one").collect();
+        assert_eq!(bright.len(), 1, "{w:?}");
+        assert!(bright[0].count == 2 && bright[0].message.contains("3.810"), "{}", bright[0].message);
+        gb.albedo.as_mut().unwrap()[1] = Vec3::ONE; // exactly 1 is plausible
+        gb.albedo.as_mut().unwrap()[8] = Vec3::ONE;
+        assert!(check(&gb, true, true, false, Path::new("f")).unwrap().iter().all(|w| w.code != "albedo-above-one"));
+    }
+
     #[test]
     fn reprojection_is_checked_for_positions_read_not_derived() {
         let gb = frame(Camera::identity(0.9, 40.0 / 30.0, 0.1, 100.0), &[], &[], &[]);

@@ -238,9 +238,17 @@ impl Info {
             );
         }
         if let Some([m, x]) = self.reprojection_px {
+            // About half a pixel everywhere: the positions were taken half a pixel off the samples (a renderer
+            // that offsets its rays, or puts pixel centres at integer coordinates).
+            let hint = if (0.35..=0.65).contains(&m) && x < 1.0 {
+                " — about half a pixel: positions taken at pixel corners, not centres (a renderer's ray offset or a \
+                 half-pixel convention); harmless for gbuf, which reads the positions as given"
+            } else {
+                ""
+            };
             let _ = writeln!(
                 t,
-                "reprojection positions through the camera: median {m:.3} px, max {x:.3} px from their sample"
+                "reprojection positions through the camera: median {m:.3} px, max {x:.3} px from their sample{hint}"
             );
         }
         if let Some(r) = &self.reading {

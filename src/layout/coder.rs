@@ -158,7 +158,7 @@ impl Coder {
         let kind = CodecKind::for_slot(slot)?;
         // The registry's errors list the valid names; keep its message without the "invalid argument" prefix.
         let msg = |e: crate::Error| match e {
-            crate::Error::Argument(m) => m,
+            crate::Error::Argument(m) | crate::Error::UnknownName(m) => m,
             other => other.to_string(),
         };
         Ok(match kind {

@@ -109,7 +109,7 @@ impl Layout {
         builtin::specs()
             .into_iter()
             .chain(builtin::visibility_specs())
-            .find(|s| s.name == name)
+            .find(|s| crate::base::names::normalize(&s.name) == crate::base::names::normalize(name))
             .map(|s| Layout::from_spec(s).expect("built-in layouts are valid"))
     }
 
@@ -132,10 +132,18 @@ impl Layout {
             return Ok(l);
         }
         let path = Path::new(name_or_path);
-        if !path.exists() {
-            return Err(Error::Argument(format!(
-                "{name_or_path:?} is neither a built-in layout ({}) nor a layout file",
-                Layout::builtin_names().join(", ")
+        // A path (a separator or a file extension) that does not exist is a missing file, read as such below.
+        let looks_like_path = path.components().count() > 1 || path.extension().is_some();
+        if !path.exists() && !looks_like_path {
+            let names = Layout::builtin_names();
+            let names: Vec<&str> = names.iter().map(String::as_str).collect();
+            let hint = match crate::base::names::closest(name_or_path, names.iter().copied()) {
+                Some(s) => format!("; did you mean {s:?}?"),
+                None => String::new(),
+            };
+            return Err(Error::UnknownName(format!(
+                "{name_or_path:?} is neither a built-in layout nor a layout file{hint} (built-in: {})",
+                names.join(", ")
             )));
         }
         Layout::load(path)

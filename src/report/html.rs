@@ -19,7 +19,8 @@ h1 { font-size: 1.6em; } h2 { font-size: 1.3em; margin-top: 2em; border-bottom: 
 code { background: #f3f3f3; padding: 0 .25em; border-radius: 3px; }
 .table { overflow-x: auto; margin: .5em 0 1.5em; }
 table { border-collapse: collapse; font-size: 13px; }
-th, td { border: 1px solid #ddd; padding: .2em .5em; white-space: nowrap; }
+th, td { border: 1px solid #ddd; padding: .2em .5em; }
+th, td.num { white-space: nowrap; } td { max-width: 42em; overflow-wrap: anywhere; }
 th { background: #f6f6f6; cursor: pointer; user-select: none; position: sticky; top: 0; }
 th.asc::after { content: ' ▲'; } th.desc::after { content: ' ▼'; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; }
@@ -289,6 +290,15 @@ pub fn to_html(markdown: &str, files: &[Attachment]) -> String {
                 match target.split_once(" \"") {
                     Some((file, b)) => o.push_str(&ab_figure(alt, file, b.trim_end_matches('"'), files)),
                     None => o.push_str(&figure(alt, target, files)),
+                }
+                // report.md repeats the caption in italics under the image (Markdown viewers hide the alt
+                // text); the page shows it once, as the figure's caption.
+                let mut j = i + 1;
+                while j < lines.len() && lines[j].trim().is_empty() {
+                    j += 1;
+                }
+                if j < lines.len() && lines[j].trim() == format!("*{alt}*") {
+                    i = j;
                 }
             }
             i += 1;

@@ -204,6 +204,7 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
                 fmt_opt(r.error.flip_hdr, 4)
             );
         }
+        s.push_str(&aa_losers_note(&p.aa));
     }
     if let Some(first) = p.compressed.first() {
         let _ = writeln!(
@@ -282,6 +283,40 @@ pub fn shading_heatmaps_png(forward: &QuadShading, deferred: &EdgeMask) -> Resul
 pub const AA_CROP: (u32, u32) = (64, 40);
 /// Each crop pixel is drawn as a square of this many picture pixels (nearest neighbour, so aliasing stays visible).
 pub const AA_CROP_ZOOM: u32 = 4;
+
+/// Why an adaptive MSAA row can err more than no AA at all, said under the table when one does: its pixels
+/// without an edge are shaded once, at sample 0, which sits off the pixel centre; where the shading changes fast
+/// across a pixel (a sharp highlight, a light close to the surface) one off-centre sample misses or catches what
+/// the every-sample reference averages, while the no-AA image is shaded at the centre (or is that same sample 0,
+/// when no 1-sample render was given).
+fn aa_losers_note(rows: &[crate::analysis::pipelines::AaRow]) -> String {
+    let Some(no_aa) = rows.iter().find(|r| r.method == "no-aa") else { return String::new() };
+    let losers: Vec<String> = rows
+        .iter()
+        .filter(|r| r.method.starts_with("msaa:") && r.error.rmse > no_aa.error.rmse)
+        .map(|r| {
+            format!(
+                "{} (RMSE {} against {})",
+                r.method,
+                fmt_opt(Some(r.error.rmse), 4),
+                fmt_opt(Some(no_aa.error.rmse), 4)
+            )
+        })
+        .collect();
+    if losers.is_empty() {
+        return String::new();
+    }
+    format!(
+        "\n**Why adaptive MSAA can lose to no AA here:** {} errs more than no AA. Adaptive MSAA shades each pixel \
+         without a detected edge once, at sample 0, which sits off the pixel centre; where the shading varies \
+         sharply inside a pixel (narrow specular highlights from low roughness or high specular powers, lights close \
+         to a surface) that one off-centre sample misses or catches what the every-sample reference averages over \
+         the pixel. The no-AA image is {}. The error is the schedule's, not the detector's edges: compare the \
+         detectors' shading against the SSAA row.\n",
+        losers.join(", "),
+        if no_aa.note.is_empty() { "shaded at the pixel centre".to_string() } else { no_aa.note.clone() }
+    )
+}
 
 /// The crop `(x, y, width, height)` of at most [`AA_CROP`] pixels where `image` differs most from `reference` (sum of
 /// the differences of MLAA's display-encoded luma, [`display_luma`], non-finite as 0; the first such window in
