@@ -118,6 +118,19 @@ pub fn standard_sample_positions(samples: u32) -> Option<Vec<Vec2>> {
     Some(table.iter().map(|&(x, y)| Vec2::new(f32::from(x) / 16.0, f32::from(y) / 16.0)).collect())
 }
 
+/// The one range check of sample positions, whatever they were read from (an EXR header, a sidecar, a fold):
+/// finite offsets within ±0.5 px of the pixel centre, or what is wrong with the first that is not.
+pub fn check_sample_positions(positions: &[Vec2]) -> std::result::Result<(), String> {
+    match positions.iter().position(|p| !(p.x.abs() <= 0.5 && p.y.abs() <= 0.5)) {
+        None => Ok(()),
+        Some(i) => Err(format!(
+            "sample position {i} = ({}, {}) lies outside its pixel: positions are offsets from the pixel centre \
+             within ±0.5 px",
+            positions[i].x, positions[i].y
+        )),
+    }
+}
+
 /// The ordered-grid positions of a k×k supersampled block folded into one pixel, row-major within the block
 /// (sample `j * k + i` comes from sub-pixel column `i`, row `j`).
 #[must_use]
@@ -563,7 +576,8 @@ impl GBuffer {
         }
     }
 
-    /// Checks the invariants every stage relies on: plane lengths, sample count and positions. Loaders call this
+    /// Checks the invariants every stage relies on: plane lengths, sample count and positions (each inside its pixel,
+    /// [`check_sample_positions`]). Loaders call this
     /// once; after that the invariants are `debug_assert!`ed.
     pub fn validate(&self) -> Result<()> {
         if self.samples == 0 || self.samples > MAX_SAMPLES {
@@ -576,6 +590,7 @@ impl GBuffer {
                 self.samples
             )));
         }
+        check_sample_positions(&self.sample_positions).map_err(Error::Argument)?;
         let n = checked_len(self.width, self.height, self.samples)?;
         if self.coverage.len() != n {
             return Err(Error::Mismatch(format!("coverage has {} entries, expected {n}", self.coverage.len())));

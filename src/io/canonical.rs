@@ -383,10 +383,10 @@ fn read_positions(raw: &RawImage, path: &Path, samples: u32) -> Result<Vec<Vec2>
             format!("{ATTR_SAMPLE_POSITIONS} lists {} positions for {samples} samples", pos.len()),
         ));
     }
-    if pos.iter().any(|p| !(p[0].abs() <= 0.5 && p[1].abs() <= 0.5)) {
-        return Err(Error::invalid(path, format!("{ATTR_SAMPLE_POSITIONS}: positions must lie within ±0.5 pixel")));
-    }
-    Ok(pos.into_iter().map(Vec2::from).collect())
+    let pos: Vec<Vec2> = pos.into_iter().map(Vec2::from).collect();
+    crate::gbuffer::check_sample_positions(&pos)
+        .map_err(|e| Error::invalid(path, format!("{ATTR_SAMPLE_POSITIONS} header attribute: {e}")))?;
+    Ok(pos)
 }
 
 fn set_f32(gb: &mut GBuffer, attr: Attribute, v: Vec<f32>) {

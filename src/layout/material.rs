@@ -399,6 +399,51 @@ impl MaterialTable {
     pub fn attributes(&self) -> Vec<Attribute> {
         self.parameters.iter().filter_map(|p| Attribute::from_name(p)).collect()
     }
+
+    /// Every problem of a table read from a file against the layout's indirection `ind` that indexes it, or none:
+    /// each parameter one of the layout's table parameters, none twice; every row as long as the parameter list
+    /// and finite; no more entries than the index bits address; as many IDs as entries, when IDs are given. A
+    /// table that passes cannot put a value into another attribute's plane or index past a row.
+    #[must_use]
+    pub fn problems(&self, ind: &super::Indirection) -> Vec<String> {
+        let mut out = Vec::new();
+        let allowed: Vec<&str> = ind.parameters.iter().map(|a| a.name()).collect();
+        for (i, p) in self.parameters.iter().enumerate() {
+            if !allowed.contains(&p.as_str()) {
+                out.push(format!(
+                    "parameters[{i}] = {p:?} is not one of the layout's table parameters ({})",
+                    allowed.join(", ")
+                ));
+            } else if self.parameters[..i].contains(p) {
+                out.push(format!("parameters[{i}] = {p:?} is listed twice"));
+            }
+        }
+        let width = self.parameters.len();
+        let short: Vec<usize> = (0..self.entries.len()).filter(|&e| self.entries[e].len() != width).collect();
+        if let Some(&first) = short.first() {
+            out.push(format!(
+                "{} of {} rows do not hold one value per parameter ({width}): the first is entries[{first}] with {}",
+                short.len(),
+                self.entries.len(),
+                self.entries[first].len()
+            ));
+        }
+        if let Some(e) = self.entries.iter().position(|row| row.iter().any(|v| !v.is_finite())) {
+            out.push(format!("entries[{e}] holds a value that is not a finite number"));
+        }
+        let most = 1u64 << ind.bits.min(63);
+        if self.entries.len() as u64 > most {
+            out.push(format!(
+                "{} entries, more than the {most} the layout's {}-bit material index addresses",
+                self.entries.len(),
+                ind.bits
+            ));
+        }
+        if !self.ids.is_empty() && self.ids.len() != self.entries.len() {
+            out.push(format!("{} ids for {} entries", self.ids.len(), self.entries.len()));
+        }
+        out
+    }
 }
 
 /// Per parameter: the largest and the mean |table value − input| over covered samples.

@@ -264,6 +264,8 @@ pub fn read_frame(
                 });
             }
             shell.sample_positions = p.iter().map(|&[x, y]| Vec2::new(x, y)).collect();
+            crate::gbuffer::check_sample_positions(&shell.sample_positions)
+                .map_err(|e| Error::Parse { path: sp.clone(), what: format!("sidecar sample_positions: {e}") })?;
             positions_assumed = false;
         }
     }
@@ -303,17 +305,31 @@ pub fn read_frame(
     };
     let material_table = match layout.indirection() {
         None => None,
-        Some(_) => {
+        Some(ind) => {
             let f = explicit
                 .iter()
                 .find(|(n, _)| n.eq_ignore_ascii_case("material_table"))
                 .map(|(_, f)| if f.is_relative() && !f.exists() { dir.join(f) } else { f.clone() })
                 .unwrap_or_else(|| dir.join(MATERIAL_TABLE_FILE));
+            let len = std::fs::metadata(&f).map(|m| m.len()).unwrap_or(0);
+            if len > MAX_TABLE_BYTES {
+                return Err(Error::invalid(
+                    &f,
+                    format!("material table of {len} bytes, over the {} MiB one may have", MAX_TABLE_BYTES >> 20),
+                ));
+            }
             let text = std::fs::read(&f).map_err(|e| {
                 Error::invalid(&f, format!("layout {:?} indexes a material table; reading it: {e}", layout.name()))
             })?;
             let table: MaterialTable = serde_json::from_slice(&text)
                 .map_err(|e| Error::Parse { path: f.clone(), what: format!("material table: {e}") })?;
+            let problems = table.problems(ind);
+            if !problems.is_empty() {
+                return Err(Error::Parse {
+                    path: f.clone(),
+                    what: format!("material table of layout {:?}: {}", layout.name(), problems.join("; ")),
+                });
+            }
             Some(table)
         }
     };
@@ -329,6 +345,10 @@ pub fn read_frame(
     };
     Ok(PackedFiles { packed, shell, files: read, coverage_from, positions_assumed })
 }
+
+/// Largest `material_table.json` read: a 2^24-entry table (the most a material index addresses) of four
+/// parameters takes about 1 GB of JSON; real ones are kilobytes. 64 MiB, as a sidecar.
+pub const MAX_TABLE_BYTES: u64 = 64 << 20;
 
 /// Reads and decodes the targets of `layout` in `dir`: the G-buffer the engine's lighting pass would see, then
 /// what [`crate::io::load`] does after every reader (sidecar lights, sanitising, validation, plausibility).
