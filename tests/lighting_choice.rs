@@ -163,3 +163,43 @@ fn a_gbuf_sidecar_with_errors_reports_all_of_them_and_no_scene_skips_it() {
     let both = gbuf(dir.path(), &["info", "frame.exr", "--no-scene", "--scene", "real.json"]);
     assert_eq!(both.status.code(), Some(2), "--scene with --no-scene is a usage error");
 }
+
+#[test]
+fn report_compares_layouts_under_several_brdfs() {
+    let dir = tempfile::tempdir().unwrap();
+    let pbr = fixture("blender_pbr.exr");
+    let args = [
+        "report",
+        pbr.to_str().unwrap(),
+        "--brdf",
+        "ggx,blinn-phong",
+        "--layouts",
+        "destiny-96,unreal-like,fat-20",
+        "--detectors",
+        "lauritzen",
+        "--flip",
+        "none",
+        "-o",
+        "cmp",
+        "--json",
+    ];
+    let rows = json_of(&gbuf(dir.path(), &args));
+    // One report per BRDF, each lit as its folder says.
+    for b in ["ggx", "blinn-phong"] {
+        let rep: Value =
+            serde_json::from_slice(&std::fs::read(dir.path().join("cmp").join(b).join("report.json")).unwrap())
+                .unwrap();
+        assert_eq!(rep["lighting"]["brdf"], b);
+    }
+    assert!(dir.path().join("cmp/brdf_comparison.md").is_file());
+    // destiny-96's 4-bit roughness: last under GGX, not under Blinn-Phong.
+    let destiny = rows.as_array().unwrap().iter().find(|r| r["layout"] == "destiny-96").unwrap();
+    let under = destiny["under"].as_array().unwrap();
+    let (ggx, bp) = (&under[0], &under[1]);
+    assert_eq!((ggx[0].as_str(), bp[0].as_str()), (Some("ggx"), Some("blinn-phong")));
+    assert_eq!(ggx[2], 3, "destiny-96 ranks last of three under GGX: {destiny}");
+    assert!(bp[2].as_u64().unwrap() < 3, "{destiny}");
+    // Commands that light once refuse a list.
+    let o = gbuf(dir.path(), &["budget", pbr.to_str().unwrap(), "--max-bytes", "12", "--brdf", "ggx,lambert"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}

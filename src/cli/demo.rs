@@ -50,6 +50,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         geometry: Some(SceneName::Room),
         notes: Vec::new(),
     };
-    run_and_write(frame, &cfg, args.sweep.lighting, &args.out, args.json)?;
+    run_and_write(frame, &cfg, args.sweep.lighting()?, &args.out, args.json)?;
     Ok(())
 }

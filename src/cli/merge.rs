@@ -3,7 +3,7 @@
 //! aggregate tables, fronts and budget choice as one `gbuf report` over all the frames. Per-frame figures stay in
 //! the runs' own folders; the merged folder gets the aggregate plots.
 
-use crate::cli::report::write_and_print;
+use crate::cli::report::{write_and_print, Say};
 use anyhow::Context;
 use gbuf::analysis::aggregate::Over;
 use gbuf::analysis::record::Report;
@@ -96,5 +96,5 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         lighting: f.lighting.clone(),
     };
     let (rep, files) = gbuf::study::assemble(frames, rows, vec![], &how)?;
-    write_and_print(&rep, &files, &args.out, args.json)
+    write_and_print(&rep, &files, &args.out, Say::of(args.json))
 }

@@ -55,9 +55,14 @@ pub struct SweepArgs {
     /// Exposure of the displayed image (as `gbuf resolve --exposure`).
     #[arg(long, value_name = "E", default_value_t = 1.0)]
     pub exposure: f32,
-    /// The lighting model the layouts are ranked under.
-    #[command(flatten)]
-    pub lighting: LightingArgs,
+    /// BRDF the layouts are ranked under: lambert, blinn-phong or ggx (default: from the frame — ggx when it stores
+    /// roughness or metallic, else blinn-phong). `gbuf report` takes several, comma-separated: one report per BRDF
+    /// in a subfolder of the output, and a table of each layout's error and rank under each.
+    #[arg(long, value_name = "B", value_delimiter = ',')]
+    pub brdf: Vec<gbuf::resolve::Brdf>,
+    /// Distance falloff: linear or gltf (default: linear).
+    #[arg(long, value_name = "F")]
+    pub falloff: Option<gbuf::resolve::Falloff>,
 }
 
 fn split(list: &str) -> impl Iterator<Item = &str> {
@@ -65,6 +70,26 @@ fn split(list: &str) -> impl Iterator<Item = &str> {
 }
 
 impl SweepArgs {
+    /// The one lighting model asked for (the data's choice without `--brdf`); several are a usage error here.
+    pub fn lighting(&self) -> anyhow::Result<LightingArgs> {
+        match self.lightings().as_slice() {
+            [] => Ok(LightingArgs { brdf: None, falloff: self.falloff }),
+            [one] => Ok(*one),
+            many => crate::usage!("--brdf: one BRDF here ({} given); `gbuf report` compares several", many.len()),
+        }
+    }
+
+    /// Each BRDF asked for, in order, without repeats.
+    pub fn lightings(&self) -> Vec<LightingArgs> {
+        let mut out: Vec<LightingArgs> = Vec::new();
+        for &b in &self.brdf {
+            if !out.iter().any(|l| l.brdf == Some(b)) {
+                out.push(LightingArgs { brdf: Some(b), falloff: self.falloff });
+            }
+        }
+        out
+    }
+
     /// The library sweep configuration.
     pub fn config(&self) -> anyhow::Result<SweepConfig> {
         let layouts = match &self.layouts {
@@ -266,7 +291,7 @@ pub fn run_frames(
     lighting: LightingArgs,
     how: &Assembly,
     out: &Path,
-    json: bool,
+    say: Say,
 ) -> anyhow::Result<Report> {
     let mut cfg = cfg.clone();
     let mut how = how.clone();
@@ -330,24 +355,49 @@ pub fn run_frames(
     pb.finish_and_clear();
     let (rep, plots) = gbuf::study::assemble(frames, rows, figures, &how)?;
     files.extend(plots);
-    write_and_print(&rep, &files, out, json)?;
+    write_and_print(&rep, &files, out, say)?;
     Ok(rep)
 }
 
-/// Writes the report folder and prints the summary (or the JSON report).
+/// What a written report prints on stdout.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Say {
+    /// The human summary.
+    Summary,
+    /// The JSON report (`--json`).
+    Json,
+    /// Nothing (a part of a larger job that prints its own).
+    Nothing,
+}
+
+impl Say {
+    /// The JSON report with `--json`, else the summary.
+    #[must_use]
+    pub fn of(json: bool) -> Say {
+        if json {
+            Say::Json
+        } else {
+            Say::Summary
+        }
+    }
+}
+
+/// Writes the report folder and prints what `say` asks.
 pub fn write_and_print(
     rep: &Report,
     files: &[gbuf::report::format::Attachment],
     out: &Path,
-    json: bool,
+    say: Say,
 ) -> anyhow::Result<()> {
     gbuf::report::write::write_folder(out, rep, files)
         .with_context(|| format!("writing the report to {}", out.display()))?;
-    if json {
-        print_json(rep)
-    } else {
-        print_summary(rep, out);
-        Ok(())
+    match say {
+        Say::Json => print_json(rep),
+        Say::Summary => {
+            print_summary(rep, out);
+            Ok(())
+        }
+        Say::Nothing => Ok(()),
     }
 }
 
@@ -361,7 +411,7 @@ pub fn run_and_write(
 ) -> anyhow::Result<Report> {
     let mut frame = Some(frame);
     let how = Assembly::of(cfg, Over::default(), None, "");
-    run_frames(1, |_| frame.take().context("one frame"), cfg, lighting, &how, out, json)
+    run_frames(1, |_| frame.take().context("one frame"), cfg, lighting, &how, out, Say::of(json))
 }
 
 /// Flags of `gbuf report`.
@@ -438,6 +488,109 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Ok(FrameInput { name: p.name(), gbuffer: loaded.gbuffer, lights, lights_source, single, geometry: None, notes })
     };
     let how = Assembly::of(&cfg, args.over, args.max_bytes, "");
-    run_frames(paths.len(), next, &cfg, args.sweep.lighting, &how, &args.out, args.json)?;
+    let lightings = args.sweep.lightings();
+    if lightings.len() < 2 {
+        run_frames(paths.len(), next, &cfg, args.sweep.lighting()?, &how, &args.out, Say::of(args.json))?;
+        return Ok(());
+    }
+    // Several BRDFs: a whole report under each (its own fronts, budget and figures), then how the layouts' errors
+    // and ranks move between them.
+    let mut reports = Vec::new();
+    for l in &lightings {
+        let out = args.out.join(l.brdf.map_or("auto", gbuf::resolve::Brdf::name));
+        let say = if args.json { Say::Nothing } else { Say::Summary };
+        reports.push(run_frames(paths.len(), &next, &cfg, *l, &how, &out, say)?);
+    }
+    let rows = brdf_comparison(&reports);
+    let text = brdf_comparison_markdown(&reports, &rows);
+    let mut staged = gbuf::util::Staged::default();
+    let md = args.out.join("brdf_comparison.md");
+    staged.stage_bytes(&md, text.as_bytes()).with_context(|| format!("writing {}", md.display()))?;
+    let json = serde_json::to_vec_pretty(&rows)?;
+    let jp = args.out.join("brdf_comparison.json");
+    staged.stage_bytes(&jp, &json).with_context(|| format!("writing {}", jp.display()))?;
+    staged.commit()?;
+    if args.json {
+        return print_json(&rows);
+    }
+    print!("{text}");
+    println!("written to {} (each BRDF's report in its subfolder)", md.display());
     Ok(())
+}
+
+/// One layout under each BRDF of a comparison: its layout error (the reports' `over` statistic, with their first
+/// detector) and its rank among the layouts under that BRDF (1 = least error).
+#[derive(serde::Serialize)]
+pub struct BrdfRow {
+    /// The layout.
+    pub layout: String,
+    /// Bytes per sample.
+    pub bytes_per_sample: u32,
+    /// Per BRDF, in the order given: its name, the layout RMSE and the rank.
+    pub under: Vec<(String, Option<f64>, Option<usize>)>,
+}
+
+/// The comparison rows of reports lit with different BRDFs (same frames, layouts and detectors).
+fn brdf_comparison(reports: &[Report]) -> Vec<BrdfRow> {
+    let Some(first) = reports.first() else { return Vec::new() };
+    let detector = first.aggregate.first().map(|r| r.detector.clone()).unwrap_or_default();
+    let pick = |rep: &Report| -> Vec<(String, u32, Option<f64>)> {
+        rep.aggregate
+            .iter()
+            .filter(|r| r.detector == detector && r.culling == first.aggregate[0].culling)
+            .map(|r| (r.layout.clone(), r.bytes_per_sample, r.layout_rmse.as_ref().map(|s| s.over(rep.over))))
+            .collect()
+    };
+    let per: Vec<Vec<(String, u32, Option<f64>)>> = reports.iter().map(pick).collect();
+    let rank = |list: &[(String, u32, Option<f64>)], layout: &str| -> Option<usize> {
+        let mine = list.iter().find(|r| r.0 == layout)?.2?;
+        Some(1 + list.iter().filter(|r| r.2.is_some_and(|e| e < mine)).count())
+    };
+    per[0]
+        .iter()
+        .map(|(layout, bytes, _)| BrdfRow {
+            layout: layout.clone(),
+            bytes_per_sample: *bytes,
+            under: reports
+                .iter()
+                .zip(&per)
+                .map(|(rep, list)| {
+                    let name = rep.lighting.as_ref().map_or("?".to_string(), |l| l.brdf.name().to_string());
+                    (name, list.iter().find(|r| &r.0 == layout).and_then(|r| r.2), rank(list, layout))
+                })
+                .collect(),
+        })
+        .collect()
+}
+
+/// The comparison as a Markdown table: a column pair (RMSE, rank) per BRDF.
+fn brdf_comparison_markdown(reports: &[Report], rows: &[BrdfRow]) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::from("# Layouts under each BRDF\n\n");
+    let detector = reports.first().and_then(|r| r.aggregate.first()).map_or("", |r| r.detector.as_str());
+    let _ = writeln!(
+        s,
+        "Layout error (RMSE against the exact G-buffer lit the same way, detector {detector}) and rank among the \
+         layouts (1 = least error) under each BRDF. A layout that ranks well under one and badly under another \
+         stores coarsely what only the second reads (GGX reads roughness and metallic; Blinn-Phong a specular \
+         amount and power).\n"
+    );
+    s.push_str("| layout | B/sample |");
+    for r in reports {
+        let b = r.lighting.as_ref().map_or("?", |l| l.brdf.name());
+        let _ = write!(s, " {b} RMSE | {b} rank |");
+    }
+    s.push_str("\n|---|--:|");
+    for _ in reports {
+        s.push_str("--:|--:|");
+    }
+    s.push('\n');
+    for r in rows {
+        let _ = write!(s, "| {} | {} |", r.layout, r.bytes_per_sample);
+        for (_, e, k) in &r.under {
+            let _ = write!(s, " {} | {} |", fmt_opt(*e, 5), k.map_or("—".to_string(), |k| k.to_string()));
+        }
+        s.push('\n');
+    }
+    s
 }
