@@ -155,12 +155,10 @@ fn ispc_arrays_that_alias_are_refused_by_name() {
     }
     let mut bad = h.to_bytes();
     bad.extend_from_slice(&good[bad.len()..]);
-    let e = gbuf::io::ispc::read_bytes(&bad, Path::new("alias.bin"), None, &LoadOptions::default())
-        .unwrap_err()
-        .to_string();
+    let e = gbuf::io::ispc::read_bytes(&bad, Path::new("alias.bin"), &LoadOptions::default()).unwrap_err().to_string();
     assert!(e.contains("alias.bin") && e.contains("may not overlap") && e.contains("(offsets["), "{e}");
     // The fixture itself has disjoint arrays.
-    gbuf::io::ispc::read_bytes(&good, Path::new("ok.bin"), None, &LoadOptions::default()).unwrap();
+    gbuf::io::ispc::read_bytes(&good, Path::new("ok.bin"), &LoadOptions::default()).unwrap();
 }
 
 #[test]

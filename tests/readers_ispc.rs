@@ -71,7 +71,7 @@ fn trace(x: u32, y: u32) -> Option<Hit> {
 }
 
 fn load(path: &Path) -> gbuf::Result<gbuf::io::Loaded> {
-    ispc::read(path, None, &LoadOptions::default())
+    ispc::read(path, &LoadOptions::default())
 }
 
 #[test]
@@ -211,7 +211,7 @@ fn writer_refuses_what_the_format_cannot_hold() {
 
 fn expect_invalid(bytes: &[u8], what: &str) -> String {
     let p = Path::new("damaged.bin");
-    match ispc::read_bytes(bytes, p, None, &LoadOptions::default()) {
+    match ispc::read_bytes(bytes, p, &LoadOptions::default()) {
         Err(e) => {
             let msg = e.to_string();
             assert!(msg.contains("damaged.bin"), "{what}: error does not name the file: {msg}");
@@ -241,7 +241,7 @@ fn truncation_at_every_length_is_an_error() {
     // Trailing bytes after the chunk are ignored.
     let mut longer = bytes.clone();
     longer.extend_from_slice(&[0xAB; 100]);
-    ispc::read_bytes(&longer, Path::new("x.bin"), None, &LoadOptions::default()).unwrap();
+    ispc::read_bytes(&longer, Path::new("x.bin"), &LoadOptions::default()).unwrap();
 }
 
 fn patch_i32(bytes: &[u8], at: usize, v: i32) -> Vec<u8> {
@@ -275,12 +275,12 @@ fn bad_header_fields_are_errors() {
     }
     // Large but representable sizes are refused by the memory limit before any allocation.
     let big = patch_i32(&patch_i32(&bytes, 72, 30_000), 76, 30_000);
-    match ispc::read_bytes(&big, Path::new("big.bin"), None, &LoadOptions::default()) {
+    match ispc::read_bytes(&big, Path::new("big.bin"), &LoadOptions::default()) {
         Err(Error::TooLarge { .. }) => {}
         other => panic!("expected TooLarge, got {other:?}"),
     }
     let tight = LoadOptions { limits: ReadLimits { max_bytes: 1000, ..Default::default() }, ..Default::default() };
-    assert!(matches!(ispc::read_bytes(&bytes, Path::new("x.bin"), None, &tight), Err(Error::TooLarge { .. })));
+    assert!(matches!(ispc::read_bytes(&bytes, Path::new("x.bin"), &tight), Err(Error::TooLarge { .. })));
     // Camera: near ≥ far, a non-finite matrix entry.
     let mut b = bytes.clone();
     b[64..68].copy_from_slice(&100f32.to_le_bytes());
@@ -307,7 +307,7 @@ fn mutate_rounds(rounds: u64, seed: u64) {
             let at = (rng.next_u64() % span as u64) as usize;
             b[at] = rng.next_u64() as u8;
         }
-        if let Ok(l) = ispc::read_bytes(&b, Path::new("m.bin"), None, &LoadOptions::default()) {
+        if let Ok(l) = ispc::read_bytes(&b, Path::new("m.bin"), &LoadOptions::default()) {
             l.gbuffer.validate().unwrap();
             assert!(l.lights.unwrap().len() <= LIGHT_SLOTS);
         }

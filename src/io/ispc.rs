@@ -17,7 +17,6 @@ use super::{AttributeSource, LoadOptions, Loaded, SourceFormat};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::gbuffer::{Attribute, BandSource, GBuffer};
-use crate::io::sidecar::Sidecar;
 use crate::light::{Light, LightKind};
 use glam::Vec3;
 use half::f16;
@@ -255,30 +254,17 @@ pub fn header_problem(head: &[u8], file_len: u64) -> String {
 
 /// Reads an ISPC `deferred` input file into a single-sample G-buffer with its lights. Only the header and the
 /// declared chunk are read, after the chunk size has been checked against the file length and the memory limit.
-pub fn read(path: &Path, sidecar: Option<&Sidecar>, opts: &LoadOptions) -> Result<Loaded> {
+pub fn read(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     let arrays = Arrays::read(path, opts)?;
-    let mut loaded = decode(&arrays.header, arrays.chunk(), path)?;
-    apply_sidecar(&mut loaded, sidecar, path)?;
-    Ok(loaded)
+    decode(&arrays.header, arrays.chunk(), path)
 }
 
 /// Decodes an ISPC `deferred` input file held in memory (`path` only names it in errors). Same checks as
 /// [`read`]; bytes past the declared chunk are ignored.
-pub fn read_bytes(bytes: &[u8], path: &Path, sidecar: Option<&Sidecar>, opts: &LoadOptions) -> Result<Loaded> {
+pub fn read_bytes(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     let h = check_header(bytes, bytes.len() as u64, path, opts)?;
     let chunk = &bytes[HEADER_BYTES..HEADER_BYTES + h.chunk_size as usize];
-    let mut loaded = decode(&h, chunk, path)?;
-    apply_sidecar(&mut loaded, sidecar, path)?;
-    Ok(loaded)
-}
-
-/// Lights the user supplied beside the file win over the file's own; they are given in the file's view space
-/// unless the sidecar says otherwise (its camera, if any, is the file's world→view).
-pub(crate) fn apply_sidecar(loaded: &mut Loaded, sidecar: Option<&Sidecar>, path: &Path) -> Result<()> {
-    if let Some(sc) = sidecar.filter(|s| !s.lights.is_empty()) {
-        loaded.lights = Some(sc.view_lights(loaded.gbuffer.camera.as_ref(), path)?);
-    }
-    Ok(())
+    decode(&h, chunk, path)
 }
 
 /// Parses and validates the header against the file length and the memory limit.

@@ -173,7 +173,7 @@ fn load_with(path: &Path, opts: &LoadOptions, side: Side) -> Result<Loaded> {
         let raw = exr::read_raw(path, &opts.limits)?;
         read_exr(raw, path, side.as_ref().map(|s| &s.0), opts)?
     } else if ispc::matches_file(&head, len) {
-        ispc::read(path, side.as_ref().map(|s| &s.0), opts)?
+        ispc::read(path, opts)?
     } else {
         return Err(not_a_dump(path, &head, len));
     };
@@ -238,8 +238,7 @@ pub fn open_packed(path: &Path, opts: &LoadOptions) -> Result<Option<PackedDump>
         reading: None,
         positions_assumed: false,
     };
-    // What `load` does with a sidecar: the `.bin` reader's (its lights win over the file's), then every reader's.
-    ispc::apply_sidecar(&mut loaded, side.as_ref().map(|(s, _)| s), path)?;
+    // What `load` does with a sidecar, as for every reader (its lights replace the file's).
     if let Some((s, sp)) = &side {
         apply_sidecar(&mut loaded, path, s, sp, 1)?;
     }
@@ -265,7 +264,7 @@ fn load_bytes_with(bytes: &[u8], path: &Path, opts: &LoadOptions, side: Side) ->
         let raw = exr::read_raw_bytes(bytes, path, &opts.limits)?;
         read_exr(raw, path, side.as_ref().map(|s| &s.0), opts)?
     } else if ispc::matches_file(bytes, bytes.len() as u64) {
-        ispc::read_bytes(bytes, path, side.as_ref().map(|s| &s.0), opts)?
+        ispc::read_bytes(bytes, path, opts)?
     } else {
         return Err(not_a_dump(path, bytes, bytes.len() as u64));
     };
@@ -527,7 +526,10 @@ fn apply_sidecar(loaded: &mut Loaded, path: &Path, s: &Sidecar, sp: &Path, k: u3
     if loaded.gbuffer.materials.is_empty() {
         loaded.gbuffer.materials.clone_from(&s.materials);
     }
-    if loaded.lights.is_none() && !s.lights.is_empty() {
+    // The lights the user put beside the file replace the file's own (an ISPC .bin carries some): one rule for
+    // every reader. They are in the file's view space unless the sidecar says world (then its camera, or the
+    // file's, places them).
+    if !s.lights.is_empty() {
         loaded.lights = Some(s.view_lights(loaded.gbuffer.camera.as_ref(), sp)?);
     }
     Ok(())
