@@ -65,13 +65,13 @@ fn main() {
         row("file read (page cache)", read_ms, "memcpy", copy_ms);
         let opts = LoadOptions::default();
         let (convert_ms, loaded) =
-            best(runs, || ispc::read_bytes(&bytes, Path::new("room.bin"), None, &opts).expect("convert"));
+            best(runs, || ispc::read_bytes(&bytes, Path::new("room.bin"), &opts).expect("convert"));
         assert_eq!(loaded.gbuffer.width, w);
         row("convert .bin → G-buffer", convert_ms, "memcpy", copy_ms);
         let (load_ms, _) = best(runs, || gbuf::io::load_bytes(&bytes, Path::new("room.bin"), &opts).expect("load"));
         row("load (convert, sanitise, checks)", load_ms, "memcpy", copy_ms);
         let (convert1_ms, _) = best(runs, || {
-            one.install(|| ispc::read_bytes(&bytes, Path::new("room.bin"), None, &opts).expect("convert"))
+            one.install(|| ispc::read_bytes(&bytes, Path::new("room.bin"), &opts).expect("convert"))
         });
         row("convert, 1 thread", convert1_ms, &format!("{threads} threads"), convert_ms);
 

@@ -10,6 +10,6 @@ fuzz_target!(init: gbuf_fuzz::init(), |data: &[u8]| {
         let path = gbuf_fuzz::dump_path();
         let _ = ispc::matches_file(data, data.len() as u64);
         let _ = ispc::header_problem(data, data.len() as u64);
-        let _ = ispc::read_bytes(data, &path, None, &gbuf_fuzz::default_options());
+        let _ = ispc::read_bytes(data, &path, &gbuf_fuzz::default_options());
     });
 });
