@@ -70,9 +70,8 @@ fn main() {
         row("convert .bin → G-buffer", convert_ms, "memcpy", copy_ms);
         let (load_ms, _) = best(runs, || gbuf::io::load_bytes(&bytes, Path::new("room.bin"), &opts).expect("load"));
         row("load (convert, sanitise, checks)", load_ms, "memcpy", copy_ms);
-        let (convert1_ms, _) = best(runs, || {
-            one.install(|| ispc::read_bytes(&bytes, Path::new("room.bin"), &opts).expect("convert"))
-        });
+        let (convert1_ms, _) =
+            best(runs, || one.install(|| ispc::read_bytes(&bytes, Path::new("room.bin"), &opts).expect("convert")));
         row("convert, 1 thread", convert1_ms, &format!("{threads} threads"), convert_ms);
 
         let f32_bytes: &[u8] = bytemuck::cast_slice(&image.rgb);

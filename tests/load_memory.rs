@@ -181,3 +181,47 @@ fn a_sidecar_with_too_many_lights_is_refused_with_the_limit() {
     assert!(e.contains("big.json") && e.contains("MiB"), "{e}");
     assert!(peak < 1 << 20, "peak {peak}");
 }
+
+/// A PNG of a signature, an IHDR claiming `w`×`h` RGBA 8-bit, a 2-byte IDAT (a zlib header, no data) and an IEND.
+fn png_header_only(w: u32, h: u32) -> Vec<u8> {
+    fn crc(data: &[u8]) -> u32 {
+        let mut c = 0xffff_ffffu32;
+        for &b in data {
+            c ^= u32::from(b);
+            for _ in 0..8 {
+                c = if c & 1 == 1 { 0xedb8_8320 ^ (c >> 1) } else { c >> 1 };
+            }
+        }
+        !c
+    }
+    let chunk = |kind: &[u8; 4], body: &[u8]| {
+        let mut typed = kind.to_vec();
+        typed.extend_from_slice(body);
+        let mut out = (body.len() as u32).to_be_bytes().to_vec();
+        out.extend_from_slice(&typed);
+        out.extend_from_slice(&crc(&typed).to_be_bytes());
+        out
+    };
+    let mut ihdr = w.to_be_bytes().to_vec();
+    ihdr.extend_from_slice(&h.to_be_bytes());
+    ihdr.extend_from_slice(&[8, 6, 0, 0, 0]); // 8-bit RGBA, deflate, adaptive filter, no interlace
+    let mut out = vec![0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
+    out.extend(chunk(b"IHDR", &ihdr));
+    out.extend(chunk(b"IDAT", &[0x78, 0x9c]));
+    out.extend(chunk(b"IEND", &[]));
+    out
+}
+
+#[test]
+fn a_png_target_claiming_more_pixels_than_its_bytes_can_hold_is_refused_before_decoding() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("huge.png");
+    std::fs::write(&p, png_header_only(30_000, 30_000)).unwrap();
+    // Limits that would allow 3.6 GB: the file's own size must refuse it.
+    let lax = ReadLimits { max_bytes: u64::MAX, allow_dwa: false };
+    let (result, peak) = peak_of(|| gbuf::layout::texture::read(&p, gbuf::layout::Format::Rgba8, &lax));
+    let e = result.expect_err("a header without its pixels must be refused").to_string();
+    assert!(e.contains("huge.png") && e.contains("30000×30000") && e.contains("1032:1"), "{e}");
+    assert!(peak < REFUSAL_PEAK, "peak {peak} bytes while refusing ({e})");
+}

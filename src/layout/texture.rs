@@ -410,6 +410,9 @@ fn integer_components(format: Format, channels: usize, bits: u32) -> bool {
         })
 }
 
+/// The most DEFLATE can expand its input (RFC 1951: a 258-byte match costs at least 2 bits).
+const MAX_DEFLATE_RATIO: u64 = 1032;
+
 fn read_png(path: &Path, format: Format, limits: &ReadLimits) -> Result<Texture> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let cap = usize::try_from(limits.max_bytes).unwrap_or(usize::MAX);
@@ -451,6 +454,20 @@ fn read_png(path: &Path, format: Format, limits: &ReadLimits) -> Result<Texture>
         ));
     }
     let want = check_size(path, w, h, 1, format.bytes(), limits)?;
+    // DEFLATE cannot expand data more than 1032:1 (its longest match, 258 bytes, in 2 bits at best): a header whose
+    // pixels (one filter byte per row included) need more than that of the file's size is refused before the
+    // buffer is allocated, instead of decoding into gigabytes what a few hundred bytes claim.
+    let file_len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
+    let raw = (want as u64).saturating_add(u64::from(h));
+    if raw > file_len.saturating_mul(MAX_DEFLATE_RATIO) {
+        return Err(Error::invalid(
+            path,
+            format!(
+                "PNG header claims {w}×{h} pixels ({raw} bytes), more than its {file_len} bytes can hold compressed \
+                 (DEFLATE expands at most {MAX_DEFLATE_RATIO}:1): a damaged or hostile file"
+            ),
+        ));
+    }
     let mut buf = vec![0u8; reader.output_buffer_size().unwrap_or(0).max(want)];
     let info = reader.next_frame(&mut buf).map_err(bad)?;
     buf.truncate(info.buffer_size());
