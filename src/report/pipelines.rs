@@ -257,8 +257,9 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
     s
 }
 
-/// Forward MSAA's lanes per pixel (left) beside the deferred mask's evaluations per pixel (right), on one
-/// colour scale, as a heatmap PNG in memory (a 2-pixel black gap between), and the scale's maximum.
+/// Forward MSAA's lanes per pixel (left) beside the deferred mask's evaluations per pixel (right), on one colour
+/// scale with a numbered colour bar, axes and a title, as a PNG in memory (a 2-pixel grey gap between), and the
+/// scale's maximum.
 pub fn shading_heatmaps_png(forward: &QuadShading, deferred: &EdgeMask) -> Result<(Vec<u8>, u32)> {
     let (w, h) = (deferred.width as usize, deferred.height as usize);
     if forward.lanes_per_pixel.len() != w * h {
@@ -269,14 +270,28 @@ pub fn shading_heatmaps_png(forward: &QuadShading, deferred: &EdgeMask) -> Resul
     }
     const GAP: usize = 2;
     let width = 2 * w + GAP;
-    let mut counts = vec![0u32; width * h];
+    let mut values = vec![None; width * h];
     for y in 0..h {
-        counts[y * width..y * width + w].copy_from_slice(&forward.lanes_per_pixel[y * w..(y + 1) * w]);
         for x in 0..w {
-            counts[y * width + w + GAP + x] = u32::from(deferred.shade_count[y * w + x]);
+            values[y * width + x] = Some(forward.lanes_per_pixel[y * w + x] as f32);
+            values[y * width + w + GAP + x] = Some(f32::from(deferred.shade_count[y * w + x]));
         }
     }
-    crate::base::picture::heatmap_png(width as u32, h as u32, &counts)
+    let max = values.iter().flatten().fold(1.0f32, |a, &b| a.max(b));
+    // As the report's heatmaps: at most twice its picture width of grid, room for the title, axes and colour bar.
+    let grid_w = (width as u32).clamp(1, 2 * crate::report::figures::MAX_PICTURE_WIDTH);
+    let grid_h = (u64::from(h as u32) * u64::from(grid_w) / width as u64).max(1) as u32;
+    let (pw, ph) = ((grid_w + 190).max(crate::report::plot::MIN_SIZE.0), (grid_h + 90).max(300));
+    let img = crate::report::plot::Heatmap {
+        title: "Forward MSAA fragment-shader lanes (left) and deferred shading evaluations (right) per pixel".into(),
+        values: &values,
+        width: width as u32,
+        height: h as u32,
+        max,
+        label: "per pixel".into(),
+    }
+    .to_png_image(pw, ph)?;
+    Ok((crate::base::picture::png_bytes(&img)?, max as u32))
 }
 
 /// Size of the anti-aliasing crop in image pixels (smaller images are shown whole) and its magnification.
