@@ -51,6 +51,19 @@ fn the_report_page_loads_in_chromium_without_a_console_message_and_renders() {
     assert_eq!(html.matches("<figcaption>").count(), figures, "one caption per figure");
     assert!(!html.contains("<p>*"), "a caption repeated as literal Markdown");
     assert!(html.contains("Lighting:"), "the page names the lighting model");
+    // Figure text at least 11 px as shown: every inline SVG fits the page's 1200-px column unscaled (so its
+    // font sizes are its displayed sizes), and none is smaller than 11 px.
+    let mut svgs = 0;
+    for svg in html.split("<svg ").skip(1) {
+        svgs += 1;
+        let width: f64 = svg.split("width=\"").nth(1).and_then(|w| w.split('"').next()?.parse().ok()).unwrap();
+        assert!(width <= 1100.0, "an SVG of {width} px is scaled down on the page");
+        let body = &svg[..svg.find("</svg>").unwrap()];
+        for size in body.split("font-size=\"").skip(1).filter_map(|f| f.split('"').next()?.parse::<f64>().ok()) {
+            assert!(size >= 11.0, "SVG text of {size:.1} px");
+        }
+    }
+    assert!(svgs >= 2, "the scatter plots are inline SVG");
     if !support::tool_has("chromium") {
         return;
     }

@@ -301,7 +301,7 @@ impl ScatterPlot {
             .configure_mesh()
             .x_desc(&self.x_label)
             .y_desc(&self.y_label)
-            .label_style(font(13.0))
+            .label_style(font(14.0))
             .axis_desc_style(font(15.0))
             .x_label_formatter(&|v| fmt_tick(*v))
             .y_label_formatter(&|v| fmt_tick(*v))
@@ -343,7 +343,7 @@ impl ScatterPlot {
         let mut boxes: Vec<(i32, i32, i32, i32)> = Vec::new();
         for (p, &(x, y)) in pts.iter().zip(&coords) {
             let col = if p.on_front { RGBColor(160, 25, 25) } else { RGBColor(40, 60, 140) };
-            let style = font(12.0).color(&col);
+            let style = font(14.0).color(&col);
             let (tw, th) = root.estimate_text_size(&p.label, &style).map_err(draw_err)?;
             let (tw, th) = (tw as i32, th as i32 + 2);
             let lx = if x + 7 + tw > px.end { x - 7 - tw } else { x + 7 };
@@ -368,7 +368,7 @@ impl ScatterPlot {
         chart
             .configure_series_labels()
             .position(best)
-            .label_font(font(13.0))
+            .label_font(font(14.0))
             .background_style(WHITE.mix(0.9))
             .border_style(RGBColor(170, 170, 170))
             .draw()
