@@ -411,7 +411,10 @@ pub(super) fn resolve_camera(
                     ),
                 ));
             }
-            detail.push_str(&format!(", median reprojection error of the position pass {err:.3} px"));
+            // The check only: the one reprojection figure a run prints is `info`'s, per sample after folding.
+            detail.push_str(&format!(
+                ", checked against the position pass (within {SIDECAR_MAX_MEDIAN_REPROJECTION_PX} px)"
+            ));
         }
         return Ok(CameraChoice { camera: Some(camera), source: super::CameraSource::Sidecar, detail });
     }
