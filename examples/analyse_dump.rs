@@ -11,11 +11,14 @@ fn main() -> Result<(), gbuf::Error> {
     let path = std::env::args_os().nth(1).map_or_else(|| PathBuf::from("fixtures/raster_4x.exr"), PathBuf::from);
     let loaded = io::load(&path, &io::LoadOptions::default())?;
     let gb = &loaded.gbuffer;
-    // The dump's lights (sidecar or dump), or lights scattered in its visible volume.
-    let lights = loaded.lights.clone().unwrap_or_else(|| scene::scatter_lights(gb, 16, 1));
-    let cfg = resolve::ResolveConfig::default();
+    // The dump's lights (sidecar or dump), else 16 scattered in its visible volume: the CLI's one rule.
+    let (lights, _) = scene::choose_lights(gb, loaded.lights.as_deref(), None, Some(16), 1).expect("a fallback count");
+    // The lighting model the data calls for (GGX when it stores roughness or metallic), as every command lights.
+    let lighting = resolve::Lighting::choose(None, None, &gb.attributes());
+    let cfg = lighting.apply(resolve::ResolveConfig::default());
     let reference = resolve::reference(gb, &lights, &cfg)?;
     println!("{}: {}×{} × {} samples, {} lights", path.display(), gb.width, gb.height, gb.samples, lights.len());
+    println!("lit with {}", lighting.summary());
     println!("{:<16} {:>6} {:>12} {:>14} {:>10}", "layout", "bytes", "normal max°", "depth max rel", "PSNR dB");
     for layout in Layout::builtins() {
         let decoded = layout.roundtrip(gb)?;

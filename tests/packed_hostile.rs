@@ -72,3 +72,21 @@ fn sidecar_sample_positions_outside_the_pixel_are_refused() {
     edit_json(&p.join("scene.json"), |v| v["sample_positions"][2] = serde_json::json!([0.5, -0.5]));
     assert_eq!(info(dir.path()).0, Some(0), "the pixel's edge is inside it");
 }
+
+#[test]
+fn a_folder_of_dds_targets_without_its_layout_says_which_flag_reads_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let engine = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/engine_4x");
+    let dds = dir.path().join("capture");
+    std::fs::create_dir(&dds).unwrap();
+    for t in ["depth", "gbuffer_a", "gbuffer_b", "gbuffer_c"] {
+        std::fs::copy(engine.join(format!("{t}.dds")), dds.join(format!("{t}.dds"))).unwrap();
+    }
+    let o = gbuf(dir.path(), &["info", "capture"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--input-layout") && stderr(&o).contains("4 DDS"), "{}", stderr(&o));
+    // With the layout named, the same folder loads.
+    let toml = engine.join("engine.toml");
+    let o = gbuf(dir.path(), &["info", "capture", "--input-layout", toml.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

@@ -341,6 +341,22 @@ pub fn detect(dir: &Path, files: &[PathBuf], asked: Option<&str>) -> Result<&'st
 
 /// The error for a directory that is no file set, saying what was found and what was expected.
 fn not_a_file_set(dir: &Path, files: &[PathBuf]) -> Error {
+    // Render targets (DDS) are read through a layout, not as a file set: say so first.
+    let dds = std::fs::read_dir(dir).map_or(0, |it| {
+        it.filter_map(|e| e.ok())
+            .filter(|e| e.path().extension().is_some_and(|x| x.eq_ignore_ascii_case("dds")))
+            .count()
+    });
+    if dds > 0 {
+        return Error::invalid(
+            dir,
+            format!(
+                "holds {dds} DDS render target(s) but no layout.toml: packed targets are decoded through the layout \
+                 they were written with — name it with --input-layout LAYOUT (a built-in name or a layout file; \
+                 `--layout` where the command has no layout of its own), or put it beside them as layout.toml"
+            ),
+        );
+    }
     let found: Vec<String> = files.iter().filter_map(|f| f.file_name()?.to_str().map(String::from)).collect();
     let expected: Vec<String> = PRESETS
         .iter()
