@@ -90,3 +90,15 @@ fn a_folder_of_dds_targets_without_its_layout_says_which_flag_reads_it() {
     let o = gbuf(dir.path(), &["info", "capture", "--input-layout", toml.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+#[test]
+fn max_memory_bounds_the_decoded_frame_not_only_the_files() {
+    let dir = tempfile::tempdir().unwrap();
+    packed(dir.path());
+    // Every target file is under 2 MiB; the decoded frame (f32 planes, derived position, coverage) is not.
+    let o = gbuf(dir.path(), &["info", "p", "--max-memory", "2"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("decoded frame") && err.contains("--max-memory"), "{err}");
+    assert!(gbuf(dir.path(), &["info", "p", "--max-memory", "64"]).status.success());
+}

@@ -350,6 +350,22 @@ pub fn read_frame(
 /// parameters takes about 1 GB of JSON; real ones are kilobytes. 64 MiB, as a sidecar.
 pub const MAX_TABLE_BYTES: u64 = 64 << 20;
 
+/// Bytes a frame of `like`'s size decoded through `layout` takes at its peak: every stored attribute as f32
+/// components, the position derived from depth when the layout stores no position (and the depth from position),
+/// the coverage, and the `packed` bytes of the targets held beside it.
+fn decoded_bytes(layout: &Layout, like: &GBuffer, packed: u64) -> u64 {
+    let attrs = layout.stored_attributes();
+    let has = |a: Attribute| attrs.contains(&a);
+    let mut per_sample: u64 = 1 + attrs.iter().map(|a| 4 * a.components() as u64).sum::<u64>();
+    if has(Attribute::Depth) && !has(Attribute::Position) {
+        per_sample += 12;
+    }
+    if has(Attribute::Position) && !has(Attribute::Depth) {
+        per_sample += 4;
+    }
+    (like.len() as u64).saturating_mul(per_sample).saturating_add(packed)
+}
+
 /// Reads and decodes the targets of `layout` in `dir`: the G-buffer the engine's lighting pass would see, then
 /// what [`crate::io::load`] does after every reader (sidecar lights, sanitising, validation, plausibility).
 pub fn load_packed(dir: &Path, layout: &Layout, explicit: &[(String, PathBuf)], opts: &LoadOptions) -> Result<Loaded> {
@@ -365,6 +381,23 @@ pub fn load_packed_frame(
     opts: &LoadOptions,
 ) -> Result<(Loaded, PackedFiles)> {
     let frame = read_frame(dir, layout, explicit, opts)?;
+    // The decoded frame, not the files, is what the limit bounds: checked before it is made.
+    let need = decoded_bytes(layout, &frame.shell, frame.packed.total_bytes() as u64);
+    if need > opts.limits.max_bytes {
+        return Err(Error::TooLarge {
+            path: dir.into(),
+            bytes: need,
+            limit: opts.limits.max_bytes,
+            why: format!(
+                "{}; the estimate is the decoded frame ({} × {} × {} samples of {}) beside its packed targets",
+                opts.limits.describe(),
+                frame.shell.width,
+                frame.shell.height,
+                frame.shell.samples,
+                layout.stored_attributes().iter().map(|a| a.name()).collect::<Vec<_>>().join(", ")
+            ),
+        });
+    }
     let gbuffer = layout.unpack(&frame.packed, &frame.shell).map_err(|e| Error::invalid(dir, e.to_string()))?;
     if !gbuffer.coverage.iter().any(|&c| c) {
         return Err(Error::invalid(dir, format!("no sample holds a surface (coverage from {})", frame.coverage_from)));
