@@ -9,7 +9,8 @@ use std::path::PathBuf;
 
 fn main() -> Result<(), gbuf::Error> {
     let path = std::env::args_os().nth(1).map_or_else(|| PathBuf::from("fixtures/raster_4x.exr"), PathBuf::from);
-    let loaded = io::load(&path, &io::LoadOptions::default())?;
+    // Any input gbuf reads (a dump, a file-set folder, packed render targets) through the one door.
+    let loaded = gbuf::load(&path, &io::LoadOptions::default())?;
     let gb = &loaded.gbuffer;
     // The dump's lights (sidecar or dump), else 16 scattered in its visible volume: the CLI's one rule.
     let (lights, _) = scene::choose_lights(gb, loaded.lights.as_deref(), None, Some(16), 1).expect("a fallback count");

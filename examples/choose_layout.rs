@@ -27,7 +27,7 @@ fn main() -> Result<(), gbuf::Error> {
     let (result, _size) = budget::search_frames(
         &paths,
         |i| {
-            let loaded = io::load(paths[i].as_ref(), &io::LoadOptions::default())?;
+            let loaded = gbuf::load(&paths[i], &io::LoadOptions::default())?;
             let lights = loaded.lights.clone().unwrap_or_else(|| scene::scatter_lights(&loaded.gbuffer, 16, 1));
             Ok::<_, gbuf::Error>((loaded.gbuffer, lights))
         },

@@ -51,3 +51,32 @@ pub use camera::Camera;
 pub use error::{Error, Result};
 pub use gbuffer::{Attribute, GBuffer};
 pub use light::{Light, LightKind};
+
+/// Reads anything gbuf reads, the one door the command line, the Python module and the examples use: a dump file
+/// (canonical, Blender or Mitsuba EXR, an ISPC `.bin`), a file-set folder (one image per buffer), or packed render
+/// targets decoded through their layout — a folder `gbuf pack` wrote (its `layout.toml` says which), or an
+/// engine's targets with [`io::LoadOptions::input_layout`]. The sidecar, folding, naming and limits of `opts`
+/// apply to every kind ([`io::load`] is the dumps' reader beneath it).
+///
+/// ```
+/// use gbuf::{layout::Layout, scene};
+///
+/// // A frame packed into DDS render targets, as `gbuf pack` writes them…
+/// let gb = scene::render(scene::SceneName::Room, 32, 18, 4)?;
+/// let layout = Layout::by_name("unreal-like").expect("a built-in layout");
+/// let dir = tempfile::tempdir().expect("a temporary folder");
+/// gbuf::layout::targets::write_frame(&layout, &gb, &[], dir.path())?;
+/// // …read back through the one door: the folder's layout.toml says how to decode it.
+/// let loaded = gbuf::load(dir.path(), &Default::default())?;
+/// assert_eq!(loaded.format, gbuf::io::SourceFormat::PackedTargets);
+/// assert_eq!(loaded.gbuffer.coverage, gb.coverage);
+/// assert_eq!(loaded.gbuffer.normal, layout.roundtrip(&gb)?.normal);
+/// # Ok::<(), gbuf::Error>(())
+/// ```
+pub fn load(path: impl AsRef<std::path::Path>, opts: &io::LoadOptions) -> Result<io::Loaded> {
+    let path = path.as_ref();
+    let input_layout = opts.input_layout.as_deref().map(layout::Layout::by_name_or_path).transpose()?;
+    let input = layout::targets::PackedInput { layout: input_layout, targets: opts.targets.clone() };
+    let plain = io::LoadOptions { input_layout: None, targets: Vec::new(), ..opts.clone() };
+    layout::targets::load(path, &input, &plain)
+}

@@ -279,7 +279,7 @@ fn a_sidecar_camera_from_another_render_is_refused() {
     let good = sidecar();
     let l = read(&raw, Some(&good)).unwrap();
     let note = l.sources.iter().find(|s| s.attribute == "position").unwrap().note.clone().unwrap();
-    assert!(note.contains("median reprojection error"), "{note}");
+    assert!(note.contains("checked against the position pass"), "{note}");
     // A wider field of view, and a camera moved sideways: both move the reprojected positions by many pixels.
     let mut wide = good.clone();
     wide.camera.as_mut().unwrap().yfov *= 1.2;

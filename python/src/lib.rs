@@ -260,11 +260,10 @@ fn load<'py>(
         map: map.channels,
         files: map.files,
         frame,
+        input_layout,
         ..Default::default()
     };
-    let layout = input_layout.as_deref().map(Layout::by_name_or_path).transpose().map_err(value_error)?;
-    let input = gbuf_core::layout::targets::PackedInput { layout, targets: Vec::new() };
-    let loaded = gbuf_core::layout::targets::load(&path, &input, &opts).map_err(value_error)?;
+    let loaded = gbuf_core::load(&path, &opts).map_err(value_error)?;
     gbuffer_dict(py, &loaded.gbuffer)
 }
 

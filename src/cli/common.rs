@@ -82,18 +82,31 @@ impl ReadArgs {
     /// How to read packed render targets (`--input-layout`/`--layout`, `--target`).
     pub fn packed(&self) -> anyhow::Result<gbuf::layout::targets::PackedInput> {
         let layout = self.input_layout.as_deref().map(gbuf::layout::Layout::by_name_or_path).transpose()?;
-        let mut targets = Vec::new();
-        for t in &self.targets {
-            let (name, file) =
-                t.split_once('=').with_context(|| format!("--target {t:?}: write NAME=FILE (e.g. gbuffer_a=a.dds)"))?;
-            targets.push((name.trim().to_string(), PathBuf::from(file.trim())));
-        }
-        Ok(gbuf::layout::targets::PackedInput { layout, targets })
+        Ok(gbuf::layout::targets::PackedInput { layout, targets: self.target_files()? })
     }
 
-    /// Loads one dump (packed render targets when asked for or named by the folder's `layout.toml`).
+    /// `--target NAME=FILE`, parsed.
+    fn target_files(&self) -> anyhow::Result<Vec<(String, PathBuf)>> {
+        self.targets
+            .iter()
+            .map(|t| {
+                let (name, file) = t
+                    .split_once('=')
+                    .with_context(|| format!("--target {t:?}: write NAME=FILE (e.g. gbuffer_a=a.dds)"))?;
+                Ok((name.trim().to_string(), PathBuf::from(file.trim())))
+            })
+            .collect()
+    }
+
+    /// Loads one input of any kind through the library's one door ([`gbuf::load`]).
     pub fn load(&self, path: &std::path::Path) -> anyhow::Result<Loaded> {
-        Ok(gbuf::layout::targets::load(path, &self.packed()?, &self.options()?)?)
+        Ok(gbuf::load(path, &self.options_with_targets()?)?)
+    }
+
+    /// [`ReadArgs::options`] with the packed-targets flags (`--input-layout`, `--target`) that only [`gbuf::load`]
+    /// reads.
+    fn options_with_targets(&self) -> anyhow::Result<LoadOptions> {
+        Ok(LoadOptions { input_layout: self.input_layout.clone(), targets: self.target_files()?, ..self.options()? })
     }
 
     /// Library load options from the flags.
@@ -103,6 +116,9 @@ impl ReadArgs {
             None => Default::default(),
         };
         Ok(LoadOptions {
+            // The packed-targets flags only `gbuf::load` reads: `options_with_targets`.
+            input_layout: None,
+            targets: Vec::new(),
             sidecar: self.scene.clone(),
             no_sidecar: self.no_scene,
             fold: self.fold,

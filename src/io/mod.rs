@@ -55,6 +55,13 @@ pub struct LoadOptions {
     pub sidecar: Option<PathBuf>,
     /// Use no sidecar at all, not even one found beside the dump (`--no-scene`).
     pub no_sidecar: bool,
+    /// The layout the input's packed render targets were written with, a built-in name or a layout file
+    /// (`--input-layout`); [`crate::load`] reads them through it ([`load`] reads dumps only and refuses it).
+    /// `None`: a folder's `layout.toml`, if it has one.
+    pub input_layout: Option<String>,
+    /// Packed targets' files when they are not `<target>.<ext>` in the folder (`--target NAME=FILE`; also
+    /// `coverage` and `material_table`), for [`crate::load`].
+    pub targets: Vec<(String, PathBuf)>,
     /// Fold k×k pixel blocks into k² samples (overrides the sidecar's `supersample`).
     pub fold: Option<u32>,
     /// Explicit attribute → channel mapping (`--map attr=channel,…`); channels are comma-free names.
@@ -140,6 +147,13 @@ pub struct Loaded {
 /// by finite values (counted in [`Loaded::sanitized`]) and validates the result.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     crate::util::protect_input(path);
+    if opts.input_layout.is_some() || !opts.targets.is_empty() {
+        return Err(Error::Argument(
+            "packed render targets (an input layout or target files) are read by gbuf::load, which decodes them \
+             through their layout; io::load reads dumps"
+                .into(),
+        ));
+    }
     let (side, ignored) = resolve_sidecar(path, opts)?;
     with_warning(load_with(path, opts, side), ignored)
 }
