@@ -11,7 +11,7 @@
 //! ```
 //! use gbuf::{detect, layout::Layout, measure, resolve, scene};
 //!
-//! // Load: an analytic scene here; `gbuf::io::load(path, &Default::default())` reads a dump from disk.
+//! // Load: an analytic scene here; `gbuf::load(path, &Default::default())` reads any input from disk.
 //! let gb = scene::render(scene::SceneName::Room, 64, 36, 4)?;
 //! let lights = scene::lights::default_lights(scene::SceneName::Room, &gb);
 //! // Pack into the layout's render targets and unpack: what a renderer reading this G-buffer sees.

@@ -6,8 +6,9 @@
 //! anywhere). The layer check reads `crate::<module>` paths anywhere, doc links included (a link up the pipeline is
 //! a dependency a reader follows); the cycle check reads `crate::…`, `super::…` and `self::…` paths (and grouped
 //! `use …::{a, b}` imports) outside comments, resolved to the file that defines the module, as
-//! `../shared/tools/file_cycles.py` does. A `mod.rs` naming its own children is the parent re-exporting them, not
-//! an edge.
+//! `../shared/tools/file_cycles.py` does. A parent (`mod.rs`, `lib.rs`, or `a.rs` beside a folder `a/`) naming its
+//! own children is the parent re-exporting them, not an edge. `lib.rs`, `main.rs` and `cli/` (the binary) sit above
+//! the layers; `main.rs` is left out of the cycle check.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};

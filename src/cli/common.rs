@@ -1,5 +1,5 @@
 //! Flags shared by every command that reads a dump, and output helpers.
-#![allow(dead_code)] // helpers used by the subcommands as they land
+#![allow(dead_code)] // each subcommand uses a subset of these helpers
 
 use anyhow::Context;
 use gbuf::detect::{DetectorConfig, IdSource};

@@ -1,7 +1,8 @@
 //! Shared proptest strategies for codec tests: adversarial vectors and scalars.
 //!
-//! Used by the unit tests (`#[cfg(test)]`) and included by path from `tests/codec_*.rs`, so it depends only on
-//! `glam` and `proptest`.
+//! Included with `#[path]` by `tests/codec_props.rs`, `tests/codec_slices.rs` and `tests/codec_sphere.rs`, so it
+//! depends only on `glam` and `proptest`. `codec/mod.rs` also compiles it into the library's unit-test build
+//! (`#[cfg(test)]`), where no unit test calls it.
 #![allow(dead_code)] // each test binary uses a subset
 
 use glam::Vec3;

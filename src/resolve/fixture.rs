@@ -2,7 +2,9 @@
 //! horizon) and light scatterers, for the resolve's tests and benches. Deterministic for a given seed.
 //!
 //! Not a scene generator for users (that is [`crate::scene`]); it exists so the resolve can be tested and timed
-//! without files and without depending on other stages.
+//! without files. It builds on the data model (camera, G-buffer, lights), `scene::raycast`'s ray-plane and
+//! ray-sphere tests and `util::SplitMix64`, and [`lights_for_density`] runs `detect::baselines::none` and the
+//! resolve itself; no reader, codec or layout is involved.
 
 use crate::camera::Camera;
 use crate::error::Result;

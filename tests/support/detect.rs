@@ -1,5 +1,5 @@
 //! A tiny ray caster that builds per-sample G-buffers from analytic planes and spheres, for the detector tests.
-//! Included by the `detect_*` tests with `#[path]`; compiled on its own it has nothing to run.
+//! Reached by the `detect_*` tests as `support::detect` (`mod support;`), and by `benches/detect.rs` with `#[path]`.
 #![allow(dead_code)]
 
 use gbuf::camera::Camera;

@@ -1,4 +1,4 @@
-//! Helpers shared by the scene tests (included with `#[path]`; also compiled alone as an empty test crate).
+//! Helpers shared by the scene tests (`support::scene`, reached through `mod support;`).
 #![allow(dead_code)]
 
 use gbuf::GBuffer;
