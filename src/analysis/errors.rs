@@ -6,7 +6,7 @@ use crate::detect::{self, Detector, DetectorConfig};
 use crate::error::Result;
 use crate::gbuffer::GBuffer;
 use crate::image::HdrImage;
-use crate::layout::Layout;
+use crate::layout::{Layout, LitFrame};
 use crate::light::Light;
 use crate::measure::image::{compare, ImageError};
 use crate::resolve::{self, ResolveConfig, Resolved};
@@ -38,9 +38,9 @@ pub fn layout_image_error(
     Ok(compare(exact, &lit_layout(gb, lights, layout, detector, detector_config, rc)?.image))
 }
 
-/// `gb` through `layout` [`lit`]: the edge pass and the lighting read the packed targets band by band when the
-/// layout packs smaller than its decoded planes ([`Layout::packs_smaller`]), else a decoded copy — the same image
-/// either way (tests/resolve_packed.rs), in the least memory.
+/// `gb` through `layout` [`lit`], prepared by the one policy ([`Layout::prepare_lighting`]): the packed targets
+/// band by band, the input itself or a decoded copy — the same image either way (tests/resolve_packed.rs), in the
+/// least memory.
 fn lit_layout(
     gb: &GBuffer,
     lights: &[Light],
@@ -49,12 +49,12 @@ fn lit_layout(
     detector_config: &DetectorConfig,
     rc: &ResolveConfig,
 ) -> Result<Resolved> {
-    if layout.packs_smaller(gb) {
-        let packed = layout.pack(gb)?;
-        let frame = layout.frame(&packed, gb)?;
-        let mask = detect::detect_packed(&frame, detector, detector_config)?;
-        resolve::resolve(&frame, lights, &mask, rc)
-    } else {
-        lit(&layout.roundtrip_for_lighting(gb, 1)?.decoded, lights, detector, detector_config, rc)
+    let prepared = layout.prepare_lighting(gb, 1, resolve::TIMING_STRIDE)?;
+    match prepared.frame(layout, gb)? {
+        LitFrame::Packed(frame) => {
+            let mask = detect::detect_packed(&frame, detector, detector_config)?;
+            resolve::resolve(&frame, lights, &mask, rc)
+        }
+        LitFrame::Planes(planes) => lit(planes, lights, detector, detector_config, rc),
     }
 }

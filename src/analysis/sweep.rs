@@ -15,7 +15,7 @@ use crate::detect::{self, Detector, DetectorConfig, EdgeMask};
 use crate::error::Result;
 use crate::gbuffer::{Attribute, GBuffer};
 use crate::image::HdrImage;
-use crate::layout::{Layout, Packed, PackedFrame};
+use crate::layout::{Layout, LitFrame, PackedFrame};
 use crate::light::Light;
 use crate::measure;
 use crate::measure::flip::FlipMap;
@@ -323,7 +323,7 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
             }
         };
         progress(done, total, Some(Stage::PackUnpack), Some(layout.name()));
-        let prepared = prepare(layout, gb, cfg.runs);
+        let prepared = layout.prepare_lighting(gb, cfg.runs, resolve::TIMING_STRIDE);
         done += 1;
         let prepared = match prepared {
             Ok(v) => v,
@@ -334,23 +334,23 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
             }
         };
         let mut attr_row = base.clone();
-        let frame = match &prepared.source {
-            Source::Packed(p) => match layout.frame(p, gb) {
-                Ok(f) => Some(f),
-                Err(e) => {
-                    fail_layout(&mut rows, &e);
-                    done += per_layout;
-                    continue;
-                }
-            },
-            _ => None,
+        // What the detectors and the resolve read: the packed targets band by band, or whole planes (the input
+        // itself, or the lighting copy).
+        let (frame, planes) = match prepared.frame(layout, gb) {
+            Ok(LitFrame::Packed(f)) => (Some(f), None),
+            Ok(LitFrame::Planes(d)) => (None, Some(d)),
+            Err(e) => {
+                fail_layout(&mut rows, &e);
+                done += per_layout;
+                continue;
+            }
         };
         // The attribute errors and maps: against the decoded bands of a packed frame (the decode timed there), or
-        // against the whole lighting copy.
-        let measured = match (&frame, &prepared.source) {
+        // against the whole planes.
+        let measured = match (&frame, planes) {
             (Some(f), _) => band_pass(f, gb, cfg.runs),
-            (None, Source::Copy(d)) => Ok(whole_pass(gb, d, prepared.decode_ms.clone())),
-            (None, _) => Ok(whole_pass(gb, gb, prepared.decode_ms.clone())),
+            (None, Some(d)) => Ok(whole_pass(gb, d, prepared.decode_ms.clone())),
+            (None, None) => unreachable!("a layout's input is packed or planes"),
         };
         let (attribute_errors, mut lmaps, derived, decode_ms) = match measured {
             Ok(m) => m,
@@ -369,12 +369,6 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
         }
         fill_attribute_errors(&mut attr_row, attribute_errors, derived);
         lmaps.layout = layout.name().to_string();
-        // What the detectors and the resolve read: the packed targets band by band, or a whole G-buffer.
-        let planes: Option<&GBuffer> = match &prepared.source {
-            Source::Packed(_) => None,
-            Source::Copy(d) => Some(d),
-            Source::Input => Some(gb),
-        };
 
         for (di, &det) in cfg.detectors.iter().enumerate() {
             progress(done, total, Some(Stage::Detect), Some(&format!("{} × {}", layout.name(), det.name())));
@@ -684,56 +678,6 @@ fn time_sampled_runs<T>(
         ms.push(sample()?);
     }
     Ok((v, Timing::from_ms(ms).expect("at least one run")))
-}
-
-/// What a layout's rows read (one value per layout: its size does not matter).
-#[allow(clippy::large_enum_variant)]
-enum Source {
-    /// The packed frame: read band by band (a layout smaller packed than decoded).
-    Packed(Packed),
-    /// A lighting copy ([`Layout::roundtrip_for_lighting`]): a layout no smaller packed than decoded whose roundtrip
-    /// changes the G-buffer.
-    Copy(GBuffer),
-    /// The input itself: a layout no smaller packed than decoded whose roundtrip leaves the G-buffer bit for bit
-    /// as it is (a lossless layout on finite input).
-    Input,
-}
-
-/// A layout made ready for its rows, with the encode times (and decode times, except for a packed frame, whose
-/// bands are decoded and timed by [`band_pass`]).
-struct Prepared {
-    source: Source,
-    encode_ms: Vec<f64>,
-    decode_ms: Vec<f64>,
-    table_ms: Option<f64>,
-}
-
-/// Packs `gb` with `layout` (`runs` timed encodes), unless its packed frame would be no smaller than the decoded
-/// planes: then the input stands for itself when the roundtrip leaves it unchanged (checked band by band, one
-/// timed run), else a lighting copy is made as before.
-fn prepare(layout: &Layout, gb: &GBuffer, runs: usize) -> Result<Prepared> {
-    if layout.packs_smaller(gb) {
-        let (packed, encode_ms, table_ms) = layout.pack_timed(gb, runs, resolve::TIMING_STRIDE)?;
-        return Ok(Prepared { source: Source::Packed(packed), encode_ms, decode_ms: Vec::new(), table_ms });
-    }
-    let (same, enc, dec) = layout.roundtrip_matches(gb)?;
-    if same {
-        // The other timing runs estimate from every TIMING_STRIDE-th band, as the packed layouts' do.
-        let (mut encode_ms, mut decode_ms) = (vec![enc], vec![dec]);
-        for _ in 1..runs.max(1) {
-            let (enc, dec) = layout.roundtrip_time_sampled(gb, resolve::TIMING_STRIDE)?;
-            encode_ms.push(enc);
-            decode_ms.push(dec);
-        }
-        return Ok(Prepared { source: Source::Input, encode_ms, decode_ms, table_ms: None });
-    }
-    let r = layout.roundtrip_for_lighting(gb, runs)?;
-    Ok(Prepared {
-        source: Source::Copy(r.decoded),
-        encode_ms: r.encode_ms,
-        decode_ms: r.decode_ms,
-        table_ms: r.table_ms,
-    })
 }
 
 /// Rows per band of [`band_pass`].

@@ -9,6 +9,7 @@ use gbuf::base::picture::heatmap_png;
 use gbuf::base::timing::{timed, StageMs};
 use gbuf::detect::{self, Detector};
 use gbuf::image::{LdrEncoding, ToneCurve, ToneMap};
+use gbuf::layout::LitFrame;
 use gbuf::light::Light;
 use gbuf::measure::image::{against_full_deferred, compare, error_triad, ErrorSet, ImageError, Viewing};
 use gbuf::resolve::{self, Culling, Lighting, ResolveConfig, ResolveStats, Schedule};
@@ -205,32 +206,29 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => None,
     };
 
-    // A layout whose packed frame is no smaller than its decoded planes (a lossless 84-byte layout) gains nothing
-    // from it: that one is unpacked band by band into a copy as before (`Layout::roundtrip_for_lighting`).
-    let in_cpu_copy = layout.as_ref().filter(|l| !l.packs_smaller(&gb));
-    let (prepared, t_pack) = timed(|| -> gbuf::Result<(Option<gbuf::layout::Packed>, Option<GBuffer>)> {
-        match (&layout, in_cpu_copy) {
-            (None, _) => Ok((None, None)),
-            (Some(l), None) => Ok((Some(l.pack(&gb)?), None)),
-            (Some(l), Some(_)) => Ok((None, Some(l.roundtrip_for_lighting(&gb, 1)?.decoded))),
-        }
-    });
-    let (packed, copy) =
+    // Through a layout, the frame is made ready for lighting by the library's one policy (packed targets read band
+    // by band, the input itself, or a decoded copy: `Layout::prepare_lighting`).
+    let (prepared, t_pack) =
+        timed(|| layout.as_ref().map(|l| l.prepare_lighting(&gb, 1, resolve::TIMING_STRIDE)).transpose());
+    let prepared =
         prepared.with_context(|| format!("{file}: packing with layout {}", args.layout.as_deref().unwrap_or("")))?;
-    let frame = match (&layout, &packed) {
-        (Some(l), Some(p)) => Some(l.frame(p, &gb).with_context(|| format!("{file}: layout {}", l.name()))?),
-        _ => bin_frame,
+    let (frame, planes) = match (&layout, &prepared) {
+        (Some(l), Some(p)) => match p.frame(l, &gb).with_context(|| format!("{file}: layout {}", l.name()))? {
+            LitFrame::Packed(f) => (Some(f), None),
+            LitFrame::Planes(d) => (None, Some(d)),
+        },
+        _ => (bin_frame, None),
     };
-    let lit_gb: resolve::ResolveInput<'_> = match (&frame, &copy) {
+    let lit_gb: resolve::ResolveInput<'_> = match (&frame, planes) {
         (Some(f), _) => f.into(),
-        (None, Some(c)) => c.into(),
+        (None, Some(d)) => d.into(),
         (None, None) => (&gb).into(),
     };
     let t_decode = t_decode + t_pack;
 
-    let (mask, t_detect) = timed(|| match (&frame, &copy) {
+    let (mask, t_detect) = timed(|| match (&frame, planes) {
         (Some(f), _) => detect::detect_packed(f, args.detector, &det_cfg),
-        (None, Some(c)) => detect::detect(c, args.detector, &det_cfg),
+        (None, Some(d)) => detect::detect(d, args.detector, &det_cfg),
         (None, None) => detect::detect(&gb, args.detector, &det_cfg),
     });
     let mask = mask.with_context(|| format!("{file}: edge detector {}", args.detector))?;

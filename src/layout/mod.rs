@@ -12,6 +12,7 @@ pub(crate) mod coder;
 pub mod codespace;
 pub mod dds;
 pub(crate) mod formats;
+pub mod lighting;
 pub mod material;
 pub mod pack;
 pub mod shader;
@@ -24,6 +25,7 @@ pub mod wgsl;
 pub use crate::gbuffer::BandSource;
 pub use coder::{CodecKind, Slot};
 pub use formats::{Component, ComponentKind, Format};
+pub use lighting::{LightingSource, LitFrame, PreparedLighting};
 pub use material::MaterialTable;
 pub use pack::{Packed, PackedFrame, Roundtrip, TargetPlane};
 pub use spec::{
