@@ -6,7 +6,7 @@
 //!
 //! Also the sidecar rules: a JSON beside a dump that is not a gbuf sidecar never blocks loading (one warning that
 //! names the file, why and the flags), `--no-scene` looks for none, and a gbuf sidecar with several errors
-//! reports all of them at once.
+//! reports all of them at once. And albedo above 1 is the data's error, said apart from the layouts' rows.
 
 mod support;
 
@@ -202,4 +202,22 @@ fn report_compares_layouts_under_several_brdfs() {
     // Commands that light once refuse a list.
     let o = gbuf(dir.path(), &["budget", pbr.to_str().unwrap(), "--max-bytes", "12", "--brdf", "ggx,lambert"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}
+
+/// Albedo above 1 is the data's error: the report says, apart from the layouts' rows, what clamping it alone costs.
+#[test]
+fn albedo_above_one_is_kept_apart_from_the_layout_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let lux = fixture("luxcore");
+    let args = ["report", lux.to_str().unwrap(), "--layouts", "fat-20", "--detectors", "lauritzen", "--flip", "none"];
+    let mut with_json: Vec<&str> = args.to_vec();
+    with_json.extend(["-o", "r", "--json"]);
+    let rep = json_of(&gbuf(dir.path(), &with_json));
+    let notes = rep["frames"][0]["notes"].as_array().expect("the frame's notes");
+    let note = notes.iter().filter_map(Value::as_str).find(|n| n.contains("exceed 1")).expect("the albedo note");
+    let rmse: f64 = note.split("layout RMSE ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+    let layout = rep["rows"][0]["layout_error"]["rmse"].as_f64().unwrap();
+    assert!(rmse > 0.0 && rmse <= layout * 1.0001, "clamping alone {rmse}, the layout's whole error {layout}");
+    let md = std::fs::read_to_string(dir.path().join("r/report.md")).unwrap();
+    assert!(md.contains("exceed 1"), "report.md says it");
 }

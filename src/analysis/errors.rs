@@ -38,6 +38,35 @@ pub fn layout_image_error(
     Ok(compare(exact, &lit_layout(gb, lights, layout, detector, detector_config, rc)?.image))
 }
 
+/// Albedos above 1 in the data, and what clamping them costs: every unorm or sRGB albedo codec stores [0, 1], so
+/// part of such a layout's error is the data's, not the packing's. Returns the covered samples with a channel
+/// above 1, the largest channel, and the image error of `gb` with only those albedos clamped to [0, 1], lit with
+/// `detector` and `rc` against `gb` lit the same way; `None` when no covered albedo exceeds 1.
+pub fn albedo_clamp_error(
+    gb: &GBuffer,
+    lights: &[Light],
+    detector: Detector,
+    detector_config: &DetectorConfig,
+    rc: &ResolveConfig,
+) -> Result<Option<(u64, f32, ImageError)>> {
+    let Some(albedo) = &gb.albedo else { return Ok(None) };
+    let bright = |i: usize| gb.coverage[i] && albedo[i].max_element() > 1.0;
+    let count = (0..gb.len()).filter(|&i| bright(i)).count() as u64;
+    if count == 0 {
+        return Ok(None);
+    }
+    let max = (0..gb.len()).filter(|&i| bright(i)).map(|i| albedo[i].max_element()).fold(1.0f32, f32::max);
+    let mut clamped = gb.clone();
+    if let Some(a) = clamped.albedo.as_mut() {
+        for v in a.iter_mut() {
+            *v = v.clamp(glam::Vec3::ZERO, glam::Vec3::ONE);
+        }
+    }
+    let exact = lit(gb, lights, detector, detector_config, rc)?.image;
+    let clamp = lit(&clamped, lights, detector, detector_config, rc)?.image;
+    Ok(Some((count, max, compare(&exact, &clamp))))
+}
+
 /// `gb` through `layout` [`lit`], prepared by the one policy ([`Layout::prepare_lighting`]): the packed targets
 /// band by band, the input itself or a decoded copy — the same image either way (tests/resolve_packed.rs), in the
 /// least memory.

@@ -148,6 +148,9 @@ pub fn print_summary(rep: &Report, dir: &Path) {
             f.lights,
             f.lights_source
         );
+        for n in &f.notes {
+            println!("note: {n}");
+        }
         println!("{}", f.needs.summary_line());
         if let Some(p) = &f.needs.pruned_layout {
             println!(
