@@ -146,8 +146,8 @@ pub fn run_frame(
             e.psnr_db,
             first.name()
         ));
+        lap("albedo above 1");
     }
-    lap("albedo above 1");
     let covered = gb.len() - gb.background_samples();
     let frame = Frame {
         input: input.name.clone(),
