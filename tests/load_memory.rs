@@ -225,3 +225,62 @@ fn a_png_target_claiming_more_pixels_than_its_bytes_can_hold_is_refused_before_d
     assert!(e.contains("huge.png") && e.contains("30000×30000") && e.contains("1032:1"), "{e}");
     assert!(peak < REFUSAL_PEAK, "peak {peak} bytes while refusing ({e})");
 }
+
+/// A legacy DDS header (no DX10 extension) for an uncompressed RGBA8 texture of `w`×`h`, and no texel data.
+fn dds_header_only(w: u32, h: u32) -> Vec<u8> {
+    let mut d = b"DDS ".to_vec();
+    let mut put = |v: u32| d.extend_from_slice(&v.to_le_bytes());
+    put(124); // header size
+    put(0x1 | 0x2 | 0x4 | 0x1000); // caps, height, width, pixel format
+    put(h);
+    put(w);
+    put(w.saturating_mul(4)); // pitch
+    put(0); // depth
+    put(1); // mip levels
+    for _ in 0..11 {
+        put(0);
+    }
+    put(32); // pixel format size
+    put(0x41); // RGB with alpha
+    put(0); // no FourCC
+    put(32); // bits per pixel
+    for m in [0xff, 0xff00, 0xff_0000, 0xff00_0000] {
+        put(m);
+    }
+    put(0x1000); // caps: texture
+    for _ in 0..4 {
+        put(0);
+    }
+    d
+}
+
+#[test]
+fn a_dds_target_claiming_a_huge_texture_is_refused_before_its_texels_exist() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("huge.dds");
+    std::fs::write(&p, dds_header_only(65_535, 65_535)).unwrap();
+    let lax = ReadLimits { max_bytes: u64::MAX, allow_dwa: false };
+    let (result, peak) = peak_of(|| gbuf::layout::texture::read(&p, gbuf::layout::Format::Rgba8, &lax));
+    let e = result.expect_err("a header without its texels must be refused").to_string();
+    assert!(e.contains("huge.dds"), "{e}");
+    assert!(peak < REFUSAL_PEAK, "peak {peak} bytes while refusing ({e})");
+}
+
+#[test]
+fn an_oversized_material_table_is_refused_before_it_is_read() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tempfile::tempdir().unwrap();
+    let dump = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/raster_4x.exr");
+    let gb = gbuf::io::load(&dump, &LoadOptions::default()).unwrap().gbuffer;
+    let layout = gbuf::layout::Layout::by_name("destiny-96").unwrap();
+    let folder = dir.path().join("p");
+    gbuf::layout::targets::write_frame(&layout, &gb, &[], &folder).unwrap();
+    // A table one byte over the cap: a sparse file, so the test writes nothing to speak of.
+    let table = std::fs::OpenOptions::new().write(true).open(folder.join("material_table.json")).unwrap();
+    table.set_len(gbuf::layout::targets::MAX_TABLE_BYTES + 1).unwrap();
+    let (result, peak) = peak_of(|| gbuf::load(&folder, &LoadOptions::default()));
+    let e = result.expect_err("an oversized table must be refused").to_string();
+    assert!(e.contains("material_table.json") && e.contains("MiB"), "{e}");
+    assert!(peak < REFUSAL_PEAK, "peak {peak} bytes while refusing ({e})");
+}
