@@ -75,17 +75,10 @@ pub fn write_rgb8_png(path: &Path, width: u32, height: u32, bytes: Vec<u8>) -> R
 /// Height in pixels of the legend strip under a heatmap.
 pub const HEATMAP_LEGEND_ROWS: u32 = 8;
 
-/// Writes `counts` (row-major, `width × height`) as a heatmap PNG through [`colormap`], scaled so that
+/// `counts` (row-major, `width × height`) as a heatmap PNG in memory through [`colormap`], scaled so that
 /// `max(counts)` is the top of the map, with a legend strip of [`HEATMAP_LEGEND_ROWS`] rows underneath running
-/// from 0 (left) to the maximum (right). Returns the maximum, which the caller should print (the PNG carries no
-/// text).
-pub fn write_heatmap_png(path: &Path, width: u32, height: u32, counts: &[u32]) -> Result<u32> {
-    let (png, max) = heatmap_png(width, height, counts).map_err(|e| Error::invalid(path, e.to_string()))?;
-    write_bytes_atomic(path, &png)?;
-    Ok(max)
-}
-
-/// [`write_heatmap_png`]'s file, encoded in memory: the PNG's bytes and the maximum.
+/// from 0 (left) to the maximum (right): the PNG's bytes and the maximum, which the caller should print (the PNG
+/// carries no text; the report's heatmaps, `report::plot::Heatmap`, have a numbered colour bar).
 pub fn heatmap_png(width: u32, height: u32, counts: &[u32]) -> Result<(Vec<u8>, u32)> {
     if counts.len() != width as usize * height as usize {
         return Err(Error::Mismatch(format!("{} counts for a {width}×{height} heatmap", counts.len())));
@@ -178,15 +171,13 @@ mod tests {
 
     #[test]
     fn heatmap_scales_to_the_maximum_with_a_legend() {
-        let dir = tempfile::tempdir().unwrap();
-        let heat = dir.path().join("h.png");
-        let max = write_heatmap_png(&heat, 3, 2, &[0, 1, 2, 3, 4, 8]).unwrap();
+        let (png, max) = heatmap_png(3, 2, &[0, 1, 2, 3, 4, 8]).unwrap();
         assert_eq!(max, 8);
-        let h = image::open(&heat).unwrap().to_rgb8();
+        let h = image::load_from_memory(&png).unwrap().to_rgb8();
         assert_eq!(h.dimensions(), (3, 2 + HEATMAP_LEGEND_ROWS));
         assert_eq!(h.get_pixel(2, 1).0, colormap(1.0));
         assert_eq!(h.get_pixel(0, 0).0, colormap(0.0));
         assert_eq!(h.get_pixel(2, 2 + HEATMAP_LEGEND_ROWS - 1).0, colormap(1.0), "legend ends at the maximum");
-        assert!(write_heatmap_png(&heat, 3, 3, &[0; 6]).is_err());
+        assert!(heatmap_png(3, 3, &[0; 6]).is_err());
     }
 }
