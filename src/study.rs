@@ -135,8 +135,10 @@ pub fn run_frame(
     // the layouts' errors that include it.
     let mut notes = input.notes.clone();
     let first = cfg.detectors.first().copied().unwrap_or(crate::detect::Detector::Lauritzen);
+    // The sweep's exact image with the first detector is the baseline: lit once, not again here.
+    let exact = out.exact.first().and_then(Option::as_ref);
     if let Some((n, max, e)) =
-        crate::analysis::errors::albedo_clamp_error(gb, input.lights, first, &cfg.detector_config, &cfg.resolve)?
+        crate::analysis::errors::albedo_clamp_error(gb, input.lights, exact, first, &cfg.detector_config, &cfg.resolve)?
     {
         notes.push(format!(
             "{n} covered albedos exceed 1 (up to {max:.3}); clamping them to [0, 1] alone — what every unorm and \

@@ -41,10 +41,12 @@ pub fn layout_image_error(
 /// Albedos above 1 in the data, and what clamping them costs: every unorm or sRGB albedo codec stores [0, 1], so
 /// part of such a layout's error is the data's, not the packing's. Returns the covered samples with a channel
 /// above 1, the largest channel, and the image error of `gb` with only those albedos clamped to [0, 1], lit with
-/// `detector` and `rc` against `gb` lit the same way; `None` when no covered albedo exceeds 1.
+/// `detector` and `rc` against `gb` lit the same way (`exact`, when the caller has it already; else lit here);
+/// `None` when no covered albedo exceeds 1.
 pub fn albedo_clamp_error(
     gb: &GBuffer,
     lights: &[Light],
+    exact: Option<&HdrImage>,
     detector: Detector,
     detector_config: &DetectorConfig,
     rc: &ResolveConfig,
@@ -62,9 +64,12 @@ pub fn albedo_clamp_error(
             *v = v.clamp(glam::Vec3::ZERO, glam::Vec3::ONE);
         }
     }
-    let exact = lit(gb, lights, detector, detector_config, rc)?.image;
     let clamp = lit(&clamped, lights, detector, detector_config, rc)?.image;
-    Ok(Some((count, max, compare(&exact, &clamp))))
+    let error = match exact {
+        Some(e) => compare(e, &clamp),
+        None => compare(&lit(gb, lights, detector, detector_config, rc)?.image, &clamp),
+    };
+    Ok(Some((count, max, error)))
 }
 
 /// `gb` through `layout` [`lit`], prepared by the one policy ([`Layout::prepare_lighting`]): the packed targets
