@@ -212,18 +212,27 @@ fn png_header_only(w: u32, h: u32) -> Vec<u8> {
     out
 }
 
-#[test]
-fn a_png_target_claiming_more_pixels_than_its_bytes_can_hold_is_refused_before_decoding() {
+/// Reads the render-target file `bytes` as `name` under limits that would allow any size, and returns the error
+/// it must be refused with, checking that refusing it stays under [`REFUSAL_PEAK`]: the file's own size, not the
+/// byte limit, must refuse a header that claims more than the file holds.
+fn refused_target(name: &str, bytes: &[u8]) -> String {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let dir = tempfile::tempdir().unwrap();
-    let p = dir.path().join("huge.png");
-    std::fs::write(&p, png_header_only(30_000, 30_000)).unwrap();
-    // Limits that would allow 3.6 GB: the file's own size must refuse it.
+    let p = dir.path().join(name);
+    std::fs::write(&p, bytes).unwrap();
     let lax = ReadLimits { max_bytes: u64::MAX, allow_dwa: false };
     let (result, peak) = peak_of(|| gbuf::layout::texture::read(&p, gbuf::layout::Format::Rgba8, &lax));
-    let e = result.expect_err("a header without its pixels must be refused").to_string();
-    assert!(e.contains("huge.png") && e.contains("30000×30000") && e.contains("1032:1"), "{e}");
+    let e = result.expect_err("a header without its data must be refused").to_string();
+    assert!(e.contains(name), "{e}");
     assert!(peak < REFUSAL_PEAK, "peak {peak} bytes while refusing ({e})");
+    e
+}
+
+#[test]
+fn a_png_target_claiming_more_pixels_than_its_bytes_can_hold_is_refused_before_decoding() {
+    // 30000² RGBA8 would be 3.6 GB.
+    let e = refused_target("huge.png", &png_header_only(30_000, 30_000));
+    assert!(e.contains("30000×30000") && e.contains("1032:1"), "{e}");
 }
 
 /// A legacy DDS header (no DX10 extension) for an uncompressed RGBA8 texture of `w`×`h`, and no texel data.
@@ -256,15 +265,7 @@ fn dds_header_only(w: u32, h: u32) -> Vec<u8> {
 
 #[test]
 fn a_dds_target_claiming_a_huge_texture_is_refused_before_its_texels_exist() {
-    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let dir = tempfile::tempdir().unwrap();
-    let p = dir.path().join("huge.dds");
-    std::fs::write(&p, dds_header_only(65_535, 65_535)).unwrap();
-    let lax = ReadLimits { max_bytes: u64::MAX, allow_dwa: false };
-    let (result, peak) = peak_of(|| gbuf::layout::texture::read(&p, gbuf::layout::Format::Rgba8, &lax));
-    let e = result.expect_err("a header without its texels must be refused").to_string();
-    assert!(e.contains("huge.dds"), "{e}");
-    assert!(peak < REFUSAL_PEAK, "peak {peak} bytes while refusing ({e})");
+    refused_target("huge.dds", &dds_header_only(65_535, 65_535));
 }
 
 #[test]

@@ -355,7 +355,6 @@ pub fn print_json<T: serde::Serialize>(value: &T) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Detector threshold flags, shared by every command that runs a detector (flatten it into their `Args`).
 /// Checks, before any work, that every output's folder exists and the output is no folder itself: a command that
 /// would fail writing its last output fails first instead.
 pub fn check_output_folders<'a>(outputs: impl IntoIterator<Item = &'a std::path::Path>) -> anyhow::Result<()> {
@@ -404,6 +403,7 @@ pub fn say_lighting(l: &gbuf::resolve::Lighting) {
     eprintln!("lighting: {}", l.summary());
 }
 
+/// Detector threshold flags, shared by every command that runs a detector (flatten it into their `Args`).
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct ThresholdArgs {
     /// lauritzen: multiplier on |∂z/∂x| + |∂z/∂y| (default 1).
