@@ -131,3 +131,19 @@ fn sidecar_round_trips_camera_and_lights_exactly() {
     assert_eq!(back.camera.as_ref().unwrap().to_camera(), gb.camera.unwrap());
     assert_eq!(back.view_lights(None, Path::new("mem.json")).unwrap(), lights);
 }
+
+/// JSON has no infinity: a number beyond `f32::MAX` would read as one, light nothing sensible and not serialize
+/// back (a fuzzer's find). Every such number is named with its path, in one error.
+#[test]
+fn sidecar_numbers_beyond_f32_are_refused_with_their_paths() {
+    let text = r#"{"camera": {"world_to_view": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]], "yfov": 1.0,
+        "aspect": 1.0, "znear": 0.1, "zfar": 100.0, "principal_point": [1e39, 0]},
+        "lights": [{"type": "point", "position": [0, 0, -1], "range": -1e39}]}"#;
+    let e = Sidecar::parse(text, Path::new("big.json")).unwrap_err().to_string();
+    assert!(e.contains("big.json"), "{e}");
+    assert!(e.contains("camera.principal_point[0]"), "{e}");
+    assert!(e.contains("lights[0].range"), "{e}");
+    // The largest finite f32 itself is a number like any other.
+    let ok = text.replace("1e39", "3.4e38");
+    assert!(Sidecar::parse(&ok, Path::new("ok.json")).is_ok());
+}

@@ -261,6 +261,7 @@ impl Sidecar {
                 }),
             }
         }
+        overflowing_numbers(value, &mut String::new(), &mut problems);
         let s = Sidecar {
             camera: field(obj, "camera", &mut problems),
             supersample: field(obj, "supersample", &mut problems),
@@ -358,5 +359,37 @@ impl Sidecar {
             out.push(light);
         }
         Ok(out)
+    }
+}
+
+/// Every number in `value` too large for an `f32` (it would read as infinity, and then neither light nor serialize
+/// back), with its path (`camera.principal_point[0]`): JSON has no infinity, so a sidecar that needs one is wrong.
+fn overflowing_numbers(value: &serde_json::Value, at: &mut String, problems: &mut Vec<String>) {
+    use serde_json::Value;
+    let len = at.len();
+    match value {
+        Value::Number(n) => {
+            if n.as_f64().is_some_and(|x| x.abs() > f64::from(f32::MAX)) {
+                problems.push(format!("{at}: {n} is beyond the largest 32-bit float ({:e})", f32::MAX));
+            }
+        }
+        Value::Array(items) => {
+            for (i, item) in items.iter().enumerate() {
+                at.push_str(&format!("[{i}]"));
+                overflowing_numbers(item, at, problems);
+                at.truncate(len);
+            }
+        }
+        Value::Object(map) => {
+            for (key, item) in map {
+                if !at.is_empty() {
+                    at.push('.');
+                }
+                at.push_str(key);
+                overflowing_numbers(item, at, problems);
+                at.truncate(len);
+            }
+        }
+        _ => {}
     }
 }
