@@ -225,3 +225,52 @@ fn light_prepass_reports_its_error_against_full_deferred() {
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("light pre-pass vs full deferred") && text.contains("error vs reference"), "{text}");
 }
+
+/// A library user gets `gbuf resolve`'s numbers from `analysis::job::resolve_frame`: the same image error, layout
+/// and detector errors and work counts as the command's JSON, on the same frame, lights and layout.
+#[test]
+fn the_library_resolve_job_gives_the_commands_numbers() {
+    use gbuf::analysis::job::{resolve_frame, ResolveJob};
+    let dir = tempfile::tempdir().unwrap();
+    let gb = small_room(dir.path());
+    let cli = json(&gbuf(
+        dir.path(),
+        &["resolve", "room.exr", "--lights", "16", "--layout", "lauritzen-15", "--json", "--no-flip"],
+    ));
+    let lights = gbuf::scene::choose_lights(&gb, None, Some(16), None, 1).unwrap().0;
+    let layout = gbuf::layout::Layout::by_name("lauritzen-15").unwrap();
+    let lighting = gbuf::resolve::Lighting::choose(None, None, &gb.attributes());
+    let job = ResolveJob {
+        layout: Some(&layout),
+        detector: gbuf::detect::Detector::Lauritzen,
+        thresholds: Default::default(),
+        config: lighting.apply(Default::default()),
+        reference: true,
+        flip: None,
+    };
+    let steps = std::sync::Mutex::new(Vec::new());
+    let (done, beside) = resolve_frame(
+        "room.exr",
+        &gb,
+        None,
+        &lights,
+        &job,
+        &|s| steps.lock().unwrap().push(s.to_string()),
+        |r| r.image.width,
+    )
+    .unwrap();
+    assert_eq!(beside, 48, "the closure ran on the lit frame");
+    assert_eq!(steps.into_inner().unwrap(), ["edges", "lighting", "the every-sample reference"]);
+    let e = done.error.unwrap();
+    assert_eq!(cli["rmse"].as_f64().unwrap(), e.rmse);
+    assert_eq!(cli["layout_error"]["rmse"].as_f64().unwrap(), done.triad.layout.unwrap().rmse);
+    assert_eq!(cli["aa_error"]["rmse"].as_f64().unwrap(), done.triad.aa.unwrap().rmse);
+    assert_eq!(cli["shading_evaluations"].as_u64().unwrap(), done.resolved.stats.shading_evaluations);
+    assert_eq!(cli["edge_fraction"].as_f64().unwrap(), done.mask.edge_fraction());
+    assert!(e.rmse > 0.0 && done.stages.total >= done.stages.detect);
+    // An empty frame lights nothing: an error naming the frame, not a success.
+    let mut empty = gb.clone();
+    empty.coverage.iter_mut().for_each(|c| *c = false);
+    let err = resolve_frame("empty.exr", &empty, None, &lights, &job, &|_| {}, |_| ()).unwrap_err().to_string();
+    assert!(err.contains("empty.exr"), "{err}");
+}

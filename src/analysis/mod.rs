@@ -10,6 +10,7 @@ pub mod budget;
 pub mod compress;
 pub mod errors;
 pub mod forward;
+pub mod job;
 pub mod needs;
 pub mod pareto;
 pub mod pipelines;

@@ -5,14 +5,14 @@
 
 use crate::cli::common::{print_json, InputArgs, ThresholdArgs};
 use anyhow::Context;
+use gbuf::analysis::job::{resolve_frame, ResolveJob, ResolveOutcome};
 use gbuf::base::picture::heatmap_png;
-use gbuf::base::timing::{timed, StageMs};
-use gbuf::detect::{self, Detector};
+use gbuf::base::timing::timed;
+use gbuf::detect::Detector;
 use gbuf::image::{LdrEncoding, ToneCurve, ToneMap};
-use gbuf::layout::LitFrame;
 use gbuf::light::Light;
-use gbuf::measure::image::{against_full_deferred, compare, error_triad, ErrorSet, ImageError, Viewing};
-use gbuf::resolve::{self, Culling, Lighting, ResolveConfig, ResolveStats, Schedule};
+use gbuf::measure::image::{ErrorSet, ImageError, Viewing};
+use gbuf::resolve::{self, Culling, Lighting, ResolveConfig, ResolveStats, Resolved, Schedule};
 use gbuf::GBuffer;
 use serde::Serialize;
 use std::io::Write;
@@ -151,7 +151,8 @@ struct Report {
     heatmap_max: Option<u32>,
 }
 
-/// Runs `gbuf resolve`.
+/// Runs `gbuf resolve`: flags in, [`gbuf::analysis::job::resolve_frame`] lights and measures, the pictures are
+/// encoded beside its measurements and written together.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let cfg = ResolveConfig {
         culling: args.culling,
@@ -168,12 +169,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
         anyhow::bail!("--exposure must be a positive number, got {}", args.exposure);
     }
-    crate::cli::common::check_output_folders(
-        [&args.output, &args.png, &args.heatmap].into_iter().flatten().map(PathBuf::as_path),
-    )?;
-    let det_cfg = args.thresholds.config()?;
-    // With a layout the G-buffer is packed into its render targets, and the edge pass and the lighting read those
-    // targets band by band, as a GPU does: no decoded copy of the frame is made. Named before any work.
+    anyhow::ensure!(args.ppd.is_finite() && args.ppd > 0.0, "--ppd must be a positive number, got {}", args.ppd);
+    let outputs = [&args.output, &args.png, &args.heatmap];
+    crate::cli::common::check_output_folders(outputs.into_iter().flatten().map(PathBuf::as_path))?;
+    let thresholds = args.thresholds.config()?;
     let layout = match &args.layout {
         Some(name) => Some(gbuf::layout::Layout::by_name_or_path(name).with_context(|| format!("--layout {name}"))?),
         None => None,
@@ -181,138 +180,34 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let file = args.input.file.display().to_string();
 
     let pb = crate::cli::spinner(format!("loading {file}"));
-    // An ISPC `.bin` is lit from its own arrays, decoded band by band inside the edge pass and the resolve (as the
-    // example's shading loop reads it): no decoded copy of the frame. Not with a layout (which packs the decoded
-    // frame), scattered lights (placed from the decoded depths) or the reference (which reads every plane at once:
-    // the frame decoded whole once serves it and the resolve).
-    let bin = args.layout.is_none() && args.lights.is_none() && args.no_reference;
-    let (opened, t_decode) = timed(|| -> anyhow::Result<(gbuf::io::Loaded, Option<gbuf::io::ispc::Arrays>)> {
-        if bin {
-            if let Some(dump) = args.input.open_packed()? {
-                return Ok((dump.loaded, Some(dump.arrays)));
-            }
+    // An ISPC `.bin` is lit from its own arrays, decoded band by band (as the example's shading loop reads it):
+    // not with a layout (which packs the decoded frame), scattered lights (placed from the decoded depths) or the
+    // reference (which reads every plane at once: the frame decoded whole serves it and the resolve).
+    let from_arrays = args.layout.is_none() && args.lights.is_none() && args.no_reference;
+    let (opened, t_load) = timed(|| -> anyhow::Result<(gbuf::io::Loaded, Option<gbuf::io::ispc::Arrays>)> {
+        match from_arrays.then(|| args.input.open_packed()).transpose()?.flatten() {
+            Some(dump) => Ok((dump.loaded, Some(dump.arrays))),
+            None => args.input.load().map(|l| (l, None)),
         }
-        args.input.load().map(|l| (l, None))
     });
     let (loaded, arrays) = opened.with_context(|| format!("loading {file}"))?;
     let gb: GBuffer = loaded.gbuffer;
-    // The lighting model: --brdf, or the data's choice (a .bin's arrays hold a specular power, no roughness).
     let lighting = args.lighting.choose(&gb.attributes());
-    let cfg = lighting.apply(cfg);
     pb.suspend(|| crate::cli::common::say_lighting(&lighting));
     let (lights, lights_source) = pick_lights(loaded.lights, args.lights, args.seed, &gb, &file)?;
-    let bin_frame = match &arrays {
-        Some(a) => Some(gbuf::layout::PackedFrame::of_source(&gb, a).with_context(|| format!("{file}: its arrays"))?),
-        None => None,
-    };
-
-    // Through a layout, the frame is made ready for lighting by the library's one policy (packed targets read band
-    // by band, the input itself, or a decoded copy: `Layout::prepare_lighting`).
-    let (prepared, t_pack) =
-        timed(|| layout.as_ref().map(|l| l.prepare_lighting(&gb, 1, resolve::TIMING_STRIDE)).transpose());
-    let prepared =
-        prepared.with_context(|| format!("{file}: packing with layout {}", args.layout.as_deref().unwrap_or("")))?;
-    let (frame, planes) = match (&layout, &prepared) {
-        (Some(l), Some(p)) => match p.frame(l, &gb).with_context(|| format!("{file}: layout {}", l.name()))? {
-            LitFrame::Packed(f) => (Some(f), None),
-            LitFrame::Planes(d) => (None, Some(d)),
-        },
-        _ => (bin_frame, None),
-    };
-    let lit_gb: resolve::ResolveInput<'_> = match (&frame, planes) {
-        (Some(f), _) => f.into(),
-        (None, Some(d)) => d.into(),
-        (None, None) => (&gb).into(),
-    };
-    let t_decode = t_decode + t_pack;
-
-    let (mask, t_detect) = timed(|| match (&frame, planes) {
-        (Some(f), _) => detect::detect_packed(f, args.detector, &det_cfg),
-        (None, Some(d)) => detect::detect(d, args.detector, &det_cfg),
-        (None, None) => detect::detect(&gb, args.detector, &det_cfg),
-    });
-    let mask = mask.with_context(|| format!("{file}: edge detector {}", args.detector))?;
-
-    pb.set_message(format!("{file}: lighting"));
-    let resolved = resolve::resolve(lit_gb, &lights, &mask, &cfg).with_context(|| format!("{file}: resolve"))?;
-    anyhow::ensure!(
-        resolved.stats.shading_evaluations > 0,
-        "{file}: the resolve shaded no sample ({} covered of {}): nothing was lit",
-        gb.coverage.iter().filter(|c| **c).count(),
-        gb.len()
-    );
-    // The resolve's own decode (the packed bands it read) is part of the pass.
-    let mut stage = StageMs { decode: t_decode + resolved.stats.ms.decode, detect: t_detect, ..resolved.stats.ms };
-    stage.total += t_decode + t_detect;
-
-    anyhow::ensure!(args.ppd.is_finite() && args.ppd > 0.0, "--ppd must be a positive number, got {}", args.ppd);
     let viewing = Viewing { tone_map: args.tonemap, exposure: args.exposure, pixels_per_degree: args.ppd };
-    let flip = (!args.no_flip).then_some(&viewing);
-    // The measurements (the pre-pass comparison, the exact G-buffer's image, the reference, FLIP) run while the
-    // pictures are encoded in memory beside them; the files are written once both have succeeded.
-    let analysis = || -> anyhow::Result<Analysis> {
-        // The light pre-pass approximates full deferred shading; its own error is measured against that, on the
-        // same input, apart from the error against the reference (which also holds the detector's and the
-        // layout's).
-        let (prepass_vs_deferred, t_deferred) = if cfg.schedule == Schedule::LightPrepass {
-            let (e, t) = against_full_deferred(lit_gb, &lights, &mask, &cfg, &resolved.image)
-                .with_context(|| format!("{file}: full deferred resolve for the pre-pass comparison"))?;
-            (Some(e), t)
-        } else {
-            (None, 0.0)
-        };
-        // With a layout, the exact G-buffer lit the same way separates the layout's loss from the detector's.
-        let exact = match &layout {
-            Some(_) => Some(
-                gbuf::analysis::errors::lit(&gb, &lights, args.detector, &det_cfg, &cfg)
-                    .with_context(|| format!("{file}: exact resolve"))?
-                    .image,
-            ),
-            None => None,
-        };
-        let (reference, t_ref) = if args.no_reference {
-            (None, 0.0)
-        } else {
-            pb.set_message(format!("{file}: the every-sample reference"));
-            let (reference, t) = timed(|| resolve::reference(&gb, &lights, &cfg));
-            let reference = reference.with_context(|| format!("{file}: reference"))?;
-            resolve::check_meaningful(&gb, &lights, &reference)
-                .with_context(|| format!("{file}: nothing to compare"))?;
-            (Some(reference), t)
-        };
-        let triad = error_triad(&resolved.image, exact.as_ref(), reference.as_ref(), flip);
-        let error = reference.as_ref().map(|r| compare(r, &resolved.image));
-        Ok(Analysis { prepass_vs_deferred, t_deferred, t_ref, triad, error })
+    let job = ResolveJob {
+        layout: layout.as_ref(),
+        detector: args.detector,
+        thresholds,
+        config: lighting.apply(cfg),
+        reference: !args.no_reference,
+        flip: (!args.no_flip).then_some(viewing),
     };
-    let encode = || -> anyhow::Result<Encoded> {
-        let mut files = Vec::new();
-        if let Some(out) = &args.output {
-            files.push((
-                out.clone(),
-                resolved.image.exr_bytes(out).with_context(|| format!("encoding {}", out.display()))?,
-            ));
-        }
-        if let Some(out) = &args.png {
-            let png = if args.ldr.is_some() {
-                resolved.image.ldr_gamma22_png()
-            } else {
-                resolved.image.png(ToneMap::new(args.tonemap, args.exposure))
-            };
-            files.push((out.clone(), png.with_context(|| format!("encoding {}", out.display()))?));
-        }
-        let mut heatmap_max = None;
-        if let Some(out) = &args.heatmap {
-            let (png, max) = heatmap_png(gb.width, gb.height, &resolved.lights_per_pixel)
-                .with_context(|| format!("encoding {}", out.display()))?;
-            files.push((out.clone(), png));
-            heatmap_max = Some(max);
-        }
-        Ok(Encoded { files, heatmap_max })
-    };
-    let (encoded, analysed) = rayon::join(|| timed(encode), analysis);
-    let Analysis { prepass_vs_deferred, t_deferred, t_ref, triad, error } = analysed?;
-    let (layout_error, total_error, aa_error) = (triad.layout, triad.total, triad.aa);
-    let (Encoded { files, heatmap_max }, t_encode) = (encoded.0?, encoded.1);
+    let source = arrays.as_ref().map(|a| a as &dyn gbuf::layout::BandSource);
+    let progress = |what: &str| pb.set_message(format!("{file}: {what}"));
+    let (done, encoded) = resolve_frame(&file, &gb, source, &lights, &job, &progress, |r| timed(|| encode(&args, r)))?;
+    let (files, heatmap_max) = encoded.0?;
     // Every file is staged beside its destination and renamed into place only when all were written: a failure
     // leaves none of them half done or alone.
     let (written, t_write) = timed(|| -> anyhow::Result<()> {
@@ -323,74 +218,104 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         staged.commit().context("renaming the outputs into place")
     });
     written?;
-    let t_output = t_encode + t_write;
-    let writes = args.output.is_some() || args.png.is_some() || args.heatmap.is_some();
-    let t_output = if writes { t_output } else { 0.0 };
-
-    let s = &resolved.stats;
-    let report = Report {
-        file,
-        width: gb.width,
-        height: gb.height,
-        samples: gb.samples,
-        lights_source,
-        layout: args.layout.clone(),
-        detector: args.detector.name(),
-        isa: gbuf::resolve::instruction_set(),
-        lighting,
-        config: cfg,
-        shading_fraction: s.shading_fraction,
-        edge_fraction: s.edge_fraction,
-        light_pairs_tested: s.light_pairs_tested,
-        light_pairs_lit: s.light_pairs_lit,
-        shading_evaluations: s.shading_evaluations,
-        lights_per_sample: s.lights_per_sample,
-        rmse: error.map(|e| e.rmse),
-        psnr_db: error.map(|e| e.psnr_db),
-        max_abs: error.map(|e| e.max_abs),
-        rel_mse: error.map(|e| e.rel_mse),
-        error,
-        psnr_peak: "the reference image's largest channel value",
-        total_error,
-        layout_error,
-        aa_error,
-        viewing: flip.copied(),
-        prepass_vs_deferred,
-        stats: s.clone(),
-        ms: Ms {
-            decode: stage.decode,
-            detect: stage.detect,
-            gather: stage.gather,
-            cull: stage.cull,
-            shade: stage.shade,
-            total: stage.total,
-            reference: t_ref,
-            deferred_for_prepass: t_deferred,
-            output: t_output,
-        },
-        heatmap_max,
-    };
-    if args.json {
-        pb.finish_and_clear();
-        return print_json(&report);
-    }
     pb.finish_and_clear();
-    print_human(&report)
+    let report =
+        Report::of(&args, file, &gb, lights_source, lighting, job, &done, t_load, encoded.1 + t_write, heatmap_max);
+    if args.json {
+        print_json(&report)
+    } else {
+        print_human(&report)
+    }
 }
 
-/// The pictures `gbuf resolve` writes, encoded: (file, bytes), and the heatmap's maximum.
-struct Encoded {
-    files: Vec<(PathBuf, Vec<u8>)>,
-    heatmap_max: Option<u32>,
+/// Files encoded in memory: (destination, bytes).
+type Files = Vec<(PathBuf, Vec<u8>)>;
+
+/// The pictures asked for, encoded in memory, and the heatmap's maximum.
+fn encode(args: &Args, r: &Resolved) -> anyhow::Result<(Files, Option<u32>)> {
+    let mut files = Vec::new();
+    let named = |out: &PathBuf| format!("encoding {}", out.display());
+    if let Some(out) = &args.output {
+        files.push((out.clone(), r.image.exr_bytes(out).with_context(|| named(out))?));
+    }
+    if let Some(out) = &args.png {
+        let png = match args.ldr {
+            Some(_) => r.image.ldr_gamma22_png(),
+            None => r.image.png(ToneMap::new(args.tonemap, args.exposure)),
+        };
+        files.push((out.clone(), png.with_context(|| named(out))?));
+    }
+    let mut heatmap_max = None;
+    if let Some(out) = &args.heatmap {
+        let (png, max) = heatmap_png(r.image.width, r.image.height, &r.lights_per_pixel).with_context(|| named(out))?;
+        files.push((out.clone(), png));
+        heatmap_max = Some(max);
+    }
+    Ok((files, heatmap_max))
 }
 
-/// What `gbuf resolve` measures beside encoding its pictures.
-struct Analysis {
-    prepass_vs_deferred: Option<ImageError>,
-    t_deferred: f64,
-    t_ref: f64,
-    triad: gbuf::measure::image::ErrorTriad,
-    error: Option<ImageError>,
+impl Report {
+    /// What `--json` prints, from the job's outcome.
+    #[allow(clippy::too_many_arguments)]
+    fn of(
+        args: &Args,
+        file: String,
+        gb: &GBuffer,
+        lights_source: &'static str,
+        lighting: Lighting,
+        job: ResolveJob<'_>,
+        done: &ResolveOutcome,
+        t_load: f64,
+        t_output: f64,
+        heatmap_max: Option<u32>,
+    ) -> Report {
+        let s = &done.resolved.stats;
+        let stage = &done.stages;
+        let error = done.error;
+        let writes = args.output.is_some() || args.png.is_some() || args.heatmap.is_some();
+        Report {
+            file,
+            width: gb.width,
+            height: gb.height,
+            samples: gb.samples,
+            lights_source,
+            layout: args.layout.clone(),
+            detector: args.detector.name(),
+            isa: gbuf::resolve::instruction_set(),
+            lighting,
+            config: job.config,
+            shading_fraction: s.shading_fraction,
+            edge_fraction: s.edge_fraction,
+            light_pairs_tested: s.light_pairs_tested,
+            light_pairs_lit: s.light_pairs_lit,
+            shading_evaluations: s.shading_evaluations,
+            lights_per_sample: s.lights_per_sample,
+            rmse: error.map(|e| e.rmse),
+            psnr_db: error.map(|e| e.psnr_db),
+            max_abs: error.map(|e| e.max_abs),
+            rel_mse: error.map(|e| e.rel_mse),
+            error,
+            psnr_peak: "the reference image's largest channel value",
+            total_error: done.triad.total,
+            layout_error: done.triad.layout,
+            aa_error: done.triad.aa,
+            viewing: job.flip,
+            prepass_vs_deferred: done.prepass_vs_deferred,
+            stats: s.clone(),
+            ms: Ms {
+                decode: t_load + stage.decode,
+                detect: stage.detect,
+                gather: stage.gather,
+                cull: stage.cull,
+                shade: stage.shade,
+                total: t_load + stage.total,
+                reference: done.reference_ms,
+                deferred_for_prepass: done.deferred_for_prepass_ms,
+                output: if writes { t_output } else { 0.0 },
+            },
+            heatmap_max,
+        }
+    }
 }
 
 /// Lights by the rule of every command ([`gbuf::scene::choose_lights`]), with no fallback: an error saying how to

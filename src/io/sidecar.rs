@@ -368,10 +368,8 @@ fn overflowing_numbers(value: &serde_json::Value, at: &mut String, problems: &mu
     use serde_json::Value;
     let len = at.len();
     match value {
-        Value::Number(n) => {
-            if n.as_f64().is_some_and(|x| x.abs() > f64::from(f32::MAX)) {
-                problems.push(format!("{at}: {n} is beyond the largest 32-bit float ({:e})", f32::MAX));
-            }
+        Value::Number(n) if n.as_f64().is_some_and(|x| x.abs() > f64::from(f32::MAX)) => {
+            problems.push(format!("{at}: {n} is beyond the largest 32-bit float ({:e})", f32::MAX));
         }
         Value::Array(items) => {
             for (i, item) in items.iter().enumerate() {
