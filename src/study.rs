@@ -262,15 +262,114 @@ pub fn assemble(
     Ok((rep, files))
 }
 
-/// A single-frame report: [`run_frame`] and [`assemble`].
-pub fn run(
-    input: &ReportInput<'_>,
+/// A frame the frames loop owns while it sweeps it ([`run_frames`] holds one at a time).
+#[derive(Clone, Debug)]
+pub struct FrameInput {
+    /// The frame's name (its path, or the scene's name).
+    pub name: String,
+    /// The G-buffer.
+    pub gbuffer: crate::GBuffer,
+    /// Its view-space lights.
+    pub lights: Vec<crate::Light>,
+    /// Where the lights came from.
+    pub lights_source: String,
+    /// The same frame with 1 sample at pixel centres (`--single`, or rendered by the demo).
+    pub single: Option<crate::GBuffer>,
+    /// The analytic scene it was rendered from (the demo).
+    pub geometry: Option<crate::scene::SceneName>,
+    /// The reader's notes every output repeats (`no-float-truth` for packed targets).
+    pub notes: Vec<String>,
+}
+
+/// What the frames loop tells its caller as it goes.
+#[derive(Clone, Copy, Debug)]
+pub enum Event<'a> {
+    /// The lighting model every frame is lit with, and why (the first frame's data chose it unless overridden).
+    Lighting(&'a Lighting),
+    /// A later frame whose data would choose another BRDF: it is lit as the first, since the rows aggregate.
+    LightingDiffers {
+        /// The frame.
+        frame: &'a str,
+        /// What its data would choose.
+        would: &'a Lighting,
+        /// What every frame is lit with.
+        chosen: &'a Lighting,
+    },
+    /// Frame `frame` (from 0) of `count`: `done` of `total` steps, now `what`.
+    Progress {
+        /// The frame's index.
+        frame: usize,
+        /// How many frames.
+        count: usize,
+        /// Steps done.
+        done: usize,
+        /// Steps in all.
+        total: usize,
+        /// The step now running.
+        what: &'a str,
+    },
+}
+
+/// The report job over `count` frames: `next(i)` yields frame `i` (so only one is in memory at a time), each is
+/// swept ([`run_frame`]) and the results assembled ([`assemble`]). Every frame is lit with one model: what `choose`
+/// gives for the first frame's stored attributes (e.g. `|a| Lighting::choose(None, None, a)`: the data's choice,
+/// [`Lighting::choose`]); a later frame for which it differs is announced. With more than one frame
+/// the figures' files are prefixed `frameN_`. Returns the report and every figure file; `on` hears the lighting
+/// choice and the progress.
+pub fn run_frames<E: From<crate::Error>>(
+    count: usize,
+    mut next: impl FnMut(usize) -> std::result::Result<FrameInput, E>,
     cfg: &SweepConfig,
-    progress: sweep::Progress<'_>,
-) -> Result<(Report, Vec<Attachment>)> {
-    let f = run_frame(input, cfg, true, "", progress)?;
-    let (rep, mut files) =
-        assemble(vec![f.frame], f.rows, f.figures, &Assembly::of(cfg, Over::default(), None, "as configured"))?;
-    files.extend(f.files);
+    choose: &dyn Fn(&[crate::gbuffer::Attribute]) -> Lighting,
+    how: &Assembly,
+    on: &mut dyn FnMut(Event<'_>),
+) -> std::result::Result<(Report, Vec<Attachment>), E> {
+    let mut cfg = cfg.clone();
+    let mut how = how.clone();
+    let (mut frames, mut rows, mut files, mut figures) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for i in 0..count {
+        let t = std::time::Instant::now();
+        let f = next(i)?;
+        let load_seconds = t.elapsed().as_secs_f64();
+        let here = choose(&f.gbuffer.attributes());
+        match &how.lighting {
+            Some(chosen) if i > 0 => {
+                if chosen.brdf != here.brdf {
+                    on(Event::LightingDiffers { frame: &f.name, would: &here, chosen });
+                }
+            }
+            _ => {
+                on(Event::Lighting(&here));
+                cfg.resolve = here.apply(cfg.resolve);
+                how.lighting = Some(here);
+            }
+        }
+        let input = ReportInput {
+            name: f.name.clone(),
+            gbuffer: &f.gbuffer,
+            lights: &f.lights,
+            lights_source: f.lights_source.clone(),
+            single: f.single.as_ref(),
+            geometry: f.geometry,
+            notes: f.notes.clone(),
+        };
+        let prefix =
+            if count > 1 { format!("frame{:0w$}_", i + 1, w = count.to_string().len()) } else { String::new() };
+        let mut progress =
+            |done: usize, total: usize, what: &str| on(Event::Progress { frame: i, count, done, total, what });
+        let r = run_frame(&input, &cfg, count == 1, &prefix, &mut progress).map_err(|e| crate::Error::InFrame {
+            frame: f.name.clone(),
+            step: "report",
+            source: e.into(),
+        })?;
+        let mut frame = r.frame;
+        frame.other_seconds.insert(0, ("reading the input".to_string(), load_seconds));
+        frames.push(frame);
+        rows.extend(r.rows);
+        files.extend(r.files);
+        figures.extend(r.figures);
+    }
+    let (rep, plots) = assemble(frames, rows, figures, &how)?;
+    files.extend(plots);
     Ok((rep, files))
 }

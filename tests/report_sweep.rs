@@ -278,3 +278,49 @@ fn a_frame_times_its_steps_outside_the_sweep() {
     assert!(other + r.frame.sweep_seconds <= wall, "{other} + {} s of {wall} s", r.frame.sweep_seconds);
     assert!(r.frame.other_seconds.iter().any(|(k, s)| k == "pipelines" && *s > 0.0));
 }
+
+/// The library's frames loop (what `gbuf report` calls): frames asked for one at a time, one lighting model for all
+/// (the first frame's choice, a differing later frame announced), figure files prefixed per frame, and a frame that
+/// fails to load stops the loop with its error.
+#[test]
+fn the_frames_loop_lights_every_frame_as_the_first_and_names_them() {
+    use gbuf::study::{run_frames, Assembly, Event, FrameInput};
+    let (gb, lights) = small_room();
+    let mut flat = gb.clone();
+    flat.roughness = None;
+    flat.metallic = None;
+    let frames = [gb, flat];
+    let cfg = one_run(&["fat-20"], vec![Detector::Lauritzen], FlipRows::None);
+    let how = Assembly::of(&cfg, gbuf::analysis::aggregate::Over::Worst, None, "");
+    let mut asked = Vec::new();
+    let mut events = Vec::new();
+    let next = |i: usize| -> gbuf::Result<FrameInput> {
+        asked.push(i);
+        Ok(FrameInput {
+            name: format!("f{i}"),
+            gbuffer: frames[i].clone(),
+            lights: lights.clone(),
+            lights_source: "default".into(),
+            single: None,
+            geometry: None,
+            notes: Vec::new(),
+        })
+    };
+    let mut on = |e: Event<'_>| match e {
+        Event::Lighting(l) => events.push(format!("lighting {}", l.brdf)),
+        Event::LightingDiffers { frame, would, .. } => events.push(format!("{frame} would {}", would.brdf)),
+        Event::Progress { .. } => {}
+    };
+    let (rep, files) =
+        run_frames(2, next, &cfg, &|a| gbuf::resolve::Lighting::choose(None, None, a), &how, &mut on).unwrap();
+    assert_eq!(asked, [0, 1]);
+    assert_eq!(events, ["lighting ggx", "f1 would blinn-phong"]);
+    assert_eq!(rep.lighting.as_ref().unwrap().brdf, gbuf::resolve::Brdf::Ggx);
+    assert_eq!(rep.frames.len(), 2);
+    assert!(rep.rows.iter().any(|r| r.frame == "f0") && rep.rows.iter().any(|r| r.frame == "f1"));
+    assert!(files.iter().any(|f| f.name.starts_with("frame1_")) && files.iter().any(|f| f.name.starts_with("frame2_")));
+    // A frame that cannot be read stops the loop with its own error.
+    let failing = |i: usize| -> gbuf::Result<FrameInput> { Err(gbuf::Error::Argument(format!("frame {i} is gone"))) };
+    let err = run_frames(1, failing, &cfg, &|_| unreachable!(), &how, &mut |_| {}).unwrap_err();
+    assert!(err.to_string().contains("frame 0 is gone"), "{err}");
+}

@@ -249,16 +249,11 @@ fn the_library_resolve_job_gives_the_commands_numbers() {
         flip: None,
     };
     let steps = std::sync::Mutex::new(Vec::new());
-    let (done, beside) = resolve_frame(
-        "room.exr",
-        &gb,
-        None,
-        &lights,
-        &job,
-        &|s| steps.lock().unwrap().push(s.to_string()),
-        |r| r.image.width,
-    )
-    .unwrap();
+    let (done, beside) =
+        resolve_frame("room.exr", &gb, None, &lights, &job, &|s| steps.lock().unwrap().push(s.to_string()), |r| {
+            r.image.width
+        })
+        .unwrap();
     assert_eq!(beside, 48, "the closure ran on the lit frame");
     assert_eq!(steps.into_inner().unwrap(), ["edges", "lighting", "the every-sample reference"]);
     let e = done.error.unwrap();

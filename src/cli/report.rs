@@ -14,7 +14,8 @@ use gbuf::layout::Layout;
 use gbuf::measure::image::Viewing;
 use gbuf::report::format::fmt_opt;
 use gbuf::resolve::{Culling, ResolveConfig};
-use gbuf::study::Assembly;
+pub use gbuf::study::FrameInput;
+use gbuf::study::{Assembly, Event};
 use std::path::{Path, PathBuf};
 
 /// The detectors a report sweeps by default: Lauritzen's 2010 test, the normal-angle test and Lauritzen + IDs.
@@ -267,97 +268,37 @@ fn short(frame: &str) -> String {
     Path::new(frame).file_name().map_or(frame.to_string(), |n| n.to_string_lossy().into_owned())
 }
 
-/// One frame to sweep: a name, its G-buffer and lights.
-pub struct FrameInput {
-    /// The frame's name (its path, or the scene's name).
-    pub name: String,
-    /// The G-buffer.
-    pub gbuffer: gbuf::GBuffer,
-    /// Its view-space lights.
-    pub lights: Vec<gbuf::Light>,
-    /// Where the lights came from.
-    pub lights_source: String,
-    /// The same frame with 1 sample at pixel centres (`--single`, or rendered by the demo).
-    pub single: Option<gbuf::GBuffer>,
-    /// The analytic scene it was rendered from (the demo).
-    pub geometry: Option<gbuf::scene::SceneName>,
-    /// The reader's notes every output repeats (`no-float-truth` for packed targets).
-    pub notes: Vec<String>,
-}
-
-/// Sweeps the frames one after another (`next` yields them, so only one is in memory at a time), writes the
-/// folder, prints the summary (or the JSON report).
+/// Sweeps the frames one after another ([`gbuf::study::run_frames`]: `next` yields them, so only one is in memory
+/// at a time) with a progress bar, writes the folder, prints the summary (or the JSON report).
 pub fn run_frames(
     count: usize,
-    mut next: impl FnMut(usize) -> anyhow::Result<FrameInput>,
+    next: impl FnMut(usize) -> anyhow::Result<FrameInput>,
     cfg: &SweepConfig,
     lighting: LightingArgs,
     how: &Assembly,
     out: &Path,
     say: Say,
 ) -> anyhow::Result<Report> {
-    let mut cfg = cfg.clone();
-    let mut how = how.clone();
     let pb = crate::cli::progress_bar(1);
-    let mut frames = Vec::new();
-    let mut rows = Vec::new();
-    let mut files = Vec::new();
-    let mut figures = Vec::new();
-    for i in 0..count {
-        let t = std::time::Instant::now();
-        let f = next(i)?;
-        let load_seconds = t.elapsed().as_secs_f64();
-        // One lighting model for every frame (their rows aggregate): the first frame's, named once.
-        let here = lighting.choose(&f.gbuffer.attributes());
-        match &how.lighting {
-            Some(chosen) if i > 0 => {
-                if chosen.brdf != here.brdf {
-                    pb.suspend(|| {
-                        eprintln!(
-                            "warning: {}: its data would choose BRDF {} ({}); every frame of the report is lit as the \
-                             first: {}",
-                            f.name,
-                            here.brdf,
-                            here.why,
-                            chosen.summary()
-                        );
-                    });
-                }
-            }
-            _ => {
-                pb.suspend(|| say_lighting(&here));
-                cfg.resolve = here.apply(cfg.resolve);
-                how.lighting = Some(here);
-            }
-        }
-        let mut progress = |done: usize, total: usize, what: &str| {
+    let mut on = |event: Event<'_>| match event {
+        Event::Lighting(l) => pb.suspend(|| say_lighting(l)),
+        Event::LightingDiffers { frame, would, chosen } => pb.suspend(|| {
+            eprintln!(
+                "warning: {frame}: its data would choose BRDF {} ({}); every frame of the report is lit as the first: \
+                 {}",
+                would.brdf,
+                would.why,
+                chosen.summary()
+            );
+        }),
+        Event::Progress { frame, count, done, total, what } => {
             pb.set_length(total as u64);
             pb.set_position(done as u64);
-            pb.set_message(if count > 1 { format!("frame {}/{count}: {what}", i + 1) } else { what.to_string() });
-        };
-        let input = gbuf::analysis::ReportInput {
-            name: f.name.clone(),
-            gbuffer: &f.gbuffer,
-            lights: &f.lights,
-            lights_source: f.lights_source.clone(),
-            single: f.single.as_ref(),
-            geometry: f.geometry,
-            notes: f.notes.clone(),
-        };
-        let prefix =
-            if count > 1 { format!("frame{:0w$}_", i + 1, w = count.to_string().len()) } else { String::new() };
-        let r = gbuf::study::run_frame(&input, &cfg, count == 1, &prefix, &mut progress)
-            .with_context(|| format!("{}: report", f.name))?;
-        let mut frame = r.frame;
-        frame.other_seconds.insert(0, ("reading the input".to_string(), load_seconds));
-        frames.push(frame);
-        rows.extend(r.rows);
-        files.extend(r.files);
-        figures.extend(r.figures);
-    }
+            pb.set_message(if count > 1 { format!("frame {}/{count}: {what}", frame + 1) } else { what.to_string() });
+        }
+    };
+    let (rep, files) = gbuf::study::run_frames(count, next, cfg, &|a| lighting.choose(a), how, &mut on)?;
     pb.finish_and_clear();
-    let (rep, plots) = gbuf::study::assemble(frames, rows, figures, &how)?;
-    files.extend(plots);
     write_and_print(&rep, &files, out, say)?;
     Ok(rep)
 }
