@@ -24,6 +24,63 @@ fn value_error(e: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(e.to_string())
 }
 
+/// The library's loading errors name its options as the command line spells them (`--frame N`); a Python user
+/// passes them as `load`'s keyword arguments, so those are named instead (`frame=N`). Options `load` does not take
+/// keep their spelling and say so.
+fn load_error(e: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(python_spelling(&e.to_string()))
+}
+
+/// `message` with the command line's spelling of `load`'s options replaced by the keyword arguments.
+fn python_spelling(message: &str) -> String {
+    // Longest first: `--no-scene` before `--scene`, `--input-layout` before `--layout`.
+    const KEYWORDS: [(&str, &str); 7] = [
+        ("--no-scene", "no_scene=True"),
+        ("--input-layout", "input_layout"),
+        ("--layout", "input_layout"),
+        ("--scene", "scene"),
+        ("--preset", "preset"),
+        ("--frame", "frame"),
+        ("--fold", "fold"),
+    ];
+    let mut out = String::with_capacity(message.len());
+    let mut rest = message;
+    'scan: while let Some(at) = rest.find("--") {
+        out.push_str(&rest[..at]);
+        let tail = &rest[at..];
+        let flag_end = tail[2..].find(|c: char| !(c.is_ascii_alphanumeric() || c == '-')).map_or(tail.len(), |i| i + 2);
+        let flag = &tail[..flag_end];
+        let after_word = out.chars().last().is_some_and(|c| c.is_alphanumeric());
+        if after_word || !flag[2..].starts_with(|c: char| c.is_ascii_lowercase()) {
+            // Not an option: `1--2`, a dash rule.
+            out.push_str("--");
+            rest = &tail[2..];
+            continue 'scan;
+        }
+        if flag == "--map" {
+            out.push_str("map");
+        } else if let Some((_, kw)) = KEYWORDS.iter().find(|(f, _)| *f == flag) {
+            // `--frame N` reads `frame=N`; a bare flag reads as the argument's name.
+            let value = tail[flag_end..].strip_prefix(' ').filter(|v| v.starts_with(|c: char| c.is_ascii_alphanumeric()));
+            match value {
+                Some(v) if !kw.contains('=') => {
+                    out.push_str(kw);
+                    out.push('=');
+                    rest = v;
+                    continue 'scan;
+                }
+                _ => out.push_str(kw),
+            }
+        } else {
+            out.push_str(flag);
+            out.push_str(" (a gbuf command-line option; Python's load does not take it)");
+        }
+        rest = &tail[flag_end..];
+    }
+    out.push_str(rest);
+    out
+}
+
 /// A numpy array of `values` in `shape` (C order).
 fn array<'py, T: numpy::Element>(py: Python<'py>, values: Vec<T>, shape: &[usize]) -> PyResult<Bound<'py, PyAny>> {
     Ok(PyArray1::from_vec(py, values).reshape(shape)?.into_any())
@@ -251,7 +308,7 @@ fn load<'py>(
     if scene.is_some() && no_scene {
         return Err(value_error("scene and no_scene exclude each other"));
     }
-    let map = map.as_deref().map(gbuf_core::io::mapped::parse_map).transpose().map_err(value_error)?.unwrap_or_default();
+    let map = map.as_deref().map(gbuf_core::io::mapped::parse_map).transpose().map_err(load_error)?.unwrap_or_default();
     let opts = gbuf_core::io::LoadOptions {
         fold,
         preset,
@@ -263,7 +320,7 @@ fn load<'py>(
         input_layout,
         ..Default::default()
     };
-    let loaded = gbuf_core::load(&path, &opts).map_err(value_error)?;
+    let loaded = gbuf_core::load(&path, &opts).map_err(load_error)?;
     gbuffer_dict(py, &loaded.gbuffer)
 }
 
@@ -355,3 +412,4 @@ fn gbuf(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }
+

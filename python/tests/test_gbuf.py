@@ -155,8 +155,14 @@ class Planes(unittest.TestCase):
                         self.assertEqual(got[k], v, f"{name}: {k}")
         with self.assertRaises(ValueError):
             gbuf.load(os.path.join(FIXTURES, "raster_4x.exr"), scene="x.json", no_scene=True)
-        with self.assertRaises(ValueError):
+        with self.assertRaises(ValueError) as e:
             gbuf.load(os.path.join(FIXTURES, "raster_4x.exr"), map="normal=A;B")
+        # Loading errors name load's keyword arguments, not the command line's flags.
+        self.assertNotIn("--map", str(e.exception))
+        self.assertIn("map", str(e.exception))
+        with self.assertRaises(ValueError) as e:
+            gbuf.load(os.path.join(FIXTURES, "raster_4x.exr"), map="bogus")
+        self.assertTrue(str(e.exception).startswith("map: "), str(e.exception))
 
 
 if __name__ == "__main__":
