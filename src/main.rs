@@ -72,18 +72,25 @@ enum Command {
     Man,
 }
 
-/// Commands that read a dump and have no layout flag of their own: there `--layout` names the layout of packed
-/// render targets (`--input-layout` everywhere, since `pack`, `resolve`, `roundtrip` and `pipelines` use
-/// `--layout` for the layout they apply).
-const INPUT_LAYOUT_IS_LAYOUT: [&str; 5] = ["info", "edges", "budget", "report", "convert"];
+/// Commands that read a dump and have no layout flag of their own, where `--input-layout` was once spelled
+/// `--layout`: the old spelling still works there, hidden from the help and with a note, so that `--layout` always
+/// names a layout a command applies (`pack`, `resolve`, `roundtrip`, `pipelines`). Not on `report`, whose list of
+/// layouts to sweep is one letter away.
+const OLD_INPUT_LAYOUT: [&str; 4] = ["info", "edges", "budget", "convert"];
 
-/// The command line, with `--layout` as the spelling of `--input-layout` where it is free.
+/// The command line, with `--layout` as a hidden old spelling of `--input-layout` where it is free.
 fn parse() -> Cli {
     let mut cmd = Cli::command();
-    for name in INPUT_LAYOUT_IS_LAYOUT {
-        cmd = cmd.mut_subcommand(name, |c| c.mut_arg("input_layout", |a| a.visible_alias("layout")));
+    for name in OLD_INPUT_LAYOUT {
+        cmd = cmd.mut_subcommand(name, |c| c.mut_arg("input_layout", |a| a.alias("layout")));
     }
     let matches = cmd.get_matches();
+    if let Some((name, _)) = matches.subcommand().filter(|(n, _)| OLD_INPUT_LAYOUT.contains(n)) {
+        let old = std::env::args_os().any(|a| a == "--layout" || a.to_string_lossy().starts_with("--layout="));
+        if old {
+            eprintln!("gbuf: note: `gbuf {name} --layout` is the old spelling of `--input-layout`; it still works");
+        }
+    }
     Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
 }
 

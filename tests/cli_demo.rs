@@ -18,7 +18,7 @@ fn demo_writes_the_report_folder() {
     std::fs::write(out.join("notes.txt"), "mine").unwrap();
     let o = gbuf()
         .args(["demo", "--width", "64", "--height", "36", "--msaa", "4", "--runs", "1"])
-        .args(["--layouts", "fat-20,minimal-8,reference-f32", "--json", "--out"])
+        .args(["--candidates", "fat-20,minimal-8,reference-f32", "--json", "--out"])
         .arg(&out)
         .output()
         .unwrap();
@@ -127,7 +127,7 @@ fn report_on_a_canonical_dump_and_bad_input() {
     let o = gbuf()
         .arg("report")
         .arg(&exr)
-        .args(["--layouts", "minimal-8,lauritzen-15", "--detectors", "lauritzen", "--runs", "1", "-o"])
+        .args(["--candidates", "minimal-8,lauritzen-15", "--detectors", "lauritzen", "--runs", "1", "-o"])
         .arg(&out)
         .output()
         .unwrap();
@@ -166,7 +166,7 @@ fn report_on_a_canonical_dump_and_bad_input() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("bad.exr") && !err.contains("panicked"), "{err}");
     // Unknown layout / detector names: usage errors (exit 2) with the known names, and the nearest when close.
-    let o = gbuf().arg("report").arg(&exr).args(["--layouts", "nope"]).output().unwrap();
+    let o = gbuf().arg("report").arg(&exr).args(["--candidates", "nope"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2));
     let o = gbuf().arg("report").arg(&exr).args(["--layouts", "lauritzen15x"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2));
@@ -230,7 +230,7 @@ fn report_over_several_frames_merges_to_the_same_answer() {
             .unwrap();
         assert!(o.status.success(), "scene: {}", String::from_utf8_lossy(&o.stderr));
     }
-    let common = ["--layouts", "minimal-8,destiny-96,reference-f32", "--detectors", "lauritzen,ssaa", "--runs", "1"];
+    let common = ["--candidates", "minimal-8,destiny-96,reference-f32", "--detectors", "lauritzen,ssaa", "--runs", "1"];
     // One run over the directory (both frames).
     let all = dir.path().join("all");
     let o = gbuf()
@@ -342,7 +342,7 @@ fn fronts_hold_on_the_shipped_fixtures() {
             .arg("report")
             .arg(root.join(fixture))
             .args([
-                "--layouts",
+                "--candidates",
                 "minimal-8,destiny-96,bevy-deferred,reference-f32",
                 "--detectors",
                 "lauritzen,combined",

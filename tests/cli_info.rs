@@ -162,7 +162,7 @@ fn edges_and_the_report_give_the_same_surfaces_per_pixel() {
     assert_eq!(edges, info);
     let o = support::gbuf(
         dir.path(),
-        &["report", dump, "--layouts", "minimal-8", "--detectors", "lauritzen", "--flip", "none", "-o", "rep", "-q"],
+        &["report", dump, "--candidates", "minimal-8", "--detectors", "lauritzen", "--flip", "none", "-o", "rep", "-q"],
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let report: serde_json::Value =

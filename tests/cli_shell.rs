@@ -88,3 +88,23 @@ fn strip_times(v: &mut serde_json::Value) {
         _ => {}
     }
 }
+
+/// `--layout` in a command's help names only a layout the command applies; the input's layout is `--input-layout`
+/// everywhere, and the old spelling on `info` still works with a note.
+#[test]
+fn help_shows_layout_only_where_a_layout_is_applied() {
+    let applies = ["pack", "resolve", "roundtrip", "pipelines"];
+    for cmd in ["info", "edges", "budget", "report", "convert", "compare", "pack", "resolve", "roundtrip", "pipelines"]
+    {
+        let o = gbuf(&[cmd, "--help"], &[]);
+        let help = String::from_utf8_lossy(&o.stdout).to_string();
+        let named = help.contains("--layout ") || help.contains("--layout\n") || help.contains("`--layout`");
+        assert_eq!(named, applies.contains(&cmd), "gbuf {cmd} --help:\n{help}");
+        if cmd != "compare" {
+            assert!(help.contains("--input-layout"), "gbuf {cmd} --help reads packed targets");
+        }
+    }
+    let o = gbuf(&["info", "fixtures/engine_4x", "--layout", "fixtures/engine_4x/engine.toml"], &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("old spelling of `--input-layout`"));
+}

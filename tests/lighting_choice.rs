@@ -67,7 +67,7 @@ fn report_ranks_under_the_data_s_brdf_names_it_and_brdf_overrides_it() {
     let dir = tempfile::tempdir().unwrap();
     let pbr = fixture("blender_pbr.exr");
     let p = pbr.to_str().unwrap();
-    let base = ["report", p, "--layouts", "destiny-96,unreal-like", "--detectors", "lauritzen", "--flip", "none"];
+    let base = ["report", p, "--candidates", "destiny-96,unreal-like", "--detectors", "lauritzen", "--flip", "none"];
     let mut auto: Vec<&str> = base.to_vec();
     auto.extend(["-o", "auto", "--json"]);
     let ggx = json_of(&gbuf(dir.path(), &auto));
@@ -173,7 +173,7 @@ fn report_compares_layouts_under_several_brdfs() {
         pbr.to_str().unwrap(),
         "--brdf",
         "ggx,blinn-phong",
-        "--layouts",
+        "--candidates",
         "destiny-96,unreal-like,fat-20",
         "--detectors",
         "lauritzen",
@@ -209,7 +209,8 @@ fn report_compares_layouts_under_several_brdfs() {
 fn albedo_above_one_is_kept_apart_from_the_layout_error() {
     let dir = tempfile::tempdir().unwrap();
     let lux = fixture("luxcore");
-    let args = ["report", lux.to_str().unwrap(), "--layouts", "fat-20", "--detectors", "lauritzen", "--flip", "none"];
+    let args =
+        ["report", lux.to_str().unwrap(), "--candidates", "fat-20", "--detectors", "lauritzen", "--flip", "none"];
     let mut with_json: Vec<&str> = args.to_vec();
     with_json.extend(["-o", "r", "--json"]);
     let rep = json_of(&gbuf(dir.path(), &with_json));

@@ -439,9 +439,9 @@ fn the_llvmpipe_engine_capture_decodes_to_its_float_truth() {
     let args = [
         "report",
         dir.to_str().unwrap(),
-        "--layout",
+        "--input-layout",
         toml.to_str().unwrap(),
-        "--layouts",
+        "--candidates",
         "minimal-8",
         "-o",
         out.to_str().unwrap(),

@@ -174,7 +174,7 @@ fn the_commands_give_the_same_answers_on_the_directory_and_on_the_merge() {
     let out = dir.path().join("rep");
     let o = gbuf(
         dir.path(),
-        &["report", l, "-o", out.to_str().unwrap(), "--layouts", "reference-f32,fat-20", "--flip", "none"],
+        &["report", l, "-o", out.to_str().unwrap(), "--candidates", "reference-f32,fat-20", "--flip", "none"],
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let rep: serde_json::Value =

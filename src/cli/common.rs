@@ -61,7 +61,7 @@ pub struct ReadArgs {
     pub allow_dwa: bool,
     /// The input is the packed render targets of this layout (a built-in name or a layout file): a folder of
     /// `<target>.dds|bin|png|exr` (RenderDoc DDS saves with samples as array slices; `gbuf pack` output). A folder
-    /// holding `layout.toml` needs no flag. Spelled `--layout` on commands without a layout of their own.
+    /// holding `layout.toml` needs no flag.
     #[arg(long = "input-layout", value_name = "NAME|PATH")]
     pub input_layout: Option<String>,
     /// The images are RenderDoc "slices as grid" mosaics of a multisampled target: C×R tiles, tile s (row by

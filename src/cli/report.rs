@@ -1,4 +1,4 @@
-//! `gbuf report FILE… [--scene SIDECAR] [--layouts LIST] [--detectors LIST] [--culling LIST] [--flip WHICH]
+//! `gbuf report FILE… [--scene SIDECAR] [--candidates LIST] [--detectors LIST] [--culling LIST] [--flip WHICH]
 //! [--over mean|worst] [-o DIR] [--json]`: sweep layouts × detectors on one or more dumps (frames), one after
 //! another, and write the report folder with per-frame and aggregated rows. Also the pieces `gbuf demo` and
 //! `gbuf merge` reuse: the sweep flags, the progress bar, the human summary.
@@ -24,8 +24,9 @@ pub const DEFAULT_DETECTORS: &str = "lauritzen,normal,combined";
 /// Sweep flags shared by `gbuf report` and `gbuf demo`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct SweepArgs {
-    /// Layouts to sweep: built-in names or layout files, comma-separated (default: every built-in).
-    #[arg(long, value_name = "LIST")]
+    /// The layouts to sweep and rank: built-in names or layout files, comma-separated (default: every built-in).
+    /// (`--input-layout` names the layout of an input that is packed render targets.)
+    #[arg(long = "candidates", alias = "layouts", value_name = "LIST")]
     pub layouts: Option<String>,
     /// Edge detectors, comma-separated.
     #[arg(long, value_name = "LIST", value_delimiter = ',', default_value = DEFAULT_DETECTORS)]
@@ -96,10 +97,10 @@ impl SweepArgs {
         let layouts = match &self.layouts {
             None => Layout::builtins(),
             Some(list) => split(list)
-                .map(|n| Layout::by_name_or_path(n).with_context(|| format!("--layouts: {n}")))
+                .map(|n| Layout::by_name_or_path(n).with_context(|| format!("--candidates: {n}")))
                 .collect::<anyhow::Result<Vec<_>>>()?,
         };
-        anyhow::ensure!(!layouts.is_empty(), "--layouts: no layout given");
+        anyhow::ensure!(!layouts.is_empty(), "--candidates: no layout given");
         let detectors = self.detectors.clone();
         anyhow::ensure!(!detectors.is_empty(), "--detectors: no detector given");
         let culling = self.culling.clone();
