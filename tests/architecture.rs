@@ -346,3 +346,100 @@ fn the_reader_finds_paths_and_skips_macros() {
     assert_eq!(non_test("a\n#[cfg(test)]\nmod tests { use crate::report; }\nb"), "a\n\nb");
     assert_eq!(non_test("#[cfg(test)]\nfn f() { crate::report::x() }"), "#[cfg(test)]\nfn f() { crate::report::x() }");
 }
+
+/// The folders of the repository a document or comment may name a path in.
+const REPO_DIRS: [&str; 10] =
+    ["src/", "tests/", "docs/", "benches/", "fixtures/", "examples/", "fuzz/", "python/", "scripts/", ".ci/"];
+
+/// Paths a document names in another repository (the ISPC example, NVIDIA's FLIP, LuxCoreRender), folders the
+/// fuzz scripts create, and the examples of a doc comment.
+const ELSEWHERE: [&str; 8] = [
+    "examples/cpu/deferred",
+    "examples/deferred",
+    "src/cpp/",
+    "src/slg/",
+    "fuzz/corpus/",
+    "fuzz/logs/",
+    "src/a/",
+    "src/a.",
+];
+
+/// Every repository path named in the documents (`*.md` outside `target/`) and in the comments of `src/`, `tests/`,
+/// `benches/` and `examples/` — `docs/RESOLVE.md`, `src/io/ispc.rs:120`, `fixtures/scripts/` — exists, from the
+/// repository's root or from the naming file's folder. Tokens with
+/// placeholders (`<`, `*`, `{`, `…`, `NAME`) are patterns, not paths, and are skipped.
+#[test]
+fn every_path_the_docs_name_exists() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            let name = p.file_name().unwrap().to_string_lossy().to_string();
+            if p.is_dir() {
+                if !matches!(name.as_str(), "target" | ".git" | "seeds" | "corpus" | "artifacts" | "node_modules") {
+                    walk(&p, out);
+                }
+            } else if name.ends_with(".md") || name.ends_with(".rs") || name.ends_with(".sh") || name.ends_with(".py") {
+                out.push(p);
+            }
+        }
+    }
+    walk(root, &mut files);
+    let mut missing = Vec::new();
+    for f in &files {
+        let text = std::fs::read_to_string(f).unwrap();
+        let rel = f.strip_prefix(root).unwrap().display().to_string();
+        let md = rel.ends_with(".md");
+        for (n, line) in text.lines().enumerate() {
+            // In code, only comments: string literals name paths a test creates.
+            let prose = if md {
+                line
+            } else {
+                match line.find("//").or_else(|| line.find("# ").filter(|_| !rel.ends_with(".rs"))) {
+                    Some(i) => &line[i..],
+                    None => continue,
+                }
+            };
+            let here = f.parent().unwrap();
+            for token in doc_paths(prose) {
+                let foreign = ELSEWHERE.iter().any(|p| token.starts_with(p));
+                if !foreign && !root.join(&token).exists() && !here.join(&token).exists() {
+                    missing.push(format!("{rel}:{}: {token}", n + 1));
+                }
+            }
+        }
+    }
+    assert!(missing.is_empty(), "paths named in docs and comments that do not exist:\n{}", missing.join("\n"));
+}
+
+/// The repository paths in a line of prose: words starting with one of [`REPO_DIRS`] (after a space, a quote, a
+/// bracket or a backtick), cut at the first character a path does not hold, with `:LINE` and `#anchor` dropped.
+fn doc_paths(line: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for (i, _) in line.char_indices() {
+        let before = line[..i].chars().last();
+        if before.is_some_and(|c| !matches!(c, ' ' | '(' | '`' | '"' | '\'' | '[' | ',')) {
+            continue;
+        }
+        let rest = &line[i..];
+        if !REPO_DIRS.iter().any(|d| rest.starts_with(d)) {
+            continue;
+        }
+        let end = rest
+            .find(|c: char| !(c.is_ascii_alphanumeric() || matches!(c, '/' | '.' | '_' | '-')))
+            .unwrap_or(rest.len());
+        let after = rest[end..].chars().next();
+        if after.is_some_and(|c| matches!(c, '<' | '*' | '{' | '…' | '$')) {
+            continue;
+        }
+        let token = rest[..end].trim_end_matches(['.', ',']);
+        if token.chars().any(|c| c.is_ascii_uppercase())
+            && token.split('/').any(|s| s.chars().all(|c| c.is_ascii_uppercase() || c == '_'))
+        {
+            continue; // a placeholder such as fixtures/NAME
+        }
+        out.push(token.to_string());
+    }
+    out
+}

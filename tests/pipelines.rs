@@ -1,4 +1,4 @@
-//! The pipelines comparison against a real rasterizer's own counts (fixtures/raster_4x: Mesa's llvmpipe, 4× MSAA,
+//! The pipelines comparison against a real rasterizer's own counts (fixtures/raster_4x.exr: Mesa's llvmpipe, 4× MSAA,
 //! per-sample primitive IDs; fixtures/raster_4x.counts.json computed independently by
 //! fixtures/scripts/raster_msaa.py), and `gbuf pipelines` on every fixture.
 mod support;
