@@ -443,3 +443,98 @@ fn doc_paths(line: &str) -> Vec<String> {
     }
     out
 }
+
+/// The files of `src/` that list the G-buffer's planes one by one — name at least [`LIST_THRESHOLD`] of the
+/// [`PLANES`], as fields (`.albedo`, `albedo:`) or as `Attribute::` variants. A new attribute is added in each of
+/// them; docs/ARCHITECTURE.md ("Walking the planes") names every one. A file that starts listing the planes fails
+/// [`the_planes_are_listed_only_where_the_architecture_says`] until it goes through `GBuffer::plane`/`slot` instead,
+/// or joins this list and the document.
+const PLANE_LISTS: [&str; 13] = [
+    "src/gbuffer.rs",
+    "src/layout/pack.rs",
+    "src/io/sanitize.rs",
+    "src/io/canonical.rs",
+    "src/io/fileset.rs",
+    "src/io/mapped.rs",
+    "src/io/blender.rs",
+    "src/io/mitsuba.rs",
+    "src/scene/raycast.rs",
+    "src/scene/rematerialise.rs",
+    "src/resolve/fixture.rs",
+    "src/analysis/budget.rs",
+    "src/analysis/compress.rs",
+];
+
+/// The G-buffer's planes besides coverage: field name and `Attribute` variant.
+const PLANES: [(&str, &str); 12] = [
+    ("depth", "Depth"),
+    ("position", "Position"),
+    ("normal", "Normal"),
+    ("albedo", "Albedo"),
+    ("specular", "Specular"),
+    ("specular_power", "SpecularPower"),
+    ("roughness", "Roughness"),
+    ("metallic", "Metallic"),
+    ("material_id", "MaterialId"),
+    ("object_id", "ObjectId"),
+    ("primitive_id", "PrimitiveId"),
+    ("motion", "Motion"),
+];
+
+/// Naming this many of the 12 planes makes a file a list of them (the resolve, which reads the 8 it lights with,
+/// is a reader of planes, not a list).
+const LIST_THRESHOLD: usize = 9;
+
+/// How many of [`PLANES`] `text` names as a field or an `Attribute` variant (whichever names more).
+fn planes_named(text: &str) -> usize {
+    let word_at = |hay: &str, needle: &str| {
+        hay.match_indices(needle).any(|(i, _)| {
+            let after = hay[i + needle.len()..].chars().next();
+            !after.is_some_and(|c| c.is_alphanumeric() || c == '_')
+        })
+    };
+    let fields =
+        PLANES.iter().filter(|(f, _)| word_at(text, &format!(".{f}")) || word_at(text, &format!(" {f}:"))).count();
+    let variants = PLANES.iter().filter(|(_, v)| word_at(text, &format!("Attribute::{v}"))).count();
+    fields.max(variants)
+}
+
+#[test]
+fn the_planes_are_listed_only_where_the_architecture_says() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    rust_files(&root.join("src"), &mut files);
+    let mut lists = BTreeSet::new();
+    for f in &files {
+        let rel = f.strip_prefix(root).unwrap().display().to_string();
+        if rel.starts_with("src/cli/") {
+            continue; // the binary prints what the library gives it
+        }
+        if planes_named(&non_test(&std::fs::read_to_string(f).unwrap())) >= LIST_THRESHOLD {
+            lists.insert(rel);
+        }
+    }
+    let allowed: BTreeSet<String> = PLANE_LISTS.iter().map(|s| s.to_string()).collect();
+    let new: Vec<_> = lists.difference(&allowed).collect();
+    let gone: Vec<_> = allowed.difference(&lists).collect();
+    assert!(
+        new.is_empty(),
+        "these files list the G-buffer's planes one by one: walk them with GBuffer::plane/slot instead, or add them \
+         to PLANE_LISTS and to docs/ARCHITECTURE.md (\"Walking the planes\"): {new:?}"
+    );
+    assert!(gone.is_empty(), "no longer plane lists: take them out of PLANE_LISTS and the document: {gone:?}");
+    let doc = std::fs::read_to_string(root.join("docs/ARCHITECTURE.md")).unwrap();
+    let section = &doc[doc.find("**Walking the planes**").expect("the section")..];
+    let section = &section[..section.find("\n- **").unwrap_or(section.len())];
+    for f in PLANE_LISTS {
+        let module = f.trim_start_matches("src/").trim_end_matches(".rs").replace('/', "::");
+        assert!(
+            section.contains(f) || section.contains(&format!("`{module}`")) || section.contains(&format!("{module}::")),
+            "docs/ARCHITECTURE.md's \"Walking the planes\" does not name {f}"
+        );
+    }
+    // The detector itself: a made-up file listing the planes is a list; the resolve's reading of eight is not.
+    let made_up = PLANES.iter().map(|(f, _)| format!("let x = gb.{f};")).collect::<Vec<_>>().join("\n");
+    assert!(planes_named(&made_up) >= LIST_THRESHOLD);
+    assert!(planes_named(&std::fs::read_to_string(root.join("src/resolve/surface.rs")).unwrap()) < LIST_THRESHOLD);
+}
