@@ -981,6 +981,7 @@ fn band_features_impl(ctx: &Ctx, img: Pixels<'_>, enc: Encoding, y0: usize, rows
                 // SAFETY: c < tws ≤ TW in steps of LANES (tws a multiple of COLS, itself of LANES); every offset
                 // + row_len (= NH1·TW, and every plane here is < NH1) ≤ ring.len(), asserted above.
                 let (a, b) = unsafe { vsum2(&ring, &offs_s, c, [HP_Y, HP_CX, HP_CZ1, HP_CZ2], &ctx.ws, [0, 1, 2, 3]) };
+                // SAFETY: as above.
                 let (fa, fb) = unsafe { vsum2(&ring, &offs_f, c, [HP_DX, HP_DDX, HP_G, HP_G], &ctx.wf, [0, 0, 1, 2]) };
                 for k in 0..4 {
                     acc[0][k][c..c + LANES].copy_from_slice(&a[k].0);
@@ -1323,9 +1324,10 @@ fn vrow2(ctx: &Ctx, ring: &[f32], tws: usize, offs_s: &[usize], offs_f: &[usize]
             }
         };
         // Y and Cx of both images; then Cz1 and Cz2 of both images.
-        // SAFETY (these three calls): c < tws ≤ TW in steps of LANES (tws a multiple of LANES); every offset
-        // + NH·TW ≤ ring.len() and every plane is < NH = 14, asserted above.
+        // SAFETY: c < tws ≤ TW in steps of LANES (tws a multiple of LANES); every offset + NH·TW ≤ ring.len()
+        // and every plane is < NH = 14, asserted above (the same for the vsum2 calls below).
         let (ya, yb) = unsafe { vsum2(ring, offs_s, c, [HP_Y, HP_CX, 7 + HP_Y, 7 + HP_CX], &ctx.ws, [0, 1, 0, 1]) };
+        // SAFETY: as above.
         let (za, zb) =
             unsafe { vsum2(ring, offs_s, c, [HP_CZ1, HP_CZ2, 7 + HP_CZ1, 7 + HP_CZ2], &ctx.ws, [2, 3, 2, 3]) };
         put(0, ([ya[0], ya[1], za[0], za[1]], [yb[0], yb[1], zb[0], zb[1]]));
@@ -1333,6 +1335,7 @@ fn vrow2(ctx: &Ctx, ring: &[f32], tws: usize, offs_s: &[usize], offs_f: &[usize]
         // Features: x-derivative planes times G, G plane times y-derivatives (per image).
         for img in 0..2 {
             let o = img * 7;
+            // SAFETY: as above (o + HP_G < NH).
             let (a, b) =
                 unsafe { vsum2(ring, offs_f, c, [o + HP_DX, o + HP_DDX, o + HP_G, o + HP_G], &ctx.wf, [0, 0, 1, 2]) };
             put(8 + img * 4, (a, b));

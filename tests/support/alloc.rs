@@ -16,8 +16,11 @@ fn grew(by: usize) {
     PEAK.fetch_max(CURRENT.fetch_add(by, Relaxed) + by, Relaxed);
 }
 
+// SAFETY: every method hands its arguments to `System` unchanged and returns its result; the counting touches
+// only atomics.
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, l: Layout) -> *mut u8 {
+        // SAFETY: the caller's layout and pointer go to the system allocator unchanged (GlobalAlloc's contract).
         let p = unsafe { System.alloc(l) };
         if !p.is_null() {
             grew(l.size());
@@ -25,6 +28,7 @@ unsafe impl GlobalAlloc for Counting {
         p
     }
     unsafe fn alloc_zeroed(&self, l: Layout) -> *mut u8 {
+        // SAFETY: the caller's layout and pointer go to the system allocator unchanged (GlobalAlloc's contract).
         let p = unsafe { System.alloc_zeroed(l) };
         if !p.is_null() {
             grew(l.size());
@@ -32,10 +36,12 @@ unsafe impl GlobalAlloc for Counting {
         p
     }
     unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
+        // SAFETY: the caller's layout and pointer go to the system allocator unchanged (GlobalAlloc's contract).
         unsafe { System.dealloc(p, l) };
         CURRENT.fetch_sub(l.size(), Relaxed);
     }
     unsafe fn realloc(&self, p: *mut u8, l: Layout, new: usize) -> *mut u8 {
+        // SAFETY: the caller's layout and pointer go to the system allocator unchanged (GlobalAlloc's contract).
         let q = unsafe { System.realloc(p, l, new) };
         if !q.is_null() {
             if new >= l.size() {

@@ -45,6 +45,7 @@ impl Neon {
     /// An 8-entry f32 table as `tbl` registers.
     #[inline(always)]
     fn table8(t: &[f32; 8]) -> Table8 {
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         unsafe { uint8x16x2_t(vld1q_u8(t.as_ptr().cast()), vld1q_u8(t.as_ptr().add(4).cast())) }
     }
 
@@ -54,7 +55,9 @@ impl Neon {
     #[inline(always)]
     fn exp2_below(self, hi: f32) -> Self {
         let [c0, c1, c2, c3, c4, c5] = EXP2_P;
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         let c = |v: f32| unsafe { vdupq_n_f32(v) };
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         self.map(|x| unsafe {
             let x = vminq_f32(vmaxq_f32(x, c(-126.0)), c(hi));
             let i = vrndnq_f32(x);
@@ -74,6 +77,7 @@ impl Add for Neon {
     type Output = Self;
     #[inline(always)]
     fn add(self, o: Self) -> Self {
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         self.zip(o, |x, y| unsafe { vaddq_f32(x, y) })
     }
 }
@@ -81,6 +85,7 @@ impl Sub for Neon {
     type Output = Self;
     #[inline(always)]
     fn sub(self, o: Self) -> Self {
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         self.zip(o, |x, y| unsafe { vsubq_f32(x, y) })
     }
 }
@@ -88,6 +93,7 @@ impl Mul for Neon {
     type Output = Self;
     #[inline(always)]
     fn mul(self, o: Self) -> Self {
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         self.zip(o, |x, y| unsafe { vmulq_f32(x, y) })
     }
 }
@@ -101,11 +107,13 @@ impl Lanes for Neon {
     type Mask = [uint32x4_t; 4];
     #[inline(always)]
     fn splat(x: f32) -> Self {
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         Neon([unsafe { vdupq_n_f32(x) }; 4])
     }
     #[inline(always)]
     fn load(a: &[f32]) -> Self {
         let a = &a[..LANES];
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         let v = unsafe { vld1q_f32_x4(a.as_ptr()) };
         Neon([v.0, v.1, v.2, v.3])
     }
@@ -113,32 +121,38 @@ impl Lanes for Neon {
     fn store(self, a: &mut [f32]) {
         let a = &mut a[..LANES];
         let [x, y, z, w] = self.0;
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         unsafe { vst1q_f32_x4(a.as_mut_ptr(), float32x4x4_t(x, y, z, w)) }
     }
     #[inline(always)]
     fn mul_add(self, b: Self, c: Self) -> Self {
         let (a, b, c) = (self.0, b.0, c.0);
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         let f = |i: usize| unsafe { vfmaq_f32(c[i], a[i], b[i]) };
         Neon([f(0), f(1), f(2), f(3)])
     }
     #[inline(always)]
     fn nmul_add(self, b: Self, c: Self) -> Self {
         let (a, b, c) = (self.0, b.0, c.0);
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         let f = |i: usize| unsafe { vfmsq_f32(c[i], a[i], b[i]) };
         Neon([f(0), f(1), f(2), f(3)])
     }
     #[inline(always)]
     fn max(self, o: Self) -> Self {
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         self.zip(o, |x, y| unsafe { vmaxq_f32(x, y) })
     }
     #[inline(always)]
     fn min(self, o: Self) -> Self {
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         self.zip(o, |x, y| unsafe { vminq_f32(x, y) })
     }
     #[inline(always)]
     fn rsqrt(self) -> Self {
         // y ≈ 1/√x to about 2⁻⁸ (`frsqrte`); each Newton step y·(3 − x·y²)/2 (`frsqrts` computes (3 − a·b)/2 fused)
         // squares the error: 2⁻¹⁵, then rounding only (≈ 2.5e-7 at worst, tested).
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         self.map(|x| unsafe {
             let mut y = vrsqrteq_f32(x);
             y = vmulq_f32(y, vrsqrtsq_f32(vmulq_f32(x, y), y));
@@ -148,6 +162,7 @@ impl Lanes for Neon {
     #[inline(always)]
     fn rsqrt_approx(self) -> Self {
         // The bare estimate is 2⁻⁸, looser than the 2⁻¹⁴ this promises: one Newton step.
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         self.map(|x| unsafe {
             let y = vrsqrteq_f32(x);
             vmulq_f32(y, vrsqrtsq_f32(vmulq_f32(x, y), y))
@@ -157,7 +172,9 @@ impl Lanes for Neon {
     fn recip(self) -> Self {
         // y ≈ 1/x to about 2⁻⁸ (`frecpe`); one step y·(2 − x·y) (`frecps`) to 2⁻¹⁶, then y + y·(1 − x·y) with the
         // residual fused (about 1 ulp).
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         let one = unsafe { vdupq_n_f32(1.0) };
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         self.map(|x| unsafe {
             let mut y = vrecpeq_f32(x);
             y = vmulq_f32(y, vrecpsq_f32(x, y));
@@ -173,7 +190,9 @@ impl Lanes for Neon {
         // log2(1 + r) = r·q(r) with the Taylor terms to r³ (truncation ≤ 2.0e-7 absolute).
         let [q0, q1, q2, q3] = LOG2_Q8;
         let (inv_c8, t8) = (Neon::table8(&LOG2_INV_C8), Neon::table8(&LOG2_T8));
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         let c = |v: f32| unsafe { vdupq_n_f32(v) };
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         self.map(|x| unsafe {
             let bits = vreinterpretq_u32_f32(x);
             let e = vcvtq_f32_s32(vsubq_s32(vreinterpretq_s32_u32(vshrq_n_u32::<23>(bits)), vdupq_n_s32(127)));
@@ -200,24 +219,29 @@ impl Lanes for Neon {
     }
     #[inline(always)]
     fn gt(self, o: Self) -> Self::Mask {
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         self.cmp(o, |x, y| unsafe { vcgtq_f32(x, y) })
     }
     #[inline(always)]
     fn ge(self, o: Self) -> Self::Mask {
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         self.cmp(o, |x, y| unsafe { vcgeq_f32(x, y) })
     }
     #[inline(always)]
     fn le(self, o: Self) -> Self::Mask {
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         self.cmp(o, |x, y| unsafe { vcleq_f32(x, y) })
     }
     #[inline(always)]
     fn and(a: Self::Mask, b: Self::Mask) -> Self::Mask {
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         let f = |i: usize| unsafe { vandq_u32(a[i], b[i]) };
         [f(0), f(1), f(2), f(3)]
     }
     #[inline(always)]
     fn keep(self, m: Self::Mask) -> Self {
         let a = self.0;
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         let f = |i: usize| unsafe { vreinterpretq_f32_u32(vandq_u32(vreinterpretq_u32_f32(a[i]), m[i])) };
         Neon([f(0), f(1), f(2), f(3)])
     }
@@ -227,6 +251,7 @@ impl Lanes for Neon {
     }
     #[inline(always)]
     fn any(m: Self::Mask) -> bool {
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         unsafe { vmaxvq_u32(vorrq_u32(vorrq_u32(m[0], m[1]), vorrq_u32(m[2], m[3]))) != 0 }
     }
     #[inline(always)]
@@ -234,6 +259,7 @@ impl Lanes for Neon {
         // The sixteen lanes narrowed to bytes (0 or 0xff, in lane order), each kept as its bit weight, and the
         // weights of each half summed.
         const W: [u8; 16] = [1, 2, 4, 8, 16, 32, 64, 128, 1, 2, 4, 8, 16, 32, 64, 128];
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         unsafe {
             let lo = vuzp1q_u16(vreinterpretq_u16_u32(m[0]), vreinterpretq_u16_u32(m[1]));
             let hi = vuzp1q_u16(vreinterpretq_u16_u32(m[2]), vreinterpretq_u16_u32(m[3]));
@@ -244,11 +270,13 @@ impl Lanes for Neon {
     #[inline(always)]
     fn hmin(self) -> f32 {
         let a = self.0;
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         unsafe { vminvq_f32(vminq_f32(vminq_f32(a[0], a[1]), vminq_f32(a[2], a[3]))) }
     }
     #[inline(always)]
     fn hmax(self) -> f32 {
         let a = self.0;
+        // SAFETY: NEON is part of every aarch64 target; slices are sliced to LANES first.
         unsafe { vmaxvq_f32(vmaxq_f32(vmaxq_f32(a[0], a[1]), vmaxq_f32(a[2], a[3]))) }
     }
 }
