@@ -193,7 +193,9 @@ impl InputArgs {
         if input.is_given() || gbuf::layout::targets::is_packed_dir(&self.file) {
             return Ok(None);
         }
-        let dump = gbuf::io::open_packed(&self.file, &self.options()?)?;
+        // SAFETY: the command line maps the `.bin` it lights and accepts the hazard of every tool that maps its
+        // input: a file changed or truncated by another process during the run (docs/DECISIONS.md, "Mapping a .bin").
+        let dump = unsafe { gbuf::io::open_packed_mapped(&self.file, &self.options()?)? };
         if let Some(d) = &dump {
             print_warnings(&self.file, &d.loaded);
         }

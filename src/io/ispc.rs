@@ -344,8 +344,25 @@ pub(crate) struct Survey {
 
 impl Arrays {
     /// Reads and checks the file (the header against the file length and the memory limit, every array's byte
-    /// range): the same checks and errors as [`read`], without decoding.
+    /// range): the same checks and errors as [`read`], without decoding. The bytes are read into memory; see
+    /// [`Arrays::map`] for a map of the file instead.
     pub fn read(path: &Path, opts: &LoadOptions) -> Result<Arrays> {
+        Arrays::open(path, opts, false)
+    }
+
+    /// [`Arrays::read`] with the file memory-mapped instead of read (no copy, no page faults of a fresh buffer: a
+    /// few milliseconds of a 720p frame's whole run); read as [`Arrays::read`] does when it cannot be mapped.
+    ///
+    /// # Safety
+    /// No other process may change or truncate the file while the returned `Arrays` (or anything borrowing it)
+    /// lives: the values read would change under gbuf, or the process would get SIGBUS. The caller signs for that,
+    /// as every tool that maps its input does (docs/DECISIONS.md, "Mapping a .bin").
+    pub unsafe fn map(path: &Path, opts: &LoadOptions) -> Result<Arrays> {
+        Arrays::open(path, opts, true)
+    }
+
+    /// [`Arrays::read`], or [`Arrays::map`] when `map` (whose caller has signed its contract).
+    fn open(path: &Path, opts: &LoadOptions, map: bool) -> Result<Arrays> {
         let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
         let file_len = file.metadata().map_err(|e| Error::io(path, e))?.len();
         let mut head = Vec::with_capacity(HEADER_BYTES);
@@ -353,13 +370,14 @@ impl Arrays {
         (&mut reader).take(HEADER_BYTES as u64).read_to_end(&mut head).map_err(|e| Error::io(path, e))?;
         let header = check_header(&head, file_len, path, opts)?;
         let want = HEADER_BYTES + header.chunk_size as usize;
-        // SAFETY: the map is read-only and its length was checked against the file's (`check_header`); every
-        // read of it is a bounds-checked slice of that length. What mapping a file cannot rule out is another
-        // process changing or truncating it while gbuf runs (values read would change, or the process would get
-        // SIGBUS): the same hazard every tool that maps its input takes (docs/DECISIONS.md, "Mapping a .bin").
-        let mapped = unsafe { memmap2::MmapOptions::new().len(want).populate().map(&file) };
-        if let Ok(m) = mapped {
-            return Ok(Arrays { header, bytes: Bytes::Mapped(m) });
+        if map {
+            // SAFETY: the map is read-only and its length was checked against the file's (`check_header`); every
+            // read of it is a bounds-checked slice of that length. The caller of `Arrays::map` has promised that
+            // no other process changes or truncates the file while it is mapped.
+            let mapped = unsafe { memmap2::MmapOptions::new().len(want).populate().map(&file) };
+            if let Ok(m) = mapped {
+                return Ok(Arrays { header, bytes: Bytes::Mapped(m) });
+            }
         }
         let mut bytes = head;
         bytes.reserve_exact(want - bytes.len());

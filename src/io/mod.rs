@@ -226,6 +226,18 @@ impl PackedDump {
 /// `Ok(None)` when `path` is no such dump, or `opts` change its samples (folding, a grid, `--map`, file lists):
 /// [`load`] it instead.
 pub fn open_packed(path: &Path, opts: &LoadOptions) -> Result<Option<PackedDump>> {
+    open_packed_with(path, opts, false)
+}
+
+/// [`open_packed`] with the file memory-mapped ([`ispc::Arrays::map`]) instead of read.
+///
+/// # Safety
+/// As [`ispc::Arrays::map`]: no other process may change or truncate the file while the returned dump lives.
+pub unsafe fn open_packed_mapped(path: &Path, opts: &LoadOptions) -> Result<Option<PackedDump>> {
+    open_packed_with(path, opts, true)
+}
+
+fn open_packed_with(path: &Path, opts: &LoadOptions, map: bool) -> Result<Option<PackedDump>> {
     if path.is_dir() || !opts.files.is_empty() || !opts.map.is_empty() || opts.grid.is_some() || opts.fold.is_some() {
         return Ok(None);
     }
@@ -238,7 +250,12 @@ pub fn open_packed(path: &Path, opts: &LoadOptions) -> Result<Option<PackedDump>
     if head.starts_with(&EXR_MAGIC) || !ispc::matches_file(&head, len) {
         return Ok(None);
     }
-    let arrays = ispc::Arrays::read(path, opts)?;
+    let arrays = if map {
+        // SAFETY: the caller of `open_packed_mapped` has signed `Arrays::map`'s contract.
+        unsafe { ispc::Arrays::map(path, opts)? }
+    } else {
+        ispc::Arrays::read(path, opts)?
+    };
     let survey = arrays.survey()?;
     let mut loaded = Loaded {
         gbuffer: survey.like,
