@@ -13,10 +13,10 @@
 
 use criterion::{BenchmarkId, Criterion, Throughput};
 use gbuf::base::isa::Isa;
+use gbuf::base::rng::SplitMix64;
 use gbuf::codec::eval::{best_time, random_unit_vectors};
 use gbuf::codec::simd::{par_decode, par_encode, PAR_CHUNK};
 use gbuf::codec::{color_codec, depth_codec, scalar_codec, NormalCodec, NormalScheme};
-use gbuf::util::SplitMix64;
 use glam::Vec3;
 use rayon::prelude::*;
 use std::hint::black_box;

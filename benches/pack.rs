@@ -11,10 +11,10 @@
 //! `cargo bench --bench pack -- --warm-up-time 1 --measurement-time 2`.
 
 use criterion::{Criterion, Throughput};
+use gbuf::base::rng::SplitMix64;
 use gbuf::codec::eval::best_time;
 use gbuf::gbuffer::GBuffer;
 use gbuf::layout::Layout;
-use gbuf::util::SplitMix64;
 use gbuf::Camera;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;

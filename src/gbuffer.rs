@@ -645,7 +645,7 @@ impl GBuffer {
         let (w, s) = (self.width as usize, self.samples as usize);
         let n = depth.len();
         let offsets = &self.sample_positions;
-        let pos = self.position.get_or_insert_with(|| crate::util::zeroed_vec3(n));
+        let pos = self.position.get_or_insert_with(|| crate::base::memory::zeroed_vec3(n));
         let chunk = (w * s).max(1);
         pos.par_chunks_mut(chunk)
             .zip(depth.par_chunks(chunk))

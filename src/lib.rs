@@ -45,7 +45,6 @@ pub mod report;
 pub mod resolve;
 pub mod scene;
 pub mod study;
-pub mod util;
 
 pub use camera::Camera;
 pub use error::{Error, Result};

@@ -14,9 +14,9 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// The top-level modules in pipeline order: each may import only those before it.
-const LAYERS: [&str; 17] = [
-    "error", "util", "base", "camera", "light", "gbuffer", "io", "image", "scene", "codec", "layout", "detect",
-    "resolve", "measure", "analysis", "report", "study",
+const LAYERS: [&str; 16] = [
+    "error", "base", "camera", "light", "gbuffer", "io", "image", "scene", "codec", "layout", "detect", "resolve",
+    "measure", "analysis", "report", "study",
 ];
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {

@@ -8,10 +8,10 @@
 mod strategies;
 
 use gbuf::base::isa::Isa;
+use gbuf::base::rng::SplitMix64;
 use gbuf::codec::simd::{self, BLOCK, PAR_CHUNK};
 use gbuf::codec::ScalarCodec;
 use gbuf::codec::{color_codec, depth_codec, scalar_codec, ColorCodec, DepthCodec, NormalCodec, NormalScheme};
-use gbuf::util::SplitMix64;
 use glam::Vec3;
 use proptest::prelude::*;
 use strategies::{any_scalar, any_vector, degenerate_vectors, stiff_unit_vectors};

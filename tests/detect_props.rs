@@ -172,7 +172,7 @@ proptest! {
 #[test]
 fn every_threshold_is_monotone_on_a_deterministic_sweep() {
     // A fixed random buffer and a dense sweep of each threshold alone: the edge count never rises.
-    let mut rng = gbuf::util::SplitMix64::new(4);
+    let mut rng = gbuf::base::rng::SplitMix64::new(4);
     let (w, h, s) = (24u32, 16u32, 4u32);
     let mut gb = GBuffer::new(w, h, s).unwrap();
     gb.coverage.fill(true);

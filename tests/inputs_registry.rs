@@ -1,7 +1,7 @@
-//! The process-wide registry of input files (`gbuf::util::protect_input`): a library user can see it and clear it.
+//! The process-wide registry of input files (`gbuf::base::files::protect_input`): a library user can see it and clear it.
 //! Its own test binary, so clearing cannot race with other tests' protected inputs.
 
-use gbuf::util::{check_not_input, clear_protected_inputs, protect_input, protected_inputs};
+use gbuf::base::files::{check_not_input, clear_protected_inputs, protect_input, protected_inputs};
 
 #[test]
 fn inputs_are_listed_refused_as_outputs_and_cleared() {

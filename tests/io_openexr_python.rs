@@ -89,7 +89,7 @@ fn python_openexr_reads_every_block_kind_we_write() {
     let dir = tempfile::tempdir().unwrap();
     let (w, h) = (13u32, 37u32);
     let n = (w * h) as usize;
-    let mut rng = gbuf::util::SplitMix64::new(3);
+    let mut rng = gbuf::base::rng::SplitMix64::new(3);
     let noise: Vec<u32> = (0..n).map(|_| rng.next_u64() as u32).collect();
     let smooth = RawImage {
         width: w,

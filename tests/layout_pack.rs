@@ -1,10 +1,10 @@
 //! Whole-layout packing: every built-in packs and unpacks; unpacking is bit-exact with applying each field's codec
 //! by hand; the reference layout is lossless; byte sizes add up; material indirection; hostile input.
 
+use gbuf::base::rng::SplitMix64;
 use gbuf::codec;
 use gbuf::gbuffer::{Attribute, GBuffer};
 use gbuf::layout::{pack::field_code, Layout, LayoutSpec, Slot};
-use gbuf::util::SplitMix64;
 use gbuf::Camera;
 use glam::{Vec2, Vec3};
 

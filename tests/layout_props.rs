@@ -2,10 +2,10 @@
 //! formats. Every packed texel holds exactly each codec's code at its field's bits, and unpacking equals
 //! `decode(encode(x))` bit for bit.
 
+use gbuf::base::rng::SplitMix64;
 use gbuf::codec;
 use gbuf::gbuffer::{GBuffer, PlaneRef};
 use gbuf::layout::{pack::field_code, FieldSpec, Format, Layout, LayoutSpec, Slot, TargetSpec};
-use gbuf::util::SplitMix64;
 use glam::{Vec2, Vec3};
 use proptest::prelude::*;
 

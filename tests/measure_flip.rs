@@ -5,8 +5,8 @@
 
 mod support;
 
+use gbuf::base::rng::SplitMix64;
 use gbuf::measure::flip::{hdr_flip, ldr_flip, FlipOptions};
-use gbuf::util::SplitMix64;
 use std::path::Path;
 use std::process::Command;
 

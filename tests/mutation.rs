@@ -6,9 +6,9 @@
 
 mod support;
 
+use gbuf::base::rng::SplitMix64;
 use gbuf::gbuffer::PlaneRef;
 use gbuf::io::{load_bytes, LoadOptions, ReadLimits};
-use gbuf::util::SplitMix64;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
 use std::sync::Mutex;

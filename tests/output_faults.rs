@@ -16,7 +16,7 @@ fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures").join(name)
 }
 
-/// The names a report folder's files have: ours, or a temporary file of `util::write_atomic`.
+/// The names a report folder's files have: ours, or a temporary file of `base::files::write_atomic`.
 fn is_temporary(name: &str) -> bool {
     name.starts_with(".gbuf-tmp-")
 }

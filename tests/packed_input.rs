@@ -5,11 +5,11 @@
 
 mod support;
 
+use gbuf::base::rng::SplitMix64;
 use gbuf::gbuffer::{Attribute, GBuffer};
 use gbuf::io::{load as load_dump, LoadOptions};
 use gbuf::layout::targets::{self, PackedInput};
 use gbuf::layout::Layout;
-use gbuf::util::SplitMix64;
 use glam::{Vec2, Vec3};
 use std::path::{Path, PathBuf};
 use std::process::Command;

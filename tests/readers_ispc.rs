@@ -298,7 +298,7 @@ fn bad_header_fields_are_errors() {
 /// Seeded random byte mutations of the fixture (header-only and whole-file): `Err` or a valid G-buffer.
 fn mutate_rounds(rounds: u64, seed: u64) {
     let bytes = std::fs::read(fixture()).unwrap();
-    let mut rng = gbuf::util::SplitMix64::new(seed);
+    let mut rng = gbuf::base::rng::SplitMix64::new(seed);
     for round in 0..rounds {
         let mut b = bytes.clone();
         let header_only = round % 2 == 0;

@@ -1,10 +1,10 @@
 //! The reader fixtures through the public entry point `gbuf::io::load`: dispatch, sidecar resolution, folding, and
 //! damaged channel values that must never panic.
 
+use gbuf::base::rng::SplitMix64;
 use gbuf::io::exr::{read_raw, RawData, RawImage};
 use gbuf::io::sidecar::Sidecar;
 use gbuf::io::{blender, load, mitsuba, LoadOptions, ReadLimits, SourceFormat};
-use gbuf::util::SplitMix64;
 use std::path::{Path, PathBuf};
 
 fn fixture(name: &str) -> PathBuf {

@@ -244,7 +244,7 @@ fn damaged_bins_open_as_they_load() {
     let good = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/ispc_deferred.bin")).unwrap();
     let opts = LoadOptions::default();
     let mut variants: Vec<Vec<u8>> = (0..good.len()).step_by(997).map(|n| good[..n].to_vec()).collect();
-    let mut rng = gbuf::util::SplitMix64::new(34);
+    let mut rng = gbuf::base::rng::SplitMix64::new(34);
     for _ in 0..200 {
         let mut b = good.clone();
         let at = (rng.next_u64() % HEADER_BYTES as u64) as usize;

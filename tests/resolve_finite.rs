@@ -51,7 +51,7 @@ fn frame(power: f32, roughness: std::ops::Range<f32>) -> GBuffer {
     let n = gb.len();
     let (mut pos, mut nrm, mut alb) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
     let (mut rough, mut metal) = (vec![0.0; n], vec![0.0; n]);
-    let mut rng = gbuf::util::SplitMix64::new(16);
+    let mut rng = gbuf::base::rng::SplitMix64::new(16);
     for y in 0..H {
         for x in 0..W {
             let i = gb.index(x, y, 0);

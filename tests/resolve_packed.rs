@@ -19,7 +19,7 @@ fn frames() -> Vec<(&'static str, GBuffer, Vec<Light>)> {
     let lights = default_lights(SceneName::Room, &room);
     let mut every = support::io::plausible(29, 21, 4, 3);
     let n = every.len();
-    let mut r = gbuf::util::SplitMix64::new(5);
+    let mut r = gbuf::base::rng::SplitMix64::new(5);
     every.specular = Some((0..n).map(|_| r.range_f32(-0.2, 1.2)).collect());
     every.specular_power = Some((0..n).map(|_| r.range_f32(0.0, 300.0)).collect());
     every.roughness = Some((0..n).map(|_| r.range_f32(-0.1, 1.1)).collect());

@@ -463,7 +463,7 @@ fn fixture() -> GBuffer {
 fn every_attribute() -> GBuffer {
     let mut gb = support::io::plausible(29, 13, 4, 3);
     let n = gb.len();
-    let mut r = gbuf::util::SplitMix64::new(5);
+    let mut r = gbuf::base::rng::SplitMix64::new(5);
     gb.specular = Some((0..n).map(|_| r.range_f32(-0.2, 1.2)).collect());
     gb.specular_power = Some((0..n).map(|_| r.range_f32(0.0, 300.0)).collect());
     gb.metallic = Some((0..n).map(|_| r.next_f32()).collect());
@@ -827,7 +827,7 @@ open(out, "wb").write(bo.read())
 "#;
 
 /// A double with a random sign, a significand of 53 random bits and an exponent in ±`e`.
-fn random_f64(r: &mut gbuf::util::SplitMix64, e: i32) -> f64 {
+fn random_f64(r: &mut gbuf::base::rng::SplitMix64, e: i32) -> f64 {
     let m = 1.0 + (r.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
     let x = (r.next_u64() % (2 * e as u64 + 1)) as i32 - e;
     let s = if r.next_u64() & 1 == 0 { 1.0 } else { -1.0 };
@@ -842,7 +842,7 @@ fn wgsl_software_double_matches_rust_f64_on_llvmpipe() {
     if !(support::python_has("moderngl, numpy") && support::tool_has("spirv-cross")) {
         return;
     }
-    let mut r = gbuf::util::SplitMix64::new(64);
+    let mut r = gbuf::base::rng::SplitMix64::new(64);
     let mut pairs: Vec<(f64, f64)> = Vec::new();
     for _ in 0..20_000 {
         pairs.push((random_f64(&mut r, 60), random_f64(&mut r, 60)));

@@ -28,10 +28,10 @@ crate::named_enum! {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Stat {
     /// Mean over the frames that have the measure.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub mean: f64,
     /// Largest value (the worst frame: every aggregated measure is lower-is-better).
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub worst: f64,
     /// The frame with the largest value.
     pub worst_frame: String,

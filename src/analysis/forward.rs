@@ -55,7 +55,7 @@ pub struct QuadShading {
     /// `lanes − covered_lanes`: lanes that run only for the quad's derivatives.
     pub helper_lanes: u64,
     /// `helper_lanes / lanes`.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub helper_fraction: f64,
     /// Is this an estimate ([`ForwardSamples::Single`] on an MSAA dump)?
     pub estimated: bool,
@@ -217,7 +217,7 @@ pub struct Utilisation {
     /// Lane-steps issued (useful + idle).
     pub issued: u64,
     /// `useful / issued` (1 when nothing is issued).
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub ratio: f64,
 }
 

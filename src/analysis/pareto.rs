@@ -59,7 +59,7 @@ mod tests {
 
     #[test]
     fn every_point_off_the_front_is_dominated_by_one_on_it() {
-        let mut rng = crate::util::SplitMix64::new(3);
+        let mut rng = crate::base::rng::SplitMix64::new(3);
         let pts: Vec<(f64, f64)> =
             (0..200).map(|_| (f64::from(rng.range_f32(0.0, 10.0)), f64::from(rng.range_f32(0.0, 10.0)))).collect();
         let on = front(&pts);

@@ -92,7 +92,7 @@ pub struct CompressedRow {
     /// Bytes per pixel of the full MSAA G-buffer of the same layout.
     pub full_bytes_per_pixel: u32,
     /// The compressed G-buffer in MB.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub footprint_mb: f64,
     /// Shading evaluations: one per slot in use.
     pub evaluations: u64,
@@ -101,12 +101,12 @@ pub struct CompressedRow {
     /// Fragments merged into a slot.
     pub merges: u64,
     /// Covered samples whose fragment was evicted, as a fraction of the covered samples.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub evicted_fraction: f64,
     /// Pixels that evicted a fragment.
     pub discarded_pixels: u64,
     /// CPU time: compressing and lighting, ms.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub ms: f64,
     /// Error against the reference.
     pub error: ErrorSet,
@@ -135,7 +135,7 @@ pub struct ScheduleRun {
     /// The schedule.
     pub schedule: MsaaSchedule,
     /// Wall time of the resolve, ms.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub ms: f64,
     /// Shading evaluations.
     pub evaluations: u64,
@@ -157,10 +157,10 @@ pub struct AaRow {
     /// Shading evaluations.
     pub evaluations: u64,
     /// G-buffer (and post-process buffers) in MB at the deferred rows' bytes per sample.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub footprint_mb: f64,
     /// CPU time: the resolve, plus MLAA's pass for `mlaa`, ms.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub ms: f64,
     /// Error against the reference.
     pub error: ErrorSet,
@@ -176,10 +176,10 @@ pub struct PipelineRow {
     /// The pipeline.
     pub pipeline: Pipeline,
     /// Render-target memory in MB (G-buffer or MSAA colour + depth, light or fragment lists, output).
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub footprint_mb: f64,
     /// Modelled traffic in MB per frame ([`Pipeline::traffic_model`]).
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub bandwidth_mb: f64,
     /// Shading work: fragment-shader lanes (forward, visibility buffer: helpers included) or shading evaluations
     /// (deferred).
@@ -190,7 +190,7 @@ pub struct PipelineRow {
     pub light_pairs: u64,
     /// Useful lanes over issued lanes (forward: covered over all quad lanes; deferred: the packed schedule at the
     /// first warp width).
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub utilisation: f64,
     /// CPU time of gbuf's resolve running this pipeline, ms (deferred rows only).
     pub cpu_ms: Option<f64>,

@@ -33,7 +33,7 @@ pub struct Frame {
     /// Samples per pixel.
     pub samples: u32,
     /// Fraction of samples covered by a surface.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub coverage: f64,
     /// Number of lights.
     pub lights: usize,
@@ -45,7 +45,7 @@ pub struct Frame {
     /// Time of the reference resolve (every sample shaded, f64 accumulation).
     pub reference: Option<Timing>,
     /// Wall time of this frame's sweep in seconds.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub sweep_seconds: f64,
     /// Where the sweep's wall time went, by kind of stage (seconds, in the order first met).
     #[serde(default)]

@@ -11,13 +11,13 @@ use std::time::Instant;
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Timing {
     /// Median over the runs, in milliseconds.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub median_ms: f64,
     /// Fastest run.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub min_ms: f64,
     /// Slowest run.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub max_ms: f64,
     /// Number of runs.
     pub runs: usize,
@@ -72,7 +72,7 @@ pub struct ParetoFlags {
 pub struct Bandwidth {
     /// Tiled deferred: the G-buffer written once per covered sample, read once per covered sample by the tiled
     /// resolve, and the RGBA16F output written once per pixel.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub tiled: f64,
     /// Quad (light-volume) deferred: the G-buffer written once, then per light-fragment pair one G-buffer read and
     /// one RGBA16F accumulation read-modify-write; `None` when the pair count is unknown.

@@ -1,8 +1,8 @@
 //! 8-bit pictures: the sRGB transfer function, the colour map every heatmap uses, and PNG encoding. The one place
 //! the crate turns numbers into pixels and pixels into a PNG file; plots (`report::plot`) draw on top of it.
 
+use crate::base::files::write_bytes_atomic;
 use crate::error::{Error, Result};
-use crate::util::write_bytes_atomic;
 use image::RgbImage;
 use std::path::Path;
 

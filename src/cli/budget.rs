@@ -119,7 +119,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     // The layout file and its shader code are staged and renamed into place together: a failure leaves neither.
     if let Some(path) = &args.out {
-        let mut staged = gbuf::util::Staged::default();
+        let mut staged = gbuf::base::files::Staged::default();
         let text = layout.spec().to_text(gbuf::layout::SpecSyntax::detect(path, ""))?;
         staged
             .stage_bytes(path, text.as_bytes())

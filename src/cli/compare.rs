@@ -302,6 +302,6 @@ fn append_csv(path: &Path, args: &Args, c: &Comparison) -> anyhow::Result<()> {
         f(n.max_abs),
     ])?;
     let bytes = w.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?;
-    gbuf::util::write_bytes_atomic(path, &bytes)?;
+    gbuf::base::files::write_bytes_atomic(path, &bytes)?;
     Ok(())
 }

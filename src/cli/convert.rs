@@ -49,7 +49,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let doc = gbuf::scene::scene_sidecar(gb, lights);
     let mut text = serde_json::to_vec_pretty(&doc).context("serialising the sidecar")?;
     text.push(b'\n');
-    gbuf::util::write_bytes_atomic(&sidecar, &text).with_context(|| format!("writing {}", sidecar.display()))?;
+    gbuf::base::files::write_bytes_atomic(&sidecar, &text).with_context(|| format!("writing {}", sidecar.display()))?;
     let out = Output {
         input,
         format: loaded.format,

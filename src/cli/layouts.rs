@@ -31,9 +31,8 @@ pub struct Args {
 pub fn emit(layout: &Layout, lang: gbuf::layout::shader::Lang, out: Option<&std::path::Path>) -> anyhow::Result<()> {
     let code = gbuf::layout::shader::emit(layout, lang)?;
     match out {
-        Some(p) => {
-            gbuf::util::write_bytes_atomic(p, code.as_bytes()).with_context(|| format!("writing {}", p.display()))?
-        }
+        Some(p) => gbuf::base::files::write_bytes_atomic(p, code.as_bytes())
+            .with_context(|| format!("writing {}", p.display()))?,
         None => {
             use std::io::Write;
             std::io::stdout().lock().write_all(code.as_bytes())?;

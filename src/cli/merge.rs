@@ -35,7 +35,7 @@ const MAX_REPORT_BYTES: u64 = 256 << 20;
 
 fn read_report(path: &std::path::Path) -> anyhow::Result<Report> {
     let file = if path.is_dir() { path.join("report.json") } else { path.to_path_buf() };
-    gbuf::util::protect_input(&file);
+    gbuf::base::files::protect_input(&file);
     let len = std::fs::metadata(&file).with_context(|| format!("{}: cannot read", file.display()))?.len();
     anyhow::ensure!(len <= MAX_REPORT_BYTES, "{}: {len} bytes is too large for a report.json", file.display());
     let text = std::fs::read_to_string(&file).with_context(|| format!("{}: cannot read", file.display()))?;

@@ -143,7 +143,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         anyhow::bail!("{file}: --geometry {name}: {e}");
     }
     // Both pictures are staged and renamed into place together: a failure leaves neither.
-    let mut staged = gbuf::util::Staged::default();
+    let mut staged = gbuf::base::files::Staged::default();
     let mut said = Vec::new();
     if let Some(path) = &args.aa_crops {
         let (pic, (x, y, w, h)) = gbuf::report::pipelines::aa_crop_picture(&p, &reference)?;

@@ -448,7 +448,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let rows = brdf_comparison(&reports);
     let text = brdf_comparison_markdown(&reports, &rows);
-    let mut staged = gbuf::util::Staged::default();
+    let mut staged = gbuf::base::files::Staged::default();
     let md = args.out.join("brdf_comparison.md");
     staged.stage_bytes(&md, text.as_bytes()).with_context(|| format!("writing {}", md.display()))?;
     let json = serde_json::to_vec_pretty(&rows)?;

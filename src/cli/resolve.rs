@@ -211,7 +211,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // Every file is staged beside its destination and renamed into place only when all were written: a failure
     // leaves none of them half done or alone.
     let (written, t_write) = timed(|| -> anyhow::Result<()> {
-        let mut staged = gbuf::util::Staged::default();
+        let mut staged = gbuf::base::files::Staged::default();
         for (path, bytes) in &files {
             staged.stage_bytes(path, bytes).with_context(|| format!("writing {}", path.display()))?;
         }

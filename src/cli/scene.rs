@@ -131,7 +131,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let doc = scene::scene_sidecar(&gb, &lights);
         let mut text = serde_json::to_vec_pretty(&doc).context("serialising the sidecar")?;
         text.push(b'\n');
-        gbuf::util::write_bytes_atomic(&sidecar, &text).with_context(|| format!("writing {}", sidecar.display()))?;
+        gbuf::base::files::write_bytes_atomic(&sidecar, &text)
+            .with_context(|| format!("writing {}", sidecar.display()))?;
     }
     let write_seconds = t1.elapsed().as_secs_f64();
     pb.finish_and_clear();

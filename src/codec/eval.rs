@@ -15,7 +15,7 @@
 use super::normal::{angle_deg, finish, sanitize, Planar, Projection, Quant};
 use super::{Codec, NormalCodec};
 use crate::base::isa::Isa;
-use crate::util::SplitMix64;
+use crate::base::rng::SplitMix64;
 use glam::Vec3;
 use rayon::prelude::*;
 use serde::Serialize;

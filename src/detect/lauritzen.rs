@@ -277,7 +277,7 @@ mod tests {
     fn stored_estimate_and_inline_estimate_agree() {
         // A bumpy buffer with background holes: feeding the per-pixel estimate back as a stored gradient must give
         // the same mask as the inline path.
-        let mut rng = crate::util::SplitMix64::new(9);
+        let mut rng = crate::base::rng::SplitMix64::new(9);
         let mut gb = flat(17, 11, 4, 1.0);
         for i in 0..gb.len() {
             let p = i / 4;

@@ -36,7 +36,7 @@ pub struct ImageFile {
 /// Reads `path`: a `.png` (8 or 16 bits, grey, grey + alpha, RGB or RGBA; alpha ignored) or an OpenEXR file
 /// (channels `R`, `G`, `B`, or `Y` for grey; also the first layer with `.R`/`.G`/`.B`).
 pub fn read(path: &Path, limits: &ReadLimits) -> Result<ImageFile> {
-    crate::util::protect_input(path);
+    crate::base::files::protect_input(path);
     let png = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
     if png {
         return read_png(path, limits);

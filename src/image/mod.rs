@@ -14,11 +14,11 @@
 pub mod file;
 pub mod mlaa;
 
+use crate::base::files::write_bytes_atomic;
 use crate::base::lut::CodeLut;
 use crate::base::picture::srgb_encode;
 use crate::error::{Error, Result};
 use crate::io::exr::{write_raw, RawChannel, RawData, RawImage};
-use crate::util::write_bytes_atomic;
 use glam::Vec3;
 use std::path::Path;
 
@@ -115,7 +115,7 @@ impl HdrImage {
     /// A black image.
     #[must_use]
     pub fn new(width: u32, height: u32) -> Self {
-        HdrImage { width, height, rgb: crate::util::zeroed_vec3(width as usize * height as usize) }
+        HdrImage { width, height, rgb: crate::base::memory::zeroed_vec3(width as usize * height as usize) }
     }
 
     /// 8-bit sRGB bytes (RGB, row-major) after `tone`, rounded to nearest.
@@ -195,7 +195,7 @@ impl HdrImage {
     }
 }
 
-/// [`HdrImage::to_ldr_gamma22`]'s encode without a `powf` per channel: a [`CodeLut`] of the ISPC sample's
+/// [`HdrImage::to_ldr_gamma22`]'s encode without a `powf` per channel: a `CodeLut` (`base::lut`) of the ISPC sample's
 /// `(x^(1/2.2) · 255) as u8` (the test sweeps every threshold's neighbourhood and a dense grid of [0, 1]).
 pub struct Gamma22Lut(CodeLut);
 

@@ -418,7 +418,7 @@ fn jacobi_eigen(m: &[f64], n: usize) -> (Vec<f64>, Vec<f64>) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::util::SplitMix64;
+    use crate::base::rng::SplitMix64;
 
     /// Exact synthetic correspondences (f32 input) recover the camera to f32 precision; these bounds leave room for
     /// the f32 rounding of positions and pixels, nothing more.

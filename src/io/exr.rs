@@ -539,7 +539,7 @@ fn write_with_exr_crate(path: &Path, image: RawImage, compression: WriteCompress
         .map_err(|source| Error::Exr { path: path.into(), source })?;
     let mut bytes = bytes.into_inner();
     sort_header_attributes(&mut bytes);
-    crate::util::write_bytes_atomic(path, &bytes)
+    crate::base::files::write_bytes_atomic(path, &bytes)
 }
 
 /// Sorts the attributes of a single-part header by name, in place. The exr crate writes custom attributes in hash

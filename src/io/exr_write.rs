@@ -155,7 +155,7 @@ fn encode(target: Target<'_>, path: &Path, image: &RawImage, compression: Compre
     let geometry = Blocks { width, height, lines, blocks, block_bytes, group, compression };
     match target {
         Target::File(path) => {
-            crate::util::write_atomic(path, |file| emit(file, &header, &channels, &geometry, &mut buf))
+            crate::base::files::write_atomic(path, |file| emit(file, &header, &channels, &geometry, &mut buf))
         }
         Target::Memory(bytes) => {
             let mut cursor = std::io::Cursor::new(std::mem::take(bytes));
@@ -326,9 +326,9 @@ fn header(path: &Path, image: &RawImage, channels: &[Channel<'_>], compression: 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::base::rng::SplitMix64;
     use crate::io::exr::{read_raw, RawChannel};
     use crate::io::ReadLimits;
-    use crate::util::SplitMix64;
 
     /// 13 × 37 (three ZIP blocks, the last of 5 lines; odd rows of halves), one channel of each type plus a channel
     /// of random bits, and a channel with a name past the 31 bytes of short names.

@@ -392,7 +392,7 @@ impl Image {
 }
 
 fn read_image(path: &Path, limits: &ReadLimits) -> Result<Image> {
-    crate::util::protect_input(path);
+    crate::base::files::protect_input(path);
     if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
         let reader = image::ImageReader::open(path).map_err(|e| Error::io(path, e))?;
         let reader = reader.with_guessed_format().map_err(|e| Error::io(path, e))?;

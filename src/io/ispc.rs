@@ -683,7 +683,7 @@ fn decode(h: &Header, chunk: &[u8], path: &Path) -> Result<Loaded> {
     gb.camera = Some(h.camera());
     let n = gb.len();
     // Zeroed allocations (the OS zeroes pages as the parallel conversion first writes them).
-    let zeroed = crate::util::zeroed_vec3;
+    let zeroed = crate::base::memory::zeroed_vec3;
     let (mut depth, mut position, mut normal) = (vec![0.0; n], zeroed(n), zeroed(n));
     let (mut albedo, mut spec, mut power) = (zeroed(n), vec![0.0; n], vec![0.0; n]);
     // Bands of rows converted in parallel: the conversion is a fixed cost of every run on a `.bin`.
@@ -841,7 +841,7 @@ pub fn write(path: &Path, gb: &GBuffer, lights: &[Light]) -> Result<()> {
     };
     let mut bytes = header.to_bytes();
     bytes.extend_from_slice(&chunk);
-    crate::util::write_bytes_atomic(path, &bytes)
+    crate::base::files::write_bytes_atomic(path, &bytes)
 }
 
 #[cfg(test)]

@@ -146,7 +146,7 @@ pub struct Loaded {
 /// folds (`opts.fold`, else the sidecar's `supersample`), attaches the sidecar's camera and lights, replaces NaN/±Inf
 /// by finite values (counted in [`Loaded::sanitized`]) and validates the result.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
-    crate::util::protect_input(path);
+    crate::base::files::protect_input(path);
     if opts.input_layout.is_some() || !opts.targets.is_empty() {
         return Err(Error::Argument(
             "packed render targets (an input layout or target files) are read by gbuf::load, which decodes them \
@@ -241,7 +241,7 @@ fn open_packed_with(path: &Path, opts: &LoadOptions, map: bool) -> Result<Option
     if path.is_dir() || !opts.files.is_empty() || !opts.map.is_empty() || opts.grid.is_some() || opts.fold.is_some() {
         return Ok(None);
     }
-    crate::util::protect_input(path);
+    crate::base::files::protect_input(path);
     let (side, ignored) = resolve_sidecar(path, opts)?;
     if side.as_ref().is_some_and(|(s, _)| s.supersample.is_some_and(|k| k > 1)) {
         return Ok(None);
@@ -284,7 +284,7 @@ fn open_packed_with(path: &Path, opts: &LoadOptions, map: bool) -> Result<Option
 /// Loads a dump (EXR or ISPC `.bin`) held in memory, exactly as [`load`] would from a file (`path` names it in
 /// errors and locates the default sidecar beside it).
 pub fn load_bytes(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<Loaded> {
-    crate::util::protect_input(path);
+    crate::base::files::protect_input(path);
     let (side, ignored) = resolve_sidecar(path, opts)?;
     with_warning(load_bytes_with(bytes, path, opts, side), ignored)
 }
@@ -431,7 +431,7 @@ pub fn sidecar_for(path: &Path, opts: &LoadOptions) -> Result<Option<(Sidecar, P
 /// What [`load`] does after its reader, for readers above `io`: folding, the sidecar's camera, lights and
 /// materials, derived depth, sanitising, validation and the plausibility checks.
 pub fn finish_loaded(loaded: Loaded, path: &Path, opts: &LoadOptions) -> Result<Loaded> {
-    crate::util::protect_input(path);
+    crate::base::files::protect_input(path);
     let (side, ignored) = resolve_sidecar(path, opts)?;
     with_warning(finish(loaded, path, side.as_ref().map(|(s, p)| (s, p.as_path())), opts), ignored)
 }

@@ -174,7 +174,7 @@ fn problem_list(problems: &[String]) -> String {
 
 /// The text of a sidecar file, refused above [`MAX_SIDECAR_BYTES`].
 fn read_capped(path: &Path) -> Result<String> {
-    crate::util::protect_input(path);
+    crate::base::files::protect_input(path);
     let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
     if len > MAX_SIDECAR_BYTES {
         return Err(Error::Parse {

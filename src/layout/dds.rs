@@ -9,10 +9,10 @@
 //! format with no DXGI twin (`rgb8`, 3 bytes per texel) goes out as `<target>.bin`: a little-endian u32 length,
 //! that many bytes of JSON describing the texels, then the slices as in the DDS file.
 
+use crate::base::files::write_bytes_atomic;
 use crate::error::{Error, Result};
 use crate::layout::formats::Format;
 use crate::layout::pack::{Packed, TargetPlane};
-use crate::util::write_bytes_atomic;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 

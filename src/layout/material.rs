@@ -770,7 +770,7 @@ mod tests {
     /// still finds every material (largest error near the noise), and its result does not depend on the threads.
     #[test]
     fn many_noisy_tuples_take_the_grid_path_and_find_the_materials() {
-        use crate::util::SplitMix64;
+        use crate::base::rng::SplitMix64;
         let mut rng = SplitMix64::new(3);
         let materials: Vec<[f32; 3]> = (0..100).map(|_| [rng.next_f32(), rng.next_f32(), rng.next_f32()]).collect();
         let n = 90_000;

@@ -537,11 +537,11 @@ impl Layout {
                 (Slot::Whole(a), _) if !band.present.contains(&a) => {}
                 (Slot::Component(a, _), _) if !band.present.contains(&a) => {}
                 (Slot::Whole(Attribute::Normal), Coder::Normal(c)) => {
-                    let plane = out.normal.get_or_insert_with(|| crate::util::zeroed_vec3(n));
+                    let plane = out.normal.get_or_insert_with(|| crate::base::memory::zeroed_vec3(n));
                     src.fill(&mut plane[r.clone()], |cs, o| c.decode_slice(cs, o), whole);
                 }
                 (Slot::Whole(Attribute::Albedo), Coder::Color(c)) => {
-                    let plane = out.albedo.get_or_insert_with(|| crate::util::zeroed_vec3(n));
+                    let plane = out.albedo.get_or_insert_with(|| crate::base::memory::zeroed_vec3(n));
                     src.fill(&mut plane[r.clone()], |cs, o| c.decode_slice(cs, o), whole);
                 }
                 (Slot::Whole(Attribute::Depth), Coder::Depth(c)) => {
@@ -565,7 +565,7 @@ impl Layout {
                             Attribute::Albedo => &mut out.albedo,
                             _ => &mut out.position,
                         };
-                        let plane = plane.get_or_insert_with(|| crate::util::zeroed_vec3(n));
+                        let plane = plane.get_or_insert_with(|| crate::base::memory::zeroed_vec3(n));
                         src.fill(&mut plane[r.clone()], |cs, o| c.decode_slice(cs, o), |d: &mut Vec3, v| d[k] = v);
                     }
                 },

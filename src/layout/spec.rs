@@ -168,7 +168,7 @@ impl LayoutSpec {
 
     /// Reads and parses a layout file (no validation beyond syntax).
     pub fn read(path: &Path) -> Result<LayoutSpec> {
-        crate::util::protect_input(path);
+        crate::base::files::protect_input(path);
         let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
         if meta.len() > MAX_SPEC_FILE_BYTES {
             return Err(Error::invalid(
@@ -193,7 +193,7 @@ impl LayoutSpec {
     pub fn save(&self, path: &Path) -> Result<()> {
         let syntax = SpecSyntax::detect(path, "");
         let text = self.to_text(syntax)?;
-        crate::util::write_bytes_atomic(path, text.as_bytes())
+        crate::base::files::write_bytes_atomic(path, text.as_bytes())
     }
 }
 

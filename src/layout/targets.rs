@@ -167,7 +167,7 @@ pub fn read_frame(
     explicit: &[(String, PathBuf)],
     opts: &LoadOptions,
 ) -> Result<PackedFiles> {
-    crate::util::protect_input(dir);
+    crate::base::files::protect_input(dir);
     if !dir.is_dir() && explicit.is_empty() {
         return Err(Error::invalid(
             dir,
@@ -524,7 +524,10 @@ pub fn write_packed(
             bytes: gb.coverage.iter().map(|&c| if c { 255 } else { 0 }).collect(),
         };
         let path = dir.join(format!("{COVERAGE_TARGET}.dds"));
-        crate::util::write_bytes_atomic(&path, &super::dds::dds_bytes(&plane, gb.width, gb.height, gb.samples)?)?;
+        crate::base::files::write_bytes_atomic(
+            &path,
+            &super::dds::dds_bytes(&plane, gb.width, gb.height, gb.samples)?,
+        )?;
         extra(COVERAGE_TARGET, "r8", path)?;
     }
     let path = dir.join(LAYOUT_FILE);
@@ -535,7 +538,7 @@ pub fn write_packed(
     let mut text = serde_json::to_vec_pretty(&side).map_err(|e| Error::Internal(format!("sidecar: {e}")))?;
     text.push(b'\n');
     let path = dir.join("scene.json");
-    crate::util::write_bytes_atomic(&path, &text)?;
+    crate::base::files::write_bytes_atomic(&path, &text)?;
     extra("scene", "json", path)?;
     Ok(out)
 }

@@ -463,7 +463,7 @@ mod tests {
     fn normal_errors_over_chunks_equal_one_loop_in_sample_order() {
         let mut a = GBuffer::new(300, 120, 4).unwrap();
         assert!(a.len() > 2 * NORMAL_CHUNK);
-        let mut rng = crate::util::SplitMix64::new(11);
+        let mut rng = crate::base::rng::SplitMix64::new(11);
         a.coverage = (0..a.len()).map(|i| i % 7 != 3).collect();
         a.normal = Some((0..a.len()).map(|_| Vec3::new(rng.range_f32(-0.2, 0.2), 0.1, 1.0).normalize()).collect());
         let mut b = a.clone();
@@ -510,7 +510,7 @@ mod tests {
     #[test]
     fn bands_in_order_equal_the_whole_comparison() {
         let mut a = GBuffer::new(61, 23, 4).unwrap();
-        let mut rng = crate::util::SplitMix64::new(3);
+        let mut rng = crate::base::rng::SplitMix64::new(3);
         let n = a.len();
         a.coverage = (0..n).map(|i| i % 9 != 2).collect();
         a.normal = Some((0..n).map(|_| Vec3::new(rng.range_f32(-0.5, 0.5), 0.2, 1.0).normalize()).collect());
@@ -613,7 +613,7 @@ mod tests {
     #[test]
     fn numbers_do_not_depend_on_the_thread_count() {
         let (a, mut b) = pair();
-        let mut rng = crate::util::SplitMix64::new(5);
+        let mut rng = crate::base::rng::SplitMix64::new(5);
         for n in b.normal.as_mut().unwrap() {
             *n = Vec3::new(rng.range_f32(-0.3, 0.3), rng.range_f32(-0.3, 0.3), 1.0).normalize();
         }

@@ -162,19 +162,19 @@ impl Viewing {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct ErrorSet {
     /// Root mean square error (linear radiance).
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub rmse: f64,
     /// PSNR in dB, peak = [`ErrorSet::psnr_peak`]; capped at [`PSNR_CAP_DB`].
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub psnr_db: f64,
     /// The PSNR peak: the largest channel value of the image compared against.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub psnr_peak: f64,
     /// Relative MSE: `Σ (t − r)² / Σ r²`.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub rel_mse: f64,
     /// Largest absolute difference.
-    #[serde(deserialize_with = "crate::util::f64_or_nan")]
+    #[serde(deserialize_with = "crate::base::json::f64_or_nan")]
     pub max_abs: f64,
     /// Mean LDR-FLIP of the displayed images ([`Viewing`]); `None` when not computed.
     pub flip_ldr: Option<f64>,

@@ -2,10 +2,10 @@
 //! atomically; the folder is created if missing; files that are not ours are left untouched.
 
 use crate::analysis::record::Report;
+use crate::base::files::write_bytes_atomic;
 use crate::error::{Error, Result};
 use crate::report::format::Attachment;
 use crate::report::{csv, markdown};
-use crate::util::write_bytes_atomic;
 use std::path::{Path, PathBuf};
 
 /// The JSON text of a report. Non-finite numbers become `null` (an infinite PSNR, i.e. an image identical to the
@@ -26,7 +26,7 @@ pub fn write_folder(dir: &Path, rep: &Report, attachments: &[Attachment]) -> Res
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     // Refuse before writing anything when a file of the folder is an input (`gbuf merge r/report.json -o r`).
     for name in attachments.iter().map(|a| a.name.as_str()).chain(FOLDER_FILES) {
-        crate::util::check_not_input(&dir.join(name))?;
+        crate::base::files::check_not_input(&dir.join(name))?;
     }
     let mut written = Vec::new();
     let mut put = |name: &str, bytes: &[u8]| -> Result<()> {

@@ -252,7 +252,7 @@ pub fn quad_rects(lights: &[Light]) -> QuadSoa {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::util::SplitMix64;
+    use crate::base::rng::SplitMix64;
 
     #[test]
     fn vector_bounds_and_light_lists_match_the_scalar_ones() {

@@ -3,15 +3,15 @@
 //!
 //! Not a scene generator for users (that is [`crate::scene`]); it exists so the resolve can be tested and timed
 //! without files. It builds on the data model (camera, G-buffer, lights), `scene::raycast`'s ray-plane and
-//! ray-sphere tests and `util::SplitMix64`, and [`lights_for_density`] runs `detect::baselines::none` and the
+//! ray-sphere tests and `base::rng::SplitMix64`, and [`lights_for_density`] runs `detect::baselines::none` and the
 //! resolve itself; no reader, codec or layout is involved.
 
+use crate::base::rng::SplitMix64;
 use crate::camera::Camera;
 use crate::error::Result;
 use crate::gbuffer::GBuffer;
 use crate::light::Light;
 use crate::scene::raycast::{ray_plane, ray_sphere};
-use crate::util::SplitMix64;
 use glam::Vec3;
 
 /// One sphere of the fixture: centre (view space), radius, albedo, specular power, roughness, metallic.

@@ -697,10 +697,10 @@ pub fn add_environment(it: &mut Items, n: usize, env: &[super::lights::Hemispher
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::base::rng::SplitMix64;
     use crate::light::Light;
     use crate::resolve::culling::quad_rects;
     use crate::resolve::worklist::Surface;
-    use crate::util::SplitMix64;
 
     /// Relative difference allowed between the vector paths and the portable one: rsqrt/recip differ by ~4e-7 and
     /// log2 by up to 2·2e-6 absolute, which Blinn-Phong's pow multiplies by p·ln 2 (p ≤ 128 here): ≲ 4e-4.

@@ -489,7 +489,7 @@ mod avx2;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::util::SplitMix64;
+    use crate::base::rng::SplitMix64;
 
     fn inputs(rng: &mut SplitMix64, lo: f32, hi: f32) -> Vec<f32> {
         (0..LANES * 64).map(|_| rng.range_f32(lo, hi)).collect()

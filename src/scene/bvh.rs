@@ -284,7 +284,7 @@ fn intersect_tri(tri: &TriGeom, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Opt
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::util::SplitMix64;
+    use crate::base::rng::SplitMix64;
 
     fn random_soup(n: usize, seed: u64) -> Vec<Triangle> {
         let mut rng = SplitMix64::new(seed);

@@ -5,11 +5,11 @@
 //! linear falloff of the 2010 tiled-deferred demo.
 
 use super::SceneName;
+use crate::base::rng::SplitMix64;
 use crate::camera::Camera;
 use crate::gbuffer::GBuffer;
 use crate::io::sidecar::{Sidecar, SidecarCamera, SidecarLight};
 use crate::light::{Light, LightKind};
-use crate::util::SplitMix64;
 use glam::Vec3;
 
 /// How many lights, on average, should reach a point of the visible volume when scattering: enough that tiles

@@ -1,8 +1,8 @@
 //! Shared builders for the I/O tests: G-buffers with every attribute and adversarial values.
 #![allow(dead_code)] // each test binary uses a subset
 
+use gbuf::base::rng::SplitMix64;
 use gbuf::gbuffer::{Attribute, GBuffer, PlaneRef};
-use gbuf::util::SplitMix64;
 use gbuf::Camera;
 use glam::{Vec2, Vec3};
 

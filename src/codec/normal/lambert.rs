@@ -85,7 +85,7 @@ mod tests {
 
     #[test]
     fn lambert_is_the_z_mirrored_cry_spheremap() {
-        let mut rng = crate::util::SplitMix64::new(11);
+        let mut rng = crate::base::rng::SplitMix64::new(11);
         for _ in 0..50_000 {
             let n = sanitize(Vec3::new(rng.range_f32(-1., 1.), rng.range_f32(-1., 1.), rng.range_f32(-1., 1.)));
             let mirrored = Vec3::new(n.x, n.y, -n.z);

@@ -118,7 +118,7 @@ mod tests {
 
     #[test]
     fn round_trip_of_the_continuous_map() {
-        let mut rng = crate::util::SplitMix64::new(21);
+        let mut rng = crate::base::rng::SplitMix64::new(21);
         for _ in 0..50_000 {
             let n = sanitize(Vec3::new(rng.range_f32(-1., 1.), rng.range_f32(-1., 1.), rng.range_f32(-1., 1.)));
             let p = LambertSphere::project(n);

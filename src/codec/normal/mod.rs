@@ -917,7 +917,7 @@ mod tests {
 
     #[test]
     fn round_half_away_matches_round() {
-        let mut rng = crate::util::SplitMix64::new(5);
+        let mut rng = crate::base::rng::SplitMix64::new(5);
         for v in [0.5f32, -0.5, 1.5, -2.5, 0.499_999_97, -0.499_999_97, 0.0, -0.0, 32767.5, 1e7 + 0.5] {
             assert_eq!(round_half_away(v), v.round() as i32, "{v}");
         }
@@ -929,7 +929,7 @@ mod tests {
 
     #[test]
     fn round_half_away_f64_matches_round() {
-        let mut rng = crate::util::SplitMix64::new(6);
+        let mut rng = crate::base::rng::SplitMix64::new(6);
         let specials =
             [0.5f64, -0.5, 1.5, -2.5, 0.499_999_999_999_999_94, 16_777_214.5, 16_777_215.0, 8_388_606.5, 0.0];
         for v in specials.into_iter().chain([-0.0, 1e-300, -8_388_607.5]) {

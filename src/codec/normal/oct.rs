@@ -235,7 +235,7 @@ mod tests {
     fn precise_is_never_worse_than_rounding() {
         let plain = Planar::new(Oct, Quant::Snorm(8));
         let precise = OctPrecise::new(8);
-        let mut rng = crate::util::SplitMix64::new(7);
+        let mut rng = crate::base::rng::SplitMix64::new(7);
         let mut better = 0;
         for _ in 0..20_000 {
             let n = Vec3::new(rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0), rng.range_f32(-1.0, 1.0));

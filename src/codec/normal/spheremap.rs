@@ -159,7 +159,7 @@ mod tests {
 
     #[test]
     fn cry_and_ispc_decoders_agree_everywhere_in_the_disc() {
-        let mut rng = crate::util::SplitMix64::new(3);
+        let mut rng = crate::base::rng::SplitMix64::new(3);
         for _ in 0..50_000 {
             let n = sanitize(Vec3::new(rng.range_f32(-1., 1.), rng.range_f32(-1., 1.), rng.range_f32(-1., 1.)));
             let g = SpheremapCry::project(n);

@@ -111,7 +111,7 @@ mod tests {
 
     #[test]
     fn round_trip_of_the_continuous_map() {
-        let mut rng = crate::util::SplitMix64::new(22);
+        let mut rng = crate::base::rng::SplitMix64::new(22);
         for _ in 0..50_000 {
             let n = sanitize(Vec3::new(rng.range_f32(-1., 1.), rng.range_f32(-1., 1.), rng.range_f32(-1., 1.)));
             let p = StereoSphere::project(n);

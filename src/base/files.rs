@@ -1,17 +1,9 @@
-//! Small shared helpers: atomic file output, a deterministic random number generator, and reading back the
-//! `null`s that JSON writes for non-finite numbers.
+//! Output files that never leave a half-written file or replace an input: atomic writes, the outputs of one
+//! command staged and renamed together ([`Staged`]), and the inputs this process read ([`protect_input`]).
 
 use crate::error::{Error, Result};
 use std::io::Write;
 use std::path::Path;
-
-/// Deserializes an `f64` that JSON may hold as `null` (serde_json writes NaN and ±∞ as `null`): `null` reads back
-/// as NaN, so a report written with a non-finite number still reads back (`gbuf merge`). Use with
-/// `#[serde(deserialize_with = "crate::util::f64_or_nan")]`.
-pub fn f64_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
-    use serde::Deserialize;
-    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
-}
 
 /// The files this process has read as input ([`protect_input`]), by canonical path: no output replaces them.
 static INPUTS: std::sync::Mutex<Vec<std::path::PathBuf>> = std::sync::Mutex::new(Vec::new());
@@ -128,73 +120,9 @@ pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     write_atomic(path, |f| f.write_all(bytes))
 }
 
-/// SplitMix64: a tiny, fast, seedable generator. Deterministic across platforms, which is what fixtures,
-/// scattered lights and sweeps need.
-#[derive(Clone, Debug)]
-pub struct SplitMix64(u64);
-
-impl SplitMix64 {
-    /// A generator from a seed.
-    #[must_use]
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// A uniform f32 in [0, 1).
-    pub fn next_f32(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
-    }
-    /// A uniform f32 in [lo, hi).
-    pub fn range_f32(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.next_f32()
-    }
-}
-
-/// `n` zero vectors from zeroed memory (`calloc`: the pages are zeroed lazily by the OS, when first written, rather
-/// than filled one by one, which `vec![Vec3::ZERO; n]` does serially). For large planes a loader fills in parallel.
-#[must_use]
-pub fn zeroed_vec3(n: usize) -> Vec<glam::Vec3> {
-    const _: () = assert!(std::mem::size_of::<glam::Vec3>() == 12 && std::mem::align_of::<glam::Vec3>() == 4);
-    let mut v = std::mem::ManuallyDrop::new(vec![[0.0f32; 3]; n]);
-    let (ptr, len, cap) = (v.as_mut_ptr(), v.len(), v.capacity());
-    // SAFETY: `[f32; 3]` and `Vec3` (`#[repr(C)]`, three f32 fields) have the same size and alignment (checked
-    // above), so the allocation is valid for `Vec<Vec3>` with the same length and capacity, and all-zero bits are
-    // `Vec3::ZERO`. The original vector is not dropped (`ManuallyDrop`).
-    unsafe { Vec::from_raw_parts(ptr.cast::<glam::Vec3>(), len, cap) }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn zeroed_vec3_is_zero_vectors_of_the_asked_length() {
-        for n in [0, 1, 7, 100_000] {
-            let mut v = zeroed_vec3(n);
-            assert_eq!(v.len(), n);
-            assert!(v.iter().all(|x| *x == glam::Vec3::ZERO));
-            v.push(glam::Vec3::ONE); // the allocation is a valid Vec<Vec3>: it grows and drops
-            assert_eq!(v[n], glam::Vec3::ONE);
-        }
-    }
-
-    #[test]
-    fn splitmix_is_deterministic_and_in_range() {
-        let mut a = SplitMix64::new(7);
-        let mut b = SplitMix64::new(7);
-        for _ in 0..1000 {
-            let x = a.next_f32();
-            assert_eq!(x, b.next_f32());
-            assert!((0.0..1.0).contains(&x), "{x}");
-        }
-    }
 
     #[test]
     fn atomic_write_replaces_and_leaves_no_temp() {
