@@ -358,3 +358,21 @@ fn streaming_compression_reproduces_the_papers_footprint_on_an_8x_frame() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.code() == Some(1) && e.contains("9 surface slots for 8 samples"), "{e}");
 }
+
+/// The anti-aliasing table compares the detectors the user names (`--aa-detectors`), by default the library's
+/// list, each beside no AA, MLAA and SSAA.
+#[test]
+fn the_aa_table_compares_the_detectors_asked_for() {
+    let raster = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/raster_4x.exr");
+    let methods = |extra: &[&str]| -> Vec<String> {
+        let o = gbuf().arg("pipelines").arg(&raster).arg("--json").args(extra).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        j["aa"].as_array().unwrap().iter().map(|a| a["method"].as_str().unwrap().to_string()).collect()
+    };
+    assert_eq!(methods(&["--aa-detectors", "id,lauritzen"]), ["no-aa", "mlaa", "msaa:id", "msaa:lauritzen", "ssaa"]);
+    let default: Vec<String> =
+        gbuf::analysis::pipelines::DEFAULT_AA_DETECTORS.iter().map(|d| format!("msaa:{d}")).collect();
+    let all = methods(&[]);
+    assert_eq!(all[2..all.len() - 1], default[..]);
+}

@@ -32,6 +32,10 @@ use std::time::Instant;
 
 pub use crate::analysis::traffic::Pipeline;
 
+/// The detectors the anti-aliasing table compares by default (adaptive MSAA with each, beside no AA, MLAA, SSAA):
+/// Lauritzen 2010's test, then depth, normal and ID discontinuities alone.
+pub const DEFAULT_AA_DETECTORS: [Detector; 4] = [Detector::Lauritzen, Detector::Depth, Detector::Normal, Detector::Id];
+
 /// What [`pipelines`] measures with.
 #[derive(Clone, Debug)]
 pub struct PipelinesConfig {

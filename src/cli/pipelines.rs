@@ -34,6 +34,9 @@ pub struct Args {
     /// row's footprint and traffic, and the frame is packed with it to check the IDs survive.
     #[arg(long, value_name = "L", default_value = "visibility-8")]
     pub visibility_layout: String,
+    /// Edge detectors the anti-aliasing table compares as adaptive MSAA (beside no AA, MLAA and SSAA).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', default_values_t = gbuf::analysis::pipelines::DEFAULT_AA_DETECTORS)]
+    pub aa_detectors: Vec<Detector>,
     /// Warp widths of the MSAA schedules' utilisation table.
     #[arg(long, value_name = "LIST", value_delimiter = ',', default_value = "8,16,32,64")]
     pub warps: Vec<u32>,
@@ -113,7 +116,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         layout: layout.name().to_string(),
         warps: args.warps.clone(),
         viewing: args.flip.then(Viewing::default),
-        aa_detectors: vec![Detector::Lauritzen, Detector::Depth, Detector::Normal, Detector::Id],
+        aa_detectors: args.aa_detectors.clone(),
         mlaa: MlaaConfig::default(),
         geometry: args.geometry,
         visibility_layout: Layout::by_name_or_path(&args.visibility_layout)
