@@ -101,29 +101,33 @@ fn detect_uncached() -> Isa {
     Isa::Baseline
 }
 
-/// Work to run under [`run`], compiled for the instruction set it picks (the codecs' slice loops, the `.bin`
-/// conversion). Implementations mark `run` `#[inline(always)]` so that its body is compiled
-/// inside each `#[target_feature]` wrapper.
+/// Work to run under [`run`], compiled for the instruction set it picks: the one way gbuf runs code for the CPU's
+/// instruction set (the codecs' slice loops, the `.bin` conversion, the resolve's bands, culling and shading
+/// kernel, FLIP's bands). `run` receives the level its wrapper was compiled for, a constant once inlined: work
+/// generic over a lane type picks it there (`resolve::simd::lanes_for!`). Implementations mark `run`
+/// `#[inline(always)]` so that its body is compiled inside each `#[target_feature]` wrapper.
 pub trait Kernel {
-    /// Does the work.
-    fn run(self);
+    /// What the work returns.
+    type Output;
+    /// Does the work, compiled for `isa`.
+    fn run(self, isa: Isa) -> Self::Output;
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn run_avx2<K: Kernel>(k: K) {
-    k.run();
+unsafe fn run_avx2<K: Kernel>(k: K) -> K::Output {
+    k.run(Isa::Avx2)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
-unsafe fn run_avx512<K: Kernel>(k: K) {
-    k.run();
+unsafe fn run_avx512<K: Kernel>(k: K) -> K::Output {
+    k.run(Isa::Avx512)
 }
 
 /// Runs `k` compiled for `isa`, or for the widest level below it that this CPU has.
 #[inline]
-pub fn run<K: Kernel>(isa: Isa, k: K) {
+pub fn run<K: Kernel>(isa: Isa, k: K) -> K::Output {
     #[cfg(target_arch = "x86_64")]
     {
         match isa.min(Isa::detect()) {
@@ -131,13 +135,13 @@ pub fn run<K: Kernel>(isa: Isa, k: K) {
             Isa::Avx512 => unsafe { run_avx512(k) },
             // SAFETY: as above.
             Isa::Avx2 => unsafe { run_avx2(k) },
-            Isa::Baseline => k.run(),
+            Isa::Baseline => k.run(Isa::Baseline),
         }
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
         let _ = isa;
-        k.run();
+        k.run(Isa::Baseline)
     }
 }
 

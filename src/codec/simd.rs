@@ -38,8 +38,9 @@ pub struct MapKernel<'a, A, B, F> {
 }
 
 impl<A, B, F: Element<A, B>> Kernel for MapKernel<'_, A, B, F> {
+    type Output = ();
     #[inline(always)]
-    fn run(self) {
+    fn run(self, _: crate::base::isa::Isa) {
         for (o, i) in self.out.iter_mut().zip(self.input) {
             *o = self.f.apply(i);
         }
@@ -80,8 +81,9 @@ pub trait BlockElement<A, B> {
 pub struct BlockKernel<'a, A, B, F>(pub MapKernel<'a, A, B, F>);
 
 impl<A, B, F: BlockElement<A, B>> Kernel for BlockKernel<'_, A, B, F> {
+    type Output = ();
     #[inline(always)]
-    fn run(self) {
+    fn run(self, _: crate::base::isa::Isa) {
         let MapKernel { input, out, f } = self.0;
         let mut ins = input.chunks_exact(BLOCK);
         let mut outs = out.chunks_exact_mut(BLOCK);
@@ -242,8 +244,9 @@ mod tests {
         assert_eq!(*av.last().unwrap(), Isa::detect());
         struct Add<'a>(&'a mut [u32]);
         impl Kernel for Add<'_> {
+            type Output = ();
             #[inline(always)]
-            fn run(self) {
+            fn run(self, _: Isa) {
                 for v in self.0.iter_mut() {
                     *v += 1;
                 }

@@ -549,8 +549,9 @@ struct Convert<'a, 'b> {
 }
 
 impl crate::base::isa::Kernel for Convert<'_, '_> {
+    type Output = ();
     #[inline(always)]
-    fn run(self) {
+    fn run(self, _: crate::base::isa::Isa) {
         use half::slice::{HalfBitsSliceExt, HalfFloatSliceExt};
         let Convert { planes, h, chunk, out_of_range } = self;
         let (w, ht) = (h.width as usize, h.height as usize);

@@ -630,7 +630,6 @@ struct Inputs<'a> {
 /// The instruction set the band kernels run on: the CPU's, capped by `GBUF_ISA` ([`Isa::detect`]); in tests, also
 /// by the level a test forces.
 #[inline]
-#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
 fn band_isa() -> Isa {
     let isa = Isa::detect();
     #[cfg(test)]
@@ -640,30 +639,24 @@ fn band_isa() -> Isa {
     isa
 }
 
-/// Runtime dispatch of the band kernel: AVX-512 and AVX2 builds of the same code on x86-64 (no FMA contraction in
-/// any: every build gives the same bits).
+/// The band kernel compiled for [`band_isa`]'s level ([`crate::base::isa::run`]: AVX-512 and AVX2 builds of the same
+/// code on x86-64, no FMA contraction in any: every build gives the same bits).
 fn band(inp: &Inputs<'_>, y0: usize, out: &mut [f32], merge: Option<(&mut [f32], f32)>) {
-    #[cfg(target_arch = "x86_64")]
-    match band_isa() {
-        // SAFETY: the CPU supports AVX-512 F/VL/BW/DQ, AVX2 and FMA (checked by `Isa::detect`).
-        Isa::Avx512 => return unsafe { band_avx512(inp, y0, out, merge) },
-        // SAFETY: the CPU supports AVX2 and FMA (checked by `Isa::detect`).
-        Isa::Avx2 => return unsafe { band_avx2(inp, y0, out, merge) },
-        Isa::Baseline => {}
+    /// [`band_impl`] under [`crate::base::isa::run`].
+    struct Band<'a, 'b, 'c> {
+        inp: &'a Inputs<'b>,
+        y0: usize,
+        out: &'a mut [f32],
+        merge: Option<(&'c mut [f32], f32)>,
     }
-    band_impl(inp, y0, out, merge)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
-unsafe fn band_avx512(inp: &Inputs<'_>, y0: usize, out: &mut [f32], merge: Option<(&mut [f32], f32)>) {
-    band_impl(inp, y0, out, merge)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn band_avx2(inp: &Inputs<'_>, y0: usize, out: &mut [f32], merge: Option<(&mut [f32], f32)>) {
-    band_impl(inp, y0, out, merge)
+    impl crate::base::isa::Kernel for Band<'_, '_, '_> {
+        type Output = ();
+        #[inline(always)]
+        fn run(self, _: Isa) {
+            band_impl(self.inp, self.y0, self.out, self.merge);
+        }
+    }
+    crate::base::isa::run(band_isa(), Band { inp, y0, out, merge });
 }
 
 // ---------------------------------------------------------------------------
@@ -914,30 +907,26 @@ fn sink_row(ctx: &Ctx, sink: &mut Sink<'_>, rows: usize, ry: usize, x0: usize, f
     }
 }
 
-/// The features of rows `y0..y0 + rows` of one image, handed to `sink` tile row by tile row. Runtime dispatch as
-/// [`band`].
+/// The features of rows `y0..y0 + rows` of one image, handed to `sink` tile row by tile row, compiled for
+/// [`band_isa`]'s level as [`band`].
 fn band_features(ctx: &Ctx, img: Pixels<'_>, enc: Encoding, y0: usize, rows: usize, sink: &mut Sink<'_>) {
-    #[cfg(target_arch = "x86_64")]
-    match band_isa() {
-        // SAFETY: the CPU supports AVX-512 F/VL/BW/DQ, AVX2 and FMA (checked by `Isa::detect`).
-        Isa::Avx512 => return unsafe { band_features_avx512(ctx, img, enc, y0, rows, sink) },
-        // SAFETY: the CPU supports AVX2 and FMA (checked by `Isa::detect`).
-        Isa::Avx2 => return unsafe { band_features_avx2(ctx, img, enc, y0, rows, sink) },
-        Isa::Baseline => {}
+    /// [`band_features_impl`] under [`crate::base::isa::run`].
+    struct Features<'a, 'b, 'c> {
+        ctx: &'a Ctx,
+        img: Pixels<'a>,
+        enc: Encoding,
+        y0: usize,
+        rows: usize,
+        sink: &'b mut Sink<'c>,
     }
-    band_features_impl(ctx, img, enc, y0, rows, sink)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
-unsafe fn band_features_avx512(ctx: &Ctx, img: Pixels<'_>, enc: Encoding, y0: usize, rows: usize, sink: &mut Sink<'_>) {
-    band_features_impl(ctx, img, enc, y0, rows, sink)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn band_features_avx2(ctx: &Ctx, img: Pixels<'_>, enc: Encoding, y0: usize, rows: usize, sink: &mut Sink<'_>) {
-    band_features_impl(ctx, img, enc, y0, rows, sink)
+    impl crate::base::isa::Kernel for Features<'_, '_, '_> {
+        type Output = ();
+        #[inline(always)]
+        fn run(self, _: Isa) {
+            band_features_impl(self.ctx, self.img, self.enc, self.y0, self.rows, self.sink);
+        }
+    }
+    crate::base::isa::run(band_isa(), Features { ctx, img, enc, y0, rows, sink });
 }
 
 /// One image's pass of [`band_impl`]: the same ring, horizontal and vertical sums (7 planes instead of 14), then

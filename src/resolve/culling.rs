@@ -283,15 +283,22 @@ mod tests {
         assert_eq!(&list[1..], &scalar[..]);
         #[cfg(target_arch = "x86_64")]
         if crate::base::isa::Isa::detect() == crate::base::isa::Isa::Avx512 {
-            use crate::resolve::simd::Avx512;
-            #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
-            fn run(it: &Items, b: &Bounds, s: [&[f32]; 4], out: &mut Vec<u32>) -> Option<Bounds> {
-                b.touching::<Avx512>(s[0], s[1], s[2], s[3], out);
-                Bounds::of_items_in::<Avx512>(it, 0..48)
+            /// The AVX-512 lanes' culling and bounds, compiled for AVX-512.
+            struct Run<'a>(&'a Items, &'a Bounds, [&'a [f32]; 4], &'a mut Vec<u32>);
+            impl crate::base::isa::Kernel for Run<'_> {
+                type Output = Option<Bounds>;
+                #[inline(always)]
+                fn run(self, _: crate::base::isa::Isa) -> Option<Bounds> {
+                    use crate::resolve::simd::Avx512;
+                    let Run(it, b, s, out) = self;
+                    b.touching::<Avx512>(s[0], s[1], s[2], s[3], out);
+                    Bounds::of_items_in::<Avx512>(it, 0..48)
+                }
             }
             let mut list = Vec::new();
-            // SAFETY: the CPU has AVX-512F (checked above).
-            let got = unsafe { run(&it, &want, [&x, &y, &z, &r], &mut list) }.unwrap();
+            let got =
+                crate::base::isa::run(crate::base::isa::Isa::Avx512, Run(&it, &want, [&x, &y, &z, &r], &mut list))
+                    .unwrap();
             assert_eq!(list, scalar);
             for (g, w) in [(got.tx0, want.tx0), (got.tx1, want.tx1), (got.ty0, want.ty0), (got.ty1, want.ty1)] {
                 assert!((g - w).abs() <= 1e-6 * w.abs().max(1e-3), "{got:?} vs {want:?}");

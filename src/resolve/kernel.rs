@@ -12,12 +12,8 @@ use super::brdf::{DIELECTRIC_F0, MIN_ALPHA, MIN_HALF_LENGTH, MIN_NDOTV};
 use super::config::{Brdf, Falloff};
 use super::falloff::MIN_DISTANCE;
 use super::lights::{LightRec, LightTable, LUMA};
-#[cfg(target_arch = "aarch64")]
-use super::simd::Neon;
 pub use super::simd::BLOCK;
-#[cfg(target_arch = "x86_64")]
-use super::simd::{Avx2, Avx512};
-use super::simd::{Lanes, Portable, Two};
+use super::simd::{lanes_for, BaselineLanes, Lanes, Portable, Two};
 use super::worklist::{Items, QuadSoa};
 use crate::base::fastmath::POW_MIN_BASE;
 use crate::base::isa::Isa;
@@ -98,50 +94,27 @@ fn dispatch<const B: u8, const F: u8, const Q: bool, const P: bool>(
     lights: &LightTable,
     quad: &QuadSoa,
 ) {
-    let Some(isa) = isa else {
-        return run::<Portable<false>, B, F, Q, P>(it, range, lights, quad);
-    };
-    #[cfg(target_arch = "x86_64")]
-    match isa.min(Isa::detect()) {
-        // SAFETY: `Isa::detect` found the features the function was compiled for on this CPU.
-        Isa::Avx512 => unsafe { run_avx512::<B, F, Q, P>(it, range, lights, quad) },
-        // SAFETY: as above.
-        Isa::Avx2 => unsafe { run_avx2::<B, F, Q, P>(it, range, lights, quad) },
-        Isa::Baseline => run::<Portable<false>, B, F, Q, P>(it, range, lights, quad),
-    }
-    // NEON is part of every aarch64 target: the only level there, no detection and no wrapper.
-    #[cfg(target_arch = "aarch64")]
-    {
-        let _ = isa;
-        run::<Neon, B, F, Q, P>(it, range, lights, quad);
-    }
-    #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
-    {
-        let _ = isa;
-        run::<Portable<false>, B, F, Q, P>(it, range, lights, quad);
+    match isa {
+        None => run::<Portable<false>, B, F, Q, P>(it, range, lights, quad),
+        Some(isa) => crate::base::isa::run(isa, ShadeKernel::<B, F, Q, P> { it, range, lights, quad }),
     }
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
-fn run_avx512<const B: u8, const F: u8, const Q: bool, const P: bool>(
-    it: &mut Items,
+/// [`run`] under [`crate::base::isa::run`], with the lanes of the level it is compiled for.
+struct ShadeKernel<'a, const B: u8, const F: u8, const Q: bool, const P: bool> {
+    it: &'a mut Items,
     range: std::ops::Range<usize>,
-    lights: &LightTable,
-    quad: &QuadSoa,
-) {
-    run::<Avx512, B, F, Q, P>(it, range, lights, quad);
+    lights: &'a LightTable,
+    quad: &'a QuadSoa,
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn run_avx2<const B: u8, const F: u8, const Q: bool, const P: bool>(
-    it: &mut Items,
-    range: std::ops::Range<usize>,
-    lights: &LightTable,
-    quad: &QuadSoa,
-) {
-    run::<Avx2, B, F, Q, P>(it, range, lights, quad);
+impl<const B: u8, const F: u8, const Q: bool, const P: bool> crate::base::isa::Kernel for ShadeKernel<'_, B, F, Q, P> {
+    type Output = ();
+    #[inline(always)]
+    fn run(self, isa: Isa) {
+        let ShadeKernel { it, range, lights, quad } = self;
+        lanes_for!(isa, BaselineLanes, |V| run::<V, B, F, Q, P>(it, range, lights, quad))
+    }
 }
 
 #[inline(always)]

@@ -173,31 +173,21 @@ impl LightLanes {
 /// ignored. `isa` caps the instruction set (`None`: the portable lanes).
 #[must_use]
 pub fn shade(isa: Option<Isa>, surfaces: &[Surface], lights: &[LightLanes], brdf: Brdf, falloff: Falloff) -> [D; 3] {
-    #[cfg(target_arch = "x86_64")]
-    match isa.map_or(Isa::Baseline, |i| i.min(Isa::detect())) {
-        // SAFETY: `Isa::detect` found the features the function was compiled for on this CPU.
-        Isa::Avx512 => unsafe { shade_avx512(surfaces, lights, brdf, falloff) },
-        // SAFETY: as above.
-        Isa::Avx2 => unsafe { shade_avx2(surfaces, lights, brdf, falloff) },
-        Isa::Baseline => shade_lanes(surfaces, lights, brdf, falloff),
+    /// [`shade_lanes`] under [`crate::base::isa::run`].
+    struct ShadeKernel<'a> {
+        surfaces: &'a [Surface],
+        lights: &'a [LightLanes],
+        brdf: Brdf,
+        falloff: Falloff,
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        let _ = isa;
-        shade_lanes(surfaces, lights, brdf, falloff)
+    impl crate::base::isa::Kernel for ShadeKernel<'_> {
+        type Output = [D; 3];
+        #[inline(always)]
+        fn run(self, _: Isa) -> [D; 3] {
+            shade_lanes(self.surfaces, self.lights, self.brdf, self.falloff)
+        }
     }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
-fn shade_avx512(surfaces: &[Surface], lights: &[LightLanes], brdf: Brdf, falloff: Falloff) -> [D; 3] {
-    shade_lanes(surfaces, lights, brdf, falloff)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn shade_avx2(surfaces: &[Surface], lights: &[LightLanes], brdf: Brdf, falloff: Falloff) -> [D; 3] {
-    shade_lanes(surfaces, lights, brdf, falloff)
+    crate::base::isa::run(isa.unwrap_or(Isa::Baseline), ShadeKernel { surfaces, lights, brdf, falloff })
 }
 
 #[inline(always)]

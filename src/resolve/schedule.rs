@@ -11,9 +11,7 @@ use super::config::{Culling, MsaaSchedule, ResolveConfig, Schedule};
 use super::culling::{quad_rects, Bounds};
 use super::kernel::{finish_prepass, shade, Variant, BLOCK};
 use super::lights::LightTable;
-use super::simd::Portable;
-#[cfg(target_arch = "x86_64")]
-use super::simd::{Avx2, Avx512};
+use super::simd::{lanes_for, Portable};
 use super::surface::{position_from_depth, usable_position, Reads, SanitizedCounts, SurfaceReader};
 use super::worklist::{Items, QuadSoa, PAD_PIXEL};
 use crate::base::isa::Isa;
@@ -194,15 +192,7 @@ pub fn run_tiles(frame: &Frame<'_>, rgb: &mut [Vec3], heat: &mut [u32]) -> Resul
         .filter(|(band, _)| band % stride == 0)
         .map_init(Scratch::default, |sc, (band, (rgb, heat))| {
             let y0 = band as u32 * ts;
-            #[cfg(target_arch = "x86_64")]
-            match frame.isa {
-                // SAFETY: `Frame::new` capped `isa` at what `Isa::detect` found on this CPU.
-                Isa::Avx512 => return unsafe { run_band_avx512(frame, y0, sc, rgb, heat) },
-                // SAFETY: as above.
-                Isa::Avx2 => return unsafe { run_band_avx2(frame, y0, sc, rgb, heat) },
-                Isa::Baseline => {}
-            }
-            run_band(frame, y0, sc, rgb, heat)
+            crate::base::isa::run(frame.isa, BandKernel { frame, y0, sc, rgb, heat })
         })
         .try_reduce(TileStats::default, |a, b| Ok(a.merged(b)))
 }
@@ -280,28 +270,22 @@ fn run_band_tiles(
     st
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
-fn run_band_avx512(
-    frame: &Frame<'_>,
+/// [`run_band`] under [`crate::base::isa::run`]: compiled once per instruction set so the work-list build and the
+/// box filter vectorise too.
+struct BandKernel<'a, 'f> {
+    frame: &'a Frame<'f>,
     y0: u32,
-    sc: &mut Scratch,
-    rgb: &mut [Vec3],
-    heat: &mut [u32],
-) -> Result<TileStats> {
-    run_band(frame, y0, sc, rgb, heat)
+    sc: &'a mut Scratch,
+    rgb: &'a mut [Vec3],
+    heat: &'a mut [u32],
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn run_band_avx2(
-    frame: &Frame<'_>,
-    y0: u32,
-    sc: &mut Scratch,
-    rgb: &mut [Vec3],
-    heat: &mut [u32],
-) -> Result<TileStats> {
-    run_band(frame, y0, sc, rgb, heat)
+impl crate::base::isa::Kernel for BandKernel<'_, '_> {
+    type Output = Result<TileStats>;
+    #[inline(always)]
+    fn run(self, _: Isa) -> Result<TileStats> {
+        run_band(self.frame, self.y0, self.sc, self.rgb, self.heat)
+    }
 }
 
 /// The planes the resolve reads for `frame`'s BRDF, as (start, bytes per sample): what [`prefetch_tile`] fetches.
@@ -791,46 +775,52 @@ fn gather(
 /// Tests every light's sphere against `bounds` (branch-free over lights, vectorised for the CPU at hand), writing
 /// survivors' indices into `sc.tile_lights`.
 fn cull_tile_list(frame: &Frame<'_>, b: &Bounds, sc: &mut Scratch) {
-    let s = &frame.table;
     sc.tile_lights.clear();
-    #[cfg(target_arch = "x86_64")]
-    match frame.isa {
-        // SAFETY: `Frame::new` capped `isa` at what `Isa::detect` found on this CPU.
-        Isa::Avx512 => unsafe { touching_avx512(b, s, &mut sc.tile_lights) },
-        // SAFETY: as above.
-        Isa::Avx2 => unsafe { touching_avx2(b, s, &mut sc.tile_lights) },
-        Isa::Baseline => b.touching::<Portable<false>>(&s.x, &s.y, &s.z, &s.r, &mut sc.tile_lights),
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    b.touching::<Portable<false>>(&s.x, &s.y, &s.z, &s.r, &mut sc.tile_lights);
+    crate::base::isa::run(frame.isa, TouchingKernel { b, s: &frame.table, out: &mut sc.tile_lights });
 }
 
-/// [`Bounds::of_items_in`] with the vector lanes of `isa` (at most [`Isa::detect`]).
+/// [`Bounds::touching`] under [`crate::base::isa::run`], with the lanes of the level it is compiled for (the
+/// portable lanes below AVX2, NEON included).
+struct TouchingKernel<'a> {
+    b: &'a Bounds,
+    s: &'a LightTable,
+    out: &'a mut Vec<u32>,
+}
+
+impl crate::base::isa::Kernel for TouchingKernel<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run(self, isa: Isa) {
+        let TouchingKernel { b, s, out } = self;
+        lanes_for!(isa, Portable<false>, |V| b.touching::<V>(&s.x, &s.y, &s.z, &s.r, out))
+    }
+}
+
+/// [`Bounds::of_items_in`] with the AVX-512 lanes where `isa` is AVX-512 (at most [`Isa::detect`]), else the scalar
+/// [`Bounds::of_items`].
 fn tile_bounds(isa: Isa, it: &Items, range: std::ops::Range<usize>) -> Option<Bounds> {
-    #[cfg(target_arch = "x86_64")]
-    if isa == Isa::Avx512 {
-        #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
-        fn avx512(it: &Items, range: std::ops::Range<usize>) -> Option<Bounds> {
-            Bounds::of_items_in::<Avx512>(it, range)
-        }
-        // SAFETY: `isa` is at most what `Isa::detect` found on this CPU: it has AVX-512F.
-        return unsafe { avx512(it, range) };
+    /// The bounds under [`crate::base::isa::run`].
+    struct BoundsKernel<'a> {
+        it: &'a Items,
+        range: std::ops::Range<usize>,
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = isa;
-    Bounds::of_items(it, range)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
-fn touching_avx512(b: &Bounds, s: &LightTable, out: &mut Vec<u32>) {
-    b.touching::<Avx512>(&s.x, &s.y, &s.z, &s.r, out);
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn touching_avx2(b: &Bounds, s: &LightTable, out: &mut Vec<u32>) {
-    b.touching::<Avx2>(&s.x, &s.y, &s.z, &s.r, out);
+    impl crate::base::isa::Kernel for BoundsKernel<'_> {
+        type Output = Option<Bounds>;
+        #[inline(always)]
+        fn run(self, isa: Isa) -> Option<Bounds> {
+            #[cfg(target_arch = "x86_64")]
+            if isa == Isa::Avx512 {
+                return Bounds::of_items_in::<super::simd::Avx512>(self.it, self.range);
+            }
+            let _ = isa;
+            Bounds::of_items(self.it, self.range)
+        }
+    }
+    if isa == Isa::Avx512 {
+        crate::base::isa::run(isa, BoundsKernel { it, range })
+    } else {
+        Bounds::of_items(it, range)
+    }
 }
 
 /// Culls lights (all, or only those in `subset`) against `b` and gathers the survivors' constants into

@@ -469,6 +469,39 @@ impl<V: Lanes> Lanes for Two<V> {
     }
 }
 
+/// The lanes the baseline level runs on: NEON on aarch64 (part of every aarch64 target), else the portable lanes.
+#[cfg(target_arch = "aarch64")]
+pub type BaselineLanes = Neon;
+/// The lanes the baseline level runs on: NEON on aarch64 (part of every aarch64 target), else the portable lanes.
+#[cfg(not(target_arch = "aarch64"))]
+pub type BaselineLanes = Portable<false>;
+
+/// `$e` with `$V` the lane type of `$isa`: [`Avx512`], [`Avx2`], or `$baseline` below them (and on every other
+/// architecture). Written inside a [`crate::base::isa::Kernel`]'s `run`, whose `isa` is the constant its
+/// `#[target_feature]` wrapper was compiled for: the match folds away and the lanes' intrinsics inline into the
+/// wrapper. The resolve's one way to pick lanes, under `base::isa::run`, the crate's one ISA dispatch.
+macro_rules! lanes_for {
+    ($isa:expr, $baseline:ty, |$V:ident| $e:expr) => {
+        match $isa {
+            #[cfg(target_arch = "x86_64")]
+            $crate::base::isa::Isa::Avx512 => {
+                type $V = $crate::resolve::simd::Avx512;
+                $e
+            }
+            #[cfg(target_arch = "x86_64")]
+            $crate::base::isa::Isa::Avx2 => {
+                type $V = $crate::resolve::simd::Avx2;
+                $e
+            }
+            _ => {
+                type $V = $baseline;
+                $e
+            }
+        }
+    };
+}
+pub(crate) use lanes_for;
+
 #[cfg(target_arch = "aarch64")]
 mod neon;
 #[cfg(target_arch = "aarch64")]
@@ -630,20 +663,25 @@ mod tests {
         check::<Two<Portable<false>>>();
     }
 
-    #[test]
-    fn avx2_lanes_are_accurate_where_supported() {
-        #[cfg(target_arch = "x86_64")]
-        if crate::base::isa::Isa::detect() >= crate::base::isa::Isa::Avx2 {
-            #[target_feature(enable = "avx2,fma")]
-            fn run() {
-                check::<Avx2>();
-                check::<Two<Avx2>>();
-            }
-            // SAFETY: the CPU has AVX2 and FMA (checked above).
-            unsafe {
-                run();
+    /// `check` on the lanes of `isa`, compiled for it ([`crate::base::isa::run`]; capped at the CPU's level).
+    fn check_at(isa: crate::base::isa::Isa) {
+        struct Check;
+        impl crate::base::isa::Kernel for Check {
+            type Output = ();
+            #[inline(always)]
+            fn run(self, isa: crate::base::isa::Isa) {
+                lanes_for!(isa, Portable<false>, |V| {
+                    check::<V>();
+                    check::<Two<V>>();
+                });
             }
         }
+        crate::base::isa::run(isa, Check);
+    }
+
+    #[test]
+    fn avx2_lanes_are_accurate_where_supported() {
+        check_at(crate::base::isa::Isa::Avx2);
     }
 
     #[cfg(target_arch = "aarch64")]
@@ -655,17 +693,6 @@ mod tests {
 
     #[test]
     fn avx512_lanes_are_accurate_where_supported() {
-        #[cfg(target_arch = "x86_64")]
-        if crate::base::isa::Isa::detect() == crate::base::isa::Isa::Avx512 {
-            #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")]
-            fn run() {
-                check::<Avx512>();
-                check::<Two<Avx512>>();
-            }
-            // SAFETY: the CPU has AVX-512F (checked above).
-            unsafe {
-                run();
-            }
-        }
+        check_at(crate::base::isa::Isa::Avx512);
     }
 }
