@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 
 /// The top-level modules in pipeline order: each may import only those before it.
 const LAYERS: [&str; 16] = [
-    "error", "base", "camera", "light", "gbuffer", "io", "image", "scene", "codec", "layout", "detect", "resolve",
+    "error", "base", "camera", "light", "gbuffer", "codec", "io", "image", "scene", "layout", "detect", "resolve",
     "measure", "analysis", "report", "study",
 ];
 

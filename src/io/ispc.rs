@@ -15,6 +15,8 @@
 
 use super::{AttributeSource, LoadOptions, Loaded, SourceFormat};
 use crate::camera::Camera;
+use crate::codec::color::color_codec;
+use crate::codec::normal::ispc_spheremap_decode;
 use crate::error::{Error, Result};
 use crate::gbuffer::{Attribute, BandSource, GBuffer};
 use crate::light::{Light, LightKind};
@@ -616,8 +618,9 @@ impl crate::base::isa::Kernel for Convert<'_, '_> {
             }
             if let Some(a) = albedo.as_deref_mut() {
                 let (ar, ag, ab) = (row(5, 1, y), row(6, 1, y), row(7, 1, y));
+                let unorm8 = unorm8_table();
                 for ((((a, &c), &r), &g), &b) in a[o..o + w].iter_mut().zip(cov.iter()).zip(ar).zip(ag).zip(ab) {
-                    let v = Vec3::new(f32::from(r), f32::from(g), f32::from(b)) / 255.0;
+                    let v = Vec3::new(unorm8[r as usize], unorm8[g as usize], unorm8[b as usize]);
                     *a = if c { v } else { Vec3::ZERO };
                 }
             }
@@ -733,16 +736,23 @@ fn decode(h: &Header, chunk: &[u8], path: &Path) -> Result<Loaded> {
     })
 }
 
-/// Decodes the sample's spheremap normal (`f = (x−x²)+(y−y²)`, `m = √(4f−1)`, `n = (m(4x−2), m(4y−2), 3−8f)`, in
-/// the file's left-handed view space) and returns it in ours (z negated), renormalised. Encodings outside the disc
-/// (4f − 1 < 0) clamp to the rim.
+/// Decodes the sample's spheremap normal with the codec's decoder ([`ispc_spheremap_decode`]: `f = (x−x²)+(y−y²)`,
+/// `m = √(4f−1)`, `n = (m(4x−2), m(4y−2), 3−8f)`, in the file's left-handed view space) and returns it in ours (z
+/// negated), renormalised. Encodings outside the disc (4f − 1 < 0) clamp to the rim.
 #[inline]
 #[must_use]
 pub fn decode_spheremap(x: f32, y: f32) -> Vec3 {
-    let f = (x - x * x) + (y - y * y);
-    let m = (4.0 * f - 1.0).max(0.0).sqrt();
-    let n = Vec3::new(m * (4.0 * x - 2.0), m * (4.0 * y - 2.0), -(3.0 - 8.0 * f));
-    n.normalize_or_zero()
+    let n = ispc_spheremap_decode(glam::Vec2::new(x, y));
+    Vec3::new(n.x, n.y, -n.z).normalize_or_zero()
+}
+
+/// The unorm8 albedo code → value table, from the `unorm8` colour codec's decoder, built once.
+fn unorm8_table() -> &'static [f32; 256] {
+    static TABLE: std::sync::OnceLock<[f32; 256]> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| {
+        let codec = color_codec("unorm8").expect("the built-in unorm8 colour codec");
+        std::array::from_fn(|c| codec.decode(c as u64 * 0x1_0101).x)
+    })
 }
 
 /// Encodes a unit normal in our view space into the sample's spheremap pair (inverse of [`decode_spheremap`]).
@@ -851,6 +861,24 @@ mod tests {
 
     /// f16 carries 11 significant bits; a spheremap pair decoded from f16 is within this of the unit normal.
     const F16_NORMAL_TOL: f32 = 4e-3;
+
+    #[test]
+    fn the_codecs_decode_the_file_as_the_format_defines_it() {
+        // Albedo: every unorm8 code is c / 255 in f32 (what the sample's `c / 255.f` gives), through the codec.
+        for c in 0..=255u8 {
+            assert_eq!(unorm8_table()[c as usize].to_bits(), (f32::from(c) / 255.0).to_bits(), "code {c}");
+        }
+        // Normal: the sample's formula, z negated, on a grid of encodings and at the centre and rim.
+        for i in 0..=64 {
+            for j in 0..=64 {
+                let (x, y) = (i as f32 / 64.0, j as f32 / 64.0);
+                let f = (x - x * x) + (y - y * y);
+                let m = (4.0 * f - 1.0).max(0.0).sqrt();
+                let want = Vec3::new(m * (4.0 * x - 2.0), m * (4.0 * y - 2.0), -(3.0 - 8.0 * f)).normalize_or_zero();
+                assert_eq!(decode_spheremap(x, y), want, "({x}, {y})");
+            }
+        }
+    }
 
     #[test]
     fn spheremap_round_trips_over_the_front_hemisphere() {
