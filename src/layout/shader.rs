@@ -688,6 +688,8 @@ struct FieldCode {
     f64: bool,
 }
 
+/// The shader code of field `f` from its codec's recipe: one function per family of recipes (IDs, scalars,
+/// colours, normals, depth).
 fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) -> Result<FieldCode> {
     let unsupported = |why: &str| {
         Error::Argument(format!(
@@ -697,23 +699,56 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             f.codec
         ))
     };
+    let code = match (&f.slot, recipe) {
+        (Slot::Whole(a), _) if a.is_id() => id_code(f, *a, name),
+        (_, Some(r)) => match r {
+            Recipe::ScalarUnorm { .. }
+            | Recipe::ScalarSnorm { .. }
+            | Recipe::ScalarLog2 { .. }
+            | Recipe::ScalarF16
+            | Recipe::ScalarF32
+            | Recipe::ScalarTable { .. } => scalar_code(r, f, name),
+            Recipe::ColorUnorm { .. }
+            | Recipe::ColorSrgb8 { .. }
+            | Recipe::ColorF16
+            | Recipe::ColorF32
+            | Recipe::ColorR11G11B10F
+            | Recipe::ColorRgb9e5 => color_code(r, f, name),
+            Recipe::NormalPlanar { .. } | Recipe::NormalOctPrecise { .. } | Recipe::NormalXyz { .. } => {
+                normal_code(r, f, name)
+            }
+            Recipe::DepthLinearF32 | Recipe::DepthLinearF16 | Recipe::DepthPost { .. } => depth_code(r, f, name),
+        },
+        (_, None) => return Err(unsupported("no shader recipe for this codec yet")),
+    };
+    Ok(code)
+}
+
+/// The shader code of an ID field: its low bits, saturating.
+fn id_code(f: &Field, a: Attribute, name: &str) -> FieldCode {
     let mut t = String::new();
-    let mut camera = false;
-    let mut f64 = false;
-    let (k, n) = match (&f.slot, recipe) {
-        (Slot::Whole(a), _) if a.is_id() => {
-            let m = if f.bits >= 32 { u32::MAX } else { (1u32 << f.bits) - 1 };
-            let _ = write!(
-                t,
-                "// {a}: the low {b} bits, saturating at 2^{b} − 1\n\
+    let (k, n) = {
+        let m = if f.bits >= 32 { u32::MAX } else { (1u32 << f.bits) - 1 };
+        let _ = write!(
+            t,
+            "// {a}: the low {b} bits, saturating at 2^{b} − 1\n\
                  uvec3 {name}_enc(uint v) {{ return uvec3(min(v, {m}u), 0u, 0u); }}\n\
                  uint {name}_dec(uvec3 c) {{ return c.x; }}\n",
-                a = a.name(),
-                b = f.bits
-            );
-            (f.bits, 1)
-        }
-        (_, Some(Recipe::ScalarUnorm { bits, lo, hi })) => {
+            a = a.name(),
+            b = f.bits
+        );
+        (f.bits, 1)
+    };
+    FieldCode { k, n, text: t, camera: false, f64: false }
+}
+
+/// The shader code of a scalar field from its codec's recipe (one of the `Scalar…` recipes).
+fn scalar_code(r: Recipe, f: &Field, name: &str) -> FieldCode {
+    let mut t = String::new();
+    let camera = false;
+    let mut f64 = false;
+    let (k, n) = match r {
+        Recipe::ScalarUnorm { bits, lo, hi } => {
             f64 = true;
             let m = (1u64 << bits) - 1;
             let _ = write!(
@@ -728,7 +763,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             );
             (bits, 1)
         }
-        (_, Some(Recipe::ScalarSnorm { bits, range })) => {
+        Recipe::ScalarSnorm { bits, range } => {
             f64 = true;
             let m = (1u64 << (bits - 1)) - 1;
             let mask = (1u64 << bits) - 1;
@@ -745,7 +780,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             );
             (bits, 1)
         }
-        (_, Some(Recipe::ScalarLog2 { bits })) => {
+        Recipe::ScalarLog2 { bits } => {
             f64 = true;
             let m = (1u64 << bits) - 1;
             let _ = write!(
@@ -760,7 +795,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             );
             (bits, 1)
         }
-        (_, Some(Recipe::ScalarF16)) => {
+        Recipe::ScalarF16 => {
             let _ = write!(
                 t,
                 "uvec3 {name}_enc(float v) {{ return uvec3(gbuf_f16_bits(clamp(isnan(v) ? 0.0 : v, -65504.0, 65504.0)), 0u, 0u); }}\n\
@@ -768,7 +803,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             );
             (16, 1)
         }
-        (_, Some(Recipe::ScalarF32)) => {
+        Recipe::ScalarF32 => {
             let _ = write!(
                 t,
                 "uvec3 {name}_enc(float v) {{ return uvec3(gbuf_f32_bits(v), 0u, 0u); }}\n\
@@ -776,7 +811,43 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             );
             (32, 1)
         }
-        (_, Some(Recipe::ColorUnorm { bits })) => {
+        Recipe::ScalarTable { bits, lo, hi, nan, thresholds, decoded } => {
+            let th: Vec<String> = thresholds.iter().map(|v| format!("{:#010x}u", v.to_bits())).collect();
+            let de: Vec<String> = decoded.iter().map(|v| format!("{:#010x}u", v.to_bits())).collect();
+            let (n_th, n_de) = (th.len(), de.len());
+            let _ = write!(
+                t,
+                "// {codec}: monotonic, so encode counts the thresholds at or below the value and decode looks the\n\
+                 // value up (gbuf's own tables: the bits match without the driver's exp2/log2)\n\
+                 const uint {name}_T[{n_th}] = uint[{n_th}]({th});\n\
+                 const uint {name}_D[{n_de}] = uint[{n_de}]({de});\n\
+                 uvec3 {name}_enc(float v) {{ float c = isnan(v) ? {nan} : clamp(v, {lo}, {hi}); uint k = 0u; \
+                 for (uint stride = {top}u; stride > 0u; stride >>= 1) {{ if (k + stride <= {n_th}u && c >= uintBitsToFloat({name}_T[k + stride - 1u])) k += stride; }} \
+                 return uvec3(k, 0u, 0u); }}\n\
+                 float {name}_dec(uvec3 c) {{ return uintBitsToFloat({name}_D[c.x & {m}u]); }}\n",
+                codec = f.codec,
+                th = th.join(", "),
+                de = de.join(", "),
+                nan = lit(nan),
+                lo = lit(lo),
+                hi = lit(hi),
+                top = 1u64 << (bits - 1),
+                m = (1u64 << bits) - 1
+            );
+            (bits, 1)
+        }
+        other => unreachable!("scalar_code takes the Scalar recipes, not {other:?}"),
+    };
+    FieldCode { k, n, text: t, camera, f64 }
+}
+
+/// The shader code of a colour field from its codec's recipe (one of the `Color…` recipes).
+fn color_code(r: Recipe, _f: &Field, name: &str) -> FieldCode {
+    let mut t = String::new();
+    let camera = false;
+    let f64 = false;
+    let (k, n) = match r {
+        Recipe::ColorUnorm { bits } => {
             let m = (1u64 << bits) - 1;
             let _ = write!(
                 t,
@@ -787,7 +858,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             );
             (bits, 3)
         }
-        (_, Some(Recipe::ColorSrgb8 { thresholds, decoded })) => {
+        Recipe::ColorSrgb8 { thresholds, decoded } => {
             let th: Vec<String> = thresholds.iter().map(|v| format!("{:#010x}u", v.to_bits())).collect();
             let de: Vec<String> = decoded.iter().map(|v| format!("{:#010x}u", v.to_bits())).collect();
             let _ = write!(
@@ -805,7 +876,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             );
             (8, 3)
         }
-        (_, Some(Recipe::ColorF16)) => {
+        Recipe::ColorF16 => {
             let _ = write!(
                 t,
                 "uint {name}_q(float v) {{ return gbuf_f16_bits(gbuf_clean(v, -65504.0, 65504.0)); }}\n\
@@ -814,7 +885,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             );
             (16, 3)
         }
-        (_, Some(Recipe::ColorF32)) => {
+        Recipe::ColorF32 => {
             let _ = write!(
                 t,
                 "uvec3 {name}_enc(vec3 v) {{ return uvec3(gbuf_f32_bits(v.x), gbuf_f32_bits(v.y), gbuf_f32_bits(v.z)); }}\n\
@@ -822,7 +893,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             );
             (32, 3)
         }
-        (_, Some(Recipe::ColorR11G11B10F)) => {
+        Recipe::ColorR11G11B10F => {
             let _ = write!(
                 t,
                 "// R11G11B10F: unsigned small floats, 6/6/5 mantissa bits\n\
@@ -832,7 +903,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             // One 32-bit code (the channels are 11, 11 and 10 bits wide).
             (32, 1)
         }
-        (_, Some(Recipe::ColorRgb9e5)) => {
+        Recipe::ColorRgb9e5 => {
             let _ = write!(
                 t,
                 "// RGB9E5 (EXT_texture_shared_exponent, mantissas rounded to nearest): the shared exponent from the\n\
@@ -849,7 +920,18 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             );
             (32, 1)
         }
-        (_, Some(Recipe::NormalPlanar { map, quant })) => {
+        other => unreachable!("color_code takes the Color recipes, not {other:?}"),
+    };
+    FieldCode { k, n, text: t, camera, f64 }
+}
+
+/// The shader code of a normal field from its codec's recipe (one of the `Normal…` recipes).
+fn normal_code(r: Recipe, f: &Field, name: &str) -> FieldCode {
+    let mut t = String::new();
+    let camera = false;
+    let f64 = false;
+    let (k, n) = match r {
+        Recipe::NormalPlanar { map, quant } => {
             quant_fns(quant, &format!("{name}_c"), &mut t);
             let (project, unproject) = match map {
                 PlaneMap::Oct => ("gbuf_oct_project(u)".to_string(), "gbuf_oct_unproject(p)".to_string()),
@@ -883,7 +965,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             );
             (quant.bits(), 2)
         }
-        (_, Some(Recipe::NormalOctPrecise { k })) => {
+        Recipe::NormalOctPrecise { k } => {
             let q = Quant::Snorm(k);
             quant_fns(q, &format!("{name}_c"), &mut t);
             let m = (1u32 << (k - 1)) - 1;
@@ -905,32 +987,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             );
             (k, 2)
         }
-        (_, Some(Recipe::ScalarTable { bits, lo, hi, nan, thresholds, decoded })) => {
-            let th: Vec<String> = thresholds.iter().map(|v| format!("{:#010x}u", v.to_bits())).collect();
-            let de: Vec<String> = decoded.iter().map(|v| format!("{:#010x}u", v.to_bits())).collect();
-            let (n_th, n_de) = (th.len(), de.len());
-            let _ = write!(
-                t,
-                "// {codec}: monotonic, so encode counts the thresholds at or below the value and decode looks the\n\
-                 // value up (gbuf's own tables: the bits match without the driver's exp2/log2)\n\
-                 const uint {name}_T[{n_th}] = uint[{n_th}]({th});\n\
-                 const uint {name}_D[{n_de}] = uint[{n_de}]({de});\n\
-                 uvec3 {name}_enc(float v) {{ float c = isnan(v) ? {nan} : clamp(v, {lo}, {hi}); uint k = 0u; \
-                 for (uint stride = {top}u; stride > 0u; stride >>= 1) {{ if (k + stride <= {n_th}u && c >= uintBitsToFloat({name}_T[k + stride - 1u])) k += stride; }} \
-                 return uvec3(k, 0u, 0u); }}\n\
-                 float {name}_dec(uvec3 c) {{ return uintBitsToFloat({name}_D[c.x & {m}u]); }}\n",
-                codec = f.codec,
-                th = th.join(", "),
-                de = de.join(", "),
-                nan = lit(nan),
-                lo = lit(lo),
-                hi = lit(hi),
-                top = 1u64 << (bits - 1),
-                m = (1u64 << bits) - 1
-            );
-            (bits, 1)
-        }
-        (_, Some(Recipe::NormalXyz { quant, unorm })) => {
+        Recipe::NormalXyz { quant, unorm } => {
             quant_fns(quant, &format!("{name}_c"), &mut t);
             let (to, from) = if unorm { (" * 0.5 + 0.5", " * 2.0 - 1.0") } else { ("", "") };
             let _ = write!(
@@ -944,8 +1001,18 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             );
             (quant.bits(), 3)
         }
-        (_, Some(Recipe::DepthLinearF32)) => {
-            camera = true;
+        other => unreachable!("normal_code takes the Normal recipes, not {other:?}"),
+    };
+    FieldCode { k, n, text: t, camera, f64 }
+}
+
+/// The shader code of a depth field from its codec's recipe (one of the `Depth…` recipes).
+fn depth_code(r: Recipe, _f: &Field, name: &str) -> FieldCode {
+    let mut t = String::new();
+    let camera = true;
+    let mut f64 = false;
+    let (k, n) = match r {
+        Recipe::DepthLinearF32 => {
             let _ = write!(
                 t,
                 "// linear view depth, IEEE single (NaN → the far plane)\n\
@@ -957,8 +1024,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             );
             (32, 1)
         }
-        (_, Some(Recipe::DepthLinearF16)) => {
-            camera = true;
+        Recipe::DepthLinearF16 => {
             let _ = write!(
                 t,
                 "// linear view depth, half float\n\
@@ -968,8 +1034,7 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             );
             (16, 1)
         }
-        (_, Some(Recipe::DepthPost { storage, reversed })) => {
-            camera = true;
+        Recipe::DepthPost { storage, reversed } => {
             f64 = true;
             let (d_of, z_of) = if reversed {
                 (
@@ -1013,9 +1078,9 @@ fn field_code(f: &Field, recipe: Option<Recipe>, name: &str, layout: &Layout) ->
             );
             (bits, 1)
         }
-        (_, None) => return Err(unsupported("no shader recipe for this codec yet")),
+        other => unreachable!("depth_code takes the Depth recipes, not {other:?}"),
     };
-    Ok(FieldCode { k, n, text: t, camera, f64 })
+    FieldCode { k, n, text: t, camera, f64 }
 }
 
 /// Can gbuf emit codec `codec` for `slot` as shader code that gives its bits exactly (it has a recipe that is
