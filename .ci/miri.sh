@@ -18,7 +18,7 @@ cargo +nightly miri setup
 export MIRIFLAGS="${MIRIFLAGS:-} -Zmiri-tree-borrows -Zmiri-permissive-provenance -Zmiri-ignore-leaks"
 cargo +nightly miri test --lib -- \
   codec::normal::tests::in_range_roundings_are_total \
-  util::tests::zeroed_vec3_is_zero_vectors_of_the_asked_length \
+  base::memory::tests::zeroed_vec3_is_zero_vectors_of_the_asked_length \
   measure::flip::tests::black_vs_white_is_max \
   measure::flip::tests::hdr_flip_of_a_mostly_black_reference_stays_finite \
   codec::simd::tests::detected_isa_is_available_and_run_clamps
