@@ -59,6 +59,9 @@ enum Command {
     Pipelines(cli::pipelines::Args),
     /// Merge the report.json of several `gbuf report` runs (one per frame) into one report.
     Merge(cli::merge::Args),
+    /// This machine's limits (read bandwidth, each instruction set's multiply-add peak) and one frame of the resolve
+    /// set against them, stage by stage.
+    Bench(cli::bench::Args),
     /// Compare two images (EXR or PNG): FLIP's pooled statistics as NVIDIA's tool prints them, RMSE, PSNR, the
     /// largest difference, tev's relative MSE; thresholds with idiff's exit status (0 pass, 1 warn, 2 fail,
     /// 3 different size or kind, 4 file error).
@@ -109,6 +112,7 @@ fn main() -> ExitCode {
     }
     let result = match cli.command {
         Command::Demo(a) => cli::demo::run(a),
+        Command::Bench(a) => cli::bench::run(a),
         Command::Scene(a) => cli::scene::run(a),
         Command::Info(a) => cli::info::run(a),
         Command::Codecs(a) => cli::codecs::run(a),

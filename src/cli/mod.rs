@@ -1,5 +1,6 @@
 //! One module per subcommand: parse flags into plain data, call the library, print.
 
+pub mod bench;
 pub mod budget;
 pub mod codecs;
 pub mod common;

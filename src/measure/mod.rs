@@ -5,4 +5,5 @@ pub mod edges;
 pub mod flip;
 pub mod gbuffer;
 pub mod image;
+pub mod machine;
 pub mod roundtrip;

@@ -18,6 +18,7 @@ mod falloff;
 pub mod fixture;
 mod kernel;
 mod lights;
+pub mod peak;
 mod reference;
 mod reference_lanes;
 mod schedule;
