@@ -75,8 +75,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let file_bytes = std::fs::metadata(&path).with_context(|| path.display().to_string())?.len();
     pb.set_message("lighting the frame on one thread");
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
+    // Opening (the survey's decode) runs on the same single thread as the lighting.
     let (opened, t_open) =
-        gbuf::base::timing::timed(|| gbuf::io::open_packed(&path, &gbuf::io::LoadOptions::default()));
+        pool.install(|| gbuf::base::timing::timed(|| gbuf::io::open_packed(&path, &gbuf::io::LoadOptions::default())));
     let dump = opened?.context("the written .bin opens as its arrays")?;
     let lighting = gbuf::resolve::Lighting::choose(None, None, &dump.loaded.gbuffer.attributes());
     let job = ResolveJob {
