@@ -115,8 +115,8 @@ fn benches(c: &mut Criterion) {
         });
     }
     // An ISPC `.bin` (the room at 1280×720 with the bench's lights, written once to a temporary file): loaded whole
-    // into planes then lit, against lit from its own arrays (`io::open_packed`: one pass for the load's report,
-    // then each tile row converted inside the resolve). Both from the file, the load's checks included; the same
+    // into planes then lit, against lit from its own arrays (`io::open_packed`: a coverage pass, then each tile
+    // row converted inside the resolve, which counts the load's checks on it). Both from the file, the load's checks included; the same
     // image bit for bit (tests/resolve_bin.rs).
     let dir = tempfile::tempdir().expect("temporary directory");
     let bin = dir.path().join("room720.bin");
@@ -130,9 +130,13 @@ fn benches(c: &mut Criterion) {
     });
     g.bench_function("bin/arrays/1x/1280x720", |b| {
         b.iter(|| {
-            let dump = gbuf::io::open_packed(black_box(&bin), &opts).unwrap().expect("a .bin");
-            let frame = gbuf::layout::PackedFrame::of_source(&dump.loaded.gbuffer, &dump.arrays).unwrap();
-            resolve(&frame, black_box(&lights), &mask1, &tiled).unwrap()
+            let mut dump = gbuf::io::open_packed(black_box(&bin), &opts).unwrap().expect("a .bin");
+            let lit = {
+                let frame = gbuf::layout::PackedFrame::of_source(&dump.loaded.gbuffer, &dump.arrays).unwrap();
+                resolve(&frame, black_box(&lights), &mask1, &tiled).unwrap()
+            };
+            dump.check().unwrap();
+            lit
         })
     });
     for threads in [1, 2] {

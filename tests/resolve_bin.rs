@@ -81,8 +81,11 @@ fn inputs(dir: &Path) -> Vec<(PathBuf, Loaded, PackedDump)> {
 #[test]
 fn opening_the_arrays_reports_what_loading_the_frame_does() {
     let dir = tempfile::tempdir().unwrap();
-    for (path, loaded, dump) in inputs(dir.path()) {
+    for (path, loaded, mut dump) in inputs(dir.path()) {
         let what = path.display().to_string();
+        // Before the checks run, none of their findings is in the report.
+        assert!(dump.loaded.sanitized.is_empty() && dump.loaded.warnings.is_empty(), "{what}: checked early");
+        dump.check().unwrap();
         let a = &dump.loaded;
         assert_eq!(a.lights, loaded.lights, "{what}: lights");
         assert_eq!(a.sources, loaded.sources, "{what}: sources");
@@ -101,6 +104,44 @@ fn opening_the_arrays_reports_what_loading_the_frame_does() {
             assert!(a.sanitized[1].2 > 5, "±Inf powers counted: {:?}", a.sanitized);
             assert!(a.sources[0].note.as_deref().is_some_and(|n| n.contains("outside [0, 1)")), "{:?}", a.sources[0]);
             assert!(a.warnings.iter().any(|w| w.code == "invalid-normals" && w.count > 5), "{:?}", a.warnings);
+        }
+    }
+}
+
+/// The checks counted on the bands the resolve decoded (each band once, however often or in whatever pieces it
+/// was decoded; rows no band covered decoded by the check) are the whole loaded frame's.
+#[test]
+fn the_checks_counted_on_decoded_bands_are_the_loaded_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let opts = LoadOptions::default();
+    for (path, loaded, _) in inputs(dir.path()) {
+        let what = path.display().to_string();
+        let lights = loaded.lights.clone().unwrap();
+        let mask = detect(&loaded.gbuffer, Detector::Lauritzen, &DetectorConfig::default()).unwrap();
+        let h = loaded.gbuffer.height;
+        // Lit first (every band decoded by the resolve), then checked; and bands decoded by hand: overlapping,
+        // repeated, partial (only some planes: not counted) and leaving gaps.
+        let lit = |dump: &PackedDump| {
+            let frame = PackedFrame::of_source(&dump.loaded.gbuffer, &dump.arrays).unwrap();
+            resolve_isa(Isa::detect(), &frame, &lights, &mask, &ResolveConfig::default()).unwrap();
+        };
+        let pieces = |dump: &PackedDump| {
+            let frame = PackedFrame::of_source(&dump.loaded.gbuffer, &dump.arrays).unwrap();
+            let mut band = GBuffer::default();
+            for r in [3..20, 10..40, 0..5, 3..20, 50..h.min(61)] {
+                frame.decode_rows(r.start.min(h - 1)..r.end.min(h), &mut band).unwrap();
+            }
+            frame.decode_rows_only(0..h, &mut band, &[Attribute::Normal]).unwrap();
+        };
+        for (how, before) in [("lit", &lit as &dyn Fn(&PackedDump)), ("pieces", &pieces)] {
+            let mut dump = open_packed(&path, &opts).unwrap().unwrap();
+            before(&dump);
+            dump.check().unwrap();
+            assert_eq!(dump.loaded.sanitized, loaded.sanitized, "{what} {how}: sanitising counts");
+            assert_eq!(dump.loaded.warnings, loaded.warnings, "{what} {how}: warnings");
+            // A second check changes nothing.
+            let again = dump.check().unwrap().to_vec();
+            assert_eq!(again, loaded.warnings, "{what} {how}: checked twice");
         }
     }
 }
@@ -255,7 +296,14 @@ fn damaged_bins_open_as_they_load() {
     for (k, bytes) in variants.iter().enumerate() {
         let path = dir.path().join(format!("v{k}.bin"));
         std::fs::write(&path, bytes).unwrap();
-        let (a, b) = (open_packed(&path, &opts), load(&path, &opts));
+        let checked = open_packed(&path, &opts).and_then(|d| {
+            d.map(|mut d| {
+                d.check()?;
+                Ok(d)
+            })
+            .transpose()
+        });
+        let (a, b) = (checked, load(&path, &opts));
         match (a, b) {
             (Ok(Some(dump)), Ok(loaded)) => {
                 assert_eq!(dump.loaded.warnings, loaded.warnings, "variant {k}");

@@ -72,6 +72,17 @@ impl CodeLut {
         self.start[b] + u8::from(x >= self.next[b])
     }
 
+    /// [`CodeLut::encode_unit`] of each of `xs` clamped to [0, 1] (NaN → 0), into `out`: one branch-free loop.
+    pub fn encode_clamped(&self, xs: &[f32], out: &mut [u8]) {
+        let (start, next, low) = (&self.start[..], &self.next[..], self.low);
+        for (o, &x) in out.iter_mut().zip(xs) {
+            // `max` ignores a NaN operand: NaN becomes 0.
+            let x = x.max(0.0).min(1.0);
+            let b = (((x.to_bits() & 0x7fff_ffff) >> Self::SHIFT).max(low) - low) as usize;
+            *o = start[b] + u8::from(x >= next[b]);
+        }
+    }
+
     /// `t_1 … t_255`: the smallest input of each code, for the users' tests.
     #[cfg(test)]
     pub(crate) fn thresholds(&self) -> &[f32] {

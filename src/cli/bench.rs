@@ -75,10 +75,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let file_bytes = std::fs::metadata(&path).with_context(|| path.display().to_string())?.len();
     pb.set_message("lighting the frame on one thread");
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
-    // Opening (the survey's decode) runs on the same single thread as the lighting.
+    // Opening (the coverage pass) runs on the same single thread as the lighting.
     let (opened, t_open) =
         pool.install(|| gbuf::base::timing::timed(|| gbuf::io::open_packed(&path, &gbuf::io::LoadOptions::default())));
-    let dump = opened?.context("the written .bin opens as its arrays")?;
+    let mut dump = opened?.context("the written .bin opens as its arrays")?;
     let lighting = gbuf::resolve::Lighting::choose(None, None, &dump.loaded.gbuffer.attributes());
     let job = ResolveJob {
         layout: None,
@@ -100,12 +100,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             |_| (),
         )
     })?;
+    // The load's checks, counted on the bands the resolve decoded.
+    let (checked, t_check) = pool.install(|| gbuf::base::timing::timed(|| dump.check().map(|_| ())));
+    checked?;
     pb.finish_and_clear();
     let isa = gbuf::resolve::instruction_set();
     let peak = fma_peaks.iter().find(|p| p.isa == isa).or(fma_peaks.last());
     let s = &done.stages;
     let pairs = done.resolved.stats.light_pairs_tested;
-    let decode_ms = t_open + s.decode;
+    let decode_ms = t_open + s.decode + t_check;
     let loop_ms = s.gather + s.cull + s.shade;
     let per_s = |n: f64, ms: f64| (ms > 0.0).then(|| n / (ms / 1e3));
     let file_rate = per_s(file_bytes as f64, decode_ms);
@@ -114,7 +117,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let fma_per_pair_at_peak = peak.zip(pair_rate).map(|(p, r)| p.flops / 2.0 / r);
     let stages = vec![
         Stage {
-            stage: "read and decode the file (survey included)",
+            stage: "read and decode the file (the load's checks included)",
             ms: decode_ms,
             rate: "file bytes/s",
             per_second: file_rate,

@@ -187,7 +187,8 @@ impl InputArgs {
     }
 
     /// The dump as its own arrays, when it is one the resolve reads band by band (an ISPC `.bin`, not folded or
-    /// remapped: [`gbuf::io::open_packed`]), with its plausibility warnings printed; `None`: [`InputArgs::load`] it.
+    /// remapped: [`gbuf::io::open_packed`]); `None`: [`InputArgs::load`] it. Its checks run after the lighting
+    /// ([`InputArgs::check_packed`]).
     pub fn open_packed(&self) -> anyhow::Result<Option<gbuf::io::PackedDump>> {
         let input = self.read.packed()?;
         if input.is_given() || gbuf::layout::targets::is_packed_dir(&self.file) {
@@ -195,11 +196,15 @@ impl InputArgs {
         }
         // SAFETY: the command line maps the `.bin` it lights and accepts the hazard of every tool that maps its
         // input: a file changed or truncated by another process during the run (docs/DECISIONS.md, "Mapping a .bin").
-        let dump = unsafe { gbuf::io::open_packed_mapped(&self.file, &self.options()?)? };
-        if let Some(d) = &dump {
-            print_warnings(&self.file, &d.loaded);
-        }
-        Ok(dump)
+        Ok(unsafe { gbuf::io::open_packed_mapped(&self.file, &self.options()?)? })
+    }
+
+    /// Runs an opened dump's checks ([`gbuf::io::PackedDump::check`], on the bands the resolve decoded) and prints
+    /// their warnings on stderr.
+    pub fn check_packed(&self, dump: &mut gbuf::io::PackedDump) -> anyhow::Result<()> {
+        dump.check()?;
+        print_warnings(&self.file, &dump.loaded);
+        Ok(())
     }
 
     /// Reads another file (a companion of the dump) with the same flags.

@@ -184,17 +184,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // not with a layout (which packs the decoded frame), scattered lights (placed from the decoded depths) or the
     // reference (which reads every plane at once: the frame decoded whole serves it and the resolve).
     let from_arrays = args.layout.is_none() && args.lights.is_none() && args.no_reference;
-    let (opened, t_load) = timed(|| -> anyhow::Result<(gbuf::io::Loaded, Option<gbuf::io::ispc::Arrays>)> {
+    let (opened, t_open) = timed(|| -> anyhow::Result<Opened> {
         match from_arrays.then(|| args.input.open_packed()).transpose()?.flatten() {
-            Some(dump) => Ok((dump.loaded, Some(dump.arrays))),
-            None => args.input.load().map(|l| (l, None)),
+            Some(dump) => Ok(Opened::Arrays(dump)),
+            None => args.input.load().map(Opened::Planes),
         }
     });
-    let (loaded, arrays) = opened.with_context(|| format!("loading {file}"))?;
-    let gb: GBuffer = loaded.gbuffer;
+    let mut opened = opened.with_context(|| format!("loading {file}"))?;
+    let gb: &GBuffer = &opened.loaded().gbuffer;
     let lighting = args.lighting.choose(&gb.attributes());
     pb.suspend(|| crate::cli::common::say_lighting(&lighting));
-    let (lights, lights_source) = pick_lights(loaded.lights, args.lights, args.seed, &gb, &file)?;
+    let (lights, lights_source) = pick_lights(opened.loaded().lights.clone(), args.lights, args.seed, gb, &file)?;
     let viewing = Viewing { tone_map: args.tonemap, exposure: args.exposure, pixels_per_degree: args.ppd };
     let job = ResolveJob {
         layout: layout.as_ref(),
@@ -204,9 +204,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         reference: !args.no_reference,
         flip: (!args.no_flip).then_some(viewing),
     };
-    let source = arrays.as_ref().map(|a| a as &dyn gbuf::layout::BandSource);
+    let source = match &opened {
+        Opened::Arrays(d) => Some(&d.arrays as &dyn gbuf::layout::BandSource),
+        Opened::Planes(_) => None,
+    };
     let progress = |what: &str| pb.set_message(format!("{file}: {what}"));
-    let (done, encoded) = resolve_frame(&file, &gb, source, &lights, &job, &progress, |r| timed(|| encode(&args, r)))?;
+    let (done, encoded) = resolve_frame(&file, gb, source, &lights, &job, &progress, |r| timed(|| encode(&args, r)))?;
+    // The load's checks of a `.bin` lit from its arrays, counted on the bands the resolve decoded: before any file
+    // is written, so a frame they refuse leaves nothing behind.
+    let (checked, t_check) = timed(|| match &mut opened {
+        Opened::Arrays(d) => pb.suspend(|| args.input.check_packed(d)),
+        Opened::Planes(_) => Ok(()),
+    });
+    checked.with_context(|| format!("loading {file}"))?;
+    let t_load = t_open + t_check;
     let (files, heatmap_max) = encoded.0?;
     // Every file is staged beside its destination and renamed into place only when all were written: a failure
     // leaves none of them half done or alone.
@@ -218,13 +229,29 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         staged.commit().context("renaming the outputs into place")
     });
     written?;
+    let gb = &opened.loaded().gbuffer;
     pb.finish_and_clear();
     let report =
-        Report::of(&args, file, &gb, lights_source, lighting, job, &done, t_load, encoded.1 + t_write, heatmap_max);
+        Report::of(&args, file, gb, lights_source, lighting, job, &done, t_load, encoded.1 + t_write, heatmap_max);
     if args.json {
         print_json(&report)
     } else {
         print_human(&report)
+    }
+}
+
+/// The input as loaded: decoded into planes, or an ISPC `.bin` held as its arrays and lit band by band.
+enum Opened {
+    Planes(gbuf::io::Loaded),
+    Arrays(gbuf::io::PackedDump),
+}
+
+impl Opened {
+    fn loaded(&self) -> &gbuf::io::Loaded {
+        match self {
+            Opened::Planes(l) => l,
+            Opened::Arrays(d) => &d.loaded,
+        }
     }
 }
 

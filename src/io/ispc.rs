@@ -300,12 +300,32 @@ fn check_header(head: &[u8], file_len: u64, path: &Path, opts: &LoadOptions) -> 
 /// [`BandSource`] that a packed frame over it (`layout::PackedFrame::of_source`) decodes a band of rows at a time
 /// inside the resolve and the edge pass, as the example's own shading loop reads the file, instead of converting the frame into planes first
 /// (49 bytes a pixel). A band's planes are [`read`]'s for those rows after [`crate::io::load`]'s sanitising, bit
-/// for bit: both run the same conversion (`Arrays::survey` says what the load's checks would).
+/// for bit: both run the same conversion (`Arrays::checks` counts what the load's checks would).
 #[derive(Debug)]
 pub struct Arrays {
     header: Header,
     /// The header's bytes and the chunk's.
     bytes: Bytes,
+    /// What the bands decoded so far with every surveyed plane found: the load's checks from the bands the resolve
+    /// decodes anyway ([`Arrays::checks`]).
+    tally: Tally,
+}
+
+/// The checks' counts of the bands decoded so far, by rows.
+#[derive(Default)]
+struct Tally(std::sync::Mutex<Vec<(Range<u32>, BandSurvey)>>);
+
+impl Tally {
+    fn lock(&self) -> std::sync::MutexGuard<'_, Vec<(Range<u32>, BandSurvey)>> {
+        // A band's counts are pushed whole: a panic elsewhere leaves the list consistent.
+        self.0.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+}
+
+impl std::fmt::Debug for Tally {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Tally({} bands)", self.lock().len())
+    }
 }
 
 /// A file's bytes: mapped (no copy, no page faults of a fresh buffer), or read when the file cannot be mapped.
@@ -329,15 +349,11 @@ impl std::ops::Deref for Bytes {
 const SURVEYED: [Attribute; 5] =
     [Attribute::Depth, Attribute::Position, Attribute::Normal, Attribute::Specular, Attribute::SpecularPower];
 
-/// One band's part of a [`Survey`]: depths out of range, NaN and ±Inf replaced, the checks' counts.
-type BandSurvey = (u64, Vec<(&'static str, u64, u64)>, crate::io::plausible::Survey);
+/// One band's part of the load's checks: NaN and ±Inf replaced, the plausibility checks' counts.
+type BandSurvey = (Vec<(&'static str, u64, u64)>, crate::io::plausible::Survey);
 
-/// What one pass over a `.bin`'s decoded bands finds: what [`crate::io::load`] reports of the whole decoded frame.
-pub(crate) struct Survey {
-    /// The frame without planes: its size, camera and coverage (what [`Arrays::frame`] needs).
-    pub like: GBuffer,
-    /// Pixels whose depth has no surface in front of the camera (besides the cleared `z = 1`).
-    pub out_of_range: u64,
+/// What the load's checks count on a whole decoded frame ([`Arrays::checks`]).
+pub(crate) struct Checks {
     /// NaN and ±Inf replaced, per plane (as [`crate::io::load`]'s sanitising reports them).
     pub sanitized: Vec<(&'static str, u64, u64)>,
     /// The plausibility checks' counts.
@@ -378,7 +394,7 @@ impl Arrays {
             // no other process changes or truncates the file while it is mapped.
             let mapped = unsafe { memmap2::MmapOptions::new().len(want).populate().map(&file) };
             if let Ok(m) = mapped {
-                return Ok(Arrays { header, bytes: Bytes::Mapped(m) });
+                return Ok(Arrays { header, bytes: Bytes::Mapped(m), tally: Tally::default() });
             }
         }
         let mut bytes = head;
@@ -396,7 +412,7 @@ impl Arrays {
                 ),
             ));
         }
-        Ok(Arrays { header, bytes: Bytes::Read(bytes) })
+        Ok(Arrays { header, bytes: Bytes::Read(bytes), tally: Tally::default() })
     }
 
     /// The decoded header.
@@ -414,43 +430,69 @@ impl Arrays {
         lights(&self.header, self.chunk(), path)
     }
 
-    /// Decodes every band once, in parallel, keeping none: the frame's coverage, and what the load's
-    /// sanitising and checks count on the decoded frame.
-    pub(crate) fn survey(&self) -> Result<Survey> {
+    /// The frame without planes (its size, camera and coverage) and how many pixels have a depth with no surface
+    /// in front of the camera (besides the cleared `z = 1`): one pass over the depth array, bands in parallel.
+    pub(crate) fn coverage(&self) -> Result<(GBuffer, u64)> {
         use rayon::prelude::*;
         let h = &self.header;
         let mut like = GBuffer::new(h.width as u32, h.height as u32, 1)?;
         like.camera = Some(h.camera());
         let band_px = h.width as usize * BAND_ROWS;
-        let parts: Vec<BandSurvey> = like
+        let out_of_range = like
             .coverage
             .par_chunks_mut(band_px)
             .enumerate()
             .map_init(GBuffer::default, |band, (k, coverage)| {
                 let y0 = (k * BAND_ROWS) as u32;
-                // Every plane but albedo (unorm8: never sanitised, never checked).
                 let rows = y0..y0 + (coverage.len() / h.width as usize) as u32;
-                let out_of_range = self.decode_band(rows, band, Some(&SURVEYED));
-                let sanitized = crate::io::sanitize::sanitize(band);
+                let out_of_range = self.decode_band(rows, band, Some(&[]));
                 coverage.copy_from_slice(&band.coverage);
-                (out_of_range, sanitized, crate::io::plausible::Survey::of(band))
+                out_of_range
+            })
+            .sum();
+        Ok((like, out_of_range))
+    }
+
+    /// What the load's sanitising and plausibility checks count on the whole decoded frame, from the bands
+    /// decoded since the file was opened with every surveyed plane (the resolve's): only rows no such band covered
+    /// are decoded now, so after a resolve this costs nothing, before it one pass. Each band counts once however
+    /// often it was decoded.
+    pub(crate) fn checks(&self) -> Checks {
+        use rayon::prelude::*;
+        let mut seen = std::mem::take(&mut *self.tally.lock());
+        seen.sort_by_key(|(r, _)| (r.start, r.end));
+        // Bands in row order that do not overlap the ones taken before them; the rows between are missing.
+        let (mut next, mut parts, mut missing) = (0, Vec::new(), Vec::new());
+        for (rows, counts) in seen {
+            if rows.start < next {
+                continue;
+            }
+            missing.extend((next..rows.start).step_by(BAND_ROWS).map(|y| y..(y + BAND_ROWS as u32).min(rows.start)));
+            next = rows.end;
+            parts.push(counts);
+        }
+        let height = self.header.height as u32;
+        missing.extend((next..height).step_by(BAND_ROWS).map(|y| y..(y + BAND_ROWS as u32).min(height)));
+        let filled: Vec<BandSurvey> = missing
+            .into_par_iter()
+            .map_init(GBuffer::default, |band, rows| {
+                self.decode_band(rows, band, Some(&SURVEYED));
+                band_survey(band)
             })
             .collect();
-        let mut survey =
-            Survey { like, out_of_range: 0, sanitized: Vec::new(), checks: crate::io::plausible::Survey::default() };
-        for (out_of_range, sanitized, checks) in parts {
-            survey.out_of_range += out_of_range;
-            survey.checks = survey.checks.add(checks);
+        let mut out = Checks { sanitized: Vec::new(), checks: crate::io::plausible::Survey::default() };
+        for (sanitized, checks) in parts.into_iter().chain(filled) {
+            out.checks = out.checks.add(checks);
             for (plane, nan, inf) in sanitized {
-                match survey.sanitized.iter_mut().find(|s| s.0 == plane) {
+                match out.sanitized.iter_mut().find(|s| s.0 == plane) {
                     Some(s) => (s.1, s.2) = (s.1 + nan, s.2 + inf),
-                    None => survey.sanitized.push((plane, nan, inf)),
+                    None => out.sanitized.push((plane, nan, inf)),
                 }
             }
         }
         // In the canonical attribute order, as the whole frame's sanitising lists them.
-        survey.sanitized.sort_by_key(|s| Attribute::ALL.iter().position(|a| a.name() == s.0));
-        Ok(survey)
+        out.sanitized.sort_by_key(|s| Attribute::ALL.iter().position(|a| a.name() == s.0));
+        out
     }
 
     /// Rows `rows` into `out` (a G-buffer of `width × rows` pixels, its planes reused): the planes of `only`
@@ -502,11 +544,27 @@ impl BandSource for Arrays {
         out: &mut GBuffer,
         only: Option<&[Attribute]>,
     ) -> Result<()> {
-        self.decode_band(rows, out, only);
-        // What the load does to the whole frame, on the band: NaN and ±Inf replaced (the counts are the survey's).
-        crate::io::sanitize::sanitize(out);
+        self.decode_band(rows.clone(), out, only);
+        // What the load does to the whole frame, on the band (NaN and ±Inf replaced), counted with the checks'
+        // counts when the band holds every plane they read: the load's checks without a pass of their own.
+        if only.is_none_or(|o| SURVEYED.iter().all(|a| o.contains(a))) {
+            let counts = band_survey(out);
+            self.tally.lock().push((rows, counts));
+        } else {
+            crate::io::sanitize::sanitize(out);
+        }
         Ok(())
     }
+}
+
+/// Sanitises a band decoded with every surveyed plane and returns what the load's checks count on it (albedo is
+/// unorm8: never sanitised, never checked).
+fn band_survey(band: &mut GBuffer) -> BandSurvey {
+    let sanitized = crate::io::sanitize::sanitize(band);
+    let albedo = band.albedo.take();
+    let checks = crate::io::plausible::Survey::of(band);
+    band.albedo = albedo;
+    (sanitized, checks)
 }
 
 /// Rows converted per parallel task.

@@ -197,13 +197,21 @@ fn load_with(path: &Path, opts: &LoadOptions, side: Side) -> Result<Loaded> {
 /// A dump loaded as its own arrays, not decoded into planes ([`open_packed`]): what [`load`] reports of it, and
 /// the arrays its bands are decoded from inside the resolve and the edge pass (`layout::PackedFrame::of_source`
 /// over `loaded.gbuffer` and `arrays`).
+///
+/// The load's sanitising counts and plausibility checks are counted on the bands the resolve decodes anyway:
+/// they are in `loaded` once [`PackedDump::check`] has run (after lighting it costs nothing; before, one pass over
+/// the file).
 #[derive(Debug)]
 pub struct PackedDump {
-    /// What [`load`] returns (lights, sources, sanitising counts, warnings), but its G-buffer has no planes: its
-    /// size, camera, sample positions and coverage only.
+    /// What [`load`] returns (lights, sources, and after [`PackedDump::check`] the sanitising counts and
+    /// warnings), but its G-buffer has no planes: its size, camera, sample positions and coverage only.
     pub loaded: Loaded,
     /// The file's arrays: every band's planes are [`load`]'s for those rows, bit for bit.
     pub arrays: ispc::Arrays,
+    /// The file, for the checks' messages.
+    path: PathBuf,
+    /// Whether [`PackedDump::check`] has filled `loaded`'s counts and warnings.
+    checked: bool,
 }
 
 impl PackedDump {
@@ -218,11 +226,28 @@ impl PackedDump {
         gb.validate().map_err(|e| Error::invalid(path, e.to_string()))?;
         Ok(gb)
     }
+
+    /// Runs the load's checks (once) and returns their warnings: [`load`]'s sanitising counts and plausibility
+    /// warnings, put in `loaded`, from the bands decoded since the file was opened (the rows none covered are
+    /// decoded now). An error is [`load`]'s for the same file.
+    pub fn check(&mut self) -> Result<&[plausible::Warning]> {
+        if !self.checked {
+            let found = self.arrays.checks();
+            self.loaded.sanitized = found.sanitized;
+            // The positions are derived from depth (nothing to check against the camera): the counts are all the
+            // checks need.
+            let mut warnings = plausible::judge(&found.checks, &self.loaded.gbuffer, false, &self.path, |_, _| {})?;
+            self.loaded.warnings.append(&mut warnings);
+            self.checked = true;
+        }
+        Ok(&self.loaded.warnings)
+    }
 }
 
 /// [`load`] without decoding, for a dump whose own arrays the resolve reads band by band as a GPU reads its
-/// G-buffer (an ISPC `.bin`: 15 bytes a pixel, where the decoded planes take 49): the lights, sources, sanitising
-/// counts and plausibility warnings are [`load`]'s, from one pass over the decoded bands that keeps none.
+/// G-buffer (an ISPC `.bin`: 15 bytes a pixel, where the decoded planes take 49): the lights, sources and coverage
+/// are [`load`]'s; its sanitising counts and plausibility warnings come from [`PackedDump::check`], counted on the
+/// bands the resolve decodes.
 /// `Ok(None)` when `path` is no such dump, or `opts` change its samples (folding, a grid, `--map`, file lists):
 /// [`load`] it instead.
 pub fn open_packed(path: &Path, opts: &LoadOptions) -> Result<Option<PackedDump>> {
@@ -256,15 +281,15 @@ fn open_packed_with(path: &Path, opts: &LoadOptions, map: bool) -> Result<Option
     } else {
         ispc::Arrays::read(path, opts)?
     };
-    let survey = arrays.survey()?;
+    let (like, out_of_range) = arrays.coverage()?;
     let mut loaded = Loaded {
-        gbuffer: survey.like,
+        gbuffer: like,
         format: SourceFormat::IspcBin,
-        sources: ispc::sources(survey.out_of_range),
+        sources: ispc::sources(out_of_range),
         lights: Some(arrays.lights(path)?),
         camera_source: CameraSource::File,
         compression: None,
-        sanitized: survey.sanitized,
+        sanitized: Vec::new(),
         warnings: Vec::new(),
         reading: None,
         positions_assumed: false,
@@ -274,11 +299,8 @@ fn open_packed_with(path: &Path, opts: &LoadOptions, map: bool) -> Result<Option
         apply_sidecar(&mut loaded, path, s, sp, 1)?;
     }
     loaded.gbuffer.validate().map_err(|e| Error::invalid(path, e.to_string()))?;
-    // The checks `load` runs on the whole frame, from the bands' counts: the positions are derived from depth
-    // (nothing to check against the camera), so the counts are all they need.
-    loaded.warnings = plausible::judge(&survey.checks, &loaded.gbuffer, false, path, |_, _| {})?;
-    loaded.warnings.splice(0..0, ignored);
-    Ok(Some(PackedDump { loaded, arrays }))
+    loaded.warnings = ignored.into_iter().collect();
+    Ok(Some(PackedDump { loaded, arrays, path: path.to_path_buf(), checked: false }))
 }
 
 /// Loads a dump (EXR or ISPC `.bin`) held in memory, exactly as [`load`] would from a file (`path` names it in

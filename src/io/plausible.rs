@@ -86,6 +86,29 @@ fn count(gb: &GBuffer) -> Counts {
         .map(|(k, cov)| {
             let r = k * CHUNK..k * CHUNK + cov.len();
             let (n, p, d) = (normal.map(|x| &x[r.clone()]), position.map(|x| &x[r.clone()]), depth.map(|x| &x[r]));
+            let albedo = albedo.map(|x| &x[k * CHUNK..k * CHUNK + cov.len()]);
+            crate::base::isa::run(crate::base::isa::Isa::detect(), CountChunk { cov, n, p, d, albedo, near })
+        })
+        .reduce(Counts::default, Counts::add)
+}
+
+/// One block of [`count`]'s pass, compiled for the widest instruction set the CPU has (integer counts and a
+/// maximum: the same on every path).
+struct CountChunk<'a> {
+    cov: &'a [bool],
+    n: Option<&'a [glam::Vec3]>,
+    p: Option<&'a [glam::Vec3]>,
+    d: Option<&'a [f32]>,
+    albedo: Option<&'a [glam::Vec3]>,
+    near: Option<f32>,
+}
+
+impl crate::base::isa::Kernel for CountChunk<'_> {
+    type Output = Counts;
+    #[inline(always)]
+    fn run(self, _: crate::base::isa::Isa) -> Counts {
+        let CountChunk { cov, n, p, d, albedo, near } = self;
+        {
             // One branch-free loop per plane (each vectorises); `u64::from(covered && test)` counts.
             let mut c = Counts { covered: cov.iter().map(|&c| u64::from(c)).sum(), ..Counts::default() };
             if let Some(n) = n {
@@ -107,7 +130,7 @@ fn count(gb: &GBuffer) -> Counts {
             if let (Some(d), Some(near)) = (d, near) {
                 c.below_near = d.iter().zip(cov).map(|(d, &cv)| u64::from(cv && *d < near)).sum();
             }
-            if let Some(a) = albedo.map(|x| &x[k * CHUNK..k * CHUNK + cov.len()]) {
+            if let Some(a) = albedo {
                 for (a, &cv) in a.iter().zip(cov) {
                     let m = if cv { a.max_element() } else { 0.0 };
                     c.bright_albedo += u64::from(m > 1.0);
@@ -115,8 +138,8 @@ fn count(gb: &GBuffer) -> Counts {
                 }
             }
             c
-        })
-        .reduce(Counts::default, Counts::add)
+        }
+    }
 }
 
 /// What one pass over a G-buffer's samples counts for the checks, with the planes it has: of a whole frame
