@@ -241,6 +241,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 /// The input as loaded: decoded into planes, or an ISPC `.bin` held as its arrays and lit band by band.
+// One value per run, on the stack of `run`: the variants' sizes do not matter.
+#[allow(clippy::large_enum_variant)]
 enum Opened {
     Planes(gbuf::io::Loaded),
     Arrays(gbuf::io::PackedDump),
