@@ -15,7 +15,9 @@
 //! | `json`      | reading back JSON's `null` for non-finite numbers                                  |
 //! | `memory`    | large planes from zeroed memory                                                    |
 //! | [`png`]     | the PNG encoder: bands of rows filtered and deflated in parallel                   |
+//! | [`alloc`]   | the command line's global allocator: large blocks in transparent huge pages        |
 
+pub mod alloc;
 pub(crate) mod fastmath;
 pub mod files;
 pub mod isa;

@@ -622,16 +622,19 @@ impl crate::base::isa::Kernel for Convert<'_, '_> {
         let mut halves = [vec![0.0f32; w], vec![0.0f32; w]];
         let mut view = vec![0.0f32; w];
         // Array `k` (elements of `elem` bytes) over row `y`; the header check bounded every array by the chunk.
-        let row = |k: usize, elem: usize, y: usize| {
+        // Functions inlined, not closures: a closure called would be compiled apart, for the baseline.
+        #[inline(always)]
+        fn array_row<'c>(h: &Header, chunk: &'c [u8], w: usize, k: usize, elem: usize, y: usize) -> &'c [u8] {
             let o = h.offsets[k] as usize + elem * y * w;
             &chunk[o..o + elem * w]
-        };
-        let mut f16_row = |k: usize, y: usize, out: &mut Vec<f32>| {
-            for (b, v) in row(k, 2, y).chunks_exact(2).zip(bits.iter_mut()) {
+        }
+        #[inline(always)]
+        fn halves_of(bytes: &[u8], bits: &mut [u16], out: &mut [f32]) {
+            for (b, v) in bytes.chunks_exact(2).zip(bits.iter_mut()) {
                 *v = u16::from_le_bytes([b[0], b[1]]);
             }
             bits.reinterpret_cast::<f16>().convert_to_f32_slice(out);
-        };
+        }
         let mut oor = 0u64;
         for r in 0..coverage.len() / w {
             let y = y0 + r;
@@ -639,7 +642,8 @@ impl crate::base::isa::Kernel for Convert<'_, '_> {
             let cov = &mut coverage[o..o + w];
             // z = 1 is the cleared depth buffer (sky); anything outside [0, 1), or whose view depth is not finite
             // and positive, has no surface in front of the camera.
-            for ((c, v), zb) in cov.iter_mut().zip(view.iter_mut()).zip(row(0, 4, y).chunks_exact(4)) {
+            for ((c, v), zb) in cov.iter_mut().zip(view.iter_mut()).zip(array_row(h, chunk, w, 0, 4, y).chunks_exact(4))
+            {
                 let z = f32::from_le_bytes([zb[0], zb[1], zb[2], zb[3]]);
                 let view_z = p32 / (z - p22);
                 let in_front = (0.0..1.0).contains(&z) & view_z.is_finite() & (view_z > 0.0);
@@ -659,8 +663,8 @@ impl crate::base::isa::Kernel for Convert<'_, '_> {
             }
             if let Some(n) = normal.as_deref_mut() {
                 let [ex, ey] = &mut halves;
-                f16_row(1, y, ex);
-                f16_row(2, y, ey);
+                halves_of(array_row(h, chunk, w, 1, 2, y), &mut bits, ex);
+                halves_of(array_row(h, chunk, w, 2, 2, y), &mut bits, ey);
                 for (((n, &c), &x), &y) in n[o..o + w].iter_mut().zip(cov.iter()).zip(ex.iter()).zip(ey.iter()) {
                     let v = decode_spheremap(x, y);
                     *n = if c { v } else { Vec3::ZERO };
@@ -668,14 +672,15 @@ impl crate::base::isa::Kernel for Convert<'_, '_> {
             }
             for (k, plane) in [(3, spec.as_deref_mut()), (4, power.as_deref_mut())] {
                 if let Some(v) = plane {
-                    f16_row(k, y, &mut halves[0]);
+                    halves_of(array_row(h, chunk, w, k, 2, y), &mut bits, &mut halves[0]);
                     for ((v, &c), &s) in v[o..o + w].iter_mut().zip(cov.iter()).zip(&halves[0]) {
                         *v = if c { s } else { 0.0 };
                     }
                 }
             }
             if let Some(a) = albedo.as_deref_mut() {
-                let (ar, ag, ab) = (row(5, 1, y), row(6, 1, y), row(7, 1, y));
+                let (ar, ag, ab) =
+                    (array_row(h, chunk, w, 5, 1, y), array_row(h, chunk, w, 6, 1, y), array_row(h, chunk, w, 7, 1, y));
                 let unorm8 = unorm8_table();
                 for ((((a, &c), &r), &g), &b) in a[o..o + w].iter_mut().zip(cov.iter()).zip(ar).zip(ag).zip(ab) {
                     let v = Vec3::new(unorm8[r as usize], unorm8[g as usize], unorm8[b as usize]);
