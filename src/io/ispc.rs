@@ -549,7 +549,12 @@ impl BandSource for Arrays {
         // counts when the band holds every plane they read: the load's checks without a pass of their own.
         if only.is_none_or(|o| SURVEYED.iter().all(|a| o.contains(a))) {
             let counts = band_survey(out);
-            self.tally.lock().push((rows, counts));
+            // A band decoded again (a frame lit twice) is counted once, and the list stays as long as the frame's
+            // bands.
+            let mut seen = self.tally.lock();
+            if !seen.iter().any(|(r, _)| *r == rows) {
+                seen.push((rows, counts));
+            }
         } else {
             crate::io::sanitize::sanitize(out);
         }
