@@ -108,37 +108,35 @@ impl crate::base::isa::Kernel for CountChunk<'_> {
     #[inline(always)]
     fn run(self, _: crate::base::isa::Isa) -> Counts {
         let CountChunk { cov, n, p, d, albedo, near } = self;
-        {
-            // One branch-free loop per plane (each vectorises); `u64::from(covered && test)` counts.
-            let mut c = Counts { covered: cov.iter().map(|&c| u64::from(c)).sum(), ..Counts::default() };
-            if let Some(n) = n {
-                for (j, (n, &cv)) in n.iter().zip(cov).enumerate() {
-                    let len = n.length();
-                    let valid = len.is_finite() && (len - 1.0).abs() <= UNIT_TOLERANCE;
-                    let facing = match p {
-                        Some(p) => n.dot(-p[j]),
-                        None => n.z,
-                    };
-                    c.zero_normal += u64::from(cv && len < ZERO_NORMAL);
-                    c.bad_normal += u64::from(cv && !valid);
-                    c.away += u64::from(cv && valid && facing < 0.0);
-                }
+        // One branch-free loop per plane (each vectorises); `u64::from(covered && test)` counts.
+        let mut c = Counts { covered: cov.iter().map(|&c| u64::from(c)).sum(), ..Counts::default() };
+        if let Some(n) = n {
+            for (j, (n, &cv)) in n.iter().zip(cov).enumerate() {
+                let len = n.length();
+                let valid = len.is_finite() && (len - 1.0).abs() <= UNIT_TOLERANCE;
+                let facing = match p {
+                    Some(p) => n.dot(-p[j]),
+                    None => n.z,
+                };
+                c.zero_normal += u64::from(cv && len < ZERO_NORMAL);
+                c.bad_normal += u64::from(cv && !valid);
+                c.away += u64::from(cv && valid && facing < 0.0);
             }
-            if let Some(p) = p {
-                c.behind = p.iter().zip(cov).map(|(p, &cv)| u64::from(cv && p.z >= 0.0)).sum();
-            }
-            if let (Some(d), Some(near)) = (d, near) {
-                c.below_near = d.iter().zip(cov).map(|(d, &cv)| u64::from(cv && *d < near)).sum();
-            }
-            if let Some(a) = albedo {
-                for (a, &cv) in a.iter().zip(cov) {
-                    let m = if cv { a.max_element() } else { 0.0 };
-                    c.bright_albedo += u64::from(m > 1.0);
-                    c.albedo_max = c.albedo_max.max(m);
-                }
-            }
-            c
         }
+        if let Some(p) = p {
+            c.behind = p.iter().zip(cov).map(|(p, &cv)| u64::from(cv && p.z >= 0.0)).sum();
+        }
+        if let (Some(d), Some(near)) = (d, near) {
+            c.below_near = d.iter().zip(cov).map(|(d, &cv)| u64::from(cv && *d < near)).sum();
+        }
+        if let Some(a) = albedo {
+            for (a, &cv) in a.iter().zip(cov) {
+                let m = if cv { a.max_element() } else { 0.0 };
+                c.bright_albedo += u64::from(m > 1.0);
+                c.albedo_max = c.albedo_max.max(m);
+            }
+        }
+        c
     }
 }
 
