@@ -76,9 +76,10 @@ impl CodeLut {
     pub fn encode_clamped(&self, xs: &[f32], out: &mut [u8]) {
         let (start, next, low) = (&self.start[..], &self.next[..], self.low);
         for (o, &x) in out.iter_mut().zip(xs) {
-            // `max` ignores a NaN operand: NaN becomes 0 (`clamp` would keep it).
-            #[allow(clippy::manual_clamp)]
-            let x = x.max(0.0).min(1.0);
+            // Compares, not `max`/`min`: a NaN fails `x >= 0` and becomes 0. (`f32::max` may turn a signalling NaN
+            // into a quiet NaN instead of ignoring it: glibc's `fmaxf`, which debug builds call, does.)
+            let x = if x >= 0.0 { x } else { 0.0 };
+            let x = if x <= 1.0 { x } else { 1.0 };
             let b = (((x.to_bits() & 0x7fff_ffff) >> Self::SHIFT).max(low) - low) as usize;
             *o = start[b] + u8::from(x >= next[b]);
         }
