@@ -1,7 +1,9 @@
 //! Packed render targets as an input (`layout::targets`, `--layout`/`--input-layout`): what `gbuf pack` writes
 //! reads back as the layout's own unpack of the frame, bit for bit, for every built-in layout; repacking keeps every
 //! byte; files other tools write (legacy DDS headers, typeless and BGRA formats, mip chains, PNG and EXR targets)
-//! read as the same texels; bad folders give errors that name the file and the problem.
+//! read as the same texels; bad folders give errors that name the file and the problem. A RenderDoc capture of the
+//! same frame (`fixtures/engine_4x.rdc`, read through RenderDoc's replay) reads as the folder its targets were saved
+//! to, at any of its actions.
 
 mod support;
 
@@ -583,4 +585,99 @@ fn hostile_target_files_are_errors_not_panics() {
             assert!(e.contains("limit"), "{e}");
         }
     }
+}
+
+// --- RenderDoc captures -------------------------------------------------------------------------------------------
+
+/// The options that read `fixtures/engine_4x.rdc` (or its folder) through its layout, at `event`.
+fn capture_options(event: Option<u32>) -> LoadOptions {
+    LoadOptions {
+        input_layout: Some(fixture("engine_4x/engine.toml").display().to_string()),
+        sidecar: Some(fixture("engine_4x/scene.json")),
+        capture: gbuf::io::rdc::Selection { event, marker: None },
+        ..Default::default()
+    }
+}
+
+#[test]
+fn a_renderdoc_capture_reads_as_the_targets_saved_from_it() {
+    if !support::renderdoc_has() {
+        return;
+    }
+    // The capture is of the very render fixtures/engine_4x/ was saved from (fixtures/scripts/rdc_capture.sh):
+    // RenderDoc's replay of its last draw gives the same codes, so the same decoded frame, bit for bit.
+    let from_capture = gbuf::load(fixture("engine_4x.rdc"), &capture_options(None)).unwrap();
+    let from_folder = gbuf::load(fixture("engine_4x"), &capture_options(None)).unwrap();
+    assert_eq!(from_capture.gbuffer, from_folder.gbuffer);
+    assert_eq!(from_capture.format, from_folder.format);
+    // Each attribute says which attachment of which event it came from.
+    let normal = from_capture.sources.iter().find(|s| s.attribute == "normal").unwrap();
+    let note = normal.note.as_deref().unwrap();
+    assert!(note.contains("RenderDoc event 185") && note.contains("color5 \"gbuffer_a\""), "{note}");
+
+    // An earlier action: after the floor's draw (event 52) only the floor is there; it is covered where the
+    // finished frame's floor is, plus where later draws hid it.
+    let floor = gbuf::load(fixture("engine_4x.rdc"), &capture_options(Some(52))).unwrap().gbuffer;
+    let (fc, all) = (&floor.coverage, &from_folder.gbuffer.coverage);
+    let count = |c: &[bool]| c.iter().filter(|&&c| c).count();
+    assert!(count(fc) > 0 && count(fc) < count(all), "{} of {}", count(fc), count(all));
+    let ids = floor.material_id.as_ref().unwrap();
+    let floor_ids: std::collections::BTreeSet<u32> = (0..fc.len()).filter(|&i| fc[i]).map(|i| ids[i]).collect();
+    assert_eq!(floor_ids.len(), 1, "one material after the first draw: {floor_ids:?}");
+    let last = from_folder.gbuffer.material_id.as_ref().unwrap();
+    let id = *floor_ids.first().unwrap();
+    assert!((0..fc.len()).all(|i| !all[i] || last[i] != id || fc[i]), "the finished floor was drawn by event 52");
+
+    // The same event chosen by its marker.
+    let by_marker = LoadOptions {
+        capture: gbuf::io::rdc::Selection { event: None, marker: Some("GBuffer/floor".into()) },
+        ..capture_options(None)
+    };
+    assert_eq!(gbuf::load(fixture("engine_4x.rdc"), &by_marker).unwrap().gbuffer, floor);
+}
+
+#[test]
+fn a_renderdoc_capture_lists_its_actions_and_refuses_what_it_cannot_read() {
+    if !support::renderdoc_has() {
+        return;
+    }
+    let dir = fixture("");
+    let rdc = fixture("engine_4x.rdc").display().to_string();
+    let out = gbuf(&dir, &["info", &rdc, "--list", "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let list: gbuf::io::rdc::Listing = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!((list.api.as_str(), list.default_event), ("OpenGL", Some(185)));
+    let last = list.actions.iter().find(|a| a.event == 185).unwrap();
+    let a = last.colors.iter().find(|t| t.name == "gbuffer_a").unwrap();
+    assert_eq!((a.slot, a.format.as_str(), a.width, a.height, a.samples), (Some(5), "R10G10B10A2_UNORM", 160, 90, 4));
+    assert_eq!(last.depth.as_ref().map(|d| d.format.as_str()), Some("D32"));
+
+    let layout = fixture("engine_4x/engine.toml").display().to_string();
+    let scene = fixture("engine_4x/scene.json").display().to_string();
+    let info = |extra: &[&str], env: Option<&str>| {
+        let mut c = support::gbuf_command();
+        c.current_dir(&dir).args(["info", &rdc, "--input-layout", &layout, "--scene", &scene]).args(extra);
+        if let Some(py) = env {
+            c.env("GBUF_RDC_PYTHON", py);
+        }
+        c.output().unwrap()
+    };
+    let fails = |o: &std::process::Output, words: &[&str]| {
+        let e = stderr(o);
+        assert!(!o.status.success() && e.contains("engine_4x.rdc"), "{e}");
+        for w in words {
+            assert!(e.contains(w), "{w:?} not in: {e}");
+        }
+        assert!(!e.contains("panicked") && !e.contains("gbuf-rdc-"), "{e}");
+    };
+    // A layout target pointed at an attachment that is not bound, or that holds another format.
+    fails(&info(&["--target", "gbuffer_a=color9"], None), &["color9", "bound there", "gbuffer_a"]);
+    fails(&info(&["--target", "gbuffer_a=color6"], None), &["event 185", "color6", "R8G8B8A8_UNORM_SRGB"]);
+    // An event that is not an action.
+    fails(&info(&["--event", "99999"], None), &["99999"]);
+    // No Python with RenderDoc's module: what to install and which variable to set.
+    fails(&info(&[], Some("/nonexistent/python3")), &["python3-renderdoc", "GBUF_RDC_PYTHON"]);
+    // Without a layout: how to give it.
+    let o = gbuf(&dir, &["info", &rdc]);
+    fails(&o, &["--input-layout", "--list"]);
 }

@@ -73,9 +73,19 @@ pub struct ReadArgs {
     #[arg(hide_short_help = true, long, value_name = "N")]
     pub frame: Option<u32>,
     /// A packed target's file, when it is not `<target>.<ext>` in the folder: `--target gbuffer_a=cap/rt1.dds`
-    /// (also `coverage=FILE`, `material_table=FILE`). Repeat per target.
+    /// (also `coverage=FILE`, `material_table=FILE`); for a RenderDoc capture, its attachment:
+    /// `--target gbuffer_a=color4`, `--target depth=depth` (default: the target with the same debug name). Repeat
+    /// per target.
     #[arg(hide_short_help = true, long = "target", value_name = "NAME=FILE")]
     pub targets: Vec<String>,
+    /// For a RenderDoc capture (`.rdc`): read the targets bound at this event (`gbuf info FILE.rdc --list` lists
+    /// them) [default: the last draw that writes colour targets].
+    #[arg(long, value_name = "EID", conflicts_with = "marker")]
+    pub event: Option<u32>,
+    /// For a RenderDoc capture: read the targets after the last draw inside the marker region NAME (its own name or
+    /// its path, `GBuffer/rod`).
+    #[arg(long, value_name = "NAME")]
+    pub marker: Option<String>,
 }
 
 impl ReadArgs {
@@ -121,6 +131,7 @@ impl ReadArgs {
             targets: Vec::new(),
             sidecar: self.scene.clone(),
             no_sidecar: self.no_scene,
+            capture: gbuf::io::rdc::Selection { event: self.event, marker: self.marker.clone() },
             fold: self.fold,
             map,
             files,

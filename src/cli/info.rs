@@ -12,6 +12,10 @@ pub struct Args {
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
+    /// For a RenderDoc capture (`.rdc`): list its actions that write render targets, with the targets bound at
+    /// each (attachment, debug name, format, size, samples), instead of reading one.
+    #[arg(long)]
+    pub list: bool,
 }
 
 /// `info` plus the scene's needs (see `gbuf::analysis::needs`).
@@ -31,6 +35,20 @@ struct WithNeeds<'a> {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let input = args.input.read.packed()?;
     let path = &args.input.file;
+    if args.list {
+        if !gbuf::io::rdc::is_capture(path) {
+            anyhow::bail!(
+                "{}: --list lists the actions of a RenderDoc capture (.rdc); this is not one",
+                path.display()
+            );
+        }
+        let listing = gbuf::io::rdc::list(path)?;
+        if args.json {
+            return print_json(&listing);
+        }
+        print!("{}", listing.to_text(path));
+        return Ok(());
+    }
     // Packed targets are read once: the decoded frame and, for the code space, their codes.
     let (loaded, code_space) = match gbuf::layout::targets::input_layout(path, &input)? {
         Some(layout) => {

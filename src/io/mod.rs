@@ -14,6 +14,7 @@ pub mod mapped;
 pub mod mitsuba;
 pub mod plausible;
 pub mod raw;
+pub mod rdc;
 pub(crate) mod sanitize;
 pub mod sidecar;
 pub mod stats;
@@ -62,6 +63,8 @@ pub struct LoadOptions {
     /// Packed targets' files when they are not `<target>.<ext>` in the folder (`--target NAME=FILE`; also
     /// `coverage` and `material_table`), for [`crate::load`].
     pub targets: Vec<(String, PathBuf)>,
+    /// For a RenderDoc capture (`.rdc`, read through its layout by [`crate::load`]): which action's targets.
+    pub capture: rdc::Selection,
     /// Fold k×k pixel blocks into k² samples (overrides the sidecar's `supersample`).
     pub fold: Option<u32>,
     /// Explicit attribute → channel mapping (`--map attr=channel,…`); channels are comma-free names.
@@ -175,6 +178,13 @@ fn load_with(path: &Path, opts: &LoadOptions, side: Side) -> Result<Loaded> {
         return finish(loaded, path, side.as_ref().map(|(s, p)| (s, p.as_path())), opts);
     }
     let (head, len) = read_head(path)?;
+    if head.starts_with(b"RDOC") {
+        return Err(Error::invalid(
+            path,
+            "a RenderDoc capture is read through the layout its render targets were written with: give it with \
+             --input-layout NAME|PATH (`gbuf info FILE.rdc --list` shows the actions and their bound targets)",
+        ));
+    }
     if head.starts_with(&PNG_MAGIC) {
         return Err(Error::invalid(
             path,
@@ -448,6 +458,11 @@ fn dir_sidecar(dir: &Path) -> Result<Option<PathBuf>> {
 /// targets of `layout::targets`, which need the camera before they decode).
 pub fn sidecar_for(path: &Path, opts: &LoadOptions) -> Result<Option<(Sidecar, PathBuf)>> {
     resolve_sidecar(path, opts).map(|(side, _)| side)
+}
+
+/// [`sidecar_for`] with the warning [`load`] gives when the JSON found beside `path` is not a gbuf sidecar.
+pub fn sidecar_found(path: &Path, opts: &LoadOptions) -> Result<(Option<PathBuf>, Option<plausible::Warning>)> {
+    resolve_sidecar(path, opts).map(|(side, ignored)| (side.map(|(_, p)| p), ignored))
 }
 
 /// What [`load`] does after its reader, for readers above `io`: folding, the sidecar's camera, lights and

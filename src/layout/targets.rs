@@ -380,6 +380,9 @@ pub fn load_packed_frame(
     explicit: &[(String, PathBuf)],
     opts: &LoadOptions,
 ) -> Result<(Loaded, PackedFiles)> {
+    if crate::io::rdc::is_capture(dir) {
+        return load_capture_frame(dir, layout, explicit, opts);
+    }
     let frame = read_frame(dir, layout, explicit, opts)?;
     // The decoded frame, not the files, is what the limit bounds: checked before it is made.
     let need = decoded_bytes(layout, &frame.shell, frame.packed.total_bytes() as u64);
@@ -455,6 +458,114 @@ pub fn load_packed_frame(
     // The targets were unfolded already: the decoded frame is not a mosaic.
     let opts = LoadOptions { grid: None, ..opts.clone() };
     Ok((crate::io::finish_loaded(loaded, dir, &opts)?, frame))
+}
+
+/// [`load_packed_frame`] of a RenderDoc capture: the targets bound at the selected action (`opts.capture`) are
+/// extracted ([`crate::io::rdc::extract`]) and matched to the layout's targets, by `--target NAME=colorN|depth`, else
+/// by the resources' debug names; the sidecar is the one found beside the capture.
+fn load_capture_frame(
+    capture: &Path,
+    layout: &Layout,
+    explicit: &[(String, PathBuf)],
+    opts: &LoadOptions,
+) -> Result<(Loaded, PackedFiles)> {
+    let x = crate::io::rdc::extract(capture, &opts.capture)?;
+    let files = capture_targets(capture, layout, explicit, &x)?;
+    let (sidecar, ignored) = crate::io::sidecar_found(capture, opts)?;
+    let opts = LoadOptions { no_sidecar: sidecar.is_none(), sidecar, ..opts.clone() };
+    let m = &x.manifest;
+    let folder = x.folder();
+    // Errors name the capture and the event, not the temporary folder.
+    let inside = format!("{}{}", folder.display(), std::path::MAIN_SEPARATOR);
+    let (mut loaded, frame) = load_packed_frame(&folder, layout, &files, &opts)
+        .map_err(|e| Error::invalid(capture, format!("event {}: {}", m.event, e.to_string().replace(&inside, ""))))?;
+    for s in &mut loaded.sources {
+        let target = s.channels.first().and_then(|c| c.split('[').next()).unwrap_or("");
+        let from = files.iter().find(|(n, _)| n == target).and_then(|(_, f)| {
+            m.targets.iter().find(|t| x.file(t).as_deref() == Some(f.as_path())).map(|t| t.describe())
+        });
+        if let Some(from) = from {
+            let from = format!("RenderDoc event {}: {from}", m.event);
+            s.note = Some(s.note.take().map_or_else(|| from.clone(), |n| format!("{n}; {from}")));
+        }
+    }
+    if let Some(w) = ignored {
+        loaded.warnings.insert(0, w);
+    }
+    Ok((loaded, frame))
+}
+
+/// The files of `layout`'s targets among those extracted from `capture`: `--target NAME=colorN|depth` names an
+/// attachment (another value is a file, relative to the capture's folder); a target not named is the bound target
+/// whose debug name is the target's (ignoring case). `coverage` is optional; the material table is a file.
+fn capture_targets(
+    capture: &Path,
+    layout: &Layout,
+    explicit: &[(String, PathBuf)],
+    x: &crate::io::rdc::Extracted,
+) -> Result<Vec<(String, PathBuf)>> {
+    let m = &x.manifest;
+    let bound = || {
+        let mut v: Vec<String> = m.targets.iter().map(crate::io::rdc::BoundTarget::describe).collect();
+        v.extend(m.skipped.iter().map(|s| format!("{} ({}: {})", s.name, s.format, s.reason)));
+        v.join("; ")
+    };
+    let is_attachment = |v: &str| {
+        v.eq_ignore_ascii_case("depth")
+            || v.get(..5).is_some_and(|p| p.eq_ignore_ascii_case("color"))
+                && v.len() > 5
+                && v[5..].bytes().all(|b| b.is_ascii_digit())
+    };
+    let here = capture.parent().unwrap_or(Path::new("."));
+    let mut files = Vec::new();
+    let names = layout.spec().targets.iter().map(|t| (t.name.as_str(), true));
+    for (name, needed) in names.chain([(COVERAGE_TARGET, false), ("material_table", false)]) {
+        let given = explicit.iter().find(|(n, _)| n.eq_ignore_ascii_case(name)).map(|(_, v)| v);
+        let target = match given {
+            Some(v) if is_attachment(&v.to_string_lossy()) => {
+                let a = v.to_string_lossy();
+                let t = m.targets.iter().find(|t| t.attachment().eq_ignore_ascii_case(&a));
+                Some(t.ok_or_else(|| {
+                    Error::Argument(format!(
+                        "--target {name}={a}: {} has no readable {a} at event {} (bound there: {})",
+                        capture.display(),
+                        m.event,
+                        bound()
+                    ))
+                })?)
+            }
+            Some(v) => {
+                files.push((name.to_string(), if v.is_relative() { here.join(v) } else { v.clone() }));
+                continue;
+            }
+            None if name == "material_table" => continue,
+            None => m.targets.iter().find(|t| t.name.eq_ignore_ascii_case(name)),
+        };
+        match target {
+            Some(t) => {
+                let f = x
+                    .file(t)
+                    .ok_or_else(|| Error::Internal(format!("RenderDoc bridge: no file for {}", t.describe())))?;
+                files.push((name.to_string(), f));
+            }
+            None if needed => {
+                return Err(Error::invalid(
+                    capture,
+                    format!(
+                        "event {} ({}): no bound target is named {name:?}, a target of layout {:?}; name its \
+                         attachment with --target {name}=colorN|depth, or pick another action with --event EID or \
+                         --marker NAME (bound there: {})",
+                        m.event,
+                        m.action,
+                        layout.name(),
+                        bound()
+                    ),
+                ))
+            }
+            None => {}
+        }
+    }
+    Ok(files)
 }
 
 /// The layout of packed targets at `path` that `input` names (or the folder's `layout.toml`), `None` when the

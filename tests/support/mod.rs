@@ -52,6 +52,28 @@ pub fn python_has(modules: &str) -> bool {
     ok
 }
 
+/// Can gbuf's RenderDoc bridge import RenderDoc's Python module (`$GBUF_RDC_PYTHON`, else `/usr/bin/python3`, else
+/// `python3`, as `gbuf::io::rdc` tries them)? The same rule as [`python_has`]: required in CI, a noted skip elsewhere.
+pub fn renderdoc_has() -> bool {
+    let pythons: Vec<std::ffi::OsString> = match std::env::var_os("GBUF_RDC_PYTHON") {
+        Some(p) => vec![p],
+        None => vec!["/usr/bin/python3".into(), "python3".into()],
+    };
+    let imports = |py: &std::ffi::OsString| {
+        let code = "import sys; sys.path.append('/usr/lib/python3/dist-packages'); import renderdoc";
+        Command::new(py).args(["-c", code]).output().is_ok_and(|o| o.status.success())
+    };
+    let ok = pythons.iter().any(imports);
+    if !ok {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI is set but no Python imports RenderDoc's module: the capture tests must run in CI (.ci/run installs it)"
+        );
+        skipped("no Python imports RenderDoc's module", "apt-get install renderdoccmd python3-renderdoc");
+    }
+    ok
+}
+
 /// Is the command-line tool `tool` on the PATH (it can be started)? The same rule as [`python_has`]: required in
 /// CI, a noted skip elsewhere.
 pub fn tool_has(tool: &str) -> bool {
