@@ -681,3 +681,126 @@ fn a_renderdoc_capture_lists_its_actions_and_refuses_what_it_cannot_read() {
     let o = gbuf(&dir, &["info", &rdc]);
     fails(&o, &["--input-layout", "--list"]);
 }
+
+/// RenderDoc's 32-bit → 24-bit colour hash of an ID, as the emitted views compute it (Wellons' lowbias32).
+fn id_colour(id: u32) -> [f32; 3] {
+    let mut h = id;
+    h ^= h >> 16;
+    h = h.wrapping_mul(0x7feb_352d);
+    h ^= h >> 15;
+    h = h.wrapping_mul(0x846c_a68b);
+    h ^= h >> 16;
+    [(h & 255) as f32 / 255.0, ((h >> 8) & 255) as f32 / 255.0, ((h >> 16) & 255) as f32 / 255.0]
+}
+
+#[test]
+fn renderdoc_views_show_gbufs_decode_of_every_sample_in_renderdocs_own_replay() {
+    if !support::renderdoc_has() {
+        return;
+    }
+    // The frame as gbuf decodes it, and its camera (the depth view's near and far).
+    let loaded = gbuf::load(fixture("engine_4x.rdc"), &capture_options(None)).unwrap();
+    let gb = &loaded.gbuffer;
+    let cam = gb.camera.unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let views = tmp.path().join("views");
+    let layout = fixture("engine_4x/engine.toml").display().to_string();
+    let (zn, zf) = (cam.znear.to_string(), cam.zfar.to_string());
+    let args =
+        ["layouts", &layout, "--emit", "renderdoc", "-o", views.to_str().unwrap(), "--znear", &zn, "--zfar", &zf];
+    let out = gbuf(tmp.path(), &args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let formats = std::fs::read_to_string(views.join("buffer_formats.txt")).unwrap();
+    assert!(
+        formats.contains("uint normal_r : 10; uint normal_g : 10;") && formats.contains("float depth;"),
+        "{formats}"
+    );
+
+    // Each view, run by RenderDoc on the capture's targets at every sample and "average value".
+    let shown: Vec<(&str, &str)> = vec![
+        ("gbuffer_a", "normal"),
+        ("gbuffer_b", "albedo"),
+        ("gbuffer_c", "roughness"),
+        ("gbuffer_c", "metallic"),
+        ("gbuffer_c", "material_id"),
+        ("depth", "depth"),
+    ];
+    let file = |t: &str, a: &str| views.join(format!("gbuf_engine_oct_rgb10a2_{t}_{a}.glsl"));
+    let results = tmp.path().join("out");
+    std::fs::create_dir(&results).unwrap();
+    let python = std::env::var("GBUF_RDC_PYTHON").unwrap_or_else(|_| "/usr/bin/python3".into());
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/support/renderdoc_views.py");
+    let mut run = Command::new(python);
+    run.arg(script).arg(fixture("engine_4x.rdc")).arg("185").arg(&results);
+    for (t, a) in &shown {
+        run.arg(format!("{t}={}", file(t, a).display()));
+    }
+    let out = run.output().unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let compiled: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(results.join("compile.json")).unwrap()).unwrap();
+    for (t, a) in &shown {
+        let name = file(t, a).file_name().unwrap().to_string_lossy().into_owned();
+        assert_eq!(compiled[&name], "", "{name} did not compile in RenderDoc");
+    }
+
+    let (w, s) = (gb.width as usize, gb.samples as usize);
+    // What a view should show for sample i, as f32 (RenderDoc stores it as RGBA16F, rounding toward zero).
+    let want = |a: &str, i: usize| -> [f32; 3] {
+        match a {
+            "normal" => (gb.normal.as_ref().unwrap()[i] * 0.5 + 0.5).to_array(),
+            "albedo" => gb.albedo.as_ref().unwrap()[i].to_array(),
+            "roughness" => [gb.roughness.as_ref().unwrap()[i]; 3],
+            "metallic" => [gb.metallic.as_ref().unwrap()[i]; 3],
+            "material_id" => id_colour(gb.material_id.as_ref().unwrap()[i]),
+            _ => [gb.depth.as_ref().unwrap()[i]; 3],
+        }
+    };
+    let close = |got: f32, want: f32| (got - want).abs() <= want.abs() * (1.0 / 1024.0) + 1e-6;
+    for (t, a) in &shown {
+        let name = file(t, a).file_name().unwrap().to_string_lossy().into_owned();
+        let read = |label: &str| -> Vec<f32> {
+            let bytes = std::fs::read(results.join(format!("{name}.{label}.f16"))).unwrap();
+            bytes.chunks_exact(2).map(|b| half::f16::from_le_bytes([b[0], b[1]]).to_f32()).collect()
+        };
+        let mut differs_from_sample_0 = 0;
+        let first = read("0");
+        for k in 0..s {
+            let got = read(&k.to_string());
+            assert_eq!(got.len(), gb.pixel_count() * 4, "{name}");
+            for p in 0..gb.pixel_count() {
+                let i = p * s + k;
+                if !gb.coverage[i] {
+                    continue;
+                }
+                let (g, e) = (&got[4 * p..4 * p + 3], want(a, i));
+                assert!(
+                    (0..3).all(|c| close(g[c], e[c])),
+                    "{name}, sample {k}, pixel ({}, {}): RenderDoc shows {g:?}, gbuf decodes {e:?}",
+                    p % w,
+                    p / w
+                );
+                differs_from_sample_0 += usize::from(g != &first[4 * p..4 * p + 3]);
+            }
+        }
+        assert!(differs_from_sample_0 > 0, "{name}: every sample showed sample 0's value");
+        // "Average value": the mean of the decoded samples (IDs: sample 0), where every sample is covered.
+        let avg = read("avg");
+        for p in (0..gb.pixel_count()).filter(|&p| (0..s).all(|k| gb.coverage[p * s + k])) {
+            let e: [f32; 3] = if *a == "material_id" {
+                want(a, p * s)
+            } else {
+                let sum = (0..s).fold([0.0f32; 3], |acc, k| {
+                    let v = want(a, p * s + k);
+                    [acc[0] + v[0], acc[1] + v[1], acc[2] + v[2]]
+                });
+                sum.map(|x| x / s as f32)
+            };
+            let g = &avg[4 * p..4 * p + 3];
+            assert!(
+                (0..3).all(|c| (g[c] - e[c]).abs() <= e[c].abs() * 2e-3 + 1e-5),
+                "{name} average at {p}: {g:?} vs {e:?}"
+            );
+        }
+    }
+}

@@ -19,12 +19,75 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// Print the one layout named as shader code instead (glsl, hlsl or wgsl): `GbufSurface`, `gbuf_pack_<target>`,
-    /// `gbuf_unpack`, bit for bit what gbuf packs (docs/SHADERS.md).
+    /// `gbuf_unpack`, bit for bit what gbuf packs (docs/SHADERS.md). `renderdoc`: views for RenderDoc's texture
+    /// viewer, one custom display shader per decoded attribute and the buffer viewer's format of each target, into
+    /// the folder `-o DIR`.
     #[arg(long, value_name = "LANG")]
-    pub emit: Option<gbuf::layout::shader::Lang>,
-    /// With `--emit`: write the code to this file instead of stdout.
+    pub emit: Option<Emit>,
+    /// With `--emit`: write the code to this file instead of stdout (`renderdoc`: this folder).
     #[arg(short = 'o', long = "out", value_name = "FILE", requires = "emit")]
     pub out: Option<std::path::PathBuf>,
+    /// With `--emit renderdoc`, for depth codecs that need the projection: the camera's near plane, written into
+    /// the code (RenderDoc passes no uniforms of ours).
+    #[arg(long, value_name = "Z", requires = "zfar")]
+    pub znear: Option<f32>,
+    /// With `--emit renderdoc`: the camera's far plane.
+    #[arg(long, value_name = "Z", requires = "znear")]
+    pub zfar: Option<f32>,
+}
+
+/// What `--emit` writes: shader code in a language, or RenderDoc views.
+#[derive(Clone, Copy, Debug)]
+pub enum Emit {
+    /// `gbuf::layout::shader::emit` in this language.
+    Code(gbuf::layout::shader::Lang),
+    /// `gbuf::layout::renderdoc::views`.
+    RenderDoc,
+}
+
+impl std::str::FromStr for Emit {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Emit, String> {
+        if s.eq_ignore_ascii_case("renderdoc") {
+            return Ok(Emit::RenderDoc);
+        }
+        s.parse::<gbuf::layout::shader::Lang>()
+            .map(Emit::Code)
+            .map_err(|_| format!("{s:?}: not one of glsl, hlsl, wgsl, renderdoc"))
+    }
+}
+
+/// Writes `layout`'s RenderDoc views into the folder `out` (every file staged, then all renamed into place).
+fn emit_renderdoc(layout: &Layout, camera: Option<(f32, f32)>, out: Option<&std::path::Path>) -> anyhow::Result<()> {
+    let Some(dir) = out else {
+        crate::usage!("--emit renderdoc writes several files: name their folder with -o DIR");
+    };
+    let v = gbuf::layout::renderdoc::views(layout, camera)?;
+    if v.views.is_empty() {
+        anyhow::bail!("layout {:?}: no attribute can be viewed ({})", layout.name(), v.skipped.join("; "));
+    }
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let mut staged = gbuf::base::files::Staged::default();
+    for view in &v.views {
+        staged.stage_bytes(&dir.join(&view.file), view.code.as_bytes())?;
+    }
+    let mut formats = String::from(
+        "# RenderDoc buffer-viewer formats, one texel per struct (open the target with \"Open Texture data in Buffer\n\
+         # Viewer\"; OpenGL rows start at the bottom). Fields show codes; the display shaders show decoded values.\n",
+    );
+    for (target, f) in &v.buffer_formats {
+        formats += &format!("\n# {target}\n{f}\n");
+    }
+    staged.stage_bytes(&dir.join("buffer_formats.txt"), formats.as_bytes())?;
+    staged.commit()?;
+    for view in &v.views {
+        println!("{}  {} of target {}", dir.join(&view.file).display(), view.attribute.name(), view.target);
+    }
+    println!("{}  the buffer viewer's format of each target", dir.join("buffer_formats.txt").display());
+    for s in &v.skipped {
+        eprintln!("warning: no view for {s}");
+    }
+    Ok(())
 }
 
 /// Writes `layout` as shader code in `lang` to `out` (atomically) or stdout.
@@ -49,7 +112,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         let layout =
             Layout::by_name_or_path(&args.layouts[0]).with_context(|| format!("layout {:?}", args.layouts[0]))?;
-        return emit(&layout, lang, args.out.as_deref());
+        return match lang {
+            Emit::Code(lang) => emit(&layout, lang, args.out.as_deref()),
+            Emit::RenderDoc => emit_renderdoc(&layout, args.znear.zip(args.zfar), args.out.as_deref()),
+        };
     }
     let detailed = !args.layouts.is_empty();
     let layouts: Vec<Layout> = if detailed {

@@ -15,6 +15,7 @@ pub(crate) mod formats;
 pub mod lighting;
 pub mod material;
 pub mod pack;
+pub mod renderdoc;
 pub mod shader;
 pub mod spec;
 pub(crate) mod summary;
