@@ -494,7 +494,7 @@ fn run_chunk<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
     let live = &live[..n];
     let mut acc = Acc { rgb: [zero; 3], s: zero, tested: zero, lit: zero };
     let mut rest: &[u32] = live;
-    if V::INTERLEAVE >= 2 {
+    if interleave::<V, B>() >= 2 {
         // A constant condition: the two- and four-light code is only generated for lane types that use it.
         rest = groups_of_lights::<V, B, F, Q, P>(&k, live, lights, quad, &mut acc);
     }
@@ -522,6 +522,16 @@ fn run_chunk<V: Lanes, const B: u8, const F: u8, const Q: bool, const P: bool>(
     acc.lit.store(&mut it.lit[c..]);
 }
 
+/// Lights per step of the kernel of BRDF `B` on lanes `V` ([`Lanes::INTERLEAVE`], [`Lanes::INTERLEAVE_GGX`]).
+#[inline(always)]
+const fn interleave<V: Lanes, const B: u8>() -> usize {
+    if B == 2 {
+        V::INTERLEAVE_GGX
+    } else {
+        V::INTERLEAVE
+    }
+}
+
 /// Shades `live` four lights at a time (when [`Lanes::INTERLEAVE`] is 4 or more), then two at a time; returns the
 /// lights left (at most one).
 #[inline(always)]
@@ -536,7 +546,7 @@ fn groups_of_lights<'a, V: Lanes, const B: u8, const F: u8, const Q: bool, const
     let k4 = both(&k2);
     let spot = lights.any_spot;
     // A constant condition: with two lights per step, the pairs below take every light.
-    let in_quads = if V::INTERLEAVE >= 4 { live.len() / 4 * 4 } else { 0 };
+    let in_quads = if interleave::<V, B>() >= 4 { live.len() / 4 * 4 } else { 0 };
     let (quads, rest) = live.split_at(in_quads);
     for q in quads.chunks_exact(4) {
         let (i0, i1, i2, i3) = (q[0] as usize, q[1] as usize, q[2] as usize, q[3] as usize);

@@ -105,6 +105,7 @@ impl Avx2 {
 impl Lanes for Avx2 {
     const N: usize = LANES;
     const INTERLEAVE: usize = 4;
+    const INTERLEAVE_GGX: usize = 1;
     type Mask = (__m256, __m256);
     #[inline(always)]
     fn splat(x: f32) -> Self {
