@@ -61,6 +61,9 @@ enum Command {
     Budget(cli::budget::Args),
     /// Forward, forward MSAA, forward+, deferred, light pre-pass and visibility buffer measured on one frame.
     Pipelines(cli::pipelines::Args),
+    /// Shading less than once per pixel: gbuf's shading-rate image from the G-buffer per tile size, the lighting
+    /// evaluations it saves and its error against the full-rate image and the reference.
+    Vrs(cli::vrs::Args),
     /// Merge the report.json of several `gbuf report` runs (one per frame) into one report.
     Merge(cli::merge::Args),
     /// This machine's limits (read bandwidth, each instruction set's multiply-add peak) and one frame of the resolve
@@ -130,6 +133,7 @@ fn main() -> ExitCode {
         Command::Budget(a) => cli::budget::run(a),
         Command::Merge(a) => cli::merge::run(a),
         Command::Pipelines(a) => cli::pipelines::run(a),
+        Command::Vrs(a) => cli::vrs::run(a),
         Command::Compare(a) => cli::compare::run(a),
         Command::Completions { shell } => {
             clap_complete::generate(shell, &mut Cli::command(), "gbuf", &mut std::io::stdout());

@@ -242,3 +242,56 @@ fn mask_picture_can_be_coloured_against_the_shading_truth() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--mask OUT.png"));
 }
+
+/// `gbuf vrs` on the real 4× raster fixture: the SRI it writes is the library's, D3D12-encoded, read back as
+/// written; coarse shading saves evaluations and costs image error; sharing only the lighting is never coarser
+/// than nothing and never finer than broadcasting.
+#[test]
+fn vrs_writes_the_sri_it_measures_and_saves_evaluations() {
+    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/raster_4x.exr");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("vrs");
+    let run = |mode: &str| -> serde_json::Value {
+        let o = gbuf_cmd(
+            dir.path(),
+            &[
+                "vrs",
+                fixture.to_str().unwrap(),
+                "--tile",
+                "8,16",
+                "--mode",
+                mode,
+                "--extra-rates",
+                "--out",
+                out.to_str().unwrap(),
+                "--json",
+            ],
+        );
+        assert!(o.status.success(), "{}", support::stderr(&o));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let broadcast = run("broadcast");
+    let full = broadcast["full_rate_evaluations"].as_u64().unwrap();
+    for row in broadcast["rows"].as_array().unwrap() {
+        let e = row["evaluations"].as_u64().unwrap();
+        assert!(e < full && row["saved"].as_f64().unwrap() > 0.0, "{row}");
+        assert!(row["vs_full_rate"]["rmse"].as_f64().unwrap() > 0.0, "coarse shading changes the image: {row}");
+        assert!(row["vs_full_rate"]["flip_ldr"].as_f64().unwrap() < 0.2, "{row}");
+    }
+    // The SRI file is the library's SRI of the same frame and mask, in D3D12_SHADING_RATE values.
+    let loaded = gbuf::load(&fixture, &Default::default()).unwrap();
+    let gb = &loaded.gbuffer;
+    let mask = detect(gb, Detector::Lauritzen, &DetectorConfig::default()).unwrap();
+    let rule = gbuf::detect::rate::Smoothness::default();
+    let sri = gbuf::detect::rate::gbuffer_sri(gb, &mask, 16, true, &rule).unwrap();
+    let read =
+        gbuf::layout::texture::read(&out.join("sri_16.dds"), gbuf::layout::Format::R8, &Default::default()).unwrap();
+    assert_eq!((read.width, read.height, read.slices), (sri.cols, sri.rows, 1));
+    assert_eq!(read.bytes, sri.d3d12_texels());
+    assert_eq!(gbuf::detect::rate::evaluations(gb, &mask, &sri), broadcast["rows"][1]["evaluations"].as_u64().unwrap());
+    // Sharing only the lighting ignores albedo contrast: at least as coarse as broadcasting.
+    let lighting = run("lighting");
+    for (b, l) in broadcast["rows"].as_array().unwrap().iter().zip(lighting["rows"].as_array().unwrap()) {
+        assert!(l["evaluations"].as_u64().unwrap() <= b["evaluations"].as_u64().unwrap(), "{l} vs {b}");
+    }
+}

@@ -20,6 +20,7 @@ pub mod row;
 pub mod surfaces;
 pub mod sweep;
 pub mod traffic;
+pub mod vrs;
 
 use crate::analysis::needs::{Needs, PrunedLayout};
 use crate::analysis::sweep::{SweepConfig, SweepOutput};

@@ -17,6 +17,7 @@ pub mod report;
 pub mod resolve;
 pub mod roundtrip;
 pub mod scene;
+pub mod vrs;
 
 static QUIET: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 

@@ -39,6 +39,7 @@ pub(crate) mod geometric;
 pub(crate) mod id;
 pub mod lauritzen;
 pub mod picture;
+pub mod rate;
 pub(crate) mod thresholds;
 pub mod truth;
 

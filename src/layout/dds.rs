@@ -110,6 +110,24 @@ pub fn dds_bytes(plane: &TargetPlane, width: u32, height: u32, samples: u32) -> 
     Ok(out)
 }
 
+/// A single-sampled `R8_UINT` texture (DXGI 62) as a DDS file's bytes, rows top first: how a shading-rate image
+/// (`D3D12_SHADING_RATE` per tile) is handed to an engine.
+#[must_use]
+pub fn r8_uint_dds(width: u32, height: u32, texels: &[u8]) -> Vec<u8> {
+    debug_assert_eq!(texels.len(), width as usize * height as usize);
+    let mut h: Vec<u32> = Vec::with_capacity(HEADER_BYTES / 4);
+    h.push(MAGIC);
+    h.extend([124, DDSD_CAPS | DDSD_HEIGHT | DDSD_WIDTH | DDSD_PITCH | DDSD_PIXELFORMAT, height, width, width]);
+    h.extend([0, 1]);
+    h.extend([0; 11]);
+    h.extend([32, DDPF_FOURCC, FOURCC_DX10, 0, 0, 0, 0, 0]);
+    h.extend([DDSCAPS_TEXTURE, 0, 0, 0, 0]);
+    h.extend([62, DIMENSION_TEXTURE2D, 0, 1, 0]);
+    let mut out: Vec<u8> = h.iter().flat_map(|w| w.to_le_bytes()).collect();
+    out.extend_from_slice(texels);
+    out
+}
+
 /// The JSON header of a `.bin` target (a format with no DXGI twin).
 #[derive(Serialize)]
 struct RawHeader<'a> {

@@ -1,0 +1,156 @@
+//! `gbuf vrs FILE [--tile 8,16,32] [--mode broadcast|lighting] [--extra-rates] [--out DIR] [--json]`: shading less
+//! than once per pixel where the G-buffer says it is safe: gbuf's shading-rate image per tile size, the lighting
+//! evaluations it saves and what it costs in the image (`gbuf::analysis::vrs`).
+
+use crate::cli::common::{print_json, InputArgs, ThresholdArgs};
+use crate::cli::report::frame_lights;
+use anyhow::Context;
+use gbuf::analysis::vrs::{vrs, VrsConfig};
+use gbuf::detect::rate::CoarseMode;
+use gbuf::detect::Detector;
+use gbuf::measure::image::Viewing;
+use gbuf::resolve::ResolveConfig;
+use std::path::PathBuf;
+
+/// Flags of `gbuf vrs`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The dump to read.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Shading-rate tile sizes in pixels (8, 16, 32).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', default_value = "8,16,32")]
+    pub tile: Vec<u32>,
+    /// How a coarse pixel's evaluation reaches its pixels: `broadcast` (its colour copied) or `lighting` (its
+    /// lighting times each pixel's own albedo).
+    #[arg(long, value_name = "MODE", default_value = "broadcast")]
+    pub mode: String,
+    /// Allow the additional rates 2x4, 4x2 and 4x4 (D3D12 `AdditionalShadingRatesSupported`).
+    #[arg(long)]
+    pub extra_rates: bool,
+    /// Edge detector whose pixels are shaded per sample whatever their tile's rate.
+    #[arg(long, value_name = "D", default_value = "lauritzen")]
+    pub detector: Detector,
+    /// Detector thresholds.
+    #[command(flatten)]
+    pub thresholds: ThresholdArgs,
+    /// Lighting model of the resolve and the reference.
+    #[command(flatten)]
+    pub lighting: crate::cli::common::LightingArgs,
+    /// Scatter N point lights (replacing the dump's own); without it, the dump's or sidecar's lights, or 64
+    /// scattered when it brings none.
+    #[arg(long, value_name = "N")]
+    pub lights: Option<u32>,
+    /// Seed of the scattered lights.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Skip FLIP (numerical errors only).
+    #[arg(long)]
+    pub no_flip: bool,
+    /// Write, per tile size, the SRI as D3D12 reads it (`sri_<tile>.dds`: R8_UINT, one `D3D12_SHADING_RATE` per
+    /// tile), as a picture in the rate colours (`sri_<tile>.png`) and the coarse-shaded image
+    /// (`coarse_<tile>.png`, Reinhard tone map) into this folder.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Machine-readable output on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `gbuf vrs`.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let mode = match args.mode.to_ascii_lowercase().as_str() {
+        "broadcast" => CoarseMode::Broadcast,
+        "lighting" => CoarseMode::Lighting,
+        m => crate::usage!("--mode {m}: broadcast or lighting"),
+    };
+    if args.tile.is_empty() || args.tile.iter().any(|t| ![8, 16, 32].contains(t)) {
+        crate::usage!("--tile: sizes 8, 16 or 32 separated by commas, got {:?}", args.tile);
+    }
+    let file = args.input.file.display().to_string();
+    let loaded = args.input.load().with_context(|| format!("loading {file}"))?;
+    let (lights, _) = frame_lights(&loaded, args.lights, args.seed);
+    let gb = loaded.gbuffer;
+    let lighting = args.lighting.choose(&gb.attributes());
+    if !args.json {
+        crate::cli::common::say_lighting(&lighting);
+    }
+    let cfg = VrsConfig {
+        tiles: args.tile.clone(),
+        extra_rates: args.extra_rates,
+        mode,
+        detector: args.detector,
+        detector_config: args.thresholds.config()?,
+        resolve: lighting.apply(ResolveConfig::default()),
+        viewing: (!args.no_flip).then(Viewing::default),
+        rule: Default::default(),
+    };
+    let out = vrs(&gb, &lights, &cfg).with_context(|| format!("{file}: shading rates"))?;
+    if let Some(dir) = &args.out {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let mut staged = gbuf::base::files::Staged::default();
+        for ((row, sri), image) in out.rows.iter().zip(&out.sris).zip(&out.images) {
+            let dds = gbuf::layout::dds::r8_uint_dds(sri.cols, sri.rows, &sri.d3d12_texels());
+            staged.stage_bytes(&dir.join(format!("sri_{}.dds", row.tile)), &dds)?;
+            let pic = gbuf::base::png::encode_rgb8(gb.width, gb.height, &sri.picture(gb.width, gb.height))?;
+            staged.stage_bytes(&dir.join(format!("sri_{}.png", row.tile)), &pic)?;
+            let shown = gbuf::base::png::encode_rgb8(gb.width, gb.height, &image.to_srgb8(Default::default()))?;
+            staged.stage_bytes(&dir.join(format!("coarse_{}.png", row.tile)), &shown)?;
+        }
+        staged.commit()?;
+    }
+    if args.json {
+        return print_json(&out);
+    }
+    let flip = |e: &gbuf::measure::image::ErrorSet| match (e.flip_ldr, e.flip_hdr) {
+        (Some(l), Some(h)) => format!("{l:>8.4} {h:>8.4}"),
+        _ => format!("{:>8} {:>8}", "-", "-"),
+    };
+    println!(
+        "{file}: {}×{}×{}, detector {} ({:.3} evaluations per pixel at full rate), coarse pixels {} their evaluation{}",
+        gb.width,
+        gb.height,
+        gb.samples,
+        out.detector,
+        out.full_rate_evaluations_per_pixel,
+        if mode == CoarseMode::Broadcast { "broadcast" } else { "share the lighting of" },
+        if args.extra_rates { ", rates up to 4x4" } else { ", rates up to 2x2" }
+    );
+    println!(
+        "{:<9} {:>5} {:>9} {:>7} | vs full rate: {:>9} {:>8} {:>8} | vs reference: {:>9} {:>8} {:>8} | tiles per rate",
+        "generator", "tile", "eval/px", "saved", "RMSE", "LDR-FLIP", "HDR-FLIP", "RMSE", "LDR-FLIP", "HDR-FLIP"
+    );
+    let r = &out.full_rate_vs_reference;
+    println!(
+        "{:<9} {:>5} {:>9.3} {:>6.1}% | {:>23} {:>9} {:>8} | {:>28.3e} {} |",
+        "full rate",
+        "-",
+        out.full_rate_evaluations_per_pixel,
+        0.0,
+        "",
+        "",
+        "",
+        r.rmse,
+        flip(r)
+    );
+    for row in &out.rows {
+        let rates: Vec<String> = row.rates.iter().map(|(n, k)| format!("{n} {k}")).collect();
+        println!(
+            "{:<9} {:>5} {:>9.3} {:>6.1}% | {:>23.3e} {} | {:>28.3e} {} | {}",
+            row.generator,
+            row.tile,
+            row.evaluations_per_pixel,
+            100.0 * row.saved,
+            row.vs_full_rate.rmse,
+            flip(&row.vs_full_rate),
+            row.vs_reference.rmse,
+            flip(&row.vs_reference),
+            rates.join(", ")
+        );
+    }
+    println!(
+        "(evaluations are what a coarse-shading resolve evaluates; the image is the full-rate resolve of the frame whose \
+         shared pixels carry their coarse pixel's surface)"
+    );
+    Ok(())
+}

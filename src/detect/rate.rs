@@ -1,0 +1,463 @@
+//! Shading rates below one per pixel: shading-rate images (SRIs) from the G-buffer, and what coarse shading lights.
+//!
+//! An SRI holds one [`Rate`] per `tile × tile` pixels (D3D12 Tier 2 / Vulkan fragment-shading-rate attachments):
+//! one lighting evaluation per `w × h` coarse pixel, coarse pixels aligned to the tile grid. Composed with MSAA as
+//! hardware composes them: a pixel the edge detector marks is shaded per sample whatever its tile's rate; the
+//! other covered pixels of a coarse pixel share one evaluation, at its **representative**: the first of its
+//! non-edge pixels, in row order, that has a covered sample (the top-left pixel when covered, as a GPU's coarse
+//! pixel shades at its first covered pixel's position).
+//!
+//! [`gbuffer_sri`] is gbuf's generator, computed before any lighting from what the G-buffer holds (the rule is
+//! written at [`Smoothness`]). [`coarse_gbuffer`] is what coarse shading lights: every covered sample of a shared
+//! pixel carries its representative's surface (`broadcast`: everything; `lighting`: everything but its own
+//! albedo, the lighting computed once and multiplied by each pixel's own albedo, as decoupled engines do). Lit by
+//! the resolve it gives the coarse-shaded image, and [`evaluations`] counts what the coarse resolve evaluates.
+
+use crate::base::mask::EdgeMask;
+use crate::error::{Error, Result};
+use crate::gbuffer::{Attribute, GBuffer};
+
+/// One evaluation per `w × h` pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Rate {
+    /// Full rate.
+    R1x1,
+    /// 1 wide, 2 tall.
+    R1x2,
+    /// 2 wide, 1 tall.
+    R2x1,
+    /// 2 × 2.
+    R2x2,
+    /// 2 wide, 4 tall (an additional rate).
+    R2x4,
+    /// 4 wide, 2 tall (an additional rate).
+    R4x2,
+    /// 4 × 4 (an additional rate).
+    R4x4,
+}
+
+impl Rate {
+    /// Every rate, finest first.
+    pub const ALL: [Rate; 7] = [Rate::R1x1, Rate::R1x2, Rate::R2x1, Rate::R2x2, Rate::R2x4, Rate::R4x2, Rate::R4x4];
+
+    /// Coarse-pixel width and height in pixels.
+    #[must_use]
+    pub fn size(self) -> (u32, u32) {
+        match self {
+            Rate::R1x1 => (1, 1),
+            Rate::R1x2 => (1, 2),
+            Rate::R2x1 => (2, 1),
+            Rate::R2x2 => (2, 2),
+            Rate::R2x4 => (2, 4),
+            Rate::R4x2 => (4, 2),
+            Rate::R4x4 => (4, 4),
+        }
+    }
+
+    /// The rate of a `w × h` coarse pixel, limited to the rates allowed: with `extra` (D3D12's
+    /// `AdditionalShadingRatesSupported`) up to 4 × 4, else up to 2 × 2; a side of 4 against a side of 1 (no such
+    /// rate) becomes 2.
+    #[must_use]
+    pub fn fit(w: u32, h: u32, extra: bool) -> Rate {
+        let cap = if extra { 4 } else { 2 };
+        let (mut w, mut h) = (w.clamp(1, cap), h.clamp(1, cap));
+        if w == 4 && h == 1 {
+            w = 2;
+        }
+        if h == 4 && w == 1 {
+            h = 2;
+        }
+        match (w, h) {
+            (1, 1) => Rate::R1x1,
+            (1, _) => Rate::R1x2,
+            (_, 1) => Rate::R2x1,
+            (2, 2) => Rate::R2x2,
+            (2, _) => Rate::R2x4,
+            (_, 2) => Rate::R4x2,
+            _ => Rate::R4x4,
+        }
+    }
+
+    /// D3D12's `D3D12_SHADING_RATE` value (and Vulkan's fragment-shading-rate attachment texel): `log2(w) << 2 |
+    /// log2(h)`.
+    #[must_use]
+    pub fn d3d12(self) -> u8 {
+        let (w, h) = self.size();
+        ((w.trailing_zeros() << 2) | h.trailing_zeros()) as u8
+    }
+
+    /// Name, `WxH`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Rate::R1x1 => "1x1",
+            Rate::R1x2 => "1x2",
+            Rate::R2x1 => "2x1",
+            Rate::R2x2 => "2x2",
+            Rate::R2x4 => "2x4",
+            Rate::R4x2 => "4x2",
+            Rate::R4x4 => "4x4",
+        }
+    }
+
+    /// The colour engines' shading-rate debug views use (full rate clear, coarser rates warmer): green 1×1, cyan
+    /// and blue for the 2-pixel rates, yellow 2×2, orange and red beyond.
+    #[must_use]
+    pub fn colour(self) -> [u8; 3] {
+        match self {
+            Rate::R1x1 => [40, 160, 60],
+            Rate::R1x2 => [40, 160, 200],
+            Rate::R2x1 => [60, 90, 220],
+            Rate::R2x2 => [230, 210, 50],
+            Rate::R2x4 => [240, 150, 40],
+            Rate::R4x2 => [230, 110, 40],
+            Rate::R4x4 => [210, 40, 40],
+        }
+    }
+}
+
+/// A shading-rate image.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Sri {
+    /// Tile size in pixels (8, 16 or 32).
+    pub tile: u32,
+    /// Tiles across and down (the image's size rounded up).
+    pub cols: u32,
+    /// Tile rows.
+    pub rows: u32,
+    /// One rate per tile, row-major.
+    pub rates: Vec<Rate>,
+}
+
+impl Sri {
+    /// Every tile at `rate`.
+    #[must_use]
+    pub fn uniform(width: u32, height: u32, tile: u32, rate: Rate) -> Sri {
+        let (cols, rows) = (width.div_ceil(tile), height.div_ceil(tile));
+        Sri { tile, cols, rows, rates: vec![rate; (cols * rows) as usize] }
+    }
+
+    /// The rate of pixel (x, y).
+    #[must_use]
+    pub fn at(&self, x: u32, y: u32) -> Rate {
+        self.rates[((y / self.tile) * self.cols + x / self.tile) as usize]
+    }
+
+    /// How many tiles have each rate, in [`Rate::ALL`]'s order.
+    #[must_use]
+    pub fn histogram(&self) -> [usize; 7] {
+        let mut h = [0; 7];
+        for r in &self.rates {
+            h[Rate::ALL.iter().position(|x| x == r).expect("a listed rate")] += 1;
+        }
+        h
+    }
+
+    /// The SRI as D3D12 consumes it: one `R8_UINT` texel per tile, `D3D12_SHADING_RATE` values, rows top first.
+    #[must_use]
+    pub fn d3d12_texels(&self) -> Vec<u8> {
+        self.rates.iter().map(|r| r.d3d12()).collect()
+    }
+
+    /// The SRI as a picture: each pixel in its tile's rate colour (interleaved RGB, `width × height`).
+    #[must_use]
+    pub fn picture(&self, width: u32, height: u32) -> Vec<u8> {
+        let mut out = Vec::with_capacity(width as usize * height as usize * 3);
+        for y in 0..height {
+            for x in 0..width {
+                let mut c = self.at(x, y).colour();
+                if x % self.tile == 0 || y % self.tile == 0 {
+                    c = c.map(|v| v / 2); // tile borders
+                }
+                out.extend_from_slice(&c);
+            }
+        }
+        out
+    }
+}
+
+/// Whether two neighbouring pixels may share an evaluation: gbuf's rule, on what a deferred renderer holds before
+/// it lights.
+///
+/// Two pixels are **smooth** when neither is an edge pixel of the mask, both are covered or both are not, they hold
+/// the same object and material IDs (when the frame has them), their depths differ by at most `depth_relative`
+/// of the nearer, their normals by at most `normal_deg` scaled by the surface's roughness (`normal_deg · (0.25 +
+/// roughness)`: a sharp highlight moves with a small turn of the normal, a rough lobe does not), and — when the
+/// coarse pixel's colour is broadcast — their albedos by at most `albedo` in every channel (broadcast copies one
+/// albedo to the whole coarse pixel, so albedo contrast shows directly). Specular amount and roughness must agree
+/// within `albedo` too (they shape the lobe). A coarse pixel is allowed when every pair of horizontally (for its
+/// width) or vertically (for its height) adjacent pixels inside it is smooth; a tile takes the coarsest rate every
+/// coarse pixel in it allows, per direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Smoothness {
+    /// Largest relative depth step.
+    pub depth_relative: f32,
+    /// Largest normal turn in degrees at roughness 0.75 (scaled by `0.25 + roughness`).
+    pub normal_deg: f32,
+    /// Largest albedo, specular and roughness difference (linear, any channel).
+    pub albedo: f32,
+    /// Whether albedo differences count (broadcast mode).
+    pub broadcast: bool,
+}
+
+impl Default for Smoothness {
+    fn default() -> Self {
+        Smoothness { depth_relative: 0.01, normal_deg: 4.0, albedo: 0.02, broadcast: true }
+    }
+}
+
+/// The pixel's representative sample: its first covered sample (sample 0 when covered).
+fn first_covered(gb: &GBuffer, p: usize) -> Option<usize> {
+    let s = gb.samples as usize;
+    (p * s..(p + 1) * s).find(|&i| gb.coverage[i])
+}
+
+fn smooth(gb: &GBuffer, mask: &EdgeMask, rule: &Smoothness, p: usize, q: usize) -> bool {
+    if mask.is_edge(p) || mask.is_edge(q) {
+        return false;
+    }
+    let (a, b) = match (first_covered(gb, p), first_covered(gb, q)) {
+        (None, None) => return true,
+        (Some(a), Some(b)) => (a, b),
+        _ => return false,
+    };
+    let same = |v: &Option<Vec<u32>>| v.as_ref().is_none_or(|v| v[a] == v[b]);
+    if !same(&gb.material_id) || !same(&gb.object_id) {
+        return false;
+    }
+    if let Some(d) = &gb.depth {
+        if (d[a] - d[b]).abs() > rule.depth_relative * d[a].abs().min(d[b].abs()) {
+            return false;
+        }
+    }
+    let rough = gb.roughness.as_ref().map_or(0.75, |r| r[a].min(r[b]).clamp(0.0, 1.0));
+    if let Some(n) = &gb.normal {
+        let cos = n[a].normalize_or_zero().dot(n[b].normalize_or_zero()).clamp(-1.0, 1.0);
+        if cos.acos().to_degrees() > rule.normal_deg * (0.25 + rough) {
+            return false;
+        }
+    }
+    let close = |v: &Option<Vec<f32>>| v.as_ref().is_none_or(|v| (v[a] - v[b]).abs() <= rule.albedo);
+    if !close(&gb.specular) || !close(&gb.roughness) {
+        return false;
+    }
+    if rule.broadcast {
+        if let Some(al) = &gb.albedo {
+            if (al[a] - al[b]).abs().max_element() > rule.albedo {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// gbuf's SRI of `gb` (tile size `tile`: 8, 16 or 32), from the edge `mask` and the G-buffer alone ([`Smoothness`]);
+/// `extra` allows the rates beyond 2 × 2.
+pub fn gbuffer_sri(gb: &GBuffer, mask: &EdgeMask, tile: u32, extra: bool, rule: &Smoothness) -> Result<Sri> {
+    if ![8, 16, 32].contains(&tile) {
+        return Err(Error::Argument(format!("shading-rate tile size {tile}: use 8, 16 or 32")));
+    }
+    if (mask.width, mask.height) != (gb.width, gb.height) {
+        return Err(Error::Mismatch("the edge mask is not the G-buffer's size".into()));
+    }
+    let (w, h) = (gb.width, gb.height);
+    let mut sri = Sri::uniform(w, h, tile, Rate::R1x1);
+    let cap = if extra { 4 } else { 2 };
+    let px = |x: u32, y: u32| (y * w + x) as usize;
+    for ty in 0..sri.rows {
+        for tx in 0..sri.cols {
+            let (x0, y0) = (tx * tile, ty * tile);
+            let (x1, y1) = ((x0 + tile).min(w), (y0 + tile).min(h));
+            // The widest coarse pixel every horizontal pair inside allows, and the tallest for vertical pairs.
+            let mut rw = cap;
+            while rw > 1 {
+                let ok = (y0..y1).all(|y| {
+                    (x0..x1.saturating_sub(1))
+                        .all(|x| (x - x0) % rw == rw - 1 || smooth(gb, mask, rule, px(x, y), px(x + 1, y)))
+                });
+                if ok {
+                    break;
+                }
+                rw /= 2;
+            }
+            let mut rh = cap;
+            while rh > 1 {
+                let ok = (y0..y1.saturating_sub(1)).all(|y| {
+                    (x0..x1).all(|x| (y - y0) % rh == rh - 1 || smooth(gb, mask, rule, px(x, y), px(x, y + 1)))
+                });
+                if ok {
+                    break;
+                }
+                rh /= 2;
+            }
+            sri.rates[(ty * sri.cols + tx) as usize] = Rate::fit(rw, rh, extra);
+        }
+    }
+    Ok(sri)
+}
+
+/// The coarse pixels of `sri` over a `width × height` image: for each, its pixels (row-major indices) in row order.
+fn coarse_pixels(sri: &Sri, width: u32, height: u32) -> impl Iterator<Item = Vec<usize>> + '_ {
+    let tiles = (0..sri.rows).flat_map(move |ty| (0..sri.cols).map(move |tx| (tx, ty)));
+    tiles.flat_map(move |(tx, ty)| {
+        let (cw, ch) = sri.rates[(ty * sri.cols + tx) as usize].size();
+        let (x0, y0) = (tx * sri.tile, ty * sri.tile);
+        let (x1, y1) = ((x0 + sri.tile).min(width), (y0 + sri.tile).min(height));
+        let blocks =
+            (y0..y1).step_by(ch as usize).flat_map(move |by| (x0..x1).step_by(cw as usize).map(move |bx| (bx, by)));
+        blocks.map(move |(bx, by)| {
+            let mut v = Vec::with_capacity((cw * ch) as usize);
+            for y in by..(by + ch).min(y1) {
+                for x in bx..(bx + cw).min(x1) {
+                    v.push((y * width + x) as usize);
+                }
+            }
+            v
+        })
+    })
+}
+
+/// Lighting evaluations of a coarse-shaded resolve: edge pixels as the mask shades them (one per covered sample),
+/// and one per coarse pixel that holds a covered non-edge pixel. With an all-1×1 SRI this is
+/// [`EdgeMask::evaluations`].
+#[must_use]
+pub fn evaluations(gb: &GBuffer, mask: &EdgeMask, sri: &Sri) -> u64 {
+    let covered = crate::detect::covered_per_pixel(gb);
+    let mut n = 0u64;
+    for block in coarse_pixels(sri, gb.width, gb.height) {
+        let mut shared = false;
+        for p in block {
+            if mask.is_edge(p) {
+                n += u64::from(mask.shade_count[p].min(covered[p]));
+            } else if covered[p] > 0 && mask.shade_count[p] > 0 {
+                shared = true;
+            }
+        }
+        n += u64::from(shared);
+    }
+    n
+}
+
+/// How a coarse pixel's evaluation reaches its pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CoarseMode {
+    /// The representative's colour for every pixel.
+    Broadcast,
+    /// The representative's lighting times each pixel's own albedo.
+    Lighting,
+}
+
+/// What a coarse-shaded resolve lights: `gb` with every covered sample of each non-edge pixel carrying its coarse
+/// pixel's representative surface (every shading input in `Broadcast`; all but the albedo in `Lighting`; IDs and
+/// motion stay the pixel's own). Resolving it with `mask` gives the coarse-shaded image; with an all-1×1 SRI it is
+/// `gb` itself.
+#[must_use]
+pub fn coarse_gbuffer(gb: &GBuffer, mask: &EdgeMask, sri: &Sri, mode: CoarseMode) -> GBuffer {
+    let s = gb.samples as usize;
+    // (representative sample, sample that takes its surface)
+    let mut pairs = Vec::new();
+    for block in coarse_pixels(sri, gb.width, gb.height) {
+        if block.len() < 2 {
+            continue;
+        }
+        let Some(rep) = block.iter().find(|&&p| !mask.is_edge(p) && first_covered(gb, p).is_some()) else {
+            continue;
+        };
+        let r = first_covered(gb, *rep).expect("found covered");
+        for &p in block.iter().filter(|&&p| p != *rep && !mask.is_edge(p)) {
+            pairs.extend((p * s..(p + 1) * s).filter(|&i| gb.coverage[i]).map(|i| (r, i)));
+        }
+    }
+    /// Copies the shading inputs of each pair's first sample to its second, plane by plane.
+    struct Share<'a> {
+        pairs: &'a [(usize, usize)],
+        keep_albedo: bool,
+    }
+    impl crate::gbuffer::PlaneVisitor for Share<'_> {
+        fn visit<T: Copy + Default + Send + Sync>(&mut self, attr: Attribute, plane: &mut [T]) {
+            if attr.is_id() || attr == Attribute::Motion || (self.keep_albedo && attr == Attribute::Albedo) {
+                return;
+            }
+            for &(from, to) in self.pairs {
+                plane[to] = plane[from];
+            }
+        }
+    }
+    let mut out = gb.clone();
+    // A representative is never a target: every copy reads an unchanged sample.
+    out.visit_planes_mut(&mut Share { pairs: &pairs, keep_albedo: mode == CoarseMode::Lighting });
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn rates_encode_as_d3d12_and_fit_the_allowed_set() {
+        let want = [0u8, 0x1, 0x4, 0x5, 0x6, 0x9, 0xa]; // D3D12_SHADING_RATE_1X1 … _4X4
+        assert_eq!(Rate::ALL.map(Rate::d3d12), want);
+        assert_eq!(Rate::fit(4, 4, false), Rate::R2x2);
+        assert_eq!(Rate::fit(4, 1, true), Rate::R2x1);
+        assert_eq!(Rate::fit(1, 4, true), Rate::R1x2);
+        assert_eq!(Rate::fit(4, 4, true), Rate::R4x4);
+        assert_eq!(Rate::fit(2, 4, true), Rate::R2x4);
+    }
+
+    #[test]
+    fn a_constant_gbuffer_is_coarsest_and_noise_is_full_rate() {
+        let (w, h) = (32u32, 32u32);
+        let n = (w * h) as usize;
+        let mut gb = GBuffer {
+            width: w,
+            height: h,
+            samples: 1,
+            sample_positions: vec![glam::Vec2::ZERO],
+            coverage: vec![true; n],
+            depth: Some(vec![5.0; n]),
+            normal: Some(vec![Vec3::Z; n]),
+            albedo: Some(vec![Vec3::splat(0.5); n]),
+            ..Default::default()
+        };
+        let mask = EdgeMask::filled(w, h, 1, 1);
+        let rule = Smoothness::default();
+        let sri = gbuffer_sri(&gb, &mask, 16, true, &rule).unwrap();
+        assert!(sri.rates.iter().all(|&r| r == Rate::R4x4), "{sri:?}");
+        assert_eq!(gbuffer_sri(&gb, &mask, 16, false, &rule).unwrap().rates[0], Rate::R2x2);
+        // Evaluations: one per 4×4 coarse pixel.
+        assert_eq!(evaluations(&gb, &mask, &sri), (n / 16) as u64);
+        // Noise in the albedo: full rate when broadcast, still coarse when only the lighting is shared.
+        let mut rng = crate::base::rng::SplitMix64::new(3);
+        gb.albedo = Some((0..n).map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32())).collect());
+        assert!(gbuffer_sri(&gb, &mask, 16, true, &rule).unwrap().rates.iter().all(|&r| r == Rate::R1x1));
+        let lighting = Smoothness { broadcast: false, ..rule };
+        assert!(gbuffer_sri(&gb, &mask, 16, true, &lighting).unwrap().rates.iter().all(|&r| r == Rate::R4x4));
+        // Noise in the normals: full rate in both modes.
+        gb.normal = Some((0..n).map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), 1.0).normalize()).collect());
+        assert!(gbuffer_sri(&gb, &mask, 16, true, &lighting).unwrap().rates.iter().all(|&r| r == Rate::R1x1));
+    }
+
+    #[test]
+    fn an_all_full_rate_sri_changes_nothing_and_edges_keep_their_samples() {
+        let gb = crate::scene::render(crate::scene::SceneName::Room, 40, 24, 4).unwrap();
+        let mask = crate::detect::detect(&gb, crate::detect::Detector::Lauritzen, &Default::default()).unwrap();
+        let full = Sri::uniform(gb.width, gb.height, 8, Rate::R1x1);
+        assert_eq!(coarse_gbuffer(&gb, &mask, &full, CoarseMode::Broadcast), gb);
+        assert_eq!(evaluations(&gb, &mask, &full), mask.evaluations(&crate::detect::covered_per_pixel(&gb)));
+        // 2×2 everywhere: edge pixels keep their own samples; every shared pixel holds its representative's normal.
+        let coarse = Sri::uniform(gb.width, gb.height, 8, Rate::R2x2);
+        let c = coarse_gbuffer(&gb, &mask, &coarse, CoarseMode::Lighting);
+        let s = gb.samples as usize;
+        for p in 0..gb.pixel_count() {
+            if mask.is_edge(p) {
+                assert_eq!(
+                    c.normal.as_ref().unwrap()[p * s..(p + 1) * s],
+                    gb.normal.as_ref().unwrap()[p * s..(p + 1) * s]
+                );
+            }
+        }
+        assert_eq!(c.albedo, gb.albedo, "lighting mode keeps each pixel's albedo");
+        assert!(evaluations(&gb, &mask, &coarse) < evaluations(&gb, &mask, &full));
+    }
+}
