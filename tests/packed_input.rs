@@ -804,3 +804,43 @@ fn renderdoc_views_show_gbufs_decode_of_every_sample_in_renderdocs_own_replay() 
         }
     }
 }
+
+#[test]
+fn two_captures_compare_as_frames_and_convert_alike() {
+    if !support::renderdoc_has() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (rdc, folder) = (fixture("engine_4x.rdc"), fixture("engine_4x"));
+    let (layout, scene) = (fixture("engine_4x/engine.toml"), fixture("engine_4x/scene.json"));
+    let common = ["--input-layout", layout.to_str().unwrap(), "--scene", scene.to_str().unwrap()];
+    let compare = |a: &Path, b: &Path, extra: &[&str]| -> serde_json::Value {
+        let mut args = vec!["compare", a.to_str().unwrap(), b.to_str().unwrap(), "--json"];
+        args.extend(common);
+        args.extend(extra);
+        let o = gbuf(dir.path(), &args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    // The capture against the folder saved from the same render: nothing differs, lit or not.
+    let same = compare(&rdc, &folder, &[]);
+    assert_eq!(same["attributes"]["normal"]["max_deg"], 0.0);
+    assert_eq!(same["attributes"]["ids"][0]["mismatches"], 0);
+    assert_eq!((same["lit"]["rmse"].as_f64(), same["lit"]["flip_ldr"].as_f64()), (Some(0.0), Some(0.0)));
+    // The finished frame against the capture before its last draw (the rod): the rod's samples differ, and so does
+    // the lit image.
+    let before = compare(&folder, &rdc, &["--event", "166"]);
+    let mismatches = before["attributes"]["ids"][0]["mismatches"].as_u64().unwrap();
+    assert!(mismatches > 0 && mismatches < 1000, "{before}");
+    assert!(before["lit"]["flip_ldr"].as_f64().unwrap() > 0.0, "{before}");
+    // Converted to the canonical EXR, the capture and the folder give the same bytes.
+    let convert = |input: &Path, out: &str| {
+        let out = dir.path().join(out);
+        let mut args = vec!["convert", input.to_str().unwrap(), "-o", out.to_str().unwrap()];
+        args.extend(common);
+        let o = gbuf(dir.path(), &args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        std::fs::read(out).unwrap()
+    };
+    assert!(convert(&rdc, "a.exr") == convert(&folder, "b.exr"), "the converted EXRs differ");
+}

@@ -54,6 +54,22 @@ pub struct Args {
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
+    /// Compare two frames instead of two images: both are packed render targets of this layout (folders or
+    /// RenderDoc captures). Also implied when either file is a RenderDoc capture (`.rdc`) or a dump gbuf reads:
+    /// per-attribute differences (angle for normals, relative for depth, mismatches for IDs) and the FLIP of the two
+    /// frames lit alike.
+    #[arg(long = "input-layout", value_name = "NAME|PATH")]
+    pub input_layout: Option<String>,
+    /// Frames: the sidecar (camera, lights) of both [default: the one found beside each].
+    #[arg(long, value_name = "FILE")]
+    pub scene: Option<PathBuf>,
+    /// Frames from RenderDoc captures: the event read in both [default: each capture's last draw writing colour
+    /// targets].
+    #[arg(long, value_name = "EID", conflicts_with = "marker")]
+    pub event: Option<u32>,
+    /// Frames from RenderDoc captures: the last draw inside this marker region, in both.
+    #[arg(long, value_name = "NAME")]
+    pub marker: Option<String>,
 }
 
 /// An exit status other than 1, with the message to print (`gbuf: <message>`).
@@ -96,6 +112,9 @@ struct Output<'a> {
 
 /// Runs `gbuf compare`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if args.input_layout.is_some() || [&args.reference, &args.test].iter().any(|p| is_frame(p)) {
+        return compare_frames(&args);
+    }
     anyhow::ensure!(args.ppd.is_finite() && args.ppd > 0.0, "--ppd must be a positive number, got {}", args.ppd);
     anyhow::ensure!(
         args.exposure.is_finite() && args.exposure > 0.0,
@@ -303,5 +322,88 @@ fn append_csv(path: &Path, args: &Args, c: &Comparison) -> anyhow::Result<()> {
     ])?;
     let bytes = w.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?;
     gbuf::base::files::write_bytes_atomic(path, &bytes)?;
+    Ok(())
+}
+
+/// Is `path` a frame rather than an image: a RenderDoc capture, a packed-targets folder or a file gbuf reads as a
+/// dump (not an EXR image: EXRs are images here unless `--input-layout` says otherwise)?
+fn is_frame(path: &Path) -> bool {
+    gbuf::io::rdc::is_capture(path) || gbuf::layout::targets::is_packed_dir(path)
+}
+
+/// What `gbuf compare` of two frames measures.
+#[derive(serde::Serialize)]
+struct FrameComparison {
+    /// The reference frame.
+    reference: String,
+    /// The test frame.
+    test: String,
+    /// Per attribute, the test against the reference.
+    attributes: gbuf::measure::gbuffer::AttributeErrors,
+    /// Both frames lit alike (the reference's lights, the same BRDF and detector): the test's image against the
+    /// reference's.
+    lit: gbuf::measure::image::ErrorSet,
+    /// The lights' source.
+    lights: String,
+}
+
+/// `gbuf compare A B` of two frames: per-attribute differences and the lit images' FLIP.
+fn compare_frames(args: &Args) -> anyhow::Result<()> {
+    if args.fail_above.is_some() || args.warn_above.is_some() || args.error_map.is_some() || args.csv.is_some() {
+        crate::usage!("--fail-above, --warn-above, --error-map and --csv apply to images; two frames are compared");
+    }
+    let opts = gbuf::io::LoadOptions {
+        input_layout: args.input_layout.clone(),
+        sidecar: args.scene.clone(),
+        capture: gbuf::io::rdc::Selection { event: args.event, marker: args.marker.clone() },
+        limits: super::common::read_limits(args.max_memory, false),
+        ..Default::default()
+    };
+    let load = |p: &Path| -> anyhow::Result<gbuf::io::Loaded> {
+        let l = gbuf::load(p, &opts).map_err(|e| file_error(e, format!("cannot read {}", p.display())))?;
+        super::common::print_warnings(p, &l);
+        Ok(l)
+    };
+    let (a, b) = (load(&args.reference)?, load(&args.test)?);
+    let pair = format!("{} vs {}", args.reference.display(), args.test.display());
+    let attributes =
+        gbuf::measure::gbuffer::compare(&a.gbuffer, &b.gbuffer).map_err(|e| status(3, format!("{pair}: {e}")))?;
+    let (lights, source) = super::report::frame_lights(&a, None, 1);
+    let lighting = super::common::LightingArgs::default().choose(&a.gbuffer.attributes());
+    let cfg = lighting.apply(gbuf::resolve::ResolveConfig::default());
+    let lit = |gb: &gbuf::GBuffer| -> anyhow::Result<gbuf::image::HdrImage> {
+        let mask = gbuf::detect::detect(gb, gbuf::detect::Detector::Lauritzen, &Default::default())?;
+        Ok(gbuf::resolve::resolve(gb, &lights, &mask, &cfg)?.image)
+    };
+    let viewing = Viewing { tone_map: args.tonemap, exposure: args.exposure, pixels_per_degree: args.ppd };
+    let lit = gbuf::measure::image::error_set(&lit(&a.gbuffer)?, &lit(&b.gbuffer)?, Some(&viewing));
+    let c = FrameComparison {
+        reference: args.reference.display().to_string(),
+        test: args.test.display().to_string(),
+        attributes,
+        lit,
+        lights: source,
+    };
+    if args.json {
+        return print_json(&c);
+    }
+    let g = &a.gbuffer;
+    println!(
+        "{pair}: {}×{}×{} frames, {} covered samples compared",
+        g.width, g.height, g.samples, c.attributes.covered_samples
+    );
+    print!("{}", super::roundtrip::attribute_lines(&c.attributes));
+    if !c.attributes.missing.is_empty() {
+        println!("  only in {}: {}", args.reference.display(), c.attributes.missing.join(", "));
+    }
+    println!(
+        "lit alike ({}, {} lights: {}): RMSE {:.4e}, LDR-FLIP {}, HDR-FLIP {}",
+        cfg.brdf.name(),
+        lights.len(),
+        c.lights,
+        c.lit.rmse,
+        c.lit.flip_ldr.map_or("-".into(), |v| format!("{v:.4}")),
+        c.lit.flip_hdr.map_or("-".into(), |v| format!("{v:.4}"))
+    );
     Ok(())
 }

@@ -60,6 +60,55 @@ fn worst(err: f64, s: &SampleAt) -> String {
     }
 }
 
+/// The per-attribute lines of an [`AttributeErrors`] (`gbuf roundtrip`, and `gbuf compare` of two frames).
+pub fn attribute_lines(e: &gbuf::measure::gbuffer::AttributeErrors) -> String {
+    use std::fmt::Write as _;
+    let mut out = String::new();
+    if let Some(n) = &e.normal {
+        let _ = writeln!(
+            out,
+            "  normal         mean {:.4}°  p95 {:.4}°  max {:.4}°{}",
+            n.mean_deg,
+            n.p95_deg,
+            n.max_deg,
+            worst(n.max_deg, &n.worst)
+        );
+        if n.skipped_invalid > 0 {
+            let _ = writeln!(
+                out,
+                "                 ({} samples with a zero or non-unit normal in the dump left out)",
+                n.skipped_invalid
+            );
+        }
+    }
+    if let Some(d) = &e.depth {
+        let _ = writeln!(
+            out,
+            "  depth          rel max {:.3e}  rel mean {:.3e}  abs max {:.3e}{}",
+            d.rel_max,
+            d.rel_mean,
+            d.abs_max,
+            worst(d.rel_max, &d.worst)
+        );
+    }
+    for v in e.albedo.iter().chain(&e.position).chain(&e.motion).chain(&e.scalars) {
+        let _ = writeln!(
+            out,
+            "  {:<14} max abs {:.3e}  mean abs {:.3e}  rmse {:.3e}{}",
+            v.attribute,
+            v.max_abs,
+            v.mean_abs,
+            v.rmse,
+            worst(v.max_abs, &v.worst)
+        );
+    }
+    for id in &e.ids {
+        let first = id.first.as_ref().map(|s| format!("  first at {}", at(s))).unwrap_or_default();
+        let _ = writeln!(out, "  {:<14} {} mismatches{first}", id.attribute, id.mismatches);
+    }
+    out
+}
+
 fn print_text(row: &Row) -> anyhow::Result<()> {
     let r = &row.roundtrip;
     use std::io::Write;
@@ -70,48 +119,7 @@ fn print_text(row: &Row) -> anyhow::Result<()> {
         "{}: {}×{}×{} through layout {} ({} B/sample), {} covered samples",
         row.file, r.size[0], r.size[1], r.size[2], r.layout, r.bytes_per_sample, e.covered_samples
     )?;
-    if let Some(n) = &e.normal {
-        writeln!(
-            out,
-            "  normal         mean {:.4}°  p95 {:.4}°  max {:.4}°{}",
-            n.mean_deg,
-            n.p95_deg,
-            n.max_deg,
-            worst(n.max_deg, &n.worst)
-        )?;
-        if n.skipped_invalid > 0 {
-            writeln!(
-                out,
-                "                 ({} samples with a zero or non-unit normal in the dump left out)",
-                n.skipped_invalid
-            )?;
-        }
-    }
-    if let Some(d) = &e.depth {
-        writeln!(
-            out,
-            "  depth          rel max {:.3e}  rel mean {:.3e}  abs max {:.3e}{}",
-            d.rel_max,
-            d.rel_mean,
-            d.abs_max,
-            worst(d.rel_max, &d.worst)
-        )?;
-    }
-    for v in e.albedo.iter().chain(&e.position).chain(&e.motion).chain(&e.scalars) {
-        writeln!(
-            out,
-            "  {:<14} max abs {:.3e}  mean abs {:.3e}  rmse {:.3e}{}",
-            v.attribute,
-            v.max_abs,
-            v.mean_abs,
-            v.rmse,
-            worst(v.max_abs, &v.worst)
-        )?;
-    }
-    for id in &e.ids {
-        let first = id.first.as_ref().map(|s| format!("  first at {}", at(s))).unwrap_or_default();
-        writeln!(out, "  {:<14} {} mismatches{first}", id.attribute, id.mismatches)?;
-    }
+    out.write_all(attribute_lines(e).as_bytes())?;
     if let Some(t) = &r.material_table {
         let how = match (t.key.as_str(), t.lossless) {
             ("material-id", _) if t.from_sidecar > 0 => {
