@@ -4,7 +4,6 @@
 //! how far the search's prediction was off, and a layout file `--layout` accepts.
 
 use crate::cli::common::{print_json, say_lighting, FramesArgs, LightingArgs, Resolution};
-use crate::cli::report::frame_lights;
 use anyhow::Context;
 use gbuf::analysis::aggregate::Over;
 use gbuf::analysis::budget::{search_frames, BudgetConfig, BudgetResult};
@@ -40,13 +39,9 @@ pub struct Args {
     /// Over several dumps: rank each candidate by its mean or its worst frame.
     #[arg(long, value_name = "HOW", default_value = "worst")]
     pub over: Over,
-    /// Scatter N point lights (replacing the dump's own, if any); without it, the dump's or sidecar's lights, or 64
-    /// scattered when it brings none.
-    #[arg(long, value_name = "N")]
-    pub lights: Option<u32>,
-    /// Seed for scattered lights.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    /// The lights.
+    #[command(flatten)]
+    pub scatter: crate::cli::common::LightsArgs,
     /// The lighting model the candidates are measured under (the budget keeps the bits its BRDF reads).
     #[command(flatten)]
     pub lighting: LightingArgs,
@@ -87,7 +82,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // handed to the search as its first visit.
     let load_frame = |i: usize| -> anyhow::Result<(gbuf::GBuffer, Vec<gbuf::Light>)> {
         let loaded = args.input.load(&paths[i])?;
-        let (lights, _) = frame_lights(&loaded, args.lights, args.seed);
+        let (lights, _) = args.scatter.of(&loaded);
         Ok((loaded.gbuffer, lights))
     };
     let first = load_frame(0)?;

@@ -233,6 +233,26 @@ pub fn print_warnings(file: &std::path::Path, loaded: &Loaded) {
     }
 }
 
+/// `--lights N --seed S`: which lights light a frame ([`crate::cli::report::frame_lights`]).
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct LightsArgs {
+    /// Scatter N point lights (replacing the dump's own, if any); without it, the dump's or sidecar's lights, or 64
+    /// scattered when it brings none.
+    #[arg(long, value_name = "N")]
+    pub lights: Option<u32>,
+    /// Seed of the scattered lights.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+impl LightsArgs {
+    /// The lights of `loaded` and where they come from.
+    #[must_use]
+    pub fn of(&self, loaded: &gbuf::io::Loaded) -> (Vec<gbuf::Light>, String) {
+        crate::cli::report::frame_lights(loaded, self.lights, self.seed)
+    }
+}
+
 /// One frame of several: a dump, or frame `frame` of a file-set folder holding a sequence.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct FrameRef {

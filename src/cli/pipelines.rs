@@ -3,7 +3,6 @@
 //! frame, in one table.
 
 use crate::cli::common::{print_json, InputArgs, ThresholdArgs};
-use crate::cli::report::frame_lights;
 use anyhow::Context;
 use gbuf::analysis::pipelines::{pipelines, PipelinesConfig};
 use gbuf::detect::{self, Detector};
@@ -43,13 +42,9 @@ pub struct Args {
     /// Lighting model of the resolve and the reference.
     #[command(flatten)]
     pub lighting: crate::cli::common::LightingArgs,
-    /// Scatter N point lights (replacing the dump's own, if any); without it, the dump's or sidecar's lights, or 64
-    /// scattered when it brings none.
-    #[arg(long, value_name = "N")]
-    pub lights: Option<u32>,
-    /// Seed of the scattered lights.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    /// The lights.
+    #[command(flatten)]
+    pub scatter: crate::cli::common::LightsArgs,
     /// Also compute LDR-FLIP and HDR-FLIP of every pipeline's image (Reinhard tone map, exposure 1).
     #[arg(long)]
     pub flip: bool,
@@ -98,7 +93,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let file = args.input.file.display().to_string();
     let pb = crate::cli::spinner(format!("loading {file}"));
     let loaded = args.input.load().with_context(|| format!("loading {file}"))?;
-    let (lights, lights_source) = frame_lights(&loaded, args.lights, args.seed);
+    let (lights, lights_source) = args.scatter.of(&loaded);
     let gb = loaded.gbuffer;
     if args.heatmap.is_some() && !gb.has(gbuf::gbuffer::Attribute::PrimitiveId) {
         anyhow::bail!(

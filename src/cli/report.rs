@@ -37,13 +37,9 @@ pub struct SweepArgs {
     /// Timing runs per stage (medians and min–max are reported).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=50))]
     pub runs: u32,
-    /// Scatter N point lights (replacing the dump's own, if any); without it, the dump's or sidecar's lights, or 64
-    /// scattered when it brings none.
-    #[arg(long, value_name = "N")]
-    pub lights: Option<u32>,
-    /// Seed for scattered lights.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    /// The lights.
+    #[command(flatten)]
+    pub scatter: crate::cli::common::LightsArgs,
     /// Which rows get FLIP: `decisive` (each layout's errors with the first detector, each detector's AA
     /// error), `all`, or `none`.
     #[arg(long, value_name = "WHICH", default_value = "decisive")]
@@ -414,7 +410,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let next = |i: usize| -> anyhow::Result<FrameInput> {
         let p = &paths[i];
         let loaded = args.input.load(p)?;
-        let (lights, lights_source) = frame_lights(&loaded, args.sweep.lights, args.sweep.seed);
+        let (lights, lights_source) = args.sweep.scatter.of(&loaded);
         let single = match &args.single {
             Some(s) => {
                 let one = args.input.load_file(s)?.gbuffer;

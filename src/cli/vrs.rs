@@ -3,7 +3,6 @@
 //! evaluations it saves and what it costs in the image (`gbuf::analysis::vrs`).
 
 use crate::cli::common::{print_json, InputArgs, ThresholdArgs};
-use crate::cli::report::frame_lights;
 use anyhow::Context;
 use gbuf::analysis::vrs::{vrs, VrsConfig};
 use gbuf::detect::rate::CoarseMode;
@@ -37,13 +36,9 @@ pub struct Args {
     /// Lighting model of the resolve and the reference.
     #[command(flatten)]
     pub lighting: crate::cli::common::LightingArgs,
-    /// Scatter N point lights (replacing the dump's own); without it, the dump's or sidecar's lights, or 64
-    /// scattered when it brings none.
-    #[arg(long, value_name = "N")]
-    pub lights: Option<u32>,
-    /// Seed of the scattered lights.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    /// The lights.
+    #[command(flatten)]
+    pub scatter: crate::cli::common::LightsArgs,
     /// Skip FLIP (numerical errors only).
     #[arg(long)]
     pub no_flip: bool,
@@ -69,7 +64,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let file = args.input.file.display().to_string();
     let loaded = args.input.load().with_context(|| format!("loading {file}"))?;
-    let (lights, _) = frame_lights(&loaded, args.lights, args.seed);
+    let (lights, _) = args.scatter.of(&loaded);
     let gb = loaded.gbuffer;
     let lighting = args.lighting.choose(&gb.attributes());
     if !args.json {
