@@ -998,3 +998,64 @@ fn spherical_through_the_drivers_transcendentals_is_within_its_measured_bound() 
         }
     }
 }
+
+/// A stand-in for the prefix RenderDoc inserts after `#version` in a custom display shader, declaring what its
+/// documentation promises (the `RD_*_BINDING` slots, `RD_TextureType_*` and the `RD_*()` helpers over a uniform
+/// block at binding 0), so that glslang can compile the views outside RenderDoc. (RenderDoc's own compile of them
+/// runs in `tests/packed_input.rs`, in its replay.)
+const RD_STAND_IN: &str = "
+#define RD_FLOAT_2D_BINDING 2
+#define RD_FLOAT_2D_ARRAY_BINDING 6
+#define RD_FLOAT_2DMS_BINDING 10
+#define RD_FLOAT_2DMS_ARRAY_BINDING 11
+#define RD_UINT_2D_BINDING 22
+#define RD_UINT_2D_ARRAY_BINDING 26
+#define RD_UINT_2DMS_BINDING 30
+#define RD_UINT_2DMS_ARRAY_BINDING 31
+const uint RD_TextureType_2D = 2u;
+const uint RD_TextureType_2D_Array = 6u;
+const uint RD_TextureType_2DMS = 10u;
+const uint RD_TextureType_2DMS_Array = 11u;
+layout(binding = 0, std140) uniform RdStandIn { uvec4 dim; uint mip; uint type; uint slice; int sample_; } rd_stand_in;
+uint RD_TextureType() { return rd_stand_in.type; }
+int RD_SelectedSample() { return rd_stand_in.sample_; }
+uint RD_SelectedMip() { return rd_stand_in.mip; }
+uint RD_SelectedSliceFace() { return rd_stand_in.slice; }
+";
+
+#[test]
+fn renderdoc_views_of_every_layout_compile_with_glslang() {
+    if !support::tool_has("glslangValidator") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mut compiled = 0;
+    for layout in Layout::builtins().into_iter().chain(Layout::visibility_builtins()) {
+        let Ok(views) = gbuf::layout::renderdoc::views(&layout, Some((0.1, 100.0))) else {
+            assert!(layout.indirection().is_some(), "{}: no views", layout.name());
+            continue;
+        };
+        for v in &views.views {
+            let (version, body) = v.code.split_once('\n').unwrap();
+            // The OpenGL and the Vulkan spelling (glslang's -V defines VULKAN, as RenderDoc's Vulkan prefix does).
+            let spv = dir.path().join("out.spv");
+            let spv = spv.to_str().unwrap();
+            for (vulkan, flags) in [(false, vec!["-S", "frag"]), (true, vec!["-V", "-S", "frag", "-o", spv])] {
+                let src = format!("{version}\n{RD_STAND_IN}\n{body}");
+                let path = dir.path().join(format!("{}{}.frag", v.file, if vulkan { ".vk" } else { "" }));
+                std::fs::write(&path, src).unwrap();
+                let o = Command::new("glslangValidator").args(&flags).arg(&path).output().unwrap();
+                assert!(
+                    o.status.success(),
+                    "{} ({}) does not compile:\n{}{}",
+                    v.file,
+                    if vulkan { "Vulkan" } else { "OpenGL" },
+                    String::from_utf8_lossy(&o.stdout),
+                    String::from_utf8_lossy(&o.stderr)
+                );
+                compiled += 1;
+            }
+        }
+    }
+    assert!(compiled >= 40, "only {compiled} views compiled");
+}
