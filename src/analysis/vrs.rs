@@ -2,6 +2,10 @@
 //! ([`crate::detect::rate`]), the lighting evaluations it leaves (against the full-rate resolve with the same edge
 //! mask) and what it costs in the image, against the full-rate image and against the every-sample reference.
 //!
+//! Beside it, the **oracle**: from the f64 reference's error at every rate, tile by tile (the displayed
+//! difference, summed), the SRI with the least error at gbuf's SRI's evaluations ([`rate::cheapest_sri`]). It is a
+//! bound for generators, not a product: it needs the reference.
+//!
 //! The coarse image is the resolve of [`rate::coarse_gbuffer`]: the frame whose shared pixels carry their coarse
 //! pixel's representative surface, lit with the same mask. It is the image a coarse-shading resolve gives; the
 //! evaluations are counted by [`rate::evaluations`] (this resolve still evaluates every pixel, so the time it
@@ -41,7 +45,7 @@ pub struct VrsConfig {
 /// One SRI's answer.
 #[derive(Clone, Debug, Serialize)]
 pub struct VrsRow {
-    /// The generator (`gbuffer`).
+    /// The generator (`gbuffer`, or `oracle`: the least error against the reference at `gbuffer`'s evaluations).
     pub generator: String,
     /// Tile size in pixels.
     pub tile: u32,
@@ -76,7 +80,7 @@ pub struct VrsOutput {
     pub full_rate_vs_reference: ErrorSet,
     /// One row per tile size.
     pub rows: Vec<VrsRow>,
-    /// The SRIs, in row order.
+    /// The SRIs, in row order (per tile size: gbuf's, then the oracle's).
     #[serde(skip)]
     pub sris: Vec<Sri>,
     /// The coarse images, in row order.
@@ -109,29 +113,97 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
         sris: Vec::new(),
         images: Vec::new(),
     };
+    // The frame coarse at each rate everywhere: a tile's image under any SRI is its image under its own rate
+    // everywhere (coarse pixels never cross tiles, and every tile size is a multiple of the widest coarse pixel).
+    let rates: Vec<Rate> = if cfg.extra_rates { Rate::ALL.to_vec() } else { Rate::ALL[..4].to_vec() };
+    let mut uniform = Vec::with_capacity(rates.len());
+    for &r in &rates {
+        let image = if r == Rate::R1x1 {
+            full.clone()
+        } else {
+            let sri = Sri::uniform(gb.width, gb.height, 8, r);
+            resolve::resolve(&rate::coarse_gbuffer(gb, &mask, &sri, cfg.mode), lights, &mask, &cfg.resolve)?.image
+        };
+        uniform.push(displayed_errors(&image, &reference));
+    }
     for &tile in &cfg.tiles {
         let sri = rate::gbuffer_sri(gb, &mask, tile, cfg.extra_rates, &rule)?;
         let coarse = rate::coarse_gbuffer(gb, &mask, &sri, cfg.mode);
         let image = resolve::resolve(&coarse, lights, &mask, &cfg.resolve)?.image;
         let evaluations = rate::evaluations(gb, &mask, &sri);
-        let rates = Rate::ALL
-            .iter()
-            .zip(sri.histogram())
-            .filter(|(_, n)| *n > 0)
-            .map(|(r, n)| (r.name().to_string(), n))
-            .collect();
         out.rows.push(VrsRow {
             generator: "gbuffer".into(),
             tile,
-            rates,
+            rates: histogram(&sri),
             evaluations,
             evaluations_per_pixel: evaluations as f64 / pixels,
             saved: if full_evals == 0 { 0.0 } else { 1.0 - evaluations as f64 / full_evals as f64 },
             vs_full_rate: error_set(&full, &image, v),
             vs_reference: error_set(&reference, &image, v),
         });
+        // The oracle at gbuf's budget: per tile the rates' errors against the reference and their evaluations.
+        let tiles = sri.rates.len();
+        let (mut error, mut evals) = (vec![Vec::new(); tiles], vec![Vec::new(); tiles]);
+        for (k, &r) in rates.iter().enumerate() {
+            let at = Sri::uniform(gb.width, gb.height, tile, r);
+            let per_tile = tile_sums(&uniform[k], gb.width, gb.height, tile);
+            for (t, n) in rate::tile_evaluations(gb, &mask, &at).into_iter().enumerate() {
+                evals[t].push(n);
+                error[t].push(per_tile[t]);
+            }
+        }
+        let objective = |s: &Sri| -> f64 {
+            s.rates.iter().enumerate().map(|(t, r)| error[t][rates.iter().position(|x| x == r).expect("a rate")]).sum()
+        };
+        // gbuf's own SRI is a candidate: the oracle is never worse than it at its budget.
+        let oracle = rate::cheapest_sri(&sri, &rates, &error, &evals, evaluations)
+            .filter(|o| objective(o) <= objective(&sri))
+            .unwrap_or_else(|| sri.clone());
+        let o_image =
+            resolve::resolve(&rate::coarse_gbuffer(gb, &mask, &oracle, cfg.mode), lights, &mask, &cfg.resolve)?.image;
+        let o_evals = rate::evaluations(gb, &mask, &oracle);
+        out.rows.push(VrsRow {
+            generator: "oracle".into(),
+            tile,
+            rates: histogram(&oracle),
+            evaluations: o_evals,
+            evaluations_per_pixel: o_evals as f64 / pixels,
+            saved: if full_evals == 0 { 0.0 } else { 1.0 - o_evals as f64 / full_evals as f64 },
+            vs_full_rate: error_set(&full, &o_image, v),
+            vs_reference: error_set(&reference, &o_image, v),
+        });
         out.sris.push(sri);
         out.images.push(image);
+        out.sris.push(oracle);
+        out.images.push(o_image);
     }
     Ok(out)
+}
+
+/// Tiles per rate of `sri` (rates no tile has are left out).
+fn histogram(sri: &Sri) -> Vec<(String, usize)> {
+    Rate::ALL.iter().zip(sri.histogram()).filter(|(_, n)| *n > 0).map(|(r, n)| (r.name().to_string(), n)).collect()
+}
+
+/// Per pixel, the squared difference of `image` and `reference` as displayed (the default tone map, summed over
+/// the channels): what the oracle minimises.
+fn displayed_errors(image: &HdrImage, reference: &HdrImage) -> Vec<f64> {
+    let tone = crate::image::ToneMap::default();
+    image
+        .rgb
+        .iter()
+        .zip(&reference.rgb)
+        .map(|(a, b)| (0..3).map(|c| f64::from(tone.apply(a[c]) - tone.apply(b[c])).powi(2)).sum::<f64>())
+        .collect()
+}
+
+/// `per_pixel` summed over each `tile × tile` tile (row-major).
+fn tile_sums(per_pixel: &[f64], width: u32, height: u32, tile: u32) -> Vec<f64> {
+    let cols = width.div_ceil(tile);
+    let mut out = vec![0.0; (cols * height.div_ceil(tile)) as usize];
+    for (p, e) in per_pixel.iter().enumerate() {
+        let (x, y) = (p as u32 % width, p as u32 / width);
+        out[((y / tile) * cols + x / tile) as usize] += e;
+    }
+    out
 }

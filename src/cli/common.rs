@@ -233,7 +233,24 @@ pub fn print_warnings(file: &std::path::Path, loaded: &Loaded) {
     }
 }
 
-/// `--lights N --seed S`: which lights light a frame ([`crate::cli::report::frame_lights`]).
+/// Point lights scattered on a frame that brings none (report, budget, pipelines, vrs, compare).
+pub const DEFAULT_LIGHTS: usize = 64;
+
+/// Lights of a loaded frame ([`gbuf::scene::choose_lights`]): `--lights N` scattered when given, else the dump's or
+/// sidecar's, else [`DEFAULT_LIGHTS`] scattered.
+pub fn frame_lights(loaded: &gbuf::io::Loaded, n: Option<u32>, seed: u64) -> (Vec<gbuf::Light>, String) {
+    let (lights, source) = gbuf::scene::choose_lights(
+        &loaded.gbuffer,
+        loaded.lights.as_deref(),
+        n.map(|n| n as usize),
+        Some(DEFAULT_LIGHTS),
+        seed,
+    )
+    .expect("a fallback light count");
+    (lights, source.to_string())
+}
+
+/// `--lights N --seed S`: which lights light a frame ([`frame_lights`]).
 #[derive(clap::Args, Debug, Clone, Copy)]
 pub struct LightsArgs {
     /// Scatter N point lights (replacing the dump's own, if any); without it, the dump's or sidecar's lights, or 64
@@ -249,7 +266,7 @@ impl LightsArgs {
     /// The lights of `loaded` and where they come from.
     #[must_use]
     pub fn of(&self, loaded: &gbuf::io::Loaded) -> (Vec<gbuf::Light>, String) {
-        crate::cli::report::frame_lights(loaded, self.lights, self.seed)
+        frame_lights(loaded, self.lights, self.seed)
     }
 }
 

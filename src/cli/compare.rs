@@ -368,7 +368,7 @@ fn compare_frames(args: &Args) -> anyhow::Result<()> {
     let pair = format!("{} vs {}", args.reference.display(), args.test.display());
     let attributes =
         gbuf::measure::gbuffer::compare(&a.gbuffer, &b.gbuffer).map_err(|e| status(3, format!("{pair}: {e}")))?;
-    let (lights, source) = super::report::frame_lights(&a, None, 1);
+    let (lights, source) = super::common::frame_lights(&a, None, 1);
     let lighting = super::common::LightingArgs::default().choose(&a.gbuffer.attributes());
     let cfg = lighting.apply(gbuf::resolve::ResolveConfig::default());
     let lit = |gb: &gbuf::GBuffer| -> anyhow::Result<gbuf::image::HdrImage> {

@@ -383,23 +383,6 @@ pub struct Args {
     pub json: bool,
 }
 
-/// Lights of a loaded frame ([`gbuf::scene::choose_lights`]): `--lights N` scattered when given, else the dump's or
-/// sidecar's, else [`DEFAULT_LIGHTS`] scattered.
-pub fn frame_lights(loaded: &gbuf::io::Loaded, n: Option<u32>, seed: u64) -> (Vec<gbuf::Light>, String) {
-    let (lights, source) = gbuf::scene::choose_lights(
-        &loaded.gbuffer,
-        loaded.lights.as_deref(),
-        n.map(|n| n as usize),
-        Some(DEFAULT_LIGHTS),
-        seed,
-    )
-    .expect("a fallback light count");
-    (lights, source.to_string())
-}
-
-/// Point lights scattered on a frame that brings none (report, budget, pipelines).
-pub const DEFAULT_LIGHTS: usize = 64;
-
 /// Runs `gbuf report`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let cfg = args.sweep.config()?;

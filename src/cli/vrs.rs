@@ -42,9 +42,9 @@ pub struct Args {
     /// Skip FLIP (numerical errors only).
     #[arg(long)]
     pub no_flip: bool,
-    /// Write, per tile size, the SRI as D3D12 reads it (`sri_<tile>.dds`: R8_UINT, one `D3D12_SHADING_RATE` per
-    /// tile), as a picture in the rate colours (`sri_<tile>.png`) and the coarse-shaded image
-    /// (`coarse_<tile>.png`, Reinhard tone map) into this folder.
+    /// Write, per generator and tile size, the SRI as D3D12 reads it (`sri_<generator>_<tile>.dds`: R8_UINT, one
+    /// `D3D12_SHADING_RATE` per tile), as a picture in the rate colours (`sri_<generator>_<tile>.png`) and the
+    /// coarse-shaded image (`coarse_<generator>_<tile>.png`, Reinhard tone map) into this folder.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Machine-readable output on stdout.
@@ -86,11 +86,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let mut staged = gbuf::base::files::Staged::default();
         for ((row, sri), image) in out.rows.iter().zip(&out.sris).zip(&out.images) {
             let dds = gbuf::layout::dds::r8_uint_dds(sri.cols, sri.rows, &sri.d3d12_texels());
-            staged.stage_bytes(&dir.join(format!("sri_{}.dds", row.tile)), &dds)?;
+            staged.stage_bytes(&dir.join(format!("sri_{}_{}.dds", row.generator, row.tile)), &dds)?;
             let pic = gbuf::base::png::encode_rgb8(gb.width, gb.height, &sri.picture(gb.width, gb.height))?;
-            staged.stage_bytes(&dir.join(format!("sri_{}.png", row.tile)), &pic)?;
+            staged.stage_bytes(&dir.join(format!("sri_{}_{}.png", row.generator, row.tile)), &pic)?;
             let shown = gbuf::base::png::encode_rgb8(gb.width, gb.height, &image.to_srgb8(Default::default()))?;
-            staged.stage_bytes(&dir.join(format!("coarse_{}.png", row.tile)), &shown)?;
+            staged.stage_bytes(&dir.join(format!("coarse_{}_{}.png", row.generator, row.tile)), &shown)?;
         }
         staged.commit()?;
     }

@@ -296,46 +296,113 @@ pub fn gbuffer_sri(gb: &GBuffer, mask: &EdgeMask, tile: u32, extra: bool, rule: 
     Ok(sri)
 }
 
-/// The coarse pixels of `sri` over a `width × height` image: for each, its pixels (row-major indices) in row order.
-fn coarse_pixels(sri: &Sri, width: u32, height: u32) -> impl Iterator<Item = Vec<usize>> + '_ {
-    let tiles = (0..sri.rows).flat_map(move |ty| (0..sri.cols).map(move |tx| (tx, ty)));
-    tiles.flat_map(move |(tx, ty)| {
-        let (cw, ch) = sri.rates[(ty * sri.cols + tx) as usize].size();
-        let (x0, y0) = (tx * sri.tile, ty * sri.tile);
-        let (x1, y1) = ((x0 + sri.tile).min(width), (y0 + sri.tile).min(height));
-        let blocks =
-            (y0..y1).step_by(ch as usize).flat_map(move |by| (x0..x1).step_by(cw as usize).map(move |bx| (bx, by)));
-        blocks.map(move |(bx, by)| {
+/// The coarse pixels of tile (`tx`, `ty`) of `sri` over a `width × height` image: for each, its pixels (row-major
+/// indices) in row order.
+fn tile_blocks(sri: &Sri, width: u32, height: u32, tx: u32, ty: u32) -> Vec<Vec<usize>> {
+    let (cw, ch) = sri.rates[(ty * sri.cols + tx) as usize].size();
+    let (x0, y0) = (tx * sri.tile, ty * sri.tile);
+    let (x1, y1) = ((x0 + sri.tile).min(width), (y0 + sri.tile).min(height));
+    let mut out = Vec::new();
+    for by in (y0..y1).step_by(ch as usize) {
+        for bx in (x0..x1).step_by(cw as usize) {
             let mut v = Vec::with_capacity((cw * ch) as usize);
             for y in by..(by + ch).min(y1) {
                 for x in bx..(bx + cw).min(x1) {
                     v.push((y * width + x) as usize);
                 }
             }
-            v
-        })
-    })
+            out.push(v);
+        }
+    }
+    out
 }
 
-/// Lighting evaluations of a coarse-shaded resolve: edge pixels as the mask shades them (one per covered sample),
-/// and one per coarse pixel that holds a covered non-edge pixel. With an all-1×1 SRI this is
+/// The coarse pixels of `sri` over a `width × height` image, tile by tile.
+fn coarse_pixels(sri: &Sri, width: u32, height: u32) -> impl Iterator<Item = Vec<usize>> + '_ {
+    let tiles = (0..sri.rows).flat_map(move |ty| (0..sri.cols).map(move |tx| (tx, ty)));
+    tiles.flat_map(move |(tx, ty)| tile_blocks(sri, width, height, tx, ty))
+}
+
+/// Lighting evaluations of a coarse-shaded resolve, per tile (row-major): edge pixels as the mask shades them (one
+/// per covered sample), and one per coarse pixel that holds a covered non-edge pixel.
+#[must_use]
+pub fn tile_evaluations(gb: &GBuffer, mask: &EdgeMask, sri: &Sri) -> Vec<u64> {
+    let covered = crate::detect::covered_per_pixel(gb);
+    let mut out = Vec::with_capacity(sri.rates.len());
+    for ty in 0..sri.rows {
+        for tx in 0..sri.cols {
+            let mut n = 0u64;
+            for block in tile_blocks(sri, gb.width, gb.height, tx, ty) {
+                let mut shared = false;
+                for p in block {
+                    if mask.is_edge(p) {
+                        n += u64::from(mask.shade_count[p].min(covered[p]));
+                    } else if covered[p] > 0 && mask.shade_count[p] > 0 {
+                        shared = true;
+                    }
+                }
+                n += u64::from(shared);
+            }
+            out.push(n);
+        }
+    }
+    out
+}
+
+/// Lighting evaluations of a coarse-shaded resolve ([`tile_evaluations`] summed). With an all-1×1 SRI this is
 /// [`EdgeMask::evaluations`].
 #[must_use]
 pub fn evaluations(gb: &GBuffer, mask: &EdgeMask, sri: &Sri) -> u64 {
-    let covered = crate::detect::covered_per_pixel(gb);
-    let mut n = 0u64;
-    for block in coarse_pixels(sri, gb.width, gb.height) {
-        let mut shared = false;
-        for p in block {
-            if mask.is_edge(p) {
-                n += u64::from(mask.shade_count[p].min(covered[p]));
-            } else if covered[p] > 0 && mask.shade_count[p] > 0 {
-                shared = true;
+    tile_evaluations(gb, mask, sri).iter().sum()
+}
+
+/// The SRI minimising `Σ error[t][r]` over tiles `t` with at most `budget` evaluations, `error[t][k]` and
+/// `evals[t][k]` given per tile for each of `rates`: per tile the rate minimising `error + λ · evaluations`, with
+/// the smallest λ (found by bisection) whose total fits the budget. Such a choice is optimal for its own total of
+/// evaluations (a Lagrangian optimum); `None` when even the coarsest rates do not fit.
+#[must_use]
+pub fn cheapest_sri(
+    template: &Sri,
+    rates: &[Rate],
+    error: &[Vec<f64>],
+    evals: &[Vec<u64>],
+    budget: u64,
+) -> Option<Sri> {
+    let pick = |lambda: f64| -> (Vec<Rate>, u64, f64) {
+        let (mut chosen, mut total, mut err) = (Vec::with_capacity(error.len()), 0u64, 0.0);
+        for (e, n) in error.iter().zip(evals) {
+            let k = (0..rates.len())
+                .min_by(|&a, &b| {
+                    let (ca, cb) = (e[a] + lambda * n[a] as f64, e[b] + lambda * n[b] as f64);
+                    ca.total_cmp(&cb).then(n[a].cmp(&n[b]))
+                })
+                .expect("at least one rate");
+            chosen.push(rates[k]);
+            total += n[k];
+            err += e[k];
+        }
+        (chosen, total, err)
+    };
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    if pick(0.0).1 > budget {
+        while pick(hi).1 > budget {
+            hi *= 4.0;
+            if hi > 1e30 {
+                return None;
             }
         }
-        n += u64::from(shared);
+        for _ in 0..100 {
+            let mid = 0.5 * (lo + hi);
+            if pick(mid).1 > budget {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+    } else {
+        hi = 0.0;
     }
-    n
+    Some(Sri { rates: pick(hi).0, ..template.clone() })
 }
 
 /// How a coarse pixel's evaluation reaches its pixels.
@@ -403,6 +470,41 @@ mod tests {
         assert_eq!(Rate::fit(1, 4, true), Rate::R1x2);
         assert_eq!(Rate::fit(4, 4, true), Rate::R4x4);
         assert_eq!(Rate::fit(2, 4, true), Rate::R2x4);
+    }
+
+    #[test]
+    fn the_cheapest_sri_fits_its_budget_and_nothing_with_fewer_evaluations_errs_less() {
+        // Four tiles, three rates: random errors falling and evaluations falling with coarseness, every budget.
+        let mut rng = crate::base::rng::SplitMix64::new(9);
+        let rates = [Rate::R1x1, Rate::R2x1, Rate::R2x2];
+        let template = Sri::uniform(32, 8, 8, Rate::R1x1);
+        for _ in 0..50 {
+            let error: Vec<Vec<f64>> = (0..4)
+                .map(|_| {
+                    let a = rng.next_f32() as f64;
+                    vec![0.0, a, a + rng.next_f32() as f64]
+                })
+                .collect();
+            let evals: Vec<Vec<u64>> =
+                (0..4).map(|_| vec![64, 32 + rng.next_u64() % 8, 16 + rng.next_u64() % 8]).collect();
+            for budget in [64, 100, 150, 200, 256] {
+                let Some(s) = cheapest_sri(&template, &rates, &error, &evals, budget) else {
+                    assert!(budget < evals.iter().map(|e| e[2]).sum::<u64>());
+                    continue;
+                };
+                let k = |r: Rate| rates.iter().position(|&x| x == r).unwrap();
+                let total: u64 = s.rates.iter().enumerate().map(|(t, &r)| evals[t][k(r)]).sum();
+                let err: f64 = s.rates.iter().enumerate().map(|(t, &r)| error[t][k(r)]).sum();
+                assert!(total <= budget);
+                // Every other choice with no more evaluations has no less error.
+                for code in 0..81u32 {
+                    let pick: Vec<usize> = (0..4).map(|t| (code / 3u32.pow(t)) as usize % 3).collect();
+                    let n: u64 = pick.iter().enumerate().map(|(t, &c)| evals[t][c]).sum();
+                    let e: f64 = pick.iter().enumerate().map(|(t, &c)| error[t][c]).sum();
+                    assert!(n > total || e >= err - 1e-12, "{pick:?}: {e} < {err} with {n} ≤ {total}");
+                }
+            }
+        }
     }
 
     #[test]
