@@ -298,6 +298,21 @@ fn vrs_writes_the_sri_it_measures_and_saves_evaluations() {
     for tile in [8, 16] {
         assert!(evals(row(&broadcast, "oracle", tile)) <= evals(row(&broadcast, "gbuffer", tile)));
     }
+    // --max-flip: the most saving of the rule's scaled thresholds within the bound, never less than a stricter
+    // rule's.
+    let o = gbuf_cmd(dir.path(), &["vrs", fixture.to_str().unwrap(), "--tile", "16", "--max-flip", "0.01", "--json"]);
+    assert!(o.status.success(), "{}", support::stderr(&o));
+    let capped: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let best = row(&capped, "gbuffer-max-flip", 16);
+    assert!(best["vs_full_rate"]["flip_ldr"].as_f64().unwrap() <= 0.01, "{best}");
+    let strictest = gbuf::detect::rate::Smoothness {
+        depth_relative: rule.depth_relative * 0.25,
+        normal_deg: rule.normal_deg * 0.25,
+        albedo: rule.albedo * 0.25,
+        ..rule
+    };
+    let strict = gbuf::detect::rate::gbuffer_sri(gb, &mask, 16, false, &strictest).unwrap();
+    assert!(evals(best) <= gbuf::detect::rate::evaluations(gb, &mask, &strict));
     // Sharing only the lighting ignores albedo contrast: at least as coarse as broadcasting.
     let lighting = run("lighting");
     for tile in [8, 16] {

@@ -40,7 +40,13 @@ pub struct VrsConfig {
     pub viewing: Option<Viewing>,
     /// gbuf's smoothness rule (its `broadcast` follows `mode`).
     pub rule: Smoothness,
+    /// Also find, per tile size, the largest saving of gbuf's rule (its thresholds scaled by [`RULE_SCALES`]) whose
+    /// LDR-FLIP against the full-rate image stays at or under this (needs `viewing`).
+    pub max_flip: Option<f64>,
 }
+
+/// The factors `--max-flip` scales the smoothness thresholds by (1: the default rule).
+pub const RULE_SCALES: [f32; 7] = [0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0];
 
 /// One SRI's answer.
 #[derive(Clone, Debug, Serialize)]
@@ -61,6 +67,9 @@ pub struct VrsRow {
     pub vs_full_rate: ErrorSet,
     /// The coarse image against the every-sample reference.
     pub vs_reference: ErrorSet,
+    /// For `gbuffer-max-flip`: the factor the rule's thresholds were scaled by.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rule_scale: Option<f32>,
 }
 
 /// Everything [`vrs`] measures.
@@ -140,6 +149,7 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
             saved: if full_evals == 0 { 0.0 } else { 1.0 - evaluations as f64 / full_evals as f64 },
             vs_full_rate: error_set(&full, &image, v),
             vs_reference: error_set(&reference, &image, v),
+            rule_scale: None,
         });
         // The oracle at gbuf's budget: per tile the rates' errors against the reference and their evaluations.
         let tiles = sri.rates.len();
@@ -171,11 +181,53 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
             saved: if full_evals == 0 { 0.0 } else { 1.0 - o_evals as f64 / full_evals as f64 },
             vs_full_rate: error_set(&full, &o_image, v),
             vs_reference: error_set(&reference, &o_image, v),
+            rule_scale: None,
         });
         out.sris.push(sri);
         out.images.push(image);
         out.sris.push(oracle);
         out.images.push(o_image);
+        if let (Some(max), Some(view)) = (cfg.max_flip, v) {
+            // The rule's thresholds scaled from strict to loose; the most evaluations saved within the FLIP bound.
+            let mut best: Option<(VrsRow, Sri, HdrImage)> = None;
+            for scale in RULE_SCALES {
+                let r = Smoothness {
+                    depth_relative: rule.depth_relative * scale,
+                    normal_deg: rule.normal_deg * scale,
+                    albedo: rule.albedo * scale,
+                    ..rule
+                };
+                let s = rate::gbuffer_sri(gb, &mask, tile, cfg.extra_rates, &r)?;
+                let evals = rate::evaluations(gb, &mask, &s);
+                if best.as_ref().is_some_and(|b| b.0.evaluations <= evals) {
+                    continue;
+                }
+                let img =
+                    resolve::resolve(&rate::coarse_gbuffer(gb, &mask, &s, cfg.mode), lights, &mask, &cfg.resolve)?
+                        .image;
+                let vs_full = error_set(&full, &img, Some(view));
+                if vs_full.flip_ldr.is_none_or(|f| f > max) {
+                    continue;
+                }
+                let row = VrsRow {
+                    generator: "gbuffer-max-flip".into(),
+                    tile,
+                    rates: histogram(&s),
+                    evaluations: evals,
+                    evaluations_per_pixel: evals as f64 / pixels,
+                    saved: if full_evals == 0 { 0.0 } else { 1.0 - evals as f64 / full_evals as f64 },
+                    vs_full_rate: vs_full,
+                    vs_reference: error_set(&reference, &img, Some(view)),
+                    rule_scale: Some(scale),
+                };
+                best = Some((row, s, img));
+            }
+            if let Some((row, s, img)) = best {
+                out.rows.push(row);
+                out.sris.push(s);
+                out.images.push(img);
+            }
+        }
     }
     Ok(out)
 }

@@ -40,8 +40,12 @@ pub struct Args {
     #[command(flatten)]
     pub scatter: crate::cli::common::LightsArgs,
     /// Skip FLIP (numerical errors only).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "max_flip")]
     pub no_flip: bool,
+    /// Also find, per tile size, the largest saving of gbuf's rule (its thresholds scaled from ¼ to 16×) whose
+    /// LDR-FLIP against the full-rate image stays at or under this value: a `gbuffer-max-flip` row.
+    #[arg(long, value_name = "FLIP")]
+    pub max_flip: Option<f64>,
     /// Write, per generator and tile size, the SRI as D3D12 reads it (`sri_<generator>_<tile>.dds`: R8_UINT, one
     /// `D3D12_SHADING_RATE` per tile), as a picture in the rate colours (`sri_<generator>_<tile>.png`) and the
     /// coarse-shaded image (`coarse_<generator>_<tile>.png`, Reinhard tone map) into this folder.
@@ -79,7 +83,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         resolve: lighting.apply(ResolveConfig::default()),
         viewing: (!args.no_flip).then(Viewing::default),
         rule: Default::default(),
+        max_flip: args.max_flip,
     };
+    if args.max_flip.is_some_and(|f| !(f.is_finite() && f > 0.0)) {
+        crate::usage!("--max-flip: a positive FLIP value, e.g. 0.01");
+    }
     let out = vrs(&gb, &lights, &cfg).with_context(|| format!("{file}: shading rates"))?;
     if let Some(dir) = &args.out {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -112,12 +120,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         if args.extra_rates { ", rates up to 4x4" } else { ", rates up to 2x2" }
     );
     println!(
-        "{:<9} {:>5} {:>9} {:>7} | vs full rate: {:>9} {:>8} {:>8} | vs reference: {:>9} {:>8} {:>8} | tiles per rate",
+        "{:<26} {:>5} {:>9} {:>7} | vs full rate: {:>9} {:>8} {:>8} | vs reference: {:>9} {:>8} {:>8} | tiles per rate",
         "generator", "tile", "eval/px", "saved", "RMSE", "LDR-FLIP", "HDR-FLIP", "RMSE", "LDR-FLIP", "HDR-FLIP"
     );
     let r = &out.full_rate_vs_reference;
     println!(
-        "{:<9} {:>5} {:>9.3} {:>6.1}% | {:>23} {:>9} {:>8} | {:>28.3e} {} |",
+        "{:<26} {:>5} {:>9.3} {:>6.1}% | {:>23} {:>9} {:>8} | {:>28.3e} {} |",
         "full rate",
         "-",
         out.full_rate_evaluations_per_pixel,
@@ -130,9 +138,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
     for row in &out.rows {
         let rates: Vec<String> = row.rates.iter().map(|(n, k)| format!("{n} {k}")).collect();
+        let name = match row.rule_scale {
+            Some(k) => format!("{} (rule ×{k})", row.generator),
+            None => row.generator.clone(),
+        };
         println!(
-            "{:<9} {:>5} {:>9.3} {:>6.1}% | {:>23.3e} {} | {:>28.3e} {} | {}",
-            row.generator,
+            "{:<26} {:>5} {:>9.3} {:>6.1}% | {:>23.3e} {} | {:>28.3e} {} | {}",
+            name,
             row.tile,
             row.evaluations_per_pixel,
             100.0 * row.saved,
