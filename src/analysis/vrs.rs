@@ -45,13 +45,20 @@ pub struct VrsConfig {
     pub max_flip: Option<f64>,
 }
 
+/// FidelityFX VRS's `VarianceCutoff` as AMD's sample sets it.
+pub const FFX_VARIANCE_CUTOFF: f32 = 0.015;
+
+/// The wave width FidelityFX VRS's reductions run over (AMD's SDK compiles its shader for 64-wide waves).
+pub const FFX_WAVE: u32 = 64;
+
 /// The factors `--max-flip` scales the smoothness thresholds by (1: the default rule).
 pub const RULE_SCALES: [f32; 7] = [0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0];
 
 /// One SRI's answer.
 #[derive(Clone, Debug, Serialize)]
 pub struct VrsRow {
-    /// The generator (`gbuffer`, or `oracle`: the least error against the reference at `gbuffer`'s evaluations).
+    /// The generator: `gbuffer` (gbuf's rule), `ffx` (FidelityFX VRS's on the full-rate image), `oracle` (the least
+    /// error against the reference at `gbuffer`'s evaluations) or `gbuffer-max-flip`.
     pub generator: String,
     /// Tile size in pixels.
     pub tile: u32,
@@ -135,22 +142,37 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
         };
         uniform.push(displayed_errors(&image, &reference));
     }
-    for &tile in &cfg.tiles {
-        let sri = rate::gbuffer_sri(gb, &mask, tile, cfg.extra_rates, &rule)?;
-        let coarse = rate::coarse_gbuffer(gb, &mask, &sri, cfg.mode);
-        let image = resolve::resolve(&coarse, lights, &mask, &cfg.resolve)?.image;
-        let evaluations = rate::evaluations(gb, &mask, &sri);
-        out.rows.push(VrsRow {
-            generator: "gbuffer".into(),
+    // One SRI's row: its coarse image, evaluations and errors.
+    let measure = |generator: &str, tile: u32, sri: &Sri, scale: Option<f32>| -> Result<(VrsRow, HdrImage)> {
+        let image =
+            resolve::resolve(&rate::coarse_gbuffer(gb, &mask, sri, cfg.mode), lights, &mask, &cfg.resolve)?.image;
+        let evaluations = rate::evaluations(gb, &mask, sri);
+        let row = VrsRow {
+            generator: generator.into(),
             tile,
-            rates: histogram(&sri),
+            rates: histogram(sri),
             evaluations,
             evaluations_per_pixel: evaluations as f64 / pixels,
             saved: if full_evals == 0 { 0.0 } else { 1.0 - evaluations as f64 / full_evals as f64 },
             vs_full_rate: error_set(&full, &image, v),
             vs_reference: error_set(&reference, &image, v),
-            rule_scale: None,
-        });
+            rule_scale: scale,
+        };
+        Ok((row, image))
+    };
+    let push = |out: &mut VrsOutput, (row, image): (VrsRow, HdrImage), sri: Sri| {
+        out.rows.push(row);
+        out.images.push(image);
+        out.sris.push(sri);
+    };
+    for &tile in &cfg.tiles {
+        let sri = rate::gbuffer_sri(gb, &mask, tile, cfg.extra_rates, &rule)?;
+        let measured = measure("gbuffer", tile, &sri, None)?;
+        let budget = measured.0.evaluations;
+        push(&mut out, measured, sri.clone());
+        // FidelityFX VRS's rule on the full-rate image as "the previous frame" (a static camera).
+        let ffx = rate::ffx_sri(&full, tile, FFX_VARIANCE_CUTOFF, FFX_WAVE);
+        push(&mut out, measure("ffx", tile, &ffx, None)?, ffx);
         // The oracle at gbuf's budget: per tile the rates' errors against the reference and their evaluations.
         let tiles = sri.rates.len();
         let (mut error, mut evals) = (vec![Vec::new(); tiles], vec![Vec::new(); tiles]);
@@ -166,30 +188,13 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
             s.rates.iter().enumerate().map(|(t, r)| error[t][rates.iter().position(|x| x == r).expect("a rate")]).sum()
         };
         // gbuf's own SRI is a candidate: the oracle is never worse than it at its budget.
-        let oracle = rate::cheapest_sri(&sri, &rates, &error, &evals, evaluations)
+        let oracle = rate::cheapest_sri(&sri, &rates, &error, &evals, budget)
             .filter(|o| objective(o) <= objective(&sri))
             .unwrap_or_else(|| sri.clone());
-        let o_image =
-            resolve::resolve(&rate::coarse_gbuffer(gb, &mask, &oracle, cfg.mode), lights, &mask, &cfg.resolve)?.image;
-        let o_evals = rate::evaluations(gb, &mask, &oracle);
-        out.rows.push(VrsRow {
-            generator: "oracle".into(),
-            tile,
-            rates: histogram(&oracle),
-            evaluations: o_evals,
-            evaluations_per_pixel: o_evals as f64 / pixels,
-            saved: if full_evals == 0 { 0.0 } else { 1.0 - o_evals as f64 / full_evals as f64 },
-            vs_full_rate: error_set(&full, &o_image, v),
-            vs_reference: error_set(&reference, &o_image, v),
-            rule_scale: None,
-        });
-        out.sris.push(sri);
-        out.images.push(image);
-        out.sris.push(oracle);
-        out.images.push(o_image);
-        if let (Some(max), Some(view)) = (cfg.max_flip, v) {
+        push(&mut out, measure("oracle", tile, &oracle, None)?, oracle);
+        if let (Some(max), Some(_)) = (cfg.max_flip, v) {
             // The rule's thresholds scaled from strict to loose; the most evaluations saved within the FLIP bound.
-            let mut best: Option<(VrsRow, Sri, HdrImage)> = None;
+            let mut best: Option<((VrsRow, HdrImage), Sri)> = None;
             for scale in RULE_SCALES {
                 let r = Smoothness {
                     depth_relative: rule.depth_relative * scale,
@@ -198,34 +203,16 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
                     ..rule
                 };
                 let s = rate::gbuffer_sri(gb, &mask, tile, cfg.extra_rates, &r)?;
-                let evals = rate::evaluations(gb, &mask, &s);
-                if best.as_ref().is_some_and(|b| b.0.evaluations <= evals) {
+                if best.as_ref().is_some_and(|b| b.0 .0.evaluations <= rate::evaluations(gb, &mask, &s)) {
                     continue;
                 }
-                let img =
-                    resolve::resolve(&rate::coarse_gbuffer(gb, &mask, &s, cfg.mode), lights, &mask, &cfg.resolve)?
-                        .image;
-                let vs_full = error_set(&full, &img, Some(view));
-                if vs_full.flip_ldr.is_none_or(|f| f > max) {
-                    continue;
+                let m = measure("gbuffer-max-flip", tile, &s, Some(scale))?;
+                if m.0.vs_full_rate.flip_ldr.is_some_and(|f| f <= max) {
+                    best = Some((m, s));
                 }
-                let row = VrsRow {
-                    generator: "gbuffer-max-flip".into(),
-                    tile,
-                    rates: histogram(&s),
-                    evaluations: evals,
-                    evaluations_per_pixel: evals as f64 / pixels,
-                    saved: if full_evals == 0 { 0.0 } else { 1.0 - evals as f64 / full_evals as f64 },
-                    vs_full_rate: vs_full,
-                    vs_reference: error_set(&reference, &img, Some(view)),
-                    rule_scale: Some(scale),
-                };
-                best = Some((row, s, img));
             }
-            if let Some((row, s, img)) = best {
-                out.rows.push(row);
-                out.sris.push(s);
-                out.images.push(img);
+            if let Some((m, s)) = best {
+                push(&mut out, m, s);
             }
         }
     }

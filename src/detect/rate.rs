@@ -296,6 +296,99 @@ pub fn gbuffer_sri(gb: &GBuffer, mask: &EdgeMask, tile: u32, extra: bool, rule: 
     Ok(sri)
 }
 
+/// AMD FidelityFX Variable Shading 1.2's SRI (the base rates, 1×1 to 2×2), re-implemented from its public
+/// description and source, of `image` given as "the previous frame" with no motion (a static camera: no
+/// reprojection, no motion allowance). `variance_cutoff` is AMD's `VarianceCutoff` (its sample's default 0.015).
+///
+/// Per 2×2 coarse pixel at (x, y): the luminances `0.30 R + 0.59 G + 0.11 B` of its four pixels (coordinates
+/// clamped to the image) give the horizontal and vertical deltas (the larger of the two pairs each way), the range
+/// and its min and max; the deltas are raised by how far the coarse pixel's min lies above its four neighbours'
+/// smallest min and its max below their largest max. A group of coarse pixels classifies the maximum of each delta
+/// over its hardware wave — range under the cutoff: 2×2; else the direction of the larger delta stays full rate,
+/// the other coarse if its delta is under the cutoff — and a tile of several waves takes the bitwise AND of their
+/// codes (`wave` lanes per wave: 64 as AMD's SDK compiles it for its GPUs). The tile-8 path reproduces AMD's
+/// grouping (a 16 × 16 group's four tiles gather its coarse pixels by the parity of their column and row, written
+/// transposed), so that the SRI equals the shader's tile for tile.
+#[must_use]
+pub fn ffx_sri(image: &crate::image::HdrImage, tile: u32, variance_cutoff: f32, wave: u32) -> Sri {
+    let (w, h) = (image.width, image.height);
+    let mut sri = Sri::uniform(w, h, tile, Rate::R1x1);
+    let lum = |x: i64, y: i64| -> f32 {
+        let (x, y) = (x.clamp(0, i64::from(w) - 1) as usize, y.clamp(0, i64::from(h) - 1) as usize);
+        let c = image.rgb[y * w as usize + x];
+        c.x * 0.30 + c.y * 0.59 + c.z * 0.11
+    };
+    // Per coarse pixel at pixel (x, y): (dx, dy, range) and (min, max).
+    let stats = |x: i64, y: i64| -> ([f32; 3], f32, f32) {
+        let (a, b, c, d) = (lum(x, y), lum(x + 1, y), lum(x, y + 1), lum(x + 1, y + 1));
+        let (mn, mx) = (a.min(b).min(c).min(d), a.max(b).max(c).max(d));
+        ([(a - b).abs().max((c - d).abs()), (a - c).abs().max((b - d).abs()), mx - mn], mn, mx)
+    };
+    let delta = |x: i64, y: i64| -> [f32; 3] {
+        let (var, mn, mx) = stats(x, y);
+        let n = [(x, y - 2), (x - 2, y), (x, y + 2), (x + 2, y)].map(|(a, b)| stats(a, b));
+        let d_min = (mn - n.iter().map(|s| s.1).fold(f32::INFINITY, f32::min)).max(0.0);
+        let d_max = (n.iter().map(|s| s.2).fold(f32::NEG_INFINITY, f32::max) - mx).max(0.0);
+        var.map(|v| (v + d_min + d_max).max(0.0))
+    };
+    let classify = |[x, y, z]: [f32; 3]| -> u8 {
+        let c = variance_cutoff;
+        if z < c {
+            5
+        } else if x > y {
+            if y > c {
+                0
+            } else {
+                1
+            }
+        } else if x > c {
+            0
+        } else {
+            4
+        }
+    };
+    let rate_of = |code: u8| match code {
+        5 => Rate::R2x2,
+        1 => Rate::R1x2,
+        4 => Rate::R2x1,
+        _ => Rate::R1x1,
+    };
+    let max3 = |a: [f32; 3], b: [f32; 3]| [a[0].max(b[0]), a[1].max(b[1]), a[2].max(b[2])];
+    // Threads per group side (a thread per coarse pixel): a group covers 2T × 2T pixels.
+    let t = if tile == 32 { 16 } else { 8 };
+    let wave = wave.max(1) as usize;
+    let (gw, gh) = if tile == 8 { (sri.cols.div_ceil(2), sri.rows.div_ceil(2)) } else { (sri.cols, sri.rows) };
+    for gy in 0..gh {
+        for gx in 0..gw {
+            let (ox, oy) = (i64::from(gx * 2 * t), i64::from(gy * 2 * t));
+            let deltas: Vec<[f32; 3]> =
+                (0..t * t).map(|g| delta(ox + 2 * i64::from(g % t), oy + 2 * i64::from(g / t))).collect();
+            if tile == 8 {
+                // Slot k = (ty & 1)·2 + (tx & 1), maxed over the first wave; slot g goes to tile (2gx + g/2, 2gy + g%2).
+                let mut slots = [[0.0f32; 3]; 4];
+                for (g, d) in deltas.iter().enumerate().take(wave) {
+                    let (tx, ty) = (g as u32 % t, g as u32 / t);
+                    let k = ((ty & 1) * 2 + (tx & 1)) as usize;
+                    slots[k] = max3(slots[k], *d);
+                }
+                for (g, slot) in slots.iter().enumerate() {
+                    let (cx, cy) = (2 * gx + g as u32 / 2, 2 * gy + g as u32 % 2);
+                    if cx < sri.cols && cy < sri.rows {
+                        sri.rates[(cy * sri.cols + cx) as usize] = rate_of(classify(*slot));
+                    }
+                }
+            } else {
+                let code = deltas
+                    .chunks(wave)
+                    .map(|lanes| classify(lanes.iter().fold([0.0f32; 3], |a, &d| max3(a, d))))
+                    .fold(5u8, |a, c| a & c);
+                sri.rates[(gy * sri.cols + gx) as usize] = rate_of(code);
+            }
+        }
+    }
+    sri
+}
+
 /// The coarse pixels of tile (`tx`, `ty`) of `sri` over a `width × height` image: for each, its pixels (row-major
 /// indices) in row order.
 fn tile_blocks(sri: &Sri, width: u32, height: u32, tx: u32, ty: u32) -> Vec<Vec<usize>> {
@@ -505,6 +598,35 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn ffx_follows_amds_classification_and_tile_8_grouping() {
+        let image = |w: u32, h: u32, f: &dyn Fn(u32, u32) -> f32| {
+            let mut img = crate::image::HdrImage::new(w, h);
+            for y in 0..h {
+                for x in 0..w {
+                    img.rgb[(y * w + x) as usize] = Vec3::splat(f(x, y));
+                }
+            }
+            img
+        };
+        let all = |s: &Sri, r: Rate| s.rates.iter().all(|&x| x == r);
+        for tile in [8, 16, 32] {
+            // Flat: 2×2. Rows alternating (no horizontal delta): 2 wide, 1 tall. Columns alternating: 1×2.
+            assert!(all(&ffx_sri(&image(64, 64, &|_, _| 0.5), tile, 0.015, 64), Rate::R2x2));
+            assert!(all(&ffx_sri(&image(64, 64, &|_, y| (y % 2) as f32), tile, 0.015, 64), Rate::R2x1));
+            assert!(all(&ffx_sri(&image(64, 64, &|x, _| (x % 2) as f32), tile, 0.015, 64), Rate::R1x2));
+            // A checkerboard: full rate.
+            assert!(all(&ffx_sri(&image(64, 64, &|x, y| ((x + y) % 2) as f32), tile, 0.015, 64), Rate::R1x1));
+        }
+        // Tile 8: a 16×16 group's four tiles gather coarse pixels by column and row parity, written transposed.
+        // One busy coarse pixel (column 1, row 0) raises itself and its neighbours (columns 0 and 2 of row 0, and
+        // column 1 of row 1): every parity class but (odd row, even column), which AMD writes to tile (1, 0). A
+        // spatial grouping would have kept tiles (1, 0), (0, 1) and (1, 1) at 2×2.
+        let one = image(16, 16, &|x, y| if x / 2 == 1 && y / 2 == 0 { ((x + y) % 2) as f32 } else { 0.5 });
+        let s = ffx_sri(&one, 8, 0.015, 64);
+        assert_eq!(s.rates, vec![Rate::R1x1, Rate::R2x2, Rate::R1x1, Rate::R1x1], "{s:?}");
     }
 
     #[test]
