@@ -272,7 +272,8 @@ fn vrs_writes_the_sri_it_measures_and_saves_evaluations() {
     };
     let broadcast = run("broadcast");
     let full = broadcast["full_rate_evaluations"].as_u64().unwrap();
-    for row in broadcast["rows"].as_array().unwrap() {
+    // gbuf's SRI and the oracle at its budget save on this frame (ffx's absolute cutoff may keep it at full rate).
+    for row in broadcast["rows"].as_array().unwrap().iter().filter(|r| r["generator"] != "ffx") {
         let e = row["evaluations"].as_u64().unwrap();
         assert!(e < full && row["saved"].as_f64().unwrap() > 0.0, "{row}");
         assert!(row["vs_full_rate"]["rmse"].as_f64().unwrap() > 0.0, "coarse shading changes the image: {row}");

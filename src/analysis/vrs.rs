@@ -96,7 +96,7 @@ pub struct VrsOutput {
     pub full_rate_vs_reference: ErrorSet,
     /// One row per tile size.
     pub rows: Vec<VrsRow>,
-    /// The SRIs, in row order (per tile size: gbuf's, then the oracle's).
+    /// The SRIs, in row order.
     #[serde(skip)]
     pub sris: Vec<Sri>,
     /// The coarse images, in row order.
@@ -131,7 +131,7 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
     };
     // The frame coarse at each rate everywhere: a tile's image under any SRI is its image under its own rate
     // everywhere (coarse pixels never cross tiles, and every tile size is a multiple of the widest coarse pixel).
-    let rates: Vec<Rate> = if cfg.extra_rates { Rate::ALL.to_vec() } else { Rate::ALL[..4].to_vec() };
+    let rates: Vec<Rate> = Rate::ALL.into_iter().filter(|r| r.allowed(gb.samples, cfg.extra_rates)).collect();
     let mut uniform = Vec::with_capacity(rates.len());
     for &r in &rates {
         let image = if r == Rate::R1x1 {
@@ -171,7 +171,8 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
         let budget = measured.0.evaluations;
         push(&mut out, measured, sri.clone());
         // FidelityFX VRS's rule on the full-rate image as "the previous frame" (a static camera).
-        let ffx = rate::ffx_sri(&full, tile, FFX_VARIANCE_CUTOFF, FFX_WAVE);
+        // (At 8× MSAA and beyond the hardware clamps its 2 × 2 tiles.)
+        let ffx = rate::ffx_sri(&full, tile, FFX_VARIANCE_CUTOFF, FFX_WAVE)?.clamped(gb.samples, false);
         push(&mut out, measure("ffx", tile, &ffx, None)?, ffx);
         // The oracle at gbuf's budget: per tile the rates' errors against the reference and their evaluations.
         let tiles = sri.rates.len();

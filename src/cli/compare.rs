@@ -55,9 +55,9 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// Compare two frames instead of two images: both are packed render targets of this layout (folders or
-    /// RenderDoc captures). Also implied when either file is a RenderDoc capture (`.rdc`) or a dump gbuf reads:
-    /// per-attribute differences (angle for normals, relative for depth, mismatches for IDs) and the FLIP of the two
-    /// frames lit alike.
+    /// RenderDoc captures). Also implied when either file is a RenderDoc capture (`.rdc`) or a folder holding
+    /// `layout.toml`: per-attribute differences (angle for normals, relative for depth, mismatches for IDs) and the
+    /// FLIP of the two frames lit alike (`--flip none`: without FLIP).
     #[arg(long = "input-layout", value_name = "NAME|PATH")]
     pub input_layout: Option<String>,
     /// Frames: the sidecar (camera, lights) of both [default: the one found beside each].
@@ -112,15 +112,15 @@ struct Output<'a> {
 
 /// Runs `gbuf compare`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    if args.input_layout.is_some() || [&args.reference, &args.test].iter().any(|p| is_frame(p)) {
-        return compare_frames(&args);
-    }
     anyhow::ensure!(args.ppd.is_finite() && args.ppd > 0.0, "--ppd must be a positive number, got {}", args.ppd);
     anyhow::ensure!(
         args.exposure.is_finite() && args.exposure > 0.0,
         "--exposure must be a positive number, got {}",
         args.exposure
     );
+    if args.input_layout.is_some() || [&args.reference, &args.test].iter().any(|p| is_frame(p)) {
+        return compare_frames(&args);
+    }
     let gates = |s: &Option<String>, flag: &str| -> anyhow::Result<Vec<(Gate, f64)>> {
         match s {
             Some(s) => {
@@ -349,8 +349,15 @@ struct FrameComparison {
 
 /// `gbuf compare A B` of two frames: per-attribute differences and the lit images' FLIP.
 fn compare_frames(args: &Args) -> anyhow::Result<()> {
-    if args.fail_above.is_some() || args.warn_above.is_some() || args.error_map.is_some() || args.csv.is_some() {
-        crate::usage!("--fail-above, --warn-above, --error-map and --csv apply to images; two frames are compared");
+    if args.fail_above.is_some()
+        || args.warn_above.is_some()
+        || args.error_map.is_some()
+        || args.flip_map.is_some()
+        || args.csv.is_some()
+    {
+        crate::usage!(
+            "--fail-above, --warn-above, --error-map, --flip-map and --csv apply to images; two frames are compared"
+        );
     }
     let opts = gbuf::io::LoadOptions {
         input_layout: args.input_layout.clone(),
@@ -376,7 +383,8 @@ fn compare_frames(args: &Args) -> anyhow::Result<()> {
         Ok(gbuf::resolve::resolve(gb, &lights, &mask, &cfg)?.image)
     };
     let viewing = Viewing { tone_map: args.tonemap, exposure: args.exposure, pixels_per_degree: args.ppd };
-    let lit = gbuf::measure::image::error_set(&lit(&a.gbuffer)?, &lit(&b.gbuffer)?, Some(&viewing));
+    let shown = (args.flip != FlipMode::None).then_some(&viewing);
+    let lit = gbuf::measure::image::error_set(&lit(&a.gbuffer)?, &lit(&b.gbuffer)?, shown);
     let c = FrameComparison {
         reference: args.reference.display().to_string(),
         test: args.test.display().to_string(),

@@ -109,15 +109,24 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         (Some(l), Some(h)) => format!("{l:>8.4} {h:>8.4}"),
         _ => format!("{:>8} {:>8}", "-", "-"),
     };
+    let allowed: Vec<&str> = gbuf::detect::rate::Rate::ALL
+        .iter()
+        .filter(|r| r.allowed(gb.samples, args.extra_rates))
+        .map(|r| r.name())
+        .collect();
     println!(
-        "{file}: {}×{}×{}, detector {} ({:.3} evaluations per pixel at full rate), coarse pixels {} their evaluation{}",
+        "{file}: {}×{}×{}, detector {} ({:.3} evaluations per pixel at full rate), coarse pixels {} their evaluation, \
+         rates {} (D3D12 at {} sample{}{})",
         gb.width,
         gb.height,
         gb.samples,
         out.detector,
         out.full_rate_evaluations_per_pixel,
         if mode == CoarseMode::Broadcast { "broadcast" } else { "share the lighting of" },
-        if args.extra_rates { ", rates up to 4x4" } else { ", rates up to 2x2" }
+        allowed.join(" "),
+        gb.samples,
+        if gb.samples == 1 { "" } else { "s" },
+        if args.extra_rates { ", additional rates on" } else { "" }
     );
     println!(
         "{:<26} {:>5} {:>9} {:>7} | vs full rate: {:>9} {:>8} {:>8} | vs reference: {:>9} {:>8} {:>8} | tiles per rate",

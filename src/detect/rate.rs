@@ -54,19 +54,42 @@ impl Rate {
         }
     }
 
-    /// The rate of a `w × h` coarse pixel, limited to the rates allowed: with `extra` (D3D12's
-    /// `AdditionalShadingRatesSupported`) up to 4 × 4, else up to 2 × 2; a side of 4 against a side of 1 (no such
-    /// rate) becomes 2.
+    /// May a target of `samples` samples use this rate? D3D12's rule: the base rates (to 2 × 2), the additional
+    /// ones (2 × 4, 4 × 2, 4 × 4) only with `extra` (`AdditionalShadingRatesSupported`), and a coarse pixel never
+    /// spans more than 16 samples (2 × 2 up to 4× MSAA, 2 × 4 up to 2×, 4 × 4 single-sampled, none beyond 2 pixels
+    /// at 8×).
     #[must_use]
-    pub fn fit(w: u32, h: u32, extra: bool) -> Rate {
-        let cap = if extra { 4 } else { 2 };
-        let (mut w, mut h) = (w.clamp(1, cap), h.clamp(1, cap));
-        if w == 4 && h == 1 {
-            w = 2;
+    pub fn allowed(self, samples: u32, extra: bool) -> bool {
+        let (w, h) = self.size();
+        (w * h <= 4 || extra) && w * h * samples.max(1) <= 16
+    }
+
+    /// The largest rate allowed ([`Rate::allowed`]) that fits a `w × h` coarse pixel: the longer side halved until
+    /// it is (a side of 4 against a side of 1, which no rate has, becomes 2).
+    #[must_use]
+    pub fn fit(w: u32, h: u32, extra: bool, samples: u32) -> Rate {
+        let (mut w, mut h) = (w.clamp(1, 4), h.clamp(1, 4));
+        loop {
+            if w == 4 && h == 1 {
+                w = 2;
+            }
+            if h == 4 && w == 1 {
+                h = 2;
+            }
+            let r = Rate::of_size(w, h);
+            if r.allowed(samples, extra) || (w, h) == (1, 1) {
+                return r;
+            }
+            if w >= h {
+                w /= 2;
+            } else {
+                h /= 2;
+            }
         }
-        if h == 4 && w == 1 {
-            h = 2;
-        }
+    }
+
+    /// The rate of a `w × h` coarse pixel (sides 1, 2 or 4; `1 × 4` and `4 × 1` do not occur).
+    fn of_size(w: u32, h: u32) -> Rate {
         match (w, h) {
             (1, 1) => Rate::R1x1,
             (1, _) => Rate::R1x2,
@@ -133,8 +156,20 @@ impl Sri {
     /// Every tile at `rate`.
     #[must_use]
     pub fn uniform(width: u32, height: u32, tile: u32, rate: Rate) -> Sri {
+        let tile = tile.max(1);
         let (cols, rows) = (width.div_ceil(tile), height.div_ceil(tile));
         Sri { tile, cols, rows, rates: vec![rate; (cols * rows) as usize] }
+    }
+
+    /// Every tile's rate brought within what a target of `samples` samples allows ([`Rate::fit`]), as hardware
+    /// clamps an SRI.
+    #[must_use]
+    pub fn clamped(mut self, samples: u32, extra: bool) -> Sri {
+        for r in &mut self.rates {
+            let (w, h) = r.size();
+            *r = Rate::fit(w, h, extra, samples);
+        }
+        self
     }
 
     /// The rate of pixel (x, y).
@@ -290,7 +325,7 @@ pub fn gbuffer_sri(gb: &GBuffer, mask: &EdgeMask, tile: u32, extra: bool, rule: 
                 }
                 rh /= 2;
             }
-            sri.rates[(ty * sri.cols + tx) as usize] = Rate::fit(rw, rh, extra);
+            sri.rates[(ty * sri.cols + tx) as usize] = Rate::fit(rw, rh, extra, gb.samples);
         }
     }
     Ok(sri)
@@ -309,8 +344,10 @@ pub fn gbuffer_sri(gb: &GBuffer, mask: &EdgeMask, tile: u32, extra: bool, rule: 
 /// codes (`wave` lanes per wave: 64 as AMD's SDK compiles it for its GPUs). The tile-8 path reproduces AMD's
 /// grouping (a 16 × 16 group's four tiles gather its coarse pixels by the parity of their column and row, written
 /// transposed), so that the SRI equals the shader's tile for tile.
-#[must_use]
-pub fn ffx_sri(image: &crate::image::HdrImage, tile: u32, variance_cutoff: f32, wave: u32) -> Sri {
+pub fn ffx_sri(image: &crate::image::HdrImage, tile: u32, variance_cutoff: f32, wave: u32) -> Result<Sri> {
+    if ![8, 16, 32].contains(&tile) {
+        return Err(Error::Argument(format!("shading-rate tile size {tile}: use 8, 16 or 32")));
+    }
     let (w, h) = (image.width, image.height);
     let mut sri = Sri::uniform(w, h, tile, Rate::R1x1);
     let lum = |x: i64, y: i64| -> f32 {
@@ -386,7 +423,7 @@ pub fn ffx_sri(image: &crate::image::HdrImage, tile: u32, variance_cutoff: f32, 
             }
         }
     }
-    sri
+    Ok(sri)
 }
 
 /// The coarse pixels of tile (`tx`, `ty`) of `sri` over a `width × height` image: for each, its pixels (row-major
@@ -558,11 +595,18 @@ mod tests {
     fn rates_encode_as_d3d12_and_fit_the_allowed_set() {
         let want = [0u8, 0x1, 0x4, 0x5, 0x6, 0x9, 0xa]; // D3D12_SHADING_RATE_1X1 … _4X4
         assert_eq!(Rate::ALL.map(Rate::d3d12), want);
-        assert_eq!(Rate::fit(4, 4, false), Rate::R2x2);
-        assert_eq!(Rate::fit(4, 1, true), Rate::R2x1);
-        assert_eq!(Rate::fit(1, 4, true), Rate::R1x2);
-        assert_eq!(Rate::fit(4, 4, true), Rate::R4x4);
-        assert_eq!(Rate::fit(2, 4, true), Rate::R2x4);
+        assert_eq!(Rate::fit(4, 4, false, 1), Rate::R2x2);
+        assert_eq!(Rate::fit(4, 1, true, 1), Rate::R2x1);
+        assert_eq!(Rate::fit(1, 4, true, 1), Rate::R1x2);
+        assert_eq!(Rate::fit(4, 4, true, 1), Rate::R4x4);
+        assert_eq!(Rate::fit(2, 4, true, 1), Rate::R2x4);
+        // D3D12's limit of 16 samples per coarse pixel.
+        assert_eq!(Rate::fit(4, 4, true, 2), Rate::R2x4);
+        assert_eq!(Rate::fit(4, 4, true, 4), Rate::R2x2);
+        assert_eq!(Rate::fit(2, 2, true, 8), Rate::R1x2);
+        assert_eq!(Rate::fit(2, 2, false, 16), Rate::R1x1);
+        let allowed = |s: u32| Rate::ALL.iter().filter(|r| r.allowed(s, true)).count();
+        assert_eq!([1, 2, 4, 8, 16].map(allowed), [7, 6, 4, 3, 1]);
     }
 
     #[test]
@@ -614,18 +658,18 @@ mod tests {
         let all = |s: &Sri, r: Rate| s.rates.iter().all(|&x| x == r);
         for tile in [8, 16, 32] {
             // Flat: 2×2. Rows alternating (no horizontal delta): 2 wide, 1 tall. Columns alternating: 1×2.
-            assert!(all(&ffx_sri(&image(64, 64, &|_, _| 0.5), tile, 0.015, 64), Rate::R2x2));
-            assert!(all(&ffx_sri(&image(64, 64, &|_, y| (y % 2) as f32), tile, 0.015, 64), Rate::R2x1));
-            assert!(all(&ffx_sri(&image(64, 64, &|x, _| (x % 2) as f32), tile, 0.015, 64), Rate::R1x2));
+            assert!(all(&ffx_sri(&image(64, 64, &|_, _| 0.5), tile, 0.015, 64).unwrap(), Rate::R2x2));
+            assert!(all(&ffx_sri(&image(64, 64, &|_, y| (y % 2) as f32), tile, 0.015, 64).unwrap(), Rate::R2x1));
+            assert!(all(&ffx_sri(&image(64, 64, &|x, _| (x % 2) as f32), tile, 0.015, 64).unwrap(), Rate::R1x2));
             // A checkerboard: full rate.
-            assert!(all(&ffx_sri(&image(64, 64, &|x, y| ((x + y) % 2) as f32), tile, 0.015, 64), Rate::R1x1));
+            assert!(all(&ffx_sri(&image(64, 64, &|x, y| ((x + y) % 2) as f32), tile, 0.015, 64).unwrap(), Rate::R1x1));
         }
         // Tile 8: a 16×16 group's four tiles gather coarse pixels by column and row parity, written transposed.
         // One busy coarse pixel (column 1, row 0) raises itself and its neighbours (columns 0 and 2 of row 0, and
         // column 1 of row 1): every parity class but (odd row, even column), which AMD writes to tile (1, 0). A
         // spatial grouping would have kept tiles (1, 0), (0, 1) and (1, 1) at 2×2.
         let one = image(16, 16, &|x, y| if x / 2 == 1 && y / 2 == 0 { ((x + y) % 2) as f32 } else { 0.5 });
-        let s = ffx_sri(&one, 8, 0.015, 64);
+        let s = ffx_sri(&one, 8, 0.015, 64).unwrap();
         assert_eq!(s.rates, vec![Rate::R1x1, Rate::R2x2, Rate::R1x1, Rate::R1x1], "{s:?}");
     }
 

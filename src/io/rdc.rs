@@ -220,7 +220,12 @@ pub fn extract(capture: &Path, sel: &Selection) -> Result<Extracted> {
     }
     let argv: Vec<&std::ffi::OsStr> = args.iter().map(std::ffi::OsString::as_os_str).collect();
     run_bridge(capture, work.path(), &argv)?;
-    let text = std::fs::read(folder.join("manifest.json")).map_err(|e| Error::io(capture, e))?;
+    let text = std::fs::read(folder.join("manifest.json")).map_err(|e| {
+        Error::Internal(format!(
+            "RenderDoc bridge: it exited cleanly but wrote no manifest for {} ({e})",
+            capture.display()
+        ))
+    })?;
     let manifest: Manifest = serde_json::from_slice(&text).map_err(|e| {
         Error::Internal(format!("RenderDoc bridge: unreadable manifest for {}: {e}", capture.display()))
     })?;
@@ -261,8 +266,15 @@ fn run_bridge(capture: &Path, work: &Path, args: &[&std::ffi::OsStr]) -> Result<
             }
         };
         let stderr = String::from_utf8_lossy(&out.stderr);
-        let last = stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("").trim();
-        let message = last.strip_prefix("rdc_bridge: error: ").unwrap_or(last).to_string();
+        // The bridge's own error line, else what the process said last and how it ended (a crash in RenderDoc's
+        // module prints no error line).
+        let message = match stderr.lines().rev().find_map(|l| l.trim().strip_prefix("rdc_bridge: error: ")) {
+            Some(m) => m.to_string(),
+            None => {
+                let last = stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("(nothing on stderr)");
+                format!("{} ({})", last.trim(), out.status)
+            }
+        };
         match out.status.code() {
             Some(0) => return Ok(out.stdout),
             Some(EXIT_NO_MODULE) => why.push(format!("{}: {message}", py.display())),

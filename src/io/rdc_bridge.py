@@ -278,12 +278,12 @@ class Replay:
         the actions that precede the capture's first glBindFramebuffer, though they write the bound FBO.)"""
         self.ctrl.SetFrameEvent(event_id, False)
         pipe = self.ctrl.GetPipelineState()
-        colours = [(i, b) for i, b in enumerate(pipe.GetOutputTargets()) if int(b.resourceId) != 0]
+        colours = [(i, b) for i, b in enumerate(pipe.GetOutputTargets()) if int(bound_id(b)) != 0]
         depth = pipe.GetDepthTarget()
-        return colours, (depth if int(depth.resourceId) != 0 else None)
+        return colours, (depth if int(bound_id(depth)) != 0 else None)
 
     def describe(self, b):
-        rid = int(b.resourceId)
+        rid = int(bound_id(b))
         tex = self.textures.get(rid)
         mip, slc = max(0, b.firstMip), max(0, b.firstSlice)
         d = {"resource": rid, "name": self.debug_name(rid)}
@@ -374,10 +374,15 @@ def pick_action(rd, rp, event, marker):
     return a, m
 
 
+def bound_id(b):
+    """The resource of a bound target: `BoundResource.resourceId` (RenderDoc 1.24), `Descriptor.resource` (later)."""
+    return b.resource if hasattr(b, "resource") else b.resourceId
+
+
 def read_target(rp, bound, out_dir, file_name, slot, skipped):
     """Writes one bound target (a BoundResource) as file_name; returns its manifest entry or None (skipped)."""
     rd = rp.rd
-    rid = int(bound.resourceId)
+    rid = int(bound_id(bound))
     tex = rp.textures.get(rid)
     name = rp.debug_name(rid)
     if tex is None:
@@ -393,7 +398,7 @@ def read_target(rp, bound, out_dir, file_name, slot, skipped):
     samples = max(1, tex.msSamp)
     chunks = []
     for s in range(samples):
-        data = rp.ctrl.GetTextureData(bound.resourceId, rd.Subresource(mip, slc, s))
+        data = rp.ctrl.GetTextureData(bound_id(bound), rd.Subresource(mip, slc, s))
         data = bytes(data)
         if not data or len(data) % (w * h):
             raise Failure("%s (%s, %dx%d): GetTextureData returned %d bytes" % (

@@ -63,6 +63,11 @@ pub fn views(layout: &Layout, camera: Option<(f32, f32)>) -> Result<Views> {
     let mut base = shader::emit(layout, Lang::Glsl)?;
     const CAMERA: &str = "uniform float gbuf_znear;\nuniform float gbuf_zfar;\n";
     if base.contains(CAMERA) {
+        if let Some((n, f)) = camera.filter(|&(n, f)| !(n.is_finite() && f.is_finite() && 0.0 < n && n < f)) {
+            return Err(Error::Argument(format!(
+                "--znear {n} --zfar {f}: the planes must be finite with 0 < near < far"
+            )));
+        }
         let Some((n, f)) = camera else {
             return Err(Error::Argument(format!(
                 "layout {:?}'s depth codec needs the camera's near and far planes, which RenderDoc cannot pass to a \
@@ -93,6 +98,7 @@ pub fn views(layout: &Layout, camera: Option<(f32, f32)>) -> Result<Views> {
     for a in attributes {
         let mut targets: Vec<usize> =
             layout.fields().iter().filter(|f| f.slot.attribute() == Some(a)).map(|f| f.target).collect();
+        targets.sort_unstable();
         targets.dedup();
         if targets.len() != 1 {
             skipped.push(format!("{}: stored in {} targets; a view sees one", a.name(), targets.len()));

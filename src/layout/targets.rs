@@ -517,6 +517,18 @@ fn capture_targets(
                 && v[5..].bytes().all(|b| b.is_ascii_digit())
     };
     let here = capture.parent().unwrap_or(Path::new("."));
+    for (n, _) in explicit {
+        let known = layout.spec().targets.iter().any(|t| t.name.eq_ignore_ascii_case(n))
+            || n.eq_ignore_ascii_case(COVERAGE_TARGET)
+            || n.eq_ignore_ascii_case("material_table");
+        if !known {
+            return Err(Error::Argument(format!(
+                "--target {n}: layout {:?} has no such target (its targets: {}; also coverage, material_table)",
+                layout.name(),
+                layout.spec().targets.iter().map(|t| t.name.as_str()).collect::<Vec<_>>().join(", ")
+            )));
+        }
+    }
     let mut files = Vec::new();
     let names = layout.spec().targets.iter().map(|t| (t.name.as_str(), true));
     for (name, needed) in names.chain([(COVERAGE_TARGET, false), ("material_table", false)]) {
@@ -535,7 +547,8 @@ fn capture_targets(
                 })?)
             }
             Some(v) => {
-                files.push((name.to_string(), if v.is_relative() { here.join(v) } else { v.clone() }));
+                // A file: as given when it exists (relative to the working folder), else beside the capture.
+                files.push((name.to_string(), if v.is_relative() && !v.exists() { here.join(v) } else { v.clone() }));
                 continue;
             }
             None if name == "material_table" => continue,

@@ -847,20 +847,21 @@ fn run_bands_many(
     bands.into_par_iter().enumerate().for_each(|(b, mut outs)| {
         let y0 = b * band_h;
         let rows = outs[0].0.len() / w;
-        BAND_FEATURES.with_borrow_mut(|feats| {
-            // Every value is written by the reference's pass before the tests read it: no zeroing needed.
-            feats.resize(FEATURES * rows * w, 0.0);
-            let feats = &mut feats[..FEATURES * rows * w];
-            band_features(ctx, r, enc, y0, rows, &mut Sink::Store(feats));
-            for (k, (out, em)) in outs.iter_mut().enumerate() {
-                let keep = match em.as_deref_mut() {
-                    Some(e) => Keep::Tagged(e, tag),
-                    None if max => Keep::Max,
-                    None => Keep::Store,
-                };
-                band_features(ctx, tests[k], enc, y0, rows, &mut Sink::Compare { reference: feats, out, keep });
-            }
-        });
+        // Taken, not borrowed: a nested call on this thread would find an empty buffer, never a held borrow.
+        let mut buffer = BAND_FEATURES.take();
+        // Every value is written by the reference's pass before the tests read it: no zeroing needed.
+        buffer.resize(FEATURES * rows * w, 0.0);
+        let feats = &mut buffer[..FEATURES * rows * w];
+        band_features(ctx, r, enc, y0, rows, &mut Sink::Store(feats));
+        for (k, (out, em)) in outs.iter_mut().enumerate() {
+            let keep = match em.as_deref_mut() {
+                Some(e) => Keep::Tagged(e, tag),
+                None if max => Keep::Max,
+                None => Keep::Store,
+            };
+            band_features(ctx, tests[k], enc, y0, rows, &mut Sink::Compare { reference: feats, out, keep });
+        }
+        BAND_FEATURES.set(buffer);
     });
 }
 
