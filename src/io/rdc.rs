@@ -245,6 +245,53 @@ fn work_dir(capture: &Path) -> Result<tempfile::TempDir> {
     Ok(dir)
 }
 
+/// The environment variable giving the replay's time limit in seconds.
+pub const TIMEOUT_VAR: &str = "GBUF_RDC_TIMEOUT";
+
+/// How long one run of the bridge may take: `$GBUF_RDC_TIMEOUT` seconds, else 600 (a replay that hangs in a
+/// driver must not hang the command).
+fn timeout() -> u64 {
+    std::env::var(TIMEOUT_VAR).ok().and_then(|v| v.trim().parse().ok()).filter(|&t| t > 0).unwrap_or(600)
+}
+
+/// Why [`wait_for`] returned no output.
+enum Waited {
+    TimedOut(u64),
+    Io(std::io::Error),
+}
+
+/// The child's output once it exits, reading its pipes meanwhile (so a full pipe cannot stall it); killed after
+/// `seconds`.
+fn wait_for(mut child: std::process::Child, seconds: u64) -> std::result::Result<std::process::Output, Waited> {
+    use std::io::Read;
+    let drain = |pipe: Option<Box<dyn Read + Send>>| {
+        std::thread::spawn(move || {
+            let mut buf = Vec::new();
+            if let Some(mut p) = pipe {
+                let _ = p.read_to_end(&mut buf);
+            }
+            buf
+        })
+    };
+    let stdout = drain(child.stdout.take().map(|p| Box::new(p) as Box<dyn Read + Send>));
+    let stderr = drain(child.stderr.take().map(|p| Box::new(p) as Box<dyn Read + Send>));
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(seconds);
+    let status = loop {
+        match child.try_wait() {
+            Ok(Some(status)) => break status,
+            Ok(None) if std::time::Instant::now() >= deadline => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(Waited::TimedOut(seconds));
+            }
+            Ok(None) => std::thread::sleep(std::time::Duration::from_millis(20)),
+            Err(e) => return Err(Waited::Io(e)),
+        }
+    };
+    let (stdout, stderr) = (stdout.join().unwrap_or_default(), stderr.join().unwrap_or_default());
+    Ok(std::process::Output { status, stdout, stderr })
+}
+
 /// The Pythons tried, in order.
 fn pythons() -> Vec<PathBuf> {
     if let Some(p) = std::env::var_os(PYTHON_VAR).filter(|p| !p.is_empty()) {
@@ -258,13 +305,31 @@ fn run_bridge(capture: &Path, work: &Path, args: &[&std::ffi::OsStr]) -> Result<
     let script = work.join("rdc_bridge.py");
     let mut why = Vec::new();
     for py in pythons() {
-        let out = match Command::new(&py).arg(&script).args(args).output() {
-            Ok(o) => o,
+        let child = Command::new(&py)
+            .arg(&script)
+            .args(args)
+            .stdin(std::process::Stdio::null())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn();
+        let child = match child {
+            Ok(c) => c,
             Err(e) => {
                 why.push(format!("{}: {e}", py.display()));
                 continue;
             }
         };
+        let out = wait_for(child, timeout()).map_err(|e| match e {
+            Waited::TimedOut(t) => Error::invalid(
+                capture,
+                format!(
+                    "RenderDoc's replay (through {}) did not finish in {t} s and was stopped; set {TIMEOUT_VAR} to \
+                     wait longer",
+                    py.display()
+                ),
+            ),
+            Waited::Io(e) => Error::io(capture, e),
+        })?;
         let stderr = String::from_utf8_lossy(&out.stderr);
         // The bridge's own error line, else what the process said last and how it ended (a crash in RenderDoc's
         // module prints no error line).
@@ -301,6 +366,30 @@ fn run_bridge(capture: &Path, work: &Path, args: &[&std::ffi::OsStr]) -> Result<
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_child_that_does_not_finish_is_stopped() {
+        let child = Command::new("sleep")
+            .arg("30")
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn();
+        let Ok(child) = child else { return }; // no `sleep` on this system
+        let t = std::time::Instant::now();
+        assert!(matches!(wait_for(child, 1), Err(Waited::TimedOut(1))));
+        assert!(t.elapsed() < std::time::Duration::from_secs(10));
+        let child = Command::new("sh")
+            .args(["-c", "echo out; echo err >&2"])
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let out = wait_for(child, 10).ok().unwrap();
+        assert_eq!(
+            (out.stdout.as_slice(), out.stderr.as_slice(), out.status.success()),
+            (&b"out\n"[..], &b"err\n"[..], true)
+        );
+    }
 
     #[test]
     fn captures_are_told_by_their_first_bytes() {
