@@ -159,6 +159,23 @@ pub struct PackedFiles {
     pub positions_assumed: bool,
 }
 
+/// Every `--target NAME=…` names a target of `layout` (or `coverage`, `material_table`).
+fn check_target_names(layout: &Layout, explicit: &[(String, PathBuf)]) -> Result<()> {
+    for (n, _) in explicit {
+        let known = layout.spec().targets.iter().any(|t| t.name.eq_ignore_ascii_case(n))
+            || n.eq_ignore_ascii_case(COVERAGE_TARGET)
+            || n.eq_ignore_ascii_case("material_table");
+        if !known {
+            return Err(Error::Argument(format!(
+                "--target {n}: layout {:?} has no such target (its targets: {}; also coverage, material_table)",
+                layout.name(),
+                layout.spec().targets.iter().map(|t| t.name.as_str()).collect::<Vec<_>>().join(", ")
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Reads the targets of `layout` from `dir` (and the sidecar's camera and sample positions, the material table,
 /// the coverage) without decoding them.
 pub fn read_frame(
@@ -185,18 +202,7 @@ pub fn read_frame(
     } else {
         Vec::new()
     };
-    for (n, _) in explicit {
-        let known = layout.spec().targets.iter().any(|t| t.name.eq_ignore_ascii_case(n))
-            || n.eq_ignore_ascii_case(COVERAGE_TARGET)
-            || n.eq_ignore_ascii_case("material_table");
-        if !known {
-            return Err(Error::Argument(format!(
-                "--target {n}: layout {:?} has no such target (its targets: {}; also coverage, material_table)",
-                layout.name(),
-                layout.spec().targets.iter().map(|t| t.name.as_str()).collect::<Vec<_>>().join(", ")
-            )));
-        }
-    }
+    check_target_names(layout, explicit)?;
     let mut planes = Vec::new();
     let mut read = Vec::new();
     let mut size: Option<(u32, u32, u32, PathBuf)> = None;
@@ -517,18 +523,7 @@ fn capture_targets(
                 && v[5..].bytes().all(|b| b.is_ascii_digit())
     };
     let here = capture.parent().unwrap_or(Path::new("."));
-    for (n, _) in explicit {
-        let known = layout.spec().targets.iter().any(|t| t.name.eq_ignore_ascii_case(n))
-            || n.eq_ignore_ascii_case(COVERAGE_TARGET)
-            || n.eq_ignore_ascii_case("material_table");
-        if !known {
-            return Err(Error::Argument(format!(
-                "--target {n}: layout {:?} has no such target (its targets: {}; also coverage, material_table)",
-                layout.name(),
-                layout.spec().targets.iter().map(|t| t.name.as_str()).collect::<Vec<_>>().join(", ")
-            )));
-        }
-    }
+    check_target_names(layout, explicit)?;
     let mut files = Vec::new();
     let names = layout.spec().targets.iter().map(|t| (t.name.as_str(), true));
     for (name, needed) in names.chain([(COVERAGE_TARGET, false), ("material_table", false)]) {
