@@ -43,6 +43,8 @@ pub struct VrsConfig {
     /// Also find, per tile size, the largest saving of gbuf's rule (its thresholds scaled by [`RULE_SCALES`]) whose
     /// LDR-FLIP against the full-rate image stays at or under this (needs `viewing`).
     pub max_flip: Option<f64>,
+    /// The wave width `ffx`'s reductions run over ([`FFX_WAVE`] on AMD's GPUs; 32 on NVIDIA's).
+    pub ffx_wave: u32,
 }
 
 /// FidelityFX VRS's `VarianceCutoff` as AMD's sample sets it.
@@ -102,6 +104,9 @@ pub struct VrsOutput {
     /// The coarse images, in row order.
     #[serde(skip)]
     pub images: Vec<HdrImage>,
+    /// The full-rate image (what `ffx` sees as "the previous frame").
+    #[serde(skip)]
+    pub full_rate: HdrImage,
 }
 
 /// Measures gbuf's SRI on `gb` lit by `lights` (view space) at each tile size of `cfg`.
@@ -128,6 +133,7 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
         rows: Vec::new(),
         sris: Vec::new(),
         images: Vec::new(),
+        full_rate: HdrImage::default(),
     };
     // The frame coarse at each rate everywhere: a tile's image under any SRI is its image under its own rate
     // everywhere (coarse pixels never cross tiles, and every tile size is a multiple of the widest coarse pixel).
@@ -172,7 +178,7 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
         push(&mut out, measured, sri.clone());
         // FidelityFX VRS's rule on the full-rate image as "the previous frame" (a static camera).
         // (At 8× MSAA and beyond the hardware clamps its 2 × 2 tiles.)
-        let ffx = rate::ffx_sri(&full, tile, FFX_VARIANCE_CUTOFF, FFX_WAVE)?.clamped(gb.samples, false);
+        let ffx = rate::ffx_sri(&full, tile, FFX_VARIANCE_CUTOFF, cfg.ffx_wave)?.clamped(gb.samples, false);
         push(&mut out, measure("ffx", tile, &ffx, None)?, ffx);
         // The oracle at gbuf's budget: per tile the rates' errors against the reference and their evaluations.
         let tiles = sri.rates.len();
@@ -217,6 +223,7 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
             }
         }
     }
+    out.full_rate = full;
     Ok(out)
 }
 

@@ -48,9 +48,13 @@ pub struct Args {
     pub max_flip: Option<f64>,
     /// Write, per generator and tile size, the SRI as D3D12 reads it (`sri_<generator>_<tile>.dds`: R8_UINT, one
     /// `D3D12_SHADING_RATE` per tile), as a picture in the rate colours (`sri_<generator>_<tile>.png`) and the
-    /// coarse-shaded image (`coarse_<generator>_<tile>.png`, Reinhard tone map) into this folder.
+    /// coarse-shaded image (`coarse_<generator>_<tile>.png`, Reinhard tone map) into this folder, and the full-rate
+    /// image `ffx` reads (`full_rate.exr`, linear).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// The wave width FidelityFX VRS's reductions run over: 64 on AMD's GPUs (its SDK's build), 32 on NVIDIA's.
+    #[arg(long, value_name = "LANES", default_value_t = gbuf::analysis::vrs::FFX_WAVE)]
+    pub ffx_wave: u32,
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
@@ -84,7 +88,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         viewing: (!args.no_flip).then(Viewing::default),
         rule: Default::default(),
         max_flip: args.max_flip,
+        ffx_wave: args.ffx_wave,
     };
+    if !(args.ffx_wave.is_power_of_two() && (4..=128).contains(&args.ffx_wave)) {
+        crate::usage!("--ffx-wave {}: a power of two from 4 to 128", args.ffx_wave);
+    }
     if args.max_flip.is_some_and(|f| !(f.is_finite() && f > 0.0)) {
         crate::usage!("--max-flip: a positive FLIP value, e.g. 0.01");
     }
@@ -100,6 +108,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             let shown = gbuf::base::png::encode_rgb8(gb.width, gb.height, &image.to_srgb8(Default::default()))?;
             staged.stage_bytes(&dir.join(format!("coarse_{}_{}.png", row.generator, row.tile)), &shown)?;
         }
+        let exr = dir.join("full_rate.exr");
+        staged.stage_bytes(&exr, &out.full_rate.exr_bytes(&exr)?)?;
         staged.commit()?;
     }
     if args.json {
