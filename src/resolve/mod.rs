@@ -41,6 +41,7 @@ pub fn kernel_lanes() -> usize {
 }
 pub use falloff::{MIN_DISTANCE, MIN_RAMP_FRACTION};
 pub use reference::{check_meaningful, reference, reference_per_sample};
+pub use schedule::Coarse;
 pub use split::{ResolveInput, SplitSamples};
 pub use surface::SanitizedCounts;
 
@@ -116,7 +117,38 @@ pub fn resolve_into<'a>(
     cfg: &ResolveConfig,
     out: &mut Resolved,
 ) -> Result<()> {
-    resolve_into_isa(Isa::detect(), gb.into(), lights, mask, cfg, out)
+    resolve_into_isa(Isa::detect(), gb.into(), lights, mask, None, cfg, out)
+}
+
+/// [`resolve`] shading less than once per pixel where `coarse`'s shading-rate image says so: each coarse pixel's
+/// non-edge pixels are shaded once, at its first one (in row order) with a covered sample, and the others take
+/// that colour (`broadcast`) or that colour times their own albedo over the shaded one's (`lighting`). Pixels of
+/// `mask` are shaded per sample whatever their tile's rate, as hardware composes coarse shading with MSAA. The
+/// evaluations in the stats fall with the pixels shared ([`crate::detect::rate::evaluations`] counts them
+/// beforehand); an all-1×1 SRI gives [`resolve`]'s image bit for bit. Fails when the SRI does not cover the frame
+/// or a coarse pixel would cross a resolve tile ([`Coarse::check`]).
+pub fn resolve_coarse<'a>(
+    gb: impl Into<ResolveInput<'a>>,
+    lights: &[Light],
+    mask: &EdgeMask,
+    coarse: Coarse<'_>,
+    cfg: &ResolveConfig,
+) -> Result<Resolved> {
+    resolve_coarse_isa(Isa::detect(), gb, lights, mask, coarse, cfg)
+}
+
+/// [`resolve_coarse`] compiled for `isa` (as [`resolve_isa`]).
+pub fn resolve_coarse_isa<'a>(
+    isa: Isa,
+    gb: impl Into<ResolveInput<'a>>,
+    lights: &[Light],
+    mask: &EdgeMask,
+    coarse: Coarse<'_>,
+    cfg: &ResolveConfig,
+) -> Result<Resolved> {
+    let mut out = Resolved::default();
+    resolve_into_isa(isa, gb.into(), lights, mask, Some(coarse), cfg, &mut out)?;
+    Ok(out)
 }
 
 /// [`resolve`] with every SIMD stage (work-list build, culling, light loop) compiled for `isa`, or for the widest
@@ -131,7 +163,7 @@ pub fn resolve_isa<'a>(
     cfg: &ResolveConfig,
 ) -> Result<Resolved> {
     let mut out = Resolved::default();
-    resolve_into_isa(isa, gb.into(), lights, mask, cfg, &mut out)?;
+    resolve_into_isa(isa, gb.into(), lights, mask, None, cfg, &mut out)?;
     Ok(out)
 }
 
@@ -172,14 +204,19 @@ fn resolve_into_isa(
     gb: ResolveInput<'_>,
     lights: &[Light],
     mask: &EdgeMask,
+    coarse: Option<Coarse<'_>>,
     cfg: &ResolveConfig,
     out: &mut Resolved,
 ) -> Result<()> {
     let t_start = Instant::now();
     let packed = gb.packed();
     let (reader, gb) = prepare(gb, mask, cfg)?;
+    if let Some(c) = &coarse {
+        c.check(gb.width, gb.height, cfg.tile_size)?;
+    }
     let clean = lights::sanitize(lights);
-    let frame = schedule::Frame::new(reader, packed, mask, &clean.lights, &clean.environment, *cfg, isa);
+    let mut frame = schedule::Frame::new(reader, packed, mask, &clean.lights, &clean.environment, *cfg, isa);
+    frame.coarse = coarse;
     let t_prep = t_start.elapsed();
 
     let t_par = Instant::now();

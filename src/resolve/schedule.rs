@@ -6,6 +6,12 @@
 //! Tiles run in parallel on rayon's current thread pool; tiles are small (16×16 by default), so each thread takes
 //! many and rayon balances them. Background samples contribute 0 (black sky) to the box filter; a non-edge pixel
 //! takes its one shaded sample's value for the whole pixel (that sample stands for the pixel, as in the demo).
+//!
+//! With a shading-rate image ([`Coarse`]) the non-edge pixels of each coarse pixel are shaded once, at its
+//! representative (the first of them in row order with a covered sample), and the others take its colour
+//! (`broadcast`) or its colour remodulated by their own albedo (`lighting`) after the box filter. Edge pixels stay
+//! per sample, as hardware composes coarse shading with MSAA. Tiles with no coarse pixel build the same list as
+//! without an SRI.
 
 use super::config::{Culling, MsaaSchedule, ResolveConfig, Schedule};
 use super::culling::{quad_rects, Bounds};
@@ -16,6 +22,7 @@ use super::surface::{position_from_depth, usable_position, Reads, SanitizedCount
 use super::worklist::{Items, QuadSoa, PAD_PIXEL};
 use crate::base::isa::Isa;
 use crate::base::mask::EdgeMask;
+use crate::detect::rate::{CoarseMode, Sri};
 use crate::error::Result;
 use crate::gbuffer::GBuffer;
 use crate::layout::PackedFrame;
@@ -53,6 +60,42 @@ pub struct Frame<'a> {
     /// Only every `band_stride`-th band of tile rows runs (1: all); the others' outputs are left as they are. For
     /// estimating a frame's time from a sample of its bands.
     pub band_stride: u32,
+    /// Coarse shading by a shading-rate image (`None`: every pixel at full rate).
+    pub coarse: Option<Coarse<'a>>,
+}
+
+/// Coarse shading: one lighting evaluation per coarse pixel of `sri` (its coarse pixels never cross a resolve
+/// tile: checked by [`Coarse::check`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Coarse<'a> {
+    /// The rates.
+    pub sri: &'a Sri,
+    /// How a coarse pixel's evaluation reaches its other pixels.
+    pub mode: CoarseMode,
+}
+
+impl Coarse<'_> {
+    /// Checks that the SRI covers a `width × height` frame and that every coarse pixel lies within one resolve tile
+    /// of `tile_size` (coarse pixels are aligned to their own size).
+    pub fn check(&self, width: u32, height: u32, tile_size: u32) -> Result<()> {
+        let s = self.sri;
+        if s.tile == 0 || s.cols != width.div_ceil(s.tile) || s.rows != height.div_ceil(s.tile) {
+            return Err(crate::error::Error::Mismatch(format!(
+                "the shading-rate image is {}×{} tiles of {} pixels, the frame {width}×{height}",
+                s.cols, s.rows, s.tile
+            )));
+        }
+        let (w, h) = s.rates.iter().fold((1, 1), |(w, h), r| (w.max(r.size().0), h.max(r.size().1)));
+        if !tile_size.is_multiple_of(w) || !tile_size.is_multiple_of(h) || !s.tile.is_multiple_of(w.max(h)) {
+            return Err(crate::error::Error::Mismatch(format!(
+                "coarse pixels of {w}×{h} would cross resolve tiles of {tile_size} (or SRI tiles of {}): use a \
+                 tile size that is a multiple of {}",
+                s.tile,
+                w.max(h)
+            )));
+        }
+        Ok(())
+    }
 }
 
 impl<'a> Frame<'a> {
@@ -83,6 +126,7 @@ impl<'a> Frame<'a> {
             cfg,
             isa: isa.min(Isa::detect()),
             band_stride: 1,
+            coarse: None,
             packed_reads: Reads::of(cfg.brdf).attributes(),
         }
     }
@@ -173,6 +217,12 @@ struct Scratch {
     band_heat: Vec<f32>,
     /// The band decoded from packed targets (when the frame is lit from them).
     band_gb: GBuffer,
+    /// Coarse shading: per pixel of the tile (row-major), whether it takes its coarse pixel's evaluation instead of
+    /// being shaded.
+    shared: Vec<bool>,
+    /// Those pixels: (band index, its representative's band index, the flat indices of both's first covered
+    /// samples).
+    sharing: Vec<(u32, u32, usize, usize)>,
 }
 
 /// Runs every tile of `frame`, writing pixel colours into `rgb` and light evaluations per pixel into `heat`
@@ -388,7 +438,8 @@ fn run_tile(frame: &Frame<'_>, rd: &SurfaceReader<'_>, tile: Tile, sc: &mut Scra
         d
     };
     st.tiles += 1;
-    let (n_first, n_real) = gather(frame, rd, tile, sc, st);
+    let coarse = plan_coarse(frame, rd, tile, sc);
+    let (n_first, n_real) = gather(frame, rd, tile, sc, st, coarse);
     st.t_gather += lap();
     // Pixels with no sample are black; edge pixels add their samples from 0.
     let width = rd.gbuffer().width as usize;
@@ -402,6 +453,7 @@ fn run_tile(frame: &Frame<'_>, rd: &SurfaceReader<'_>, tile: Tile, sc: &mut Scra
         sc.band_heat[px] = 0.0;
     }
     if n_real == 0 {
+        share_coarse(frame, rd, sc);
         return;
     }
     let n = sc.items.len();
@@ -502,9 +554,80 @@ fn run_tile(frame: &Frame<'_>, rd: &SurfaceReader<'_>, tile: Tile, sc: &mut Scra
     st.tested += items.tested[..n_real].iter().map(|&t| t as u64).sum::<u64>();
     st.lit += items.lit[..n_real].iter().map(|&t| t as u64).sum::<u64>();
     st.evaluations += n_real as u64;
+    share_coarse(frame, rd, sc);
     t_shade += lap();
     st.t_cull += t_cull;
     st.t_shade += t_shade;
+}
+
+/// Lists the tile's pixels that take their coarse pixel's evaluation (`sc.shared`, `sc.sharing`); whether there
+/// are any. A coarse pixel's representative is its first non-edge pixel in row order with a covered sample; its
+/// other non-edge covered pixels share it (uncovered pixels stay black, edge pixels per sample).
+fn plan_coarse(frame: &Frame<'_>, rd: &SurfaceReader<'_>, tile: Tile, sc: &mut Scratch) -> bool {
+    sc.sharing.clear();
+    let Some(c) = frame.coarse else { return false };
+    let gb = rd.gbuffer();
+    let (width, samples) = (gb.width, gb.samples);
+    let at = rd.sample_index();
+    let t = c.sri.tile;
+    let (x_end, y_end) = (tile.x0 + tile.w, tile.y0 + tile.h);
+    sc.shared.clear();
+    sc.shared.resize((tile.w * tile.h) as usize, false);
+    for sy in tile.y0 / t..=(y_end - 1) / t {
+        for sx in tile.x0 / t..=(x_end - 1) / t {
+            let (rw, rh) = c.sri.rates[(sy * c.sri.cols + sx) as usize].size();
+            if rw * rh == 1 {
+                continue;
+            }
+            let (xa, xb) = ((sx * t).max(tile.x0), ((sx + 1) * t).min(x_end));
+            let (ya, yb) = ((sy * t).max(tile.y0), ((sy + 1) * t).min(y_end));
+            for cy in (ya..yb).step_by(rh as usize) {
+                for cx in (xa..xb).step_by(rw as usize) {
+                    let mut rep: Option<(u32, usize)> = None;
+                    for y in cy..(cy + rh).min(yb) {
+                        for x in cx..(cx + rw).min(xb) {
+                            let p = y as usize * width as usize + x as usize;
+                            if frame.mask.shade_count[p] > 1 {
+                                continue;
+                            }
+                            let Some(i) = (0..samples).map(|s| at.of(p, s)).find(|&i| gb.coverage[i]) else {
+                                continue;
+                            };
+                            let band = (y - tile.y0) * width + x;
+                            match rep {
+                                None => rep = Some((band, i)),
+                                Some((r, ri)) => {
+                                    sc.sharing.push((band, r, i, ri));
+                                    sc.shared[((y - tile.y0) * tile.w + x - tile.x0) as usize] = true;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    !sc.sharing.is_empty()
+}
+
+/// Writes the pixels listed by [`plan_coarse`] from their representatives (after the box filter): its colour, or
+/// in `lighting` mode its colour times the pixel's albedo over its own, per channel (a channel whose
+/// representative albedo is under 1/1024 keeps the colour: there is no lighting to recover). They spent no light
+/// evaluation.
+fn share_coarse(frame: &Frame<'_>, rd: &SurfaceReader<'_>, sc: &mut Scratch) {
+    let Some(c) = frame.coarse else { return };
+    for &(px, rep, i, ri) in &sc.sharing {
+        let colour = sc.band_rgb[rep as usize];
+        sc.band_rgb[px as usize] = match c.mode {
+            CoarseMode::Broadcast => colour,
+            CoarseMode::Lighting => {
+                let (own, theirs) = (rd.albedo(i), rd.albedo(ri));
+                let ratio = |o: f32, t: f32| if t >= 1.0 / 1024.0 { o / t } else { 1.0 };
+                colour * Vec3::new(ratio(own.x, theirs.x), ratio(own.y, theirs.y), ratio(own.z, theirs.z))
+            }
+        };
+        sc.band_heat[px as usize] = 0.0;
+    }
 }
 
 /// Copies the shading results of `sc.sorted` back to tile order (`sc.order[j]`: where item `j` went), so the box
@@ -608,6 +731,7 @@ fn gather(
     tile: Tile,
     sc: &mut Scratch,
     st: &mut TileStats,
+    coarse: bool,
 ) -> (usize, usize) {
     let gb = rd.gbuffer();
     let samples = gb.samples;
@@ -647,12 +771,20 @@ fn gather(
         let row = y as usize * width;
         let local_row = (y - tile.y0) as usize * width + x0;
         let counts_row = &frame.mask.shade_count[row + x0..row + x0 + tw];
+        // Pixels that take their coarse pixel's evaluation (none without an SRI).
+        let shared_row = if coarse {
+            let r = (y - tile.y0) as usize * tw;
+            Some(&sc.shared[r..r + tw]).filter(|r| r.contains(&true))
+        } else {
+            None
+        };
         // The common case first, a whole row at once: every pixel's sample 0 covered with a usable position,
         // stored or derived from depth (checked without branches). Otherwise pixel by pixel below.
         let first = at.first(row + x0);
         let end = first + (tw - 1) * stride + 1;
         let n = it.px.len();
         let taken = match (plane, gb.depth.as_deref(), rd.rays()) {
+            _ if shared_row.is_some() => false,
             (Some(plane), ..) => {
                 let (pos, cov) = (&plane[first..end], &gb.coverage[first..end]);
                 let usable = |a: bool, (&p, &c): (&Vec3, &bool)| a & c & usable_position(p);
@@ -728,7 +860,10 @@ fn gather(
                 sc.edge_px.push((x, y, pos.is_some()));
                 continue;
             }
-            // A non-edge pixel: its first usable sample stands for the whole pixel.
+            // A non-edge pixel: its first usable sample stands for the whole pixel, unless its coarse pixel's does.
+            if shared_row.is_some_and(|r| r[k]) {
+                continue;
+            }
             if let Some(plane) = plane {
                 // The common case first: sample 0 covered, with a usable stored position (else the loop below
                 // looks at every sample again, counting what it must).

@@ -277,6 +277,11 @@ impl<'a> SurfaceReader<'a> {
         self.gb
     }
 
+    /// The albedo sample `i` is shaded with (sanitised as the work list sanitises it, not counted).
+    pub(crate) fn albedo(&self, i: usize) -> Vec3 {
+        self.gb.albedo.as_ref().map_or(Vec3::splat(DEFAULT_ALBEDO), |a| albedo_clamped(a[i]).0)
+    }
+
     /// Sample `s` of pixel (`x`, `y`); `None` for background (or an unusable position, counted).
     #[inline]
     pub fn read(&self, x: u32, y: u32, s: u32, counts: &mut SanitizedCounts) -> Option<Surface> {
