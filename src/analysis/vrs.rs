@@ -6,10 +6,9 @@
 //! difference, summed), the SRI with the least error at gbuf's SRI's evaluations ([`rate::cheapest_sri`]). It is a
 //! bound for generators, not a product: it needs the reference.
 //!
-//! The coarse image is the resolve of [`rate::coarse_gbuffer`]: the frame whose shared pixels carry their coarse
-//! pixel's representative surface, lit with the same mask. It is the image a coarse-shading resolve gives; the
-//! evaluations are counted by [`rate::evaluations`] (this resolve still evaluates every pixel, so the time it
-//! saves is not measured here).
+//! The coarse image is [`resolve::resolve_coarse`]'s: one lighting evaluation per coarse pixel, edge pixels per
+//! sample with the same mask. Its evaluations are the resolve's own (equal to [`rate::evaluations`]), and its time
+//! is measured beside the full-rate resolve's (one run each: a machine's load shows in them).
 
 use crate::detect::rate::{self, CoarseMode, Rate, Smoothness, Sri};
 use crate::detect::{self, Detector, DetectorConfig};
@@ -18,7 +17,7 @@ use crate::gbuffer::GBuffer;
 use crate::image::HdrImage;
 use crate::light::Light;
 use crate::measure::image::{error_set, ErrorSet, Viewing};
-use crate::resolve::{self, ResolveConfig};
+use crate::resolve::{self, Coarse, ResolveConfig};
 use serde::Serialize;
 
 /// What to measure.
@@ -76,6 +75,10 @@ pub struct VrsRow {
     pub vs_full_rate: ErrorSet,
     /// The coarse image against the every-sample reference.
     pub vs_reference: ErrorSet,
+    /// The coarse resolve's wall time (ms).
+    pub resolve_ms: f64,
+    /// Its light loop's (work list, culling and shading, ms).
+    pub light_loop_ms: f64,
     /// For `gbuffer-max-flip`: the factor the rule's thresholds were scaled by.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rule_scale: Option<f32>,
@@ -94,6 +97,10 @@ pub struct VrsOutput {
     pub full_rate_evaluations: u64,
     /// Per pixel.
     pub full_rate_evaluations_per_pixel: f64,
+    /// The full-rate resolve's wall time (ms).
+    pub full_rate_resolve_ms: f64,
+    /// Its light loop's (work list, culling and shading, ms).
+    pub full_rate_light_loop_ms: f64,
     /// The full-rate image against the reference (what the detector alone costs).
     pub full_rate_vs_reference: ErrorSet,
     /// One row per tile size.
@@ -112,7 +119,9 @@ pub struct VrsOutput {
 /// Measures gbuf's SRI on `gb` lit by `lights` (view space) at each tile size of `cfg`.
 pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput> {
     let mask = detect::detect(gb, cfg.detector, &cfg.detector_config)?;
-    let full = resolve::resolve(gb, lights, &mask, &cfg.resolve)?.image;
+    let full = resolve::resolve(gb, lights, &mask, &cfg.resolve)?;
+    let (full_ms, full_loop_ms) = (full.stats.ms.total, light_loop_ms(&full.stats));
+    let full = full.image;
     let reference = resolve::reference(gb, lights, &cfg.resolve)?;
     resolve::check_meaningful(gb, lights, &reference)?;
     let v = cfg.viewing.as_ref();
@@ -129,6 +138,8 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
         extra_rates: cfg.extra_rates,
         full_rate_evaluations: full_evals,
         full_rate_evaluations_per_pixel: full_evals as f64 / pixels,
+        full_rate_resolve_ms: full_ms,
+        full_rate_light_loop_ms: full_loop_ms,
         full_rate_vs_reference: error_set(&reference, &full, v),
         rows: Vec::new(),
         sris: Vec::new(),
@@ -144,15 +155,16 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
             full.clone()
         } else {
             let sri = Sri::uniform(gb.width, gb.height, 8, r);
-            resolve::resolve(&rate::coarse_gbuffer(gb, &mask, &sri, cfg.mode), lights, &mask, &cfg.resolve)?.image
+            resolve::resolve_coarse(gb, lights, &mask, Coarse { sri: &sri, mode: cfg.mode }, &cfg.resolve)?.image
         };
         uniform.push(displayed_errors(&image, &reference));
     }
     // One SRI's row: its coarse image, evaluations and errors.
     let measure = |generator: &str, tile: u32, sri: &Sri, scale: Option<f32>| -> Result<(VrsRow, HdrImage)> {
-        let image =
-            resolve::resolve(&rate::coarse_gbuffer(gb, &mask, sri, cfg.mode), lights, &mask, &cfg.resolve)?.image;
-        let evaluations = rate::evaluations(gb, &mask, sri);
+        let coarse = resolve::resolve_coarse(gb, lights, &mask, Coarse { sri, mode: cfg.mode }, &cfg.resolve)?;
+        let evaluations = coarse.stats.shading_evaluations;
+        let (resolve_ms, loop_ms) = (coarse.stats.ms.total, light_loop_ms(&coarse.stats));
+        let image = coarse.image;
         let row = VrsRow {
             generator: generator.into(),
             tile,
@@ -162,6 +174,8 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
             saved: if full_evals == 0 { 0.0 } else { 1.0 - evaluations as f64 / full_evals as f64 },
             vs_full_rate: error_set(&full, &image, v),
             vs_reference: error_set(&reference, &image, v),
+            resolve_ms,
+            light_loop_ms: loop_ms,
             rule_scale: scale,
         };
         Ok((row, image))
@@ -225,6 +239,11 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
     }
     out.full_rate = full;
     Ok(out)
+}
+
+/// A resolve's light loop: its work lists, culling and shading (ms).
+fn light_loop_ms(stats: &resolve::ResolveStats) -> f64 {
+    stats.ms.gather + stats.ms.cull + stats.ms.shade
 }
 
 /// Tiles per rate of `sri` (rates no tile has are left out).

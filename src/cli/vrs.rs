@@ -132,23 +132,35 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         gb.samples,
         out.detector,
         out.full_rate_evaluations_per_pixel,
-        if mode == CoarseMode::Broadcast { "broadcast" } else { "share the lighting of" },
+        if mode == CoarseMode::Broadcast { "broadcast" } else { "remodulate by their albedo" },
         allowed.join(" "),
         gb.samples,
         if gb.samples == 1 { "" } else { "s" },
         if args.extra_rates { ", additional rates on" } else { "" }
     );
     println!(
-        "{:<26} {:>5} {:>9} {:>7} | vs full rate: {:>9} {:>8} {:>8} | vs reference: {:>9} {:>8} {:>8} | tiles per rate",
-        "generator", "tile", "eval/px", "saved", "RMSE", "LDR-FLIP", "HDR-FLIP", "RMSE", "LDR-FLIP", "HDR-FLIP"
+        "{:<26} {:>5} {:>9} {:>7} {:>8} | vs full rate: {:>9} {:>8} {:>8} | vs reference: {:>9} {:>8} {:>8} | tiles \
+         per rate",
+        "generator",
+        "tile",
+        "eval/px",
+        "saved",
+        "loop ms",
+        "RMSE",
+        "LDR-FLIP",
+        "HDR-FLIP",
+        "RMSE",
+        "LDR-FLIP",
+        "HDR-FLIP"
     );
     let r = &out.full_rate_vs_reference;
     println!(
-        "{:<26} {:>5} {:>9.3} {:>6.1}% | {:>23} {:>9} {:>8} | {:>28.3e} {} |",
+        "{:<26} {:>5} {:>9.3} {:>6.1}% {:>8.1} | {:>23} {:>9} {:>8} | {:>28.3e} {} |",
         "full rate",
         "-",
         out.full_rate_evaluations_per_pixel,
         0.0,
+        out.full_rate_light_loop_ms,
         "",
         "",
         "",
@@ -162,11 +174,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             None => row.generator.clone(),
         };
         println!(
-            "{:<26} {:>5} {:>9.3} {:>6.1}% | {:>23.3e} {} | {:>28.3e} {} | {}",
+            "{:<26} {:>5} {:>9.3} {:>6.1}% {:>8.1} | {:>23.3e} {} | {:>28.3e} {} | {}",
             name,
             row.tile,
             row.evaluations_per_pixel,
             100.0 * row.saved,
+            row.light_loop_ms,
             row.vs_full_rate.rmse,
             flip(&row.vs_full_rate),
             row.vs_reference.rmse,
@@ -175,8 +188,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     println!(
-        "(evaluations are what a coarse-shading resolve evaluates; the image is the full-rate resolve of the frame whose \
-         shared pixels carry their coarse pixel's surface)"
+        "(the coarse resolve shades each coarse pixel once and its edge pixels per sample; loop ms: its work lists, \
+         culling and shading, one run each on this machine's {} threads)",
+        rayon::current_num_threads()
     );
     Ok(())
 }

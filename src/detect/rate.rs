@@ -8,14 +8,13 @@
 //! pixel shades at its first covered pixel's position).
 //!
 //! [`gbuffer_sri`] is gbuf's generator, computed before any lighting from what the G-buffer holds (the rule is
-//! written at [`Smoothness`]). [`coarse_gbuffer`] is what coarse shading lights: every covered sample of a shared
-//! pixel carries its representative's surface (`broadcast`: everything; `lighting`: everything but its own
-//! albedo, the lighting computed once and multiplied by each pixel's own albedo, as decoupled engines do). Lit by
-//! the resolve it gives the coarse-shaded image, and [`evaluations`] counts what the coarse resolve evaluates.
+//! written at [`Smoothness`]). [`crate::resolve::resolve_coarse`] shades by an SRI (`broadcast`: the
+//! representative's colour for every pixel; `lighting`: that colour remodulated by each pixel's own albedo, as
+//! engines that shade lighting apart from albedo do), and [`evaluations`] counts beforehand what it evaluates.
 
 use crate::base::mask::EdgeMask;
 use crate::error::{Error, Result};
-use crate::gbuffer::{Attribute, GBuffer};
+use crate::gbuffer::GBuffer;
 
 /// One evaluation per `w × h` pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -447,12 +446,6 @@ fn tile_blocks(sri: &Sri, width: u32, height: u32, tx: u32, ty: u32) -> Vec<Vec<
     out
 }
 
-/// The coarse pixels of `sri` over a `width × height` image, tile by tile.
-fn coarse_pixels(sri: &Sri, width: u32, height: u32) -> impl Iterator<Item = Vec<usize>> + '_ {
-    let tiles = (0..sri.rows).flat_map(move |ty| (0..sri.cols).map(move |tx| (tx, ty)));
-    tiles.flat_map(move |(tx, ty)| tile_blocks(sri, width, height, tx, ty))
-}
-
 /// Lighting evaluations of a coarse-shaded resolve, per tile (row-major): edge pixels as the mask shades them (one
 /// per covered sample), and one per coarse pixel that holds a covered non-edge pixel.
 #[must_use]
@@ -542,48 +535,6 @@ pub enum CoarseMode {
     Broadcast,
     /// The representative's lighting times each pixel's own albedo.
     Lighting,
-}
-
-/// What a coarse-shaded resolve lights: `gb` with every covered sample of each non-edge pixel carrying its coarse
-/// pixel's representative surface (every shading input in `Broadcast`; all but the albedo in `Lighting`; IDs and
-/// motion stay the pixel's own). Resolving it with `mask` gives the coarse-shaded image; with an all-1×1 SRI it is
-/// `gb` itself.
-#[must_use]
-pub fn coarse_gbuffer(gb: &GBuffer, mask: &EdgeMask, sri: &Sri, mode: CoarseMode) -> GBuffer {
-    let s = gb.samples as usize;
-    // (representative sample, sample that takes its surface)
-    let mut pairs = Vec::new();
-    for block in coarse_pixels(sri, gb.width, gb.height) {
-        if block.len() < 2 {
-            continue;
-        }
-        let Some(rep) = block.iter().find(|&&p| !mask.is_edge(p) && first_covered(gb, p).is_some()) else {
-            continue;
-        };
-        let r = first_covered(gb, *rep).expect("found covered");
-        for &p in block.iter().filter(|&&p| p != *rep && !mask.is_edge(p)) {
-            pairs.extend((p * s..(p + 1) * s).filter(|&i| gb.coverage[i]).map(|i| (r, i)));
-        }
-    }
-    /// Copies the shading inputs of each pair's first sample to its second, plane by plane.
-    struct Share<'a> {
-        pairs: &'a [(usize, usize)],
-        keep_albedo: bool,
-    }
-    impl crate::gbuffer::PlaneVisitor for Share<'_> {
-        fn visit<T: Copy + Default + Send + Sync>(&mut self, attr: Attribute, plane: &mut [T]) {
-            if attr.is_id() || attr == Attribute::Motion || (self.keep_albedo && attr == Attribute::Albedo) {
-                return;
-            }
-            for &(from, to) in self.pairs {
-                plane[to] = plane[from];
-            }
-        }
-    }
-    let mut out = gb.clone();
-    // A representative is never a target: every copy reads an unchanged sample.
-    out.visit_planes_mut(&mut Share { pairs: &pairs, keep_albedo: mode == CoarseMode::Lighting });
-    out
 }
 
 #[cfg(test)]
@@ -707,25 +658,13 @@ mod tests {
     }
 
     #[test]
-    fn an_all_full_rate_sri_changes_nothing_and_edges_keep_their_samples() {
+    fn full_rate_evaluations_are_the_masks_and_coarse_rates_count_fewer() {
         let gb = crate::scene::render(crate::scene::SceneName::Room, 40, 24, 4).unwrap();
         let mask = crate::detect::detect(&gb, crate::detect::Detector::Lauritzen, &Default::default()).unwrap();
         let full = Sri::uniform(gb.width, gb.height, 8, Rate::R1x1);
-        assert_eq!(coarse_gbuffer(&gb, &mask, &full, CoarseMode::Broadcast), gb);
-        assert_eq!(evaluations(&gb, &mask, &full), mask.evaluations(&crate::detect::covered_per_pixel(&gb)));
-        // 2×2 everywhere: edge pixels keep their own samples; every shared pixel holds its representative's normal.
+        let at_full = evaluations(&gb, &mask, &full);
+        assert_eq!(at_full, mask.evaluations(&crate::detect::covered_per_pixel(&gb)));
         let coarse = Sri::uniform(gb.width, gb.height, 8, Rate::R2x2);
-        let c = coarse_gbuffer(&gb, &mask, &coarse, CoarseMode::Lighting);
-        let s = gb.samples as usize;
-        for p in 0..gb.pixel_count() {
-            if mask.is_edge(p) {
-                assert_eq!(
-                    c.normal.as_ref().unwrap()[p * s..(p + 1) * s],
-                    gb.normal.as_ref().unwrap()[p * s..(p + 1) * s]
-                );
-            }
-        }
-        assert_eq!(c.albedo, gb.albedo, "lighting mode keeps each pixel's albedo");
-        assert!(evaluations(&gb, &mask, &coarse) < evaluations(&gb, &mask, &full));
+        assert!(evaluations(&gb, &mask, &coarse) < at_full);
     }
 }
