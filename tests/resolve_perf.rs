@@ -175,3 +175,55 @@ fn time_per_frame() {
         );
     }
 }
+
+/// Coarse shading's time against the full-rate resolve's on the room at `GBUF_PERF_SIZE` (default 1920×1080) × 4
+/// with its default lights, lauritzen edges and gbuf's SRI at tile 16 (broadcast): per case the best wall time of
+/// `GBUF_PERF_FRAMES` frames on one thread, alternating, with the stage split and the evaluations.
+#[test]
+#[ignore = "measurement, not a test: run in release with --ignored --nocapture"]
+fn coarse_shading_time() {
+    use gbuf::detect::rate::{gbuffer_sri, CoarseMode};
+    use gbuf::resolve::{resolve_coarse, Coarse};
+    let (w, h) = std::env::var("GBUF_PERF_SIZE")
+        .ok()
+        .and_then(|s| s.split_once('x').and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?))))
+        .unwrap_or((1920u32, 1080u32));
+    let frames: u32 = env("GBUF_PERF_FRAMES").unwrap_or(7);
+    let gb = gbuf::scene::render(gbuf::scene::SceneName::Room, w, h, 4).unwrap();
+    let lights = gbuf::scene::default_lights(gbuf::scene::SceneName::Room, &gb);
+    let mask = detect(&gb, Detector::Lauritzen, &DetectorConfig::default()).unwrap();
+    let t0 = Instant::now();
+    let sri = gbuffer_sri(&gb, &mask, 16, false, &Default::default()).unwrap();
+    let t_sri = t0.elapsed().as_secs_f64() * 1e3;
+    let brdf = gbuf::resolve::Brdf::Ggx;
+    let cfg = ResolveConfig { brdf, ..Default::default() };
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let coarse = Coarse { sri: &sri, mode: CoarseMode::Broadcast };
+    let mut best = [f64::INFINITY; 2];
+    let mut stats: [Option<ResolveStats>; 2] = [None, None];
+    for _ in 0..frames {
+        for (k, best) in best.iter_mut().enumerate() {
+            let t = Instant::now();
+            let r = pool.install(|| {
+                if k == 0 {
+                    resolve(&gb, &lights, &mask, &cfg)
+                } else {
+                    resolve_coarse(&gb, &lights, &mask, coarse, &cfg)
+                }
+            });
+            let r = r.unwrap();
+            *best = best.min(t.elapsed().as_secs_f64() * 1e3);
+            stats[k] = Some(r.stats);
+        }
+    }
+    println!("{w}×{h}×4 room, {} lights, GGX, SRI (tile 16) in {t_sri:.1} ms", lights.len());
+    for (k, name) in ["full rate", "coarse"].iter().enumerate() {
+        let s = stats[k].as_ref().unwrap();
+        println!(
+            "{name}: best {:.1} ms on 1 thread; evaluations {} ({:.1}/sample lights); gather {:.1} cull {:.1} shade {:.1} \
+             (last run's split)",
+            best[k], s.shading_evaluations, s.lights_per_sample, s.ms.gather, s.ms.cull, s.ms.shade
+        );
+    }
+    println!("coarse / full: {:.2} of the time", best[1] / best[0]);
+}

@@ -77,8 +77,9 @@ pub struct VrsRow {
     pub vs_reference: ErrorSet,
     /// The coarse resolve's wall time (ms).
     pub resolve_ms: f64,
-    /// Its light loop's (work list, culling and shading, ms).
-    pub light_loop_ms: f64,
+    /// Its light loop's: the work lists shaded against their lights (ms; the work lists' reading of the G-buffer
+    /// and the culling are in `resolve_ms` only).
+    pub shade_ms: f64,
     /// For `gbuffer-max-flip`: the factor the rule's thresholds were scaled by.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rule_scale: Option<f32>,
@@ -99,8 +100,9 @@ pub struct VrsOutput {
     pub full_rate_evaluations_per_pixel: f64,
     /// The full-rate resolve's wall time (ms).
     pub full_rate_resolve_ms: f64,
-    /// Its light loop's (work list, culling and shading, ms).
-    pub full_rate_light_loop_ms: f64,
+    /// Its light loop's: the work lists shaded against their lights (ms; the work lists' reading of the G-buffer
+    /// and the culling are in `resolve_ms` only).
+    pub full_rate_shade_ms: f64,
     /// The full-rate image against the reference (what the detector alone costs).
     pub full_rate_vs_reference: ErrorSet,
     /// One row per tile size.
@@ -120,7 +122,7 @@ pub struct VrsOutput {
 pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput> {
     let mask = detect::detect(gb, cfg.detector, &cfg.detector_config)?;
     let full = resolve::resolve(gb, lights, &mask, &cfg.resolve)?;
-    let (full_ms, full_loop_ms) = (full.stats.ms.total, light_loop_ms(&full.stats));
+    let (full_ms, full_shade_ms) = (full.stats.ms.total, shade_ms(&full.stats));
     let full = full.image;
     let reference = resolve::reference(gb, lights, &cfg.resolve)?;
     resolve::check_meaningful(gb, lights, &reference)?;
@@ -139,7 +141,7 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
         full_rate_evaluations: full_evals,
         full_rate_evaluations_per_pixel: full_evals as f64 / pixels,
         full_rate_resolve_ms: full_ms,
-        full_rate_light_loop_ms: full_loop_ms,
+        full_rate_shade_ms: full_shade_ms,
         full_rate_vs_reference: error_set(&reference, &full, v),
         rows: Vec::new(),
         sris: Vec::new(),
@@ -163,7 +165,7 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
     let measure = |generator: &str, tile: u32, sri: &Sri, scale: Option<f32>| -> Result<(VrsRow, HdrImage)> {
         let coarse = resolve::resolve_coarse(gb, lights, &mask, Coarse { sri, mode: cfg.mode }, &cfg.resolve)?;
         let evaluations = coarse.stats.shading_evaluations;
-        let (resolve_ms, loop_ms) = (coarse.stats.ms.total, light_loop_ms(&coarse.stats));
+        let (resolve_ms, shade_ms) = (coarse.stats.ms.total, shade_ms(&coarse.stats));
         let image = coarse.image;
         let row = VrsRow {
             generator: generator.into(),
@@ -175,7 +177,7 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
             vs_full_rate: error_set(&full, &image, v),
             vs_reference: error_set(&reference, &image, v),
             resolve_ms,
-            light_loop_ms: loop_ms,
+            shade_ms: shade_ms,
             rule_scale: scale,
         };
         Ok((row, image))
@@ -241,9 +243,9 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
     Ok(out)
 }
 
-/// A resolve's light loop: its work lists, culling and shading (ms).
-fn light_loop_ms(stats: &resolve::ResolveStats) -> f64 {
-    stats.ms.gather + stats.ms.cull + stats.ms.shade
+/// A resolve's light loop: its work lists shaded against their lights (ms).
+fn shade_ms(stats: &resolve::ResolveStats) -> f64 {
+    stats.ms.shade
 }
 
 /// Tiles per rate of `sri` (rates no tile has are left out).

@@ -145,7 +145,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "tile",
         "eval/px",
         "saved",
-        "loop ms",
+        "shade ms",
         "RMSE",
         "LDR-FLIP",
         "HDR-FLIP",
@@ -160,7 +160,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "-",
         out.full_rate_evaluations_per_pixel,
         0.0,
-        out.full_rate_light_loop_ms,
+        out.full_rate_shade_ms,
         "",
         "",
         "",
@@ -179,7 +179,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             row.tile,
             row.evaluations_per_pixel,
             100.0 * row.saved,
-            row.light_loop_ms,
+            row.shade_ms,
             row.vs_full_rate.rmse,
             flip(&row.vs_full_rate),
             row.vs_reference.rmse,
@@ -188,8 +188,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     println!(
-        "(the coarse resolve shades each coarse pixel once and its edge pixels per sample; loop ms: its work lists, \
-         culling and shading, one run each on this machine's {} threads)",
+        "(the coarse resolve shades each coarse pixel once and its edge pixels per sample; shade ms: the light \
+         loop, the work lists shaded against their lights, one run each on this machine's {} threads)",
         rayon::current_num_threads()
     );
     Ok(())

@@ -13,6 +13,7 @@ pub mod codespace;
 pub mod dds;
 pub(crate) mod formats;
 pub mod lighting;
+pub mod limits;
 pub mod material;
 pub mod pack;
 pub mod renderdoc;
