@@ -146,3 +146,41 @@ fn scene_roundtrips_stay_within_the_codec_bounds() {
         }
     }
 }
+
+/// `gbuf layouts --check`: a row per layout and platform, the library's verdicts, reasons named, and an unknown
+/// platform refused with the known ones listed.
+#[test]
+fn layouts_check_says_where_each_layout_binds() {
+    let dir = tempfile::tempdir().unwrap();
+    let at = |msaa: &str| json(&gbuf(dir.path(), &["layouts", "--check", "--msaa", msaa, "--json"]));
+    let four = at("4");
+    let rows = four.as_array().unwrap();
+    assert_eq!(rows.len(), Layout::builtins().len() * gbuf::layout::limits::PLATFORMS.len());
+    let row = |rows: &[Value], l: &str, p: &str| {
+        rows.iter().find(|r| r["layout"] == l && r["platform"] == p).unwrap_or_else(|| panic!("{l} on {p}")).clone()
+    };
+    // Bevy's deferred texel is RGBA32_UINT: WebGPU binds it single-sampled, never at 4×.
+    let bevy = row(rows, "bevy-deferred", "webgpu");
+    assert_eq!(bevy["fits"], false);
+    assert!(bevy["problems"][0].as_str().unwrap().contains("rgba32ui has no guaranteed 4x MSAA"), "{bevy}");
+    let one = at("1");
+    assert_eq!(row(one.as_array().unwrap(), "bevy-deferred", "webgpu")["fits"], true);
+    // fat-20's five targets fill WebGPU's default 32 bytes per sample exactly.
+    let fat = row(rows, "fat-20", "webgpu");
+    assert_eq!(
+        (fat["fits"].clone(), fat["color_bytes"].clone(), fat["color_bytes_limit"].clone()),
+        (true.into(), 32.into(), 32.into())
+    );
+    // The f32 reference layout needs 80 bytes per sample: over every WebGPU budget, fine on D3D12.
+    assert_eq!(row(rows, "reference-f32", "webgpu-128")["fits"], false);
+    assert_eq!(row(rows, "reference-f32", "d3d12")["fits"], true);
+    // MSAA never keeps AFBC.
+    assert!(fat["afbc"].as_array().unwrap().iter().all(|t| t[1] == "never"), "{fat}");
+    let text = gbuf(dir.path(), &["layouts", "--check", "fat-20", "--platform", "metal-apple2,webgpu"]);
+    let text = String::from_utf8(text.stdout).unwrap();
+    assert!(text.contains("fat-20 on metal-apple2: d24s8 is not a guaranteed attachment format"), "{text}");
+    let bad = gbuf(dir.path(), &["layouts", "--check", "--platform", "xbox"]);
+    assert_eq!(bad.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.contains("--platform xbox") && err.contains("webgpu-64") && err.contains("metal-apple7"), "{err}");
+}

@@ -18,6 +18,13 @@ pub struct Args {
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
+    /// Whether each layout's targets bind as one `--msaa` pass on each platform (WebGPU's bytes per sample, Vulkan's
+    /// and D3D12's required formats, Metal's tile memory, AFBC): a fit table; `--platform` narrows it.
+    #[arg(long, conflicts_with = "emit")]
+    pub check: bool,
+    /// With `--check`: only these platforms (comma-separated; `gbuf layouts --check` lists them all).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', requires = "check")]
+    pub platform: Vec<String>,
     /// Print the one layout named as shader code instead (glsl, hlsl or wgsl): `GbufSurface`, `gbuf_pack_<target>`,
     /// `gbuf_unpack`, bit for bit what gbuf packs (docs/SHADERS.md). `renderdoc`: views for RenderDoc's texture
     /// viewer, one custom display shader per decoded attribute and the buffer viewer's format of each target, into
@@ -118,6 +125,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         };
     }
     let detailed = !args.layouts.is_empty();
+    if args.check {
+        let layouts: Vec<Layout> = if detailed {
+            args.layouts
+                .iter()
+                .map(|n| Layout::by_name_or_path(n).with_context(|| format!("layout {n:?}")))
+                .collect::<anyhow::Result<_>>()?
+        } else {
+            Layout::builtins()
+        };
+        return check(&layouts, &args.platform, args.msaa, args.json, detailed);
+    }
     let layouts: Vec<Layout> = if detailed {
         args.layouts
             .iter()
@@ -179,6 +197,119 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             for (a, v) in &r.constants {
                 writeln!(out, "  constant {a} = {v:?}")?;
             }
+        }
+    }
+    Ok(())
+}
+
+/// One layout's fit on one platform (`--check --json`).
+#[derive(serde::Serialize)]
+struct FitRow {
+    layout: String,
+    platform: &'static str,
+    fits: bool,
+    /// Colour bytes per sample (WebGPU) or per pixel (Metal tile memory), where the platform has such a budget.
+    color_bytes: Option<u32>,
+    color_bytes_limit: Option<u32>,
+    problems: Vec<String>,
+    needs: Vec<&'static str>,
+    /// Per target: whether Arm's AFBC can keep it compressed at this sample count.
+    afbc: Vec<(String, &'static str)>,
+}
+
+/// `gbuf layouts --check`: each layout's fit per platform.
+fn check(layouts: &[Layout], only: &[String], samples: u32, json: bool, detailed: bool) -> anyhow::Result<()> {
+    use gbuf::layout::limits::{self, Afbc, PLATFORMS};
+    let known: Vec<&str> = PLATFORMS.iter().map(|p| p.name).collect();
+    let mut platforms = Vec::new();
+    for name in only {
+        match limits::Platform::by_name(&name.to_ascii_lowercase()) {
+            Some(p) => platforms.push(p),
+            None => crate::usage!("--platform {name}: not a known platform; known: {}", known.join(", ")),
+        }
+    }
+    if platforms.is_empty() {
+        platforms = PLATFORMS.iter().collect();
+    }
+    let mut rows = Vec::new();
+    for l in layouts {
+        let formats = l.formats();
+        let afbc: Vec<(String, &'static str)> = l
+            .spec()
+            .targets
+            .iter()
+            .zip(formats)
+            .map(|(t, &f)| {
+                let a = match limits::afbc(f, samples) {
+                    Afbc::AllMali => "every Mali with AFBC",
+                    Afbc::FromMaliG77 => "from Mali-G77",
+                    Afbc::Never => "never",
+                };
+                (t.name.clone(), a)
+            })
+            .collect();
+        for p in &platforms {
+            let c = limits::check(p, formats, samples);
+            rows.push(FitRow {
+                layout: l.name().to_string(),
+                platform: p.name,
+                fits: c.fits(),
+                color_bytes: c.color_bytes,
+                color_bytes_limit: p.color_bytes_limit,
+                problems: c.problems,
+                needs: c.needs,
+                afbc: afbc.clone(),
+            });
+        }
+    }
+    if json {
+        return super::common::print_json(&rows);
+    }
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "Fit at {samples}× MSAA (what every conforming device guarantees; ok = binds as one pass, feature = needs an \
+         optional feature, no = does not):"
+    )?;
+    write!(out, "{:<16}", "layout")?;
+    for p in &platforms {
+        write!(out, " {:>13}", p.name)?;
+    }
+    writeln!(out)?;
+    for chunk in rows.chunks(platforms.len()) {
+        write!(out, "{:<16}", chunk[0].layout)?;
+        for r in chunk {
+            let verdict = if r.fits {
+                "ok"
+            } else if r.problems.is_empty() {
+                "feature"
+            } else {
+                "no"
+            };
+            let cell = match (r.color_bytes, r.color_bytes_limit) {
+                (Some(b), Some(l)) => format!("{verdict} {b}/{l}"),
+                _ => verdict.to_string(),
+            };
+            write!(out, " {cell:>13}")?;
+        }
+        writeln!(out)?;
+    }
+    writeln!(out, "(n/m: colour bytes per sample on WebGPU, per pixel of tile memory on Metal, against the budget)")?;
+    let why: Vec<&FitRow> = rows.iter().filter(|r| !r.fits).collect();
+    if detailed || why.len() <= 24 {
+        for r in why {
+            let mut reasons = r.problems.clone();
+            reasons.extend(r.needs.iter().map(|n| format!("needs {n}")));
+            writeln!(out, "  {} on {}: {}", r.layout, r.platform, reasons.join("; "))?;
+        }
+    } else {
+        writeln!(out, "(name layouts to see why each does not fit)")?;
+    }
+    if detailed {
+        for chunk in rows.chunks(platforms.len()) {
+            let afbc: Vec<String> = chunk[0].afbc.iter().map(|(t, a)| format!("{t} {a}")).collect();
+            writeln!(out, "  {} AFBC at {samples}×: {}", chunk[0].layout, afbc.join(", "))?;
         }
     }
     Ok(())
