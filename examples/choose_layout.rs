@@ -22,6 +22,7 @@ fn main() -> Result<(), gbuf::Error> {
         resolve: Default::default(),
         over: Over::Worst,
         shader_code: false,
+        fit: Vec::new(),
     };
     // Each frame loaded when the search needs it (twice with several frames: propose, then measure).
     let (result, _size) = budget::search_frames(

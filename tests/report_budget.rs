@@ -16,6 +16,7 @@ fn cfg(max_bytes: u32, max_error: Option<f64>) -> BudgetConfig {
         resolve: ResolveConfig::default(),
         over: Default::default(),
         shader_code: false,
+        fit: Vec::new(),
     }
 }
 
@@ -78,4 +79,28 @@ fn error_cap_picks_a_layout_under_it_and_impossible_budgets_fail() {
     assert_eq!(lossless.rmse, Some(0.0));
     assert_eq!(wide.winner.rmse, Some(0.0), "nothing beats no error");
     assert!(search(&gb, &lights, &cfg(1, None)).is_err(), "nothing useful fits in one byte");
+}
+
+/// `--fit`: every candidate the search measures binds as one pass on the platforms named, at the frame's sample
+/// count; single-sampled, WebGPU keeps generated layouts, and at 4× (integer targets do not multisample there) the
+/// search still answers with a layout that binds.
+#[test]
+fn budget_fit_keeps_only_layouts_that_bind_on_the_platforms() {
+    use gbuf::layout::limits::{check, Platform};
+    let webgpu = Platform::by_name("webgpu").unwrap();
+    for samples in [1, 4] {
+        let gb = scene::render(SceneName::Room, 64, 36, samples).unwrap();
+        let lights = scene::default_lights(SceneName::Room, &gb);
+        let unconstrained = search(&gb, &lights, &cfg(16, None)).unwrap();
+        let fits = |spec: &gbuf::layout::spec::LayoutSpec| {
+            check(webgpu, Layout::from_spec(spec.clone()).unwrap().formats(), samples).fits()
+        };
+        assert!(unconstrained.measured.iter().any(|c| !fits(&c.spec)), "{samples}×: the constraint must bite");
+        let res = search(&gb, &lights, &BudgetConfig { fit: vec![webgpu], ..cfg(16, None) }).unwrap();
+        assert!(fits(&res.winner.spec), "{samples}×: {}", res.winner.name);
+        assert!(res.measured.iter().all(|c| fits(&c.spec)), "{samples}×");
+        if samples == 1 {
+            assert!(res.measured.iter().any(|c| c.kind == "generated"), "single-sampled generated layouts bind");
+        }
+    }
 }

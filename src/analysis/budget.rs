@@ -63,6 +63,9 @@ pub struct BudgetConfig {
     /// Only layouts gbuf can emit as shader code (`--emit`): codecs with a `codec::Recipe`, material tables of at
     /// most `layout::shader::MAX_TABLE_BITS` index bits.
     pub shader_code: bool,
+    /// Only layouts whose targets bind as one pass at the frame's sample count on every one of these platforms
+    /// ([`crate::layout::limits::check`]; empty: no such constraint).
+    pub fit: Vec<&'static crate::layout::limits::Platform>,
 }
 
 /// A candidate's numbers on one frame.
@@ -773,19 +776,25 @@ pub fn propose(gb: &GBuffer, lights: &[Light], cfg: &BudgetConfig) -> Result<Pro
         Some(e) => fitting.sort_by(|a, b| ((a.1 > e), a.0).cmp(&((b.1 > e), b.0)).then(a.1.total_cmp(&b.1))),
     }
     let mut cands: Vec<Candidate> = Vec::new();
-    for (_, pred, c) in fitting.iter().take(VERIFY_GENERATED) {
+    let binds = |l: &Layout| cfg.fit.iter().all(|p| crate::layout::limits::check(p, l.formats(), gb.samples).fits());
+    for (_, pred, c) in &fitting {
+        if cands.len() == VERIFY_GENERATED {
+            break;
+        }
         if let Some(spec) = space.spec(c, &sets) {
-            cands.push(candidate(spec, "generated", Some(*pred)));
+            if cfg.fit.is_empty() || Layout::from_spec(spec.clone()).is_ok_and(|l| binds(&l)) {
+                cands.push(candidate(spec, "generated", Some(*pred)));
+            }
         }
     }
     for l in Layout::builtins() {
-        if l.bytes_per_sample() as u32 <= cfg.max_bytes {
+        if l.bytes_per_sample() as u32 <= cfg.max_bytes && binds(&l) {
             cands.push(candidate(l.spec().clone(), "built-in", None));
         }
         let (p, changes) = prune_spec(l.spec(), &needs);
         if !changes.is_empty() {
             if let Ok(pl) = Layout::from_spec(p.clone()) {
-                if pl.bytes_per_sample() as u32 <= cfg.max_bytes {
+                if pl.bytes_per_sample() as u32 <= cfg.max_bytes && binds(&pl) {
                     cands.push(candidate(p, "pruned built-in", None));
                 }
             }

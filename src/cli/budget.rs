@@ -55,6 +55,10 @@ pub struct Args {
     /// `LAYOUT.<lang>`.
     #[arg(long, value_name = "LANG", conflicts_with = "json")]
     pub emit: Option<gbuf::layout::shader::Lang>,
+    /// Only layouts whose targets bind as one pass at the frame's sample count on each of these platforms
+    /// (comma-separated: webgpu, d3d12, metal-apple4, …; `gbuf layouts --check` lists them).
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    pub fit: Vec<String>,
 }
 
 #[derive(Serialize)]
@@ -70,6 +74,7 @@ struct Output<'a> {
 
 /// Runs `gbuf budget`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    let fit = super::common::platforms("--fit", &args.fit)?;
     let detector = args.detector;
     if let Some(e) = args.max_error {
         anyhow::ensure!(e.is_finite() && e >= 0.0, "--max-error must be a finite number ≥ 0, got {e}");
@@ -97,6 +102,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         resolve: lighting.apply(ResolveConfig::default()),
         over: args.over,
         shader_code: args.emit.is_some(),
+        fit,
     };
     let names: Vec<String> = paths.iter().map(super::common::FrameRef::name).collect();
     let load = |i: usize| match first.take() {
@@ -206,6 +212,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     println!("searched {} generated combinations within budget in {:.1} s", res.combinations, res.seconds);
+    if !args.fit.is_empty() && !res.measured.iter().any(|c| c.kind == "generated") {
+        println!(
+            "--fit {}: no generated combination binds there at {}× (they pack fields into 32-bit integer targets, \
+             which WebGPU, Vulkan and Metal do not guarantee to multisample); `gbuf layouts --check LAYOUT` says why \
+             for any layout",
+            args.fit.join(","),
+            size.2
+        );
+    }
     if let Some(p) = &args.out {
         println!("layout written to {} (use it with --layout {})", p.display(), p.display());
     }

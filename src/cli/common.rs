@@ -518,3 +518,19 @@ impl std::str::FromStr for Resolution {
         }
     }
 }
+
+/// The platforms named by `--platform`/`--fit` (`flag`), or a usage error listing the known ones.
+pub fn platforms(flag: &str, names: &[String]) -> anyhow::Result<Vec<&'static gbuf::layout::limits::Platform>> {
+    use gbuf::layout::limits::{Platform, PLATFORMS};
+    let mut out = Vec::new();
+    for name in names {
+        match Platform::by_name(&name.to_ascii_lowercase()) {
+            Some(p) => out.push(p),
+            None => {
+                let known: Vec<&str> = PLATFORMS.iter().map(|p| p.name).collect();
+                crate::usage!("{flag} {name}: not a known platform; known: {}", known.join(", "))
+            }
+        }
+    }
+    Ok(out)
+}

@@ -220,14 +220,7 @@ struct FitRow {
 /// `gbuf layouts --check`: each layout's fit per platform.
 fn check(layouts: &[Layout], only: &[String], samples: u32, json: bool, detailed: bool) -> anyhow::Result<()> {
     use gbuf::layout::limits::{self, Afbc, PLATFORMS};
-    let known: Vec<&str> = PLATFORMS.iter().map(|p| p.name).collect();
-    let mut platforms = Vec::new();
-    for name in only {
-        match limits::Platform::by_name(&name.to_ascii_lowercase()) {
-            Some(p) => platforms.push(p),
-            None => crate::usage!("--platform {name}: not a known platform; known: {}", known.join(", ")),
-        }
-    }
+    let mut platforms = super::common::platforms("--platform", only)?;
     if platforms.is_empty() {
         platforms = PLATFORMS.iter().collect();
     }
