@@ -8,7 +8,7 @@
 //! pixel shades at its first covered pixel's position).
 //!
 //! [`gbuffer_sri`] is gbuf's generator, computed before any lighting from what the G-buffer holds (the rule is
-//! written at [`Smoothness`]). [`crate::resolve::resolve_coarse`] shades by an SRI (`broadcast`: the
+//! written at [`Smoothness`]). `resolve::resolve_coarse` (a later stage) shades by an SRI (`broadcast`: the
 //! representative's colour for every pixel; `lighting`: that colour remodulated by each pixel's own albedo, as
 //! engines that shade lighting apart from albedo do), and [`evaluations`] counts beforehand what it evaluates.
 

@@ -168,12 +168,11 @@ fn running_total(formats: &[Format], cost: impl Fn(Format) -> Option<(u32, u32)>
 /// Bytes and alignment a colour format takes in Apple tile memory; `None` if it is not renderable there or the GPU
 /// has no tile memory (`Mac2`). `msaa` selects the multisampled size, which differs only on `Apple1`–`Apple3`.
 ///
-/// Apple's *Understanding Color-Renderable Pixel Format Sizes* says A7–A10 expand some formats in tile memory and
-/// sends the numbers to the *Metal Feature Set Tables*; the per-format values here are the ones ANGLE's Metal back end
-/// validates with (`FormatTable::adjustFormatCapsForDevice`, `src/libANGLE/renderer/metal/mtl_format_utils.mm`): on
-/// A7–A10 every target takes at least 4 bytes at 4-byte alignment, `rgb10a2`/`rg11b10f`/`rgb9e5` take 8, sRGB and
-/// snorm `rgba8` take 8 with MSAA (plain `rgba8` too from A8); from A11 each format takes its own size, aligned to
-/// its component size.
+/// Apple's *Understanding Color-Renderable Pixel Format Sizes* says A7–A10 expand some formats in tile memory and sends
+/// the numbers to the *Metal Feature Set Tables*; the per-format values here are the ones ANGLE's Metal back end
+/// validates with (`FormatTable::adjustFormatCapsForDevice` in `mtl_format_utils.mm`): on A7–A10 every target takes at
+/// least 4 bytes at 4-byte alignment, `rgb10a2`/`rg11b10f`/`rgb9e5` take 8, sRGB and snorm `rgba8` take 8 with MSAA
+/// (plain `rgba8` too from A8); from A11 each format takes its own size, aligned to its component size.
 #[must_use]
 pub fn metal_tile_cost(format: Format, gpu: AppleGpu, msaa: bool) -> Option<(u32, u32)> {
     use Format::*;
@@ -276,7 +275,7 @@ pub fn d3d12_support(format: Format) -> Support {
 }
 
 /// Metal, from the pixel-format capability tables of Apple's *Metal Feature Set Tables* as ANGLE transcribes them
-/// (`caps` in `src/libANGLE/renderer/metal/mtl_format_map.json`). Apple GPUs render, blend and multisample `rgb9e5`;
+/// (`caps` in `mtl_format_map.json` of ANGLE's Metal back end). Apple GPUs render, blend and multisample `rgb9e5`;
 /// they multisample 32-bit-per-channel formats only from `Apple7` (`rg32ui`, `rgba32f`) or never (`r32ui`,
 /// `rgba32ui`, `rg32f`), blend `rgba32f` never, and have no `Depth24Unorm_Stencil8`.
 #[must_use]
