@@ -370,9 +370,34 @@ fn the_aa_table_compares_the_detectors_asked_for() {
         let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
         j["aa"].as_array().unwrap().iter().map(|a| a["method"].as_str().unwrap().to_string()).collect()
     };
-    assert_eq!(methods(&["--aa-detectors", "id,lauritzen"]), ["no-aa", "mlaa", "msaa:id", "msaa:lauritzen", "ssaa"]);
+    assert_eq!(
+        methods(&["--aa-detectors", "id,lauritzen"]),
+        ["no-aa", "mlaa", "msaa:id", "msaa:lauritzen", "ssaa", "vrs:gbuffer+msaa:lauritzen"]
+    );
     let default: Vec<String> =
         gbuf::analysis::pipelines::DEFAULT_AA_DETECTORS.iter().map(|d| format!("msaa:{d}")).collect();
     let all = methods(&[]);
-    assert_eq!(all[2..all.len() - 1], default[..]);
+    assert_eq!(all[2..all.len() - 2], default[..]);
+}
+
+/// The anti-aliasing table's shading-rate row: the deferred detector's adaptive MSAA shaded by gbuf's SRI, with
+/// fewer evaluations than that detector's row, exactly `rate::evaluations` of the SRI, and an image close to it.
+#[test]
+fn the_aa_table_has_gbufs_shading_rate_over_adaptive_msaa() {
+    let raster = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/raster_4x.exr");
+    let o = gbuf().arg("pipelines").arg(&raster).args(["--json", "--flip"]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let aa = j["aa"].as_array().unwrap();
+    let row = |m: &str| aa.iter().find(|r| r["method"] == m).unwrap_or_else(|| panic!("no {m} row"));
+    let (msaa, vrs) = (row("msaa:lauritzen"), row("vrs:gbuffer+msaa:lauritzen"));
+    let loaded = gbuf::io::load(&raster, &Default::default()).unwrap();
+    let gb = &loaded.gbuffer;
+    let mask = gbuf::detect::detect(gb, gbuf::detect::Detector::Lauritzen, &Default::default()).unwrap();
+    let sri = gbuf::detect::rate::gbuffer_sri(gb, &mask, 16, false, &Default::default()).unwrap();
+    assert_eq!(vrs["evaluations"].as_u64().unwrap(), gbuf::detect::rate::evaluations(gb, &mask, &sri));
+    assert!(vrs["evaluations"].as_u64().unwrap() * 10 < msaa["evaluations"].as_u64().unwrap() * 7, "{vrs}");
+    let flip = |r: &serde_json::Value| r["error"]["flip_ldr"].as_f64().unwrap();
+    assert!(flip(vrs) < flip(msaa) + 0.01, "{} against {}", flip(vrs), flip(msaa));
+    assert!(vrs["note"].as_str().unwrap().contains("tiles coarser than 1×1"), "{vrs}");
 }

@@ -44,8 +44,10 @@ fn the_report_page_loads_in_chromium_without_a_console_message_and_renders() {
         figures >= 3 && html.matches("<figure>").count() + html.matches("<figure class=\"ab\">").count() == figures,
         "every figure of report.md is inline"
     );
-    // One A/B view per layout of the sweep (8 built-ins), each with its two images and a slider.
-    assert_eq!((ab, html.matches("<figure class=\"ab\">").count()), (8, 8));
+    // One A/B view per layout of the sweep (8 built-ins) and gbuf's shading-rate image, each with its two images
+    // and a slider.
+    assert_eq!((ab, html.matches("<figure class=\"ab\">").count()), (9, 9));
+    assert!(md.contains("ab_shading_rate.png") && md.contains("shading-rate image"), "the SRI beside the A/B views");
     assert!(!html.contains("not in the report"), "no figure is missing");
     // Each caption once, as its figure's caption: not again as a literal `*…*` paragraph.
     assert_eq!(html.matches("<figcaption>").count(), figures, "one caption per figure");
@@ -73,7 +75,7 @@ fn the_report_page_loads_in_chromium_without_a_console_message_and_renders() {
     let dom = String::from_utf8_lossy(&o.stdout);
     let tables = html.matches("<table>").count();
     assert!(tables >= 3 && dom.contains(&format!("data-ready=\"{tables}\"")), "the page's script did not finish");
-    assert!(dom.contains("data-ab=\"8\""), "the A/B views were not set up");
+    assert!(dom.contains("data-ab=\"9\""), "the A/B views were not set up");
     assert!(dom.contains("class=\"ab-label\">fat_20 | reference<"), "the A/B labels are set by the script");
     // No console message (script errors and refused requests are logged there), and a rendered screenshot.
     let shot = dir.path().join("shot.png");

@@ -36,6 +36,9 @@ pub use crate::analysis::traffic::Pipeline;
 /// Lauritzen 2010's test, then depth, normal and ID discontinuities alone.
 pub const DEFAULT_AA_DETECTORS: [Detector; 4] = [Detector::Lauritzen, Detector::Depth, Detector::Normal, Detector::Id];
 
+/// The shading-rate tile of the anti-aliasing table's `vrs:gbuffer` row.
+pub const VRS_TILE: u32 = 16;
+
 /// What [`pipelines`] measures with.
 #[derive(Clone, Debug)]
 pub struct PipelinesConfig {
@@ -917,6 +920,33 @@ impl Measure<'_> {
                 ms,
                 error: self.err(&image.image),
                 note: String::new(),
+            });
+            aa_images.push(image.image);
+        }
+        // Shading less than once per pixel where the G-buffer allows: gbuf's shading-rate image over the deferred
+        // detector's adaptive MSAA (coarse pixels never cross a resolve tile of an even size).
+        if cfg.resolve.tile_size.is_multiple_of(2) {
+            let mask = detect::detect(gb, cfg.detector, &cfg.detector_config)?;
+            let sri = crate::detect::rate::gbuffer_sri(gb, &mask, VRS_TILE, false, &Default::default())?;
+            let rc = ResolveConfig { culling: Culling::Tiled, schedule: Schedule::Deferred, ..cfg.resolve };
+            let coarse = resolve::Coarse { sri: &sri, mode: crate::detect::rate::CoarseMode::Broadcast };
+            let t = Instant::now();
+            let r = resolve::resolve_coarse(gb, self.lights, &mask, coarse, &rc)?;
+            let ms = t.elapsed().as_secs_f64() * 1e3;
+            let image = self.share(r.image);
+            self.flip(FlipSlot::Aa(aa.len()), &image);
+            let rates = sri.histogram();
+            aa.push(AaRow {
+                method: format!("vrs:gbuffer+msaa:{}", cfg.detector),
+                evaluations: r.stats.shading_evaluations,
+                // The SRI: one byte per tile.
+                footprint_mb: gbuf_mb(s) + sri.rates.len() as f64 / 1e6,
+                ms,
+                error: self.err(&image.image),
+                note: format!(
+                    "gbuf's shading-rate image, tile {VRS_TILE}, {:.0}% of tiles coarser than 1×1",
+                    100.0 * (1.0 - rates[0] as f64 / sri.rates.len().max(1) as f64)
+                ),
             });
             aa_images.push(image.image);
         }

@@ -204,6 +204,9 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
                 fmt_opt(r.error.flip_hdr, 4)
             );
         }
+        for r in p.aa.iter().filter(|r| r.method.starts_with("vrs:")) {
+            let _ = writeln!(s, "\n`{}`: {} (`gbuf vrs` compares generators and tile sizes).", r.method, r.note);
+        }
         s.push_str(&aa_losers_note(&p.aa));
     }
     if let Some(first) = p.compressed.first() {
