@@ -13,6 +13,9 @@
 //! - `resolve/bin/loaded-then-resolve|arrays/1x/1280x720`: an ISPC `.bin` loaded whole then lit, against lit from
 //!   its own arrays (issue 34: the file's conversion inside the resolve).
 //!
+//! - `resolve/vrs/…`: the shading-rate generators' time per frame (as pixels per second), and the resolve shaded by
+//!   gbuf's SRI (tile 16) against the full-rate resolve with the same mask.
+//!
 //! The G-buffer is built in code once, outside the timed loop. Run briefly:
 //! `cargo bench --bench resolve -- --warm-up-time 1 --measurement-time 3`.
 
@@ -145,6 +148,39 @@ fn benches(c: &mut Criterion) {
             b.iter(|| pool.install(|| resolve(black_box(&gb1), black_box(&lights), &mask1, &tiled).unwrap()))
         });
     }
+    g.finish();
+    vrs_benches(c, &gb4, &lights, &mask4);
+}
+
+/// Shading less than once per pixel on the 4× bench frame: the SRI generators' own time (pixels per second), and the
+/// resolve shaded by gbuf's SRI at tile 16 against the full-rate resolve with the same mask, the evaluations of
+/// each printed beside them (`resolve/vrs/…`).
+fn vrs_benches(c: &mut Criterion, gb4: &gbuf::GBuffer, lights: &[gbuf::Light], mask4: &gbuf::base::mask::EdgeMask) {
+    use gbuf::detect::rate::{evaluations, ffx_sri, gbuffer_sri, CoarseMode, Rate, Sri};
+    use gbuf::resolve::{resolve_coarse, Coarse};
+    let tiled = ResolveConfig::default();
+    let sri = gbuffer_sri(gb4, mask4, 16, false, &Default::default()).expect("sri");
+    let full_image = resolve(gb4, lights, mask4, &tiled).unwrap().image;
+    let full = evaluations(gb4, mask4, &Sri::uniform(W, H, 16, Rate::R1x1));
+    let coarse = evaluations(gb4, mask4, &sri);
+    eprintln!(
+        "vrs bench: gbuf's SRI at tile 16 leaves {coarse} of {full} evaluations ({:.1}% saved)",
+        100.0 * (1.0 - coarse as f64 / full as f64)
+    );
+    let mut g = c.benchmark_group("resolve/vrs");
+    g.sample_size(10);
+    g.throughput(criterion::Throughput::Elements(u64::from(W * H)));
+    g.bench_function("sri/gbuffer-16/4x/1280x720", |b| {
+        b.iter(|| black_box(gbuffer_sri(gb4, mask4, 16, false, &Default::default()).unwrap()))
+    });
+    g.bench_function("sri/ffx-16/1280x720", |b| b.iter(|| black_box(ffx_sri(&full_image, 16, 0.015, 64).unwrap())));
+    g.bench_function("full-rate/4x-adaptive/1280x720", |b| {
+        b.iter(|| black_box(resolve(gb4, lights, mask4, &tiled).unwrap()))
+    });
+    let by = Coarse { sri: &sri, mode: CoarseMode::Broadcast };
+    g.bench_function("gbuffer-16/4x-adaptive/1280x720", |b| {
+        b.iter(|| black_box(resolve_coarse(gb4, lights, mask4, by, &tiled).unwrap()))
+    });
     g.finish();
 }
 

@@ -15,6 +15,7 @@
 use crate::base::mask::EdgeMask;
 use crate::error::{Error, Result};
 use crate::gbuffer::GBuffer;
+use glam::Vec3;
 
 /// One evaluation per `w × h` pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -240,75 +241,170 @@ impl Default for Smoothness {
     }
 }
 
-/// The pixel's representative sample: its first covered sample (sample 0 when covered).
-fn first_covered(gb: &GBuffer, p: usize) -> Option<usize> {
-    let s = gb.samples as usize;
-    (p * s..(p + 1) * s).find(|&i| gb.coverage[i])
+/// One band of tile rows of a frame in the form the smoothness tests read (structure of arrays, one entry per pixel,
+/// at its first covered sample): built once per band, then every adjacent pair is tested from it.
+#[derive(Default)]
+struct Band {
+    /// 0: uncovered, 1: covered, 2: an edge pixel (never smooth).
+    state: Vec<u8>,
+    depth: Vec<f32>,
+    nx: Vec<f32>,
+    ny: Vec<f32>,
+    nz: Vec<f32>,
+    /// The cosine of the pixel's largest normal turn (`normal_deg · (0.25 + roughness)`).
+    cos_turn: Vec<f32>,
+    rough: Vec<f32>,
+    spec: Vec<f32>,
+    ar: Vec<f32>,
+    ag: Vec<f32>,
+    ab: Vec<f32>,
+    material: Vec<u32>,
+    object: Vec<u32>,
 }
 
-fn smooth(gb: &GBuffer, mask: &EdgeMask, rule: &Smoothness, p: usize, q: usize) -> bool {
-    if mask.is_edge(p) || mask.is_edge(q) {
-        return false;
+/// `cos x` for `x` in [0, π] by its Taylor series to x¹² (within 1e-9 below 80°, 1e-4 at π): the smoothness test's
+/// threshold, per pixel, in straight-line code the compiler vectorises.
+#[inline(always)]
+fn cos_taylor(x: f32) -> f32 {
+    let x2 = x * x;
+    let mut c = 1.0 / 479_001_600.0; // 1/12!
+    for k in [-1.0 / 3_628_800.0, 1.0 / 40_320.0, -1.0 / 720.0, 1.0 / 24.0, -0.5, 1.0] {
+        c = c * x2 + k;
     }
-    let (a, b) = match (first_covered(gb, p), first_covered(gb, q)) {
-        (None, None) => return true,
-        (Some(a), Some(b)) => (a, b),
-        _ => return false,
-    };
-    let same = |v: &Option<Vec<u32>>| v.as_ref().is_none_or(|v| v[a] == v[b]);
-    if !same(&gb.material_id) || !same(&gb.object_id) {
-        return false;
-    }
-    if let Some(d) = &gb.depth {
-        if (d[a] - d[b]).abs() > rule.depth_relative * d[a].abs().min(d[b].abs()) {
-            return false;
+    c
+}
+
+impl Band {
+    /// Rows `y0..y1` of `gb`.
+    fn fill(&mut self, gb: &GBuffer, mask: &EdgeMask, rule: &Smoothness, y0: u32, y1: u32) {
+        let (w, s) = (gb.width as usize, gb.samples as usize);
+        let (p0, p1) = (y0 as usize * w, y1 as usize * w);
+        let n = p1 - p0;
+        self.state.clear();
+        let mut at = Vec::with_capacity(n);
+        for p in p0..p1 {
+            let a = gb.coverage[p * s..(p + 1) * s].iter().position(|&c| c).map(|k| p * s + k);
+            self.state.push(if mask.is_edge(p) { 2 } else { u8::from(a.is_some()) });
+            at.push(a.unwrap_or(p * s));
         }
-    }
-    let rough = gb.roughness.as_ref().map_or(0.75, |r| r[a].min(r[b]).clamp(0.0, 1.0));
-    if let Some(n) = &gb.normal {
-        let cos = n[a].normalize_or_zero().dot(n[b].normalize_or_zero()).clamp(-1.0, 1.0);
-        if cos.acos().to_degrees() > rule.normal_deg * (0.25 + rough) {
-            return false;
-        }
-    }
-    let close = |v: &Option<Vec<f32>>| v.as_ref().is_none_or(|v| (v[a] - v[b]).abs() <= rule.albedo);
-    if !close(&gb.specular) || !close(&gb.roughness) {
-        return false;
-    }
-    if rule.broadcast {
-        if let Some(al) = &gb.albedo {
-            if (al[a] - al[b]).abs().max_element() > rule.albedo {
-                return false;
+        fn take<T: Copy + Default>(out: &mut Vec<T>, plane: Option<&Vec<T>>, at: &[usize], default: T) {
+            out.clear();
+            match plane {
+                Some(v) => out.extend(at.iter().map(|&i| v[i])),
+                None => out.resize(at.len(), default),
             }
         }
+        take(&mut self.depth, gb.depth.as_ref(), &at, 0.0);
+        take(&mut self.rough, gb.roughness.as_ref(), &at, f32::NAN);
+        take(&mut self.spec, gb.specular.as_ref(), &at, 0.0);
+        take(&mut self.material, gb.material_id.as_ref(), &at, 0);
+        take(&mut self.object, gb.object_id.as_ref(), &at, 0);
+        for v in [&mut self.nx, &mut self.ny, &mut self.nz, &mut self.ar, &mut self.ag, &mut self.ab] {
+            v.clear();
+        }
+        let unit = |v: Vec3| v.normalize_or_zero();
+        match &gb.normal {
+            Some(nv) => {
+                for &i in &at {
+                    let u = unit(nv[i]);
+                    (self.nx.push(u.x), self.ny.push(u.y), self.nz.push(u.z));
+                }
+            }
+            None => {
+                (self.nx.resize(n, 0.0), self.ny.resize(n, 0.0), self.nz.resize(n, 1.0));
+            }
+        }
+        match gb.albedo.as_ref().filter(|_| rule.broadcast) {
+            Some(al) => {
+                for &i in &at {
+                    (self.ar.push(al[i].x), self.ag.push(al[i].y), self.ab.push(al[i].z));
+                }
+            }
+            None => {
+                (self.ar.resize(n, 0.0), self.ag.resize(n, 0.0), self.ab.resize(n, 0.0));
+            }
+        }
+        // A missing or unreadable roughness stands at 0.75 (the rule's reference).
+        for r in &mut self.rough {
+            *r = if r.is_nan() { 0.75 } else { r.clamp(0.0, 1.0) };
+        }
+        let to_rad = rule.normal_deg.to_radians();
+        self.cos_turn.clear();
+        self.cos_turn
+            .extend(self.rough.iter().map(|&r| cos_taylor((to_rad * (0.25 + r)).clamp(0.0, std::f32::consts::PI))));
     }
-    true
+
+    /// `out[k]`: whether pixels `k` and `k + off` of the band are smooth ([`Smoothness`]), for `k < out.len()`:
+    /// `off` 1 for horizontal pairs, the width for vertical ones. Branch-free over slices of one length, so the
+    /// compiler vectorises it.
+    #[inline(always)]
+    fn pairs(&self, rule: &Smoothness, off: usize, out: &mut [bool]) {
+        let m = out.len();
+        fn split(v: &[f32], m: usize, off: usize) -> (&[f32], &[f32]) {
+            (&v[..m], &v[off..off + m])
+        }
+        let both = |v| split(v, m, off);
+        let (st0, st1) = (&self.state[..m], &self.state[off..off + m]);
+        let (d0, d1) = both(&self.depth);
+        let ((x0, x1), (y0, y1), (z0, z1)) = (both(&self.nx), both(&self.ny), both(&self.nz));
+        let (c0, c1) = both(&self.cos_turn);
+        let ((r0, r1), (s0, s1)) = (both(&self.rough), both(&self.spec));
+        let ((a0, a1), (g0, g1), (b0, b1)) = (both(&self.ar), both(&self.ag), both(&self.ab));
+        let (m0, m1) = (&self.material[..m], &self.material[off..off + m]);
+        let (o0, o1) = (&self.object[..m], &self.object[off..off + m]);
+        let close = |a: f32, b: f32| (a - b).abs() <= rule.albedo;
+        for k in 0..m {
+            let (si, sj) = (st0[k], st1[k]);
+            let both = (si == 1) & (sj == 1);
+            let depth_ok = (d0[k] - d1[k]).abs() <= rule.depth_relative * d0[k].abs().min(d1[k].abs());
+            let cos = (x0[k] * x1[k] + y0[k] * y1[k] + z0[k] * z1[k]).clamp(-1.0, 1.0);
+            // The looser of the two thresholds: the pair's smaller roughness has the larger cosine.
+            let normal_ok = cos >= c0[k].max(c1[k]);
+            let scalars_ok = close(s0[k], s1[k]) & close(r0[k], r1[k]);
+            let albedo_ok = close(a0[k], a1[k]) & close(g0[k], g1[k]) & close(b0[k], b1[k]);
+            let ids_ok = (m0[k] == m1[k]) & (o0[k] == o1[k]);
+            // Two uncovered pixels are smooth; an edge pixel or a covered one beside an uncovered one is not.
+            out[k] = (both & depth_ok & normal_ok & scalars_ok & albedo_ok & ids_ok) | ((si == 0) & (sj == 0));
+        }
+    }
 }
 
-/// gbuf's SRI of `gb` (tile size `tile`: 8, 16 or 32), from the edge `mask` and the G-buffer alone ([`Smoothness`]);
-/// `extra` allows the rates beyond 2 × 2.
-pub fn gbuffer_sri(gb: &GBuffer, mask: &EdgeMask, tile: u32, extra: bool, rule: &Smoothness) -> Result<Sri> {
-    if ![8, 16, 32].contains(&tile) {
-        return Err(Error::Argument(format!("shading-rate tile size {tile}: use 8, 16 or 32")));
-    }
-    if (mask.width, mask.height) != (gb.width, gb.height) {
-        return Err(Error::Mismatch("the edge mask is not the G-buffer's size".into()));
-    }
-    let (w, h) = (gb.width, gb.height);
-    let mut sri = Sri::uniform(w, h, tile, Rate::R1x1);
-    let cap = if extra { 4 } else { 2 };
-    let px = |x: u32, y: u32| (y * w + x) as usize;
-    for ty in 0..sri.rows {
-        for tx in 0..sri.cols {
-            let (x0, y0) = (tx * tile, ty * tile);
-            let (x1, y1) = ((x0 + tile).min(w), (y0 + tile).min(h));
-            // The widest coarse pixel every horizontal pair inside allows, and the tallest for vertical pairs.
+/// The rates of one band of tile rows (`rates`: its tiles), from the band's pixels: each tile takes, per direction,
+/// the coarsest size every adjacent pair inside its coarse pixels allows.
+struct BandRates<'a> {
+    gb: &'a GBuffer,
+    mask: &'a EdgeMask,
+    rule: &'a Smoothness,
+    tile: u32,
+    extra: bool,
+    ty: u32,
+    rates: &'a mut [Rate],
+}
+
+impl crate::base::isa::Kernel for BandRates<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run(self, _: crate::base::isa::Isa) {
+        let (gb, rule, tile) = (self.gb, self.rule, self.tile);
+        let (w, h) = (gb.width, gb.height);
+        let (y0, y1) = (self.ty * tile, ((self.ty + 1) * tile).min(h));
+        let mut band = Band::default();
+        band.fill(gb, self.mask, rule, y0, y1);
+        let (wu, rows) = (w as usize, (y1 - y0) as usize);
+        // Pair bits: right[i] for (i, i + 1), down[i] for (i, i + width), within the band.
+        let mut right = vec![false; wu * rows];
+        let mut down = vec![false; wu * rows];
+        let n = wu * rows;
+        band.pairs(rule, 1, &mut right[..n.saturating_sub(1)]);
+        band.pairs(rule, wu, &mut down[..n.saturating_sub(wu)]);
+        let cap = if self.extra { 4 } else { 2 };
+        for (tx, rate) in self.rates.iter_mut().enumerate() {
+            let x0 = tx * tile as usize;
+            let x1 = (x0 + tile as usize).min(wu);
             let mut rw = cap;
             while rw > 1 {
-                let ok = (y0..y1).all(|y| {
-                    (x0..x1.saturating_sub(1))
-                        .all(|x| (x - x0) % rw == rw - 1 || smooth(gb, mask, rule, px(x, y), px(x + 1, y)))
-                });
+                // Pairs that straddle two coarse pixels (x − x0 ≡ rw − 1) do not count (rw is a power of two).
+                let ok = (0..rows).all(|r| (x0..x1 - 1).all(|x| (x - x0) & (rw - 1) == rw - 1 || right[r * wu + x]));
                 if ok {
                     break;
                 }
@@ -316,17 +412,38 @@ pub fn gbuffer_sri(gb: &GBuffer, mask: &EdgeMask, tile: u32, extra: bool, rule: 
             }
             let mut rh = cap;
             while rh > 1 {
-                let ok = (y0..y1.saturating_sub(1)).all(|y| {
-                    (x0..x1).all(|x| (y - y0) % rh == rh - 1 || smooth(gb, mask, rule, px(x, y), px(x, y + 1)))
-                });
+                let ok = (0..rows.saturating_sub(1))
+                    .all(|r| r & (rh - 1) == rh - 1 || down[r * wu + x0..r * wu + x1].iter().all(|&d| d));
                 if ok {
                     break;
                 }
                 rh /= 2;
             }
-            sri.rates[(ty * sri.cols + tx) as usize] = Rate::fit(rw, rh, extra, gb.samples);
+            *rate = Rate::fit(rw as u32, rh as u32, self.extra, gb.samples);
         }
     }
+}
+
+/// gbuf's SRI of `gb` (tile size `tile`: 8, 16 or 32), from the edge `mask` and the G-buffer alone ([`Smoothness`]);
+/// `extra` allows the rates beyond 2 × 2. Bands of tile rows run in parallel on rayon's current pool, each compiled
+/// for the CPU's widest instruction set.
+pub fn gbuffer_sri(gb: &GBuffer, mask: &EdgeMask, tile: u32, extra: bool, rule: &Smoothness) -> Result<Sri> {
+    use rayon::prelude::*;
+    if ![8, 16, 32].contains(&tile) {
+        return Err(Error::Argument(format!("shading-rate tile size {tile}: use 8, 16 or 32")));
+    }
+    if (mask.width, mask.height) != (gb.width, gb.height) {
+        return Err(Error::Mismatch("the edge mask is not the G-buffer's size".into()));
+    }
+    let mut sri = Sri::uniform(gb.width, gb.height, tile, Rate::R1x1);
+    let cols = sri.cols as usize;
+    if cols == 0 {
+        return Ok(sri);
+    }
+    sri.rates.par_chunks_mut(cols).enumerate().for_each(|(ty, rates)| {
+        let k = BandRates { gb, mask, rule, tile, extra, ty: ty as u32, rates };
+        crate::base::isa::run(crate::base::isa::Isa::detect(), k);
+    });
     Ok(sri)
 }
 
