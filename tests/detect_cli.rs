@@ -310,6 +310,7 @@ fn vrs_writes_the_sri_it_measures_and_saves_evaluations() {
         depth_relative: rule.depth_relative * 0.25,
         normal_deg: rule.normal_deg * 0.25,
         albedo: rule.albedo * 0.25,
+        lobe: rule.lobe * 0.25,
         ..rule
     };
     let strict = gbuf::detect::rate::gbuffer_sri(gb, &mask, 16, false, &strictest).unwrap();

@@ -223,6 +223,7 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
                     depth_relative: rule.depth_relative * scale,
                     normal_deg: rule.normal_deg * scale,
                     albedo: rule.albedo * scale,
+                    lobe: rule.lobe * scale,
                     ..rule
                 };
                 let s = rate::gbuffer_sri(gb, &mask, tile, cfg.extra_rates, &r)?;

@@ -217,7 +217,9 @@ impl Sri {
 /// Two pixels are **smooth** when neither is an edge pixel of the mask, both are covered or both are not, they hold
 /// the same object and material IDs (when the frame has them), their depths differ by at most `depth_relative`
 /// of the nearer, their normals by at most `normal_deg` scaled by the surface's roughness (`normal_deg · (0.25 +
-/// roughness)`: a sharp highlight moves with a small turn of the normal, a rough lobe does not), and — when the
+/// roughness)`: a sharp highlight moves with a small turn of the normal, a rough lobe does not; on metals, where the
+/// highlight is all of the colour, also at most `lobe` times the GGX lobe width `roughness²` in radians, since a
+/// polished curved metal's highlight is narrower than a pixel), and — when the
 /// coarse pixel's colour is broadcast — their albedos by at most `albedo` in every channel (broadcast copies one
 /// albedo to the whole coarse pixel, so albedo contrast shows directly). Specular amount and roughness must agree
 /// within `albedo` too (they shape the lobe). A coarse pixel is allowed when every pair of horizontally (for its
@@ -233,11 +235,14 @@ pub struct Smoothness {
     pub albedo: f32,
     /// Whether albedo differences count (broadcast mode).
     pub broadcast: bool,
+    /// On metals (metallic ≥ 0.5), the largest normal turn in units of the GGX lobe width `roughness²` (radians;
+    /// 0: no such limit).
+    pub lobe: f32,
 }
 
 impl Default for Smoothness {
     fn default() -> Self {
-        Smoothness { depth_relative: 0.01, normal_deg: 4.0, albedo: 0.02, broadcast: true }
+        Smoothness { depth_relative: 0.01, normal_deg: 4.0, albedo: 0.02, broadcast: true, lobe: 0.5 }
     }
 }
 
@@ -329,9 +334,15 @@ impl Band {
             *r = if r.is_nan() { 0.75 } else { r.clamp(0.0, 1.0) };
         }
         let to_rad = rule.normal_deg.to_radians();
+        let mut metal = Vec::new();
+        take(&mut metal, gb.metallic.as_ref(), &at, 0.0);
         self.cos_turn.clear();
-        self.cos_turn
-            .extend(self.rough.iter().map(|&r| cos_taylor((to_rad * (0.25 + r)).clamp(0.0, std::f32::consts::PI))));
+        self.cos_turn.extend(self.rough.iter().zip(&metal).map(|(&r, &m)| {
+            let turn = to_rad * (0.25 + r);
+            // A metal's highlight: at most `lobe` lobe widths (α = r², at least 1e-3 as the resolve clamps it).
+            let turn = if m >= 0.5 && rule.lobe > 0.0 { turn.min(rule.lobe * (r * r).max(1e-3)) } else { turn };
+            cos_taylor(turn.clamp(0.0, std::f32::consts::PI))
+        }));
     }
 
     /// `out[k]`: whether pixels `k` and `k + off` of the band are smooth ([`Smoothness`]), for `k < out.len()`:
