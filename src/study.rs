@@ -169,6 +169,7 @@ pub fn run_frame(
         pipelines,
         pipelines_error,
         surfaces_per_pixel: Some(crate::analysis::surfaces::SurfacesPerPixel::of(gb.samples, &surface_maps)),
+        fits: cfg.layouts.iter().map(|l| crate::analysis::record::LayoutFit::of(l, gb.samples)).collect(),
     };
     Ok(FrameResult { frame, rows: out.rows, files, figures })
 }

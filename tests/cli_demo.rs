@@ -140,6 +140,19 @@ fn report_on_a_canonical_dump_and_bad_input() {
     let json: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
     let mut seen = 0;
+    // Where each layout binds, at the frame's 2×: the library's verdicts, in report.json and report.md.
+    for layout in ["minimal-8", "lauritzen-15"] {
+        let fit = json["frames"][0]["fits"].as_array().unwrap().iter().find(|f| f["layout"] == layout).unwrap();
+        let l = gbuf::layout::Layout::by_name(layout).unwrap();
+        let want: Vec<&str> = gbuf::layout::limits::PLATFORMS
+            .iter()
+            .filter(|p| gbuf::layout::limits::check(p, l.formats(), 2).fits())
+            .map(|p| p.name)
+            .collect();
+        assert_eq!(fit["fits"].as_array().unwrap().iter().map(|v| v.as_str().unwrap()).collect::<Vec<_>>(), want);
+    }
+    // (2× is guaranteed nowhere: WebGPU and Vulkan promise 1× and 4×.)
+    assert!(md.contains("bind as one 2× pass") && md.contains("- minimal-8: none"), "{md}");
     for layout in ["minimal-8", "lauritzen-15"] {
         let file = format!("error_maps_{}.exr", layout.replace('-', "_"));
         let Ok(raw) = gbuf::io::exr::read_raw(&out.join(&file), &Default::default()) else { continue };

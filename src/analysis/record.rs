@@ -21,6 +21,34 @@ pub struct Figure {
     pub against: Option<String>,
 }
 
+/// Where one layout's targets bind as one pass ([`crate::layout::limits`]), at a frame's sample count.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LayoutFit {
+    /// The layout.
+    pub layout: String,
+    /// Platforms it binds on as every conforming device guarantees.
+    pub fits: Vec<String>,
+    /// Platforms it binds on with an optional feature.
+    pub with_feature: Vec<String>,
+}
+
+impl LayoutFit {
+    /// `layout`'s fit on every platform at `samples` per pixel.
+    #[must_use]
+    pub fn of(layout: &crate::layout::Layout, samples: u32) -> LayoutFit {
+        let (mut fits, mut with_feature) = (Vec::new(), Vec::new());
+        for p in crate::layout::limits::PLATFORMS {
+            let c = crate::layout::limits::check(p, layout.formats(), samples);
+            if c.fits() {
+                fits.push(p.name.to_string());
+            } else if c.problems.is_empty() {
+                with_feature.push(p.name.to_string());
+            }
+        }
+        LayoutFit { layout: layout.name().to_string(), fits, with_feature }
+    }
+}
+
 /// One analysed frame (dump) of a report: what it is and what was measured on it apart from the rows.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Frame {
@@ -67,6 +95,10 @@ pub struct Frame {
     /// How many surfaces each pixel holds (by IDs and by geometry): what MSAA G-buffer compression could keep.
     #[serde(default)]
     pub surfaces_per_pixel: Option<crate::analysis::surfaces::SurfacesPerPixel>,
+    /// Per layout swept, the platforms whose guarantees its targets bind within as one pass at this frame's
+    /// sample count ([`crate::layout::limits::check`]), and those they need a feature on.
+    #[serde(default)]
+    pub fits: Vec<LayoutFit>,
 }
 
 /// Everything a report folder holds: the frames, one row per frame × layout × detector (× culling), and the rows
@@ -122,6 +154,7 @@ pub(crate) fn test_report(input: &str, width: u32, height: u32, rows: Vec<Row>, 
             pipelines: None,
             pipelines_error: None,
             surfaces_per_pixel: None,
+            fits: vec![],
         }],
         runs: 3,
         viewing: Viewing::default(),

@@ -375,6 +375,19 @@ pub fn to_markdown(rep: &Report) -> String {
         }
         s.push_str(if multi { "\n### Layouts × detectors\n\n" } else { "\n## Layouts × detectors\n\n" });
         s.push_str(&rows_table(&rows));
+        if !f.fits.is_empty() {
+            let _ = writeln!(
+                s,
+                "\nWhere each layout's targets bind as one {}× pass, as every conforming device guarantees (`gbuf layouts \
+                 --check` says why; `+feature`: with an optional feature):\n",
+                f.samples
+            );
+            for fit in &f.fits {
+                let mut on = fit.fits.clone();
+                on.extend(fit.with_feature.iter().map(|p| format!("{p} +feature")));
+                let _ = writeln!(s, "- {}: {}", fit.layout, if on.is_empty() { "none".into() } else { on.join(", ") });
+            }
+        }
         s.push_str(if multi { "\n### Pareto fronts\n\n" } else { "\n## Pareto fronts\n\n" });
         fronts(&mut s, &rows);
         s.push_str(if multi {
