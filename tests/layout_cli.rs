@@ -86,6 +86,20 @@ fn roundtrip_json_matches_the_library() {
         assert_close(&row["albedo_max_abs"], want.albedo.as_ref().unwrap().max_abs, name);
         assert_eq!(row["errors"]["normal"]["worst"]["x"].as_u64().unwrap(), u64::from(n.worst.x));
     }
+    // Bytes after framebuffer compression: the library's, per target of the packed frame; MSAA rules out AFBC.
+    let row = json(&gbuf(dir.path(), &["roundtrip", "room.exr", "--layout", "fat-20", "--json"]));
+    let want = gbuf::layout::compression::compressed(&Layout::by_name("fat-20").unwrap().pack(&gb).unwrap());
+    let got = row["compression"].as_array().unwrap();
+    assert_eq!(got.len(), want.len());
+    for (g, w) in got.iter().zip(&want) {
+        assert_eq!((g["target"].as_str().unwrap(), g["nominal"].as_u64().unwrap()), (w.target.as_str(), w.nominal));
+        for (gs, ws) in g["schemes"].as_array().unwrap().iter().zip(&w.schemes) {
+            assert_eq!(gs["bytes"].as_u64(), ws.bytes, "{}: {}", w.target, ws.scheme);
+        }
+        assert_eq!(g["zstd"].as_u64().unwrap(), w.zstd);
+        let afbc = g["schemes"].as_array().unwrap().iter().find(|s| s["scheme"] == "afbc").unwrap();
+        assert!(afbc["bytes"].is_null(), "AFBC holds no multisampled target: {g}");
+    }
     let reference = json(&gbuf(dir.path(), &["roundtrip", "room.exr", "--layout", "reference-f32", "--json"]));
     assert_eq!(reference["normal_max_deg"], 0.0);
     assert_eq!(reference["depth_rel_max"], 0.0);

@@ -29,6 +29,8 @@ struct Row {
     roundtrip: Roundtrip,
     /// How much of each field's code space the packed frame uses (covered samples).
     code_space: Vec<gbuf::layout::codespace::FieldCodes>,
+    /// Each target's bytes under framebuffer-compression models (`gbuf::layout::compression`).
+    compression: Vec<gbuf::layout::compression::TargetBytes>,
 }
 
 /// Runs `gbuf roundtrip`.
@@ -39,8 +41,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let roundtrip = roundtrip(&loaded.gbuffer, &layout).with_context(|| format!("{file}: layout {}", layout.name()))?;
     let packed = layout.pack(&loaded.gbuffer).with_context(|| format!("{file}: layout {}", layout.name()))?;
     let code_space = gbuf::layout::codespace::code_space(&layout, &packed, &loaded.gbuffer.coverage);
+    let compression = gbuf::layout::compression::compressed(&packed);
     drop(packed);
-    let row = Row { file, roundtrip, code_space };
+    let row = Row { file, roundtrip, code_space, compression };
     if args.json {
         return super::common::print_json(&row);
     }
@@ -149,5 +152,50 @@ fn print_text(row: &Row) -> anyhow::Result<()> {
     }
     writeln!(out, "  code space used per field (covered samples):")?;
     out.write_all(gbuf::layout::codespace::text(&row.code_space).as_bytes())?;
+    writeln!(
+        out,
+        "  bytes after framebuffer compression (models of published constraints, not a vendor's compressor; zstd on each \
+         256-byte block for scale):"
+    )?;
+    writeln!(
+        out,
+        "    {:<18} {:<12} {:>10} {:>16} {:>16} {:>16} {:>16}",
+        "target", "format", "nominal", "dcc", "ccs", "afbc", "zstd"
+    )?;
+    let cell = |b: Option<u64>, nominal: u64| match b {
+        Some(b) => format!("{b} ({:.0}%)", 100.0 * b as f64 / nominal.max(1) as f64),
+        None => "n/a".to_string(),
+    };
+    let (mut nominal, mut sums) = (0u64, [Some(0u64); 4]);
+    for t in &row.compression {
+        let by: Vec<Option<u64>> = t.schemes.iter().map(|s| s.bytes).chain([Some(t.zstd)]).collect();
+        writeln!(
+            out,
+            "    {:<18} {:<12} {:>10} {:>16} {:>16} {:>16} {:>16}",
+            t.target,
+            t.format,
+            t.nominal,
+            cell(by[0], t.nominal),
+            cell(by[1], t.nominal),
+            cell(by[2], t.nominal),
+            cell(by[3], t.nominal)
+        )?;
+        nominal += t.nominal;
+        for (sum, b) in sums.iter_mut().zip(&by) {
+            // AFBC holds a layout only when it holds every target.
+            *sum = sum.zip(*b).map(|(a, b)| a + b);
+        }
+    }
+    writeln!(
+        out,
+        "    {:<18} {:<12} {:>10} {:>16} {:>16} {:>16} {:>16}",
+        "all targets",
+        "",
+        nominal,
+        cell(sums[0], nominal),
+        cell(sums[1], nominal),
+        cell(sums[2], nominal),
+        cell(sums[3], nominal)
+    )?;
     Ok(())
 }

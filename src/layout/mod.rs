@@ -10,6 +10,7 @@ pub(crate) mod bits;
 pub(crate) mod builtin;
 pub(crate) mod coder;
 pub mod codespace;
+pub mod compression;
 pub mod dds;
 pub(crate) mod formats;
 pub mod lighting;
