@@ -183,7 +183,7 @@ impl Sri {
     pub fn histogram(&self) -> [usize; 7] {
         let mut h = [0; 7];
         for r in &self.rates {
-            h[Rate::ALL.iter().position(|x| x == r).expect("a listed rate")] += 1;
+            h[Rate::ALL.iter().take_while(|&x| x != r).count()] += 1;
         }
         h
     }
@@ -288,7 +288,7 @@ impl Band {
         self.state.clear();
         let mut at = Vec::with_capacity(n);
         for p in p0..p1 {
-            let a = gb.coverage[p * s..(p + 1) * s].iter().position(|&c| c).map(|k| p * s + k);
+            let a = (p * s..(p + 1) * s).find(|&i| gb.coverage[i]);
             self.state.push(if mask.is_edge(p) { 2 } else { u8::from(a.is_some()) });
             at.push(a.unwrap_or(p * s));
         }
