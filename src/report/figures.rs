@@ -249,25 +249,28 @@ pub fn figures(
             });
         }
         // Beside them, where shading less than once per pixel is safe: gbuf's shading-rate image over the reference.
-        let mask = crate::detect::detect(gb, crate::detect::Detector::Lauritzen, &Default::default())?;
+        // (Only where the frame gives the detector what it reads: the figure is an illustration, not a measurement.)
         let tile = crate::analysis::pipelines::VRS_TILE;
-        let sri = crate::detect::rate::gbuffer_sri(gb, &mask, tile, false, &Default::default())?;
-        let rates = sri.picture(w, h);
-        let over: Vec<u8> =
-            reference.iter().zip(&rates).map(|(&a, &b)| ((u16::from(a) + u16::from(b)) / 2) as u8).collect();
-        let coarse = 1.0 - sri.histogram()[0] as f64 / sri.rates.len().max(1) as f64;
-        let file = format!("{prefix}ab_shading_rate.png");
-        files.push(Attachment { name: file.clone(), bytes: crate::base::picture::png_bytes(&crop(&over))? });
-        figs.push(Figure {
-            file,
-            caption: format!(
+        let sri = crate::detect::detect(gb, crate::detect::Detector::Lauritzen, &Default::default())
+            .and_then(|mask| crate::detect::rate::gbuffer_sri(gb, &mask, tile, false, &Default::default()));
+        if let Ok(sri) = sri {
+            let rates = sri.picture(w, h);
+            let over: Vec<u8> =
+                reference.iter().zip(&rates).map(|(&a, &b)| ((u16::from(a) + u16::from(b)) / 2) as u8).collect();
+            let coarse = 1.0 - sri.histogram()[0] as f64 / sri.rates.len().max(1) as f64;
+            let file = format!("{prefix}ab_shading_rate.png");
+            files.push(Attachment { name: file.clone(), bytes: crate::base::picture::png_bytes(&crop(&over))? });
+            figs.push(Figure {
+                file,
+                caption: format!(
                 "A/B: gbuf's shading-rate image (tile {tile}, from the G-buffer and the lauritzen mask, before any \
                  lighting) over the reference, same crop: green 1×1, blue 2×1, cyan 1×2, yellow 2×2; {:.0}% of the \
                  frame's tiles shade coarser than once per pixel (`gbuf vrs` measures what that costs)",
                 100.0 * coarse
             ),
-            against: Some(ab_reference.clone()),
-        });
+                against: Some(ab_reference.clone()),
+            });
+        }
     }
     if let Some((name, map)) = &out.worst_flip {
         let img =
