@@ -44,13 +44,18 @@ fn env<T: std::str::FromStr>(name: &str) -> Option<T> {
     std::env::var(name).ok().and_then(|s| s.parse().ok())
 }
 
+/// `GBUF_PERF_SIZE` (`WxH`), else `default`.
+fn perf_size(default: (u32, u32)) -> (u32, u32) {
+    std::env::var("GBUF_PERF_SIZE")
+        .ok()
+        .and_then(|s| s.split_once('x').and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?))))
+        .unwrap_or(default)
+}
+
 #[test]
 #[ignore = "measurement, not a test: run in release with --ignored --nocapture"]
 fn time_per_frame() {
-    let (w, h) = std::env::var("GBUF_PERF_SIZE")
-        .ok()
-        .and_then(|s| s.split_once('x').and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?))))
-        .unwrap_or((1280u32, 720u32));
+    let (w, h) = perf_size((1280, 720));
     let frames: u32 = env("GBUF_PERF_FRAMES").unwrap_or(10);
     let density: f64 = env("GBUF_PERF_LIGHTS_PER_SAMPLE").unwrap_or(40.0);
     let gb1 = fixture::room(w, h, 1).unwrap();
@@ -184,10 +189,7 @@ fn time_per_frame() {
 fn coarse_shading_time() {
     use gbuf::detect::rate::{gbuffer_sri, CoarseMode};
     use gbuf::resolve::{resolve_coarse, Coarse};
-    let (w, h) = std::env::var("GBUF_PERF_SIZE")
-        .ok()
-        .and_then(|s| s.split_once('x').and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?))))
-        .unwrap_or((1920u32, 1080u32));
+    let (w, h) = perf_size((1920, 1080));
     let frames: u32 = env("GBUF_PERF_FRAMES").unwrap_or(7);
     let gb = gbuf::scene::render(gbuf::scene::SceneName::Room, w, h, 4).unwrap();
     let lights = gbuf::scene::default_lights(gbuf::scene::SceneName::Room, &gb);

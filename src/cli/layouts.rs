@@ -125,25 +125,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         };
     }
     let detailed = !args.layouts.is_empty();
+    let named: Vec<Layout> = args
+        .layouts
+        .iter()
+        .map(|n| Layout::by_name_or_path(n).with_context(|| format!("layout {n:?}")))
+        .collect::<anyhow::Result<_>>()?;
     if args.check {
-        let layouts: Vec<Layout> = if detailed {
-            args.layouts
-                .iter()
-                .map(|n| Layout::by_name_or_path(n).with_context(|| format!("layout {n:?}")))
-                .collect::<anyhow::Result<_>>()?
-        } else {
-            Layout::builtins()
-        };
+        let layouts = if detailed { named } else { Layout::builtins() };
         return check(&layouts, &args.platform, args.msaa, args.json, detailed);
     }
-    let layouts: Vec<Layout> = if detailed {
-        args.layouts
-            .iter()
-            .map(|n| Layout::by_name_or_path(n).with_context(|| format!("layout {n:?}")))
-            .collect::<anyhow::Result<_>>()?
-    } else {
-        Layout::builtins().into_iter().chain(Layout::visibility_builtins()).collect()
-    };
+    let layouts: Vec<Layout> =
+        if detailed { named } else { Layout::builtins().into_iter().chain(Layout::visibility_builtins()).collect() };
     let visibility: Vec<String> = Layout::visibility_builtins().iter().map(|l| l.name().to_string()).collect();
     let (w, h) = (args.resolution.width, args.resolution.height);
     let rows: Vec<LayoutSummary> = layouts.iter().map(|l| LayoutSummary::new(l, w, h, args.msaa)).collect();
