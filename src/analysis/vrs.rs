@@ -177,7 +177,7 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
             vs_full_rate: error_set(&full, &image, v),
             vs_reference: error_set(&reference, &image, v),
             resolve_ms,
-            shade_ms: shade_ms,
+            shade_ms,
             rule_scale: scale,
         };
         Ok((row, image))

@@ -312,21 +312,29 @@ impl Band {
             Some(nv) => {
                 for &i in &at {
                     let u = unit(nv[i]);
-                    (self.nx.push(u.x), self.ny.push(u.y), self.nz.push(u.z));
+                    self.nx.push(u.x);
+                    self.ny.push(u.y);
+                    self.nz.push(u.z);
                 }
             }
             None => {
-                (self.nx.resize(n, 0.0), self.ny.resize(n, 0.0), self.nz.resize(n, 1.0));
+                self.nx.resize(n, 0.0);
+                self.ny.resize(n, 0.0);
+                self.nz.resize(n, 1.0);
             }
         }
         match gb.albedo.as_ref().filter(|_| rule.broadcast) {
             Some(al) => {
                 for &i in &at {
-                    (self.ar.push(al[i].x), self.ag.push(al[i].y), self.ab.push(al[i].z));
+                    self.ar.push(al[i].x);
+                    self.ag.push(al[i].y);
+                    self.ab.push(al[i].z);
                 }
             }
             None => {
-                (self.ar.resize(n, 0.0), self.ag.resize(n, 0.0), self.ab.resize(n, 0.0));
+                self.ar.resize(n, 0.0);
+                self.ag.resize(n, 0.0);
+                self.ab.resize(n, 0.0);
             }
         }
         // A missing or unreadable roughness stands at 0.75 (the rule's reference).
