@@ -10,7 +10,8 @@ os.wait4, whose rusage gives user+sys CPU to the microsecond (the `time` process
 itself costs ~1 ms). Per-core comparisons use process CPU (user+sys) at one thread: robust to the other core's load,
 unlike wall time. 2-thread runs are compared by wall time (what threads buy), so they carry the machine's noise.
 
-usage: bench.py [--rounds N] [--files a.bin,b.bin] [--out DIR]   (relative paths are taken from WORK)
+usage: bench.py [--rounds N] [--files a.bin,b.bin] [--out DIR]   (relative paths are taken from WORK; the default
+files are data/dense720.bin, dense1080.bin, blender720.bin and, when blender_native.sh has made it, blender720n.bin)
 """
 import argparse
 import json
@@ -85,7 +86,10 @@ def med(xs):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--rounds", type=int, default=7)
-    ap.add_argument("--files", default="data/dense720.bin,data/dense1080.bin,data/blender720.bin")
+    default = ["data/dense720.bin", "data/dense1080.bin", "data/blender720.bin"]
+    if os.path.exists(os.path.join(WORK, "data", "blender720n.bin")):
+        default.append("data/blender720n.bin")
+    ap.add_argument("--files", default=",".join(default))
     ap.add_argument("--out", default="results")
     a = ap.parse_args()
     a.out = os.path.join(WORK, a.out)

@@ -22,11 +22,15 @@ Subcommands:
   rescale IN.bin OUT.bin --range S [--color C]
                                         multiply every light's attenuation begin/end by S (and colour by C): how the
                                         dense frames are made from `gbuf scene room --msaa 1 --lights 1024 -o X.bin`
-  from-exr EXR OUT.bin --width W --height H [--lights N --range R --seed S]
+  from-exr EXR OUT.bin [--width W --height H | --native] [--lights N --range R --seed S]
                                         a real renderer's G-buffer (the Blender Cycles fixture of gbuf,
                                         fixtures/blender_gbuffer.exr + .json, 128x96, 1 ray per pixel centre) cropped
                                         to W:H and upsampled (1/z and normals bilinear inside one object, nearest at
-                                        object edges), with N point lights scattered over the visible surfaces.
+                                        object edges; default 1280x720), with N point lights scattered over the
+                                        visible surfaces. --native (or W x H equal to the EXR's size) takes every
+                                        pixel as it is, no crop or resampling: for an EXR rendered at the target size
+                                        (fixtures/scripts/blender_gbuffer.py --width 1280 --height 720, as
+                                        blender_native.sh does). The lights follow the same rule either way.
 Needs numpy; from-exr also the `OpenEXR` module (pip install numpy openexr).
 """
 import argparse
@@ -145,10 +149,33 @@ def cmd_from_exr(a):
     obj = ch["IndexOB.X"].astype(np.int64)
     covered = (depth > 0) & (depth < 1e9) & np.isfinite(depth)
 
-    # Crop rows (or columns) of the source to the target aspect, keeping the horizontal field of view.
-    W, H = a.width, a.height
     tan_y0 = math.tan(cam["yfov"] / 2)
     tan_x0 = tan_y0 * cam["aspect"]
+    native = a.native or (a.width, a.height) == (W0, H0)
+    if native:
+        if (a.width or W0, a.height or H0) != (W0, H0):
+            sys.exit(f"from-exr --native: the EXR is {W0}x{H0}, not {a.width or W0}x{a.height or H0}")
+        if abs(cam["aspect"] - W0 / H0) > 1e-6:
+            sys.exit(f"from-exr --native: the sidecar's aspect {cam['aspect']} is not the EXR's {W0}x{H0}")
+        W, H = W0, H0
+        tan_x, tan_y = tan_x0, tan_y0
+        cov = covered
+        vz = np.where(covered, depth, 0.0)
+        n = nv / np.maximum(np.linalg.norm(nv, axis=-1, keepdims=True), 1e-12)
+        albedo, spec = alb, gloss
+        r = np.clip(rough, 0.05, 1.0)
+        how = "native, no resampling"
+    else:
+        W, H = a.width or 1280, a.height or 720
+        W, H, tan_x, tan_y, cov, vz, n, albedo, spec, r, how = resample(
+            W, H, W0, H0, tan_x0, tan_y0, covered, depth, nv, alb, gloss, rough, obj)
+    power = np.clip(2.0 / r ** 4 - 2.0, 1.0, 2048.0)          # inverse of gbuf's roughness = (2/(p+2))^(1/4)
+    write_from_gbuffer(a, W, H, W0, H0, tan_x, tan_y, cam, cov, vz, n, albedo, spec, power, how)
+
+
+def resample(W, H, W0, H0, tan_x0, tan_y0, covered, depth, nv, alb, gloss, rough, obj):
+    """Crops the source to W:H (keeping the horizontal field of view) and upsamples it to W x H."""
+    # Crop rows (or columns) of the source to the target aspect, keeping the horizontal field of view.
     rows = W0 * H / W                                    # source rows that keep the pixel aspect
     if rows <= H0:
         y0, h_src, x0, w_src = (H0 - rows) / 2, rows, 0.0, float(W0)
@@ -188,8 +215,12 @@ def cmd_from_exr(a):
     albedo = interp(alb)
     spec = interp(gloss)
     r = np.clip(interp(rough), 0.05, 1.0)
-    power = np.clip(2.0 / r ** 4 - 2.0, 1.0, 2048.0)          # inverse of gbuf's roughness = (2/(p+2))^(1/4)
+    how = f"rows {y0:.1f}+{h_src:.1f}, cols {x0:.1f}+{w_src:.1f}"
+    return W, H, tan_x, tan_y, cov, vz, n, albedo, spec, r, how
 
+
+def write_from_gbuffer(a, W, H, W0, H0, tan_x, tan_y, cam, cov, vz, n, albedo, spec, power, how):
+    """The .bin of a W x H view-space G-buffer (right-handed, -z forward) plus the scattered lights."""
     near, far = cam["znear"], cam["zfar"]
     proj = np.zeros((4, 4), np.float32)
     proj[0, 0], proj[1, 1] = 1 / tan_x, 1 / tan_y
@@ -233,7 +264,7 @@ def cmd_from_exr(a):
     for k, c in enumerate("xyz"):
         arrays["lightColor_" + c] = col[:, k]
     write_bin(a.out, proj, near, far, W, H, arrays, a.lights)
-    print(f"wrote {a.out}: {W}x{H} from {W0}x{H0} (rows {y0:.1f}+{h_src:.1f}, cols {x0:.1f}+{w_src:.1f}), "
+    print(f"wrote {a.out}: {W}x{H} from {W0}x{H0} ({how}), "
           f"{100 * cov.mean():.1f}% covered, {a.lights} lights, range {a.range}")
 
 
@@ -250,8 +281,9 @@ def main():
     s = sub.add_parser("from-exr")
     s.add_argument("exr")
     s.add_argument("out")
-    s.add_argument("--width", type=int, default=1280)
-    s.add_argument("--height", type=int, default=720)
+    s.add_argument("--width", type=int, help="default 1280 (the EXR's width with --native)")
+    s.add_argument("--height", type=int, help="default 720 (the EXR's height with --native)")
+    s.add_argument("--native", action="store_true", help="the EXR's own pixels, no crop or resampling")
     s.add_argument("--lights", type=int, default=1024)
     s.add_argument("--range", type=float, default=0.5)
     s.add_argument("--color", type=float, default=0.6)

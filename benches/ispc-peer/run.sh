@@ -8,6 +8,8 @@
 #   GBUF_BIN=/path/to/gbuf …      another gbuf binary (default: <repo>/target/release/gbuf)
 #   PEER_WORK=/dir …              work dir (default: <repo>/target/ispc-peer, git-ignored)
 #   PEER_SHM=/dir …               scratch dir for output images and perf data (default: /dev/shm/ispc-peer)
+#   BLENDER_NATIVE=0|1 …          the natively rendered blender720n input (blender_native.sh): default on when
+#                                 `blender` (or $BLENDER) is found, skipped with a message otherwise; 1 = required
 #
 # Needs: g++, python3 with numpy, pillow, openexr (pip install numpy pillow openexr), /usr/bin/time, and for the
 # stage profiles `perf` (Debian: linux-perf). ISPC_GIT is needed only while WORK/ispc-deferred is missing (build.sh
@@ -34,7 +36,8 @@ mkdir -p data results out "$PEER_SHM"
 
 # Inputs (deterministic): gbuf's own .bin writer for the synthetic room (1024 scattered lights, seed 1), light ranges
 # scaled so that the C++ culling leaves ~27 lights per pixel; the Blender Cycles fixture converted by make_bin.py
-# (1024 lights, ~4.5 per pixel).
+# (1024 lights, ~4.5 per pixel); and, with Blender, the same scene rendered natively at 1280x720 (blender_native.sh,
+# ~4.5 lights per pixel; Blender's normals may differ in the last bits between renders, see fixtures/README.md).
 if [ ! -f data/dense720.bin ]; then
   "$G" scene room --msaa 1 --width 1280 --height 720 --lights 1024 -o data/room720.bin >&2
   "$here/make_bin.py" rescale data/room720.bin data/dense720.bin --range 1.78 --color 0.3
@@ -47,6 +50,22 @@ if [ ! -f data/blender720.bin ]; then
   "$here/make_bin.py" from-exr "$FIXTURE" data/blender720.bin \
     --width 1280 --height 720 --lights 1024 --range 0.148 --color 0.8 --seed 1 >&2
 fi
+stems=(dense720 dense1080 blender720)
+BLENDER_NATIVE=${BLENDER_NATIVE:-auto}
+if [ "$BLENDER_NATIVE" != 0 ]; then
+  if [ -f data/blender720n.bin ]; then
+    stems+=(blender720n)
+  elif command -v "${BLENDER:-blender}" >/dev/null; then
+    "$here/blender_native.sh"
+    stems+=(blender720n)
+  elif [ "$BLENDER_NATIVE" = 1 ]; then
+    echo "run.sh: BLENDER_NATIVE=1 but no Blender (${BLENDER:-blender}): apt-get install blender or set BLENDER" >&2
+    exit 1
+  else
+    echo "run.sh: no Blender (${BLENDER:-blender}): skipping the native blender720n input (apt-get install blender," \
+      "or BLENDER=/path/to/blender; BLENDER_NATIVE=0 skips it without this message)" >&2
+  fi
+fi
 
 out=results/tables.md
 {
@@ -56,19 +75,20 @@ out=results/tables.md
   echo "- load average at start: $(cut -d' ' -f1-3 /proc/loadavg)"
   echo "- C++: $(${CXX:-g++} --version | head -1), -O3 -march=native -DNDEBUG; ISPC sources: $(cat ispc-deferred/SOURCE)"
   echo "- gbuf: $G ($("$G" --version), sha256 $(sha256sum "$G" | cut -c1-12), modified $(date -u -r "$G" '+%Y-%m-%d %H:%M UTC')); repo $repo at $(git --no-optional-locks -C "$repo" describe --always --dirty 2>/dev/null || echo '?')"
-  for f in data/dense720.bin data/dense1080.bin data/blender720.bin; do
+  for s in "${stems[@]}"; do
+    f=data/$s.bin
     echo "- $f (sha256 $(sha256sum $f | cut -c1-12)): $("$here/make_bin.py" info $f | sed -n '1s/^[^:]*://p'); C++ $(./build/harness-count count $f | grep lights_per_pixel)"
   done
   echo
 } > "$out"
 
-"$here/bench.py" --rounds "$ROUNDS"
+"$here/bench.py" --rounds "$ROUNDS" --files "$(printf 'data/%s.bin,' "${stems[@]}" | sed 's/,$//')"
 "$here/report.py" results/summary.json >> "$out"
 {
   echo
   echo "### Image agreement: C++ PPM vs gbuf PNG (--ldr gamma2.2), 8-bit codes"
   echo
-  "$here/compare.py" --keep out dense720 dense1080 blender720
+  "$here/compare.py" --keep out "${stems[@]}"
 } >> "$out"
 
 if [ "$PERF_RUNS" -gt 0 ] && command -v perf >/dev/null && perf record -q -e cpu-clock -o /dev/null true 2>/dev/null; then
@@ -80,7 +100,7 @@ if [ "$PERF_RUNS" -gt 0 ] && command -v perf >/dev/null && perf record -q -e cpu
     echo "Each sample is filed by the gbuf functions on its stack (profile.py). 'on main thread' = share of the"
     echo "stage's CPU on the main thread: rayon's parallel loops run on its worker thread(s), so 100% = serial code."
   } >> "$out"
-  for f in dense720 dense1080 blender720; do
+  for f in "${stems[@]}"; do
     for isa in avx512 avx2 baseline; do
       files=()
       for k in $(seq 1 "$PERF_RUNS"); do
