@@ -224,9 +224,18 @@ fn resolve_into_isa(
     let n = gb.pixel_count();
     let mut image = std::mem::take(&mut out.image);
     (image.width, image.height) = (gb.width, gb.height);
-    image.rgb.resize(n, glam::Vec3::ZERO);
+    // Fresh outputs come from zeroed memory (`calloc`: pages the tiles' writes fault in, not a serial fill first).
+    if image.rgb.is_empty() {
+        image.rgb = crate::base::memory::zeroed_vec3(n);
+    } else {
+        image.rgb.resize(n, glam::Vec3::ZERO);
+    }
     let mut heat = std::mem::take(&mut out.lights_per_pixel);
-    heat.resize(n, 0);
+    if heat.is_empty() {
+        heat = vec![0; n];
+    } else {
+        heat.resize(n, 0);
+    }
     let t = match schedule::run_tiles(&frame, &mut image.rgb, &mut heat) {
         Ok(t) => t,
         Err(e) => {
