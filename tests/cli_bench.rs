@@ -25,10 +25,27 @@ fn bench_measures_the_machine_and_sets_a_frame_against_it() {
     assert!(j["file_bytes"].as_u64().unwrap() > 160 * 90 * 15);
     assert!(j["light_pairs"].as_u64().unwrap() > 0);
     let stages = j["stages"].as_array().unwrap();
-    assert_eq!(stages.len(), 3);
+    let names: Vec<&str> = stages.iter().map(|s| s["stage"].as_str().unwrap()).collect();
+    assert_eq!(names.len(), 9, "{names:?}");
+    for want in
+        ["read and decode", "edges", "work list", "culling", "shading", "light loop", "8-bit", "f64 reference", "FLIP"]
+    {
+        assert!(names.iter().any(|n| n.starts_with(want)), "no stage {want:?} in {names:?}");
+    }
     assert!(stages.iter().all(|s| s["ms"].as_f64().unwrap() >= 0.0));
-    let f = stages[0]["fraction_of_limit"].as_f64().unwrap();
-    assert!(f > 0.0 && f.is_finite(), "{f}");
+    // The streaming stages are set against the read bandwidth; the light loop's parts add up to it.
+    for i in [0, 6] {
+        let f = stages[i]["fraction_of_limit"].as_f64().unwrap();
+        assert!(f > 0.0 && f.is_finite(), "{}: {f}", names[i]);
+    }
+    let ms = |i: usize| stages[i]["ms"].as_f64().unwrap();
+    assert!((ms(2) + ms(3) + ms(4) - ms(5)).abs() <= 1e-9 * ms(5).max(1.0), "{names:?}");
+    // FLIP: one pass per exposure plus the LDR one, over every pixel.
+    let exposures = j["flip_exposures"].as_u64().unwrap();
+    assert!(exposures >= 2, "{exposures}");
+    let passes = stages[8]["per_second"].as_f64().unwrap() * ms(8) / 1e3;
+    let want = (160 * 90) as f64 * (exposures + 1) as f64;
+    assert!((passes - want).abs() <= 1e-6 * want, "{passes} pixel passes, {want} expected");
     assert!(j["fma_per_pair_at_peak"].as_f64().unwrap() > 0.0);
 }
 

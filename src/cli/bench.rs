@@ -1,8 +1,9 @@
 //! `gbuf bench [--mib N] [--width W --height H --lights N] [--json]`: this machine's own limits (read bandwidth on
 //! one and on every thread, each instruction-set path's multiply-add peak) and one frame of the resolve set against
 //! them: the room rendered at W×H, 1 sample, N point lights, written as an ISPC `.bin` and lit from it on one
-//! thread as `gbuf resolve` lights it (`analysis::job::resolve_frame`), each stage's time with the fraction of the
-//! limit it reaches.
+//! thread as `gbuf resolve` lights it (`analysis::job::resolve_frame`), then its 8-bit PNG, the f64 reference and
+//! FLIP against it, as `gbuf resolve --png` and `gbuf report` do: each stage's time with its rate and, where a limit
+//! applies, the fraction of it reached (bytes read against the read bandwidth).
 
 use crate::cli::common::print_json;
 use anyhow::Context;
@@ -38,9 +39,10 @@ struct Stage {
     ms: f64,
     /// What the rate is counted in.
     rate: &'static str,
-    /// The stage's rate (bytes/s for reading the file, light-sample pairs/s for the light loop).
+    /// The stage's rate (bytes/s for reading the file and the image the output encodes, light-sample pairs/s for
+    /// the light loop's stages, pixel passes/s for FLIP: one pass per exposure and one for LDR, per pixel).
     per_second: Option<f64>,
-    /// Reading the file: its rate against one thread's read bandwidth.
+    /// A stage that streams bytes: its rate against one thread's read bandwidth.
     fraction_of_limit: Option<f64>,
 }
 
@@ -55,6 +57,8 @@ struct Bench {
     file_bytes: u64,
     light_pairs: u64,
     stages: Vec<Stage>,
+    /// HDR-FLIP's exposures for this frame (FLIP's passes are these plus the LDR one).
+    flip_exposures: usize,
     /// The multiply-adds a light-sample pair may take at the light loop's measured rate if the loop ran at the FMA
     /// peak of its instruction set, per lane: how far the shading is from the arithmetic limit.
     fma_per_pair_at_peak: Option<f64>,
@@ -88,21 +92,29 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         reference: false,
         flip: None,
     };
+    let viewing = gbuf::measure::image::Viewing::default();
     let frame_gb = &dump.loaded.gbuffer;
     let (done, ()) = pool.install(|| {
-        resolve_frame(
-            "frame.bin",
-            frame_gb,
-            Some(&dump.arrays),
-            &dump.loaded.lights.clone().unwrap_or_default(),
-            &job,
-            &|_| {},
-            |_| (),
-        )
+        resolve_frame("frame.bin", frame_gb, Some(&dump.arrays), &lights_of(&dump), &job, &|_| {}, |_| ())
     })?;
     // The load's checks, counted on the bands the resolve decoded.
     let (checked, t_check) = pool.install(|| gbuf::base::timing::timed(|| dump.check().map(|_| ())));
     checked?;
+    // What `gbuf resolve --ldr gamma2.2 --png` writes, the f64 reference and FLIP against it, on the same thread.
+    let image = &done.resolved.image;
+    pb.set_message("encoding the 8-bit PNG, lighting the f64 reference, FLIP");
+    let (png, t_output) = pool.install(|| gbuf::base::timing::timed(|| image.ldr_gamma22_png()));
+    png?;
+    // The reference reads every plane at once: the file loaded whole (not timed), as `gbuf resolve` does for it.
+    let whole = gbuf::io::ispc::read(&path, &gbuf::io::LoadOptions::default())?;
+    let (reference, t_reference) = pool.install(|| {
+        gbuf::base::timing::timed(|| gbuf::resolve::reference(&whole.gbuffer, &lights_of(&dump), &job.config))
+    });
+    let reference = reference?;
+    let (flip, t_flip) =
+        pool.install(|| gbuf::base::timing::timed(|| gbuf::measure::image::flip_pair(&reference, image, &viewing)));
+    flip.context("FLIP of the lit frame against its reference")?;
+    let flip_exposures = gbuf::measure::flip::hdr_exposure_count(bytemuck::cast_slice(&reference.rgb));
     pb.finish_and_clear();
     let isa = gbuf::resolve::instruction_set();
     let peak = fma_peaks.iter().find(|p| p.isa == isa).or(fma_peaks.last());
@@ -113,6 +125,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let per_s = |n: f64, ms: f64| (ms > 0.0).then(|| n / (ms / 1e3));
     let file_rate = per_s(file_bytes as f64, decode_ms);
     let pair_rate = per_s(pairs as f64, loop_ms);
+    let pixels = f64::from(args.width) * f64::from(args.height);
+    // The output reads the lit image's floats (12 bytes a pixel).
+    let output_rate = per_s(12.0 * pixels, t_output);
+    let pair_stage = |stage: &'static str, ms: f64| Stage {
+        stage,
+        ms,
+        rate: "light-sample pairs/s",
+        per_second: per_s(pairs as f64, ms),
+        fraction_of_limit: None,
+    };
     // Multiply-adds a second across the lanes, per pair a second: what the peak leaves each pair.
     let fma_per_pair_at_peak = peak.zip(pair_rate).map(|(p, r)| p.flops / 2.0 / r);
     let stages = vec![
@@ -124,11 +146,29 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             fraction_of_limit: file_rate.map(|r| r / bandwidth.one_thread),
         },
         Stage { stage: "edges", ms: s.detect, rate: "", per_second: None, fraction_of_limit: None },
+        pair_stage("work list", s.gather),
+        pair_stage("culling", s.cull),
+        pair_stage("shading", s.shade),
+        pair_stage("light loop (work list, culling, shading)", loop_ms),
         Stage {
-            stage: "light loop (work list, culling, shading)",
-            ms: loop_ms,
+            stage: "8-bit gamma-2.2 image and PNG",
+            ms: t_output,
+            rate: "image bytes/s",
+            per_second: output_rate,
+            fraction_of_limit: output_rate.map(|r| r / bandwidth.one_thread),
+        },
+        Stage {
+            stage: "f64 reference (every sample)",
+            ms: t_reference,
             rate: "light-sample pairs/s",
-            per_second: pair_rate,
+            per_second: None,
+            fraction_of_limit: None,
+        },
+        Stage {
+            stage: "FLIP against the reference (HDR and LDR)",
+            ms: t_flip,
+            rate: "pixel passes/s",
+            per_second: per_s(pixels * (flip_exposures + 1) as f64, t_flip),
             fraction_of_limit: None,
         },
     ];
@@ -140,6 +180,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         file_bytes,
         light_pairs: pairs,
         stages,
+        flip_exposures,
         fma_per_pair_at_peak,
     };
     if args.json {
@@ -176,4 +217,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         )?;
     }
     Ok(())
+}
+
+/// The lights of the opened `.bin` (its own, or its sidecar's).
+fn lights_of(dump: &gbuf::io::PackedDump) -> Vec<gbuf::light::Light> {
+    dump.loaded.lights.clone().unwrap_or_default()
 }

@@ -242,6 +242,14 @@ pub fn hdr_flip_with(
     }
 }
 
+/// How many exposures HDR-FLIP runs for `reference_linear` (interleaved linear RGB) with the default tone mapper:
+/// each is one pass over the image, like the LDR one.
+#[must_use]
+pub fn hdr_exposure_count(reference_linear: &[f32]) -> usize {
+    let (start, stop) = compute_exposures(reference_linear, ToneMapper::default());
+    exposure_count(start, stop)
+}
+
 /// The reference's default number of exposures between `start` and `stop` (at least 2).
 fn exposure_count(start: f32, stop: f32) -> usize {
     (stop - start).clamp(0.0, MAX_EXPOSURE_RANGE).ceil().max(2.0) as usize
