@@ -11,7 +11,7 @@ fn bench_measures_the_machine_and_sets_a_frame_against_it() {
     let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let bw = &j["bandwidth"];
     assert_eq!(bw["bytes"], 16 << 20);
-    for k in ["one_thread", "all_threads"] {
+    for k in ["one_thread", "all_threads", "copy_one_thread", "copy_all_threads"] {
         let v = bw[k].as_f64().unwrap();
         assert!(v.is_finite() && v > 1e8, "{k}: {v}");
     }

@@ -15,7 +15,8 @@ use std::io::Write;
 /// Flags of `gbuf bench`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// MiB of memory the bandwidth probe reads (far beyond the caches).
+    /// MiB of memory the bandwidth probes read (far beyond the caches); the copy probe writes a second buffer as
+    /// large.
     #[arg(long, value_name = "N", default_value_t = 512, value_parser = clap::value_parser!(u64).range(1..=65536))]
     pub mib: u64,
     /// Width of the frame lit (the ISPC example's 1280×720 by default).
@@ -195,6 +196,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         b.all_threads / 1e9,
         b.threads,
         b.bytes >> 20
+    )?;
+    writeln!(
+        out,
+        "copy bandwidth   {:.1} GB/s one thread, {:.1} GB/s on {} threads (STREAM Copy's counting: 16 B per element)",
+        b.copy_one_thread / 1e9,
+        b.copy_all_threads / 1e9,
+        b.threads
     )?;
     for p in &report.fma_peaks {
         writeln!(out, "FMA peak         {:<8} {:.1} GFLOP/s one thread ({} lanes)", p.isa, p.flops / 1e9, p.lanes)?;
