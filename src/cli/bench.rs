@@ -1,5 +1,5 @@
-//! `gbuf bench [--mib N] [--width W --height H --lights N] [--json]`: this machine's own limits (read bandwidth on
-//! one and on every thread, each instruction-set path's multiply-add peak) and one frame of the resolve set against
+//! `gbuf bench [--mib N] [--width W --height H --lights N] [--json]`: this machine's own limits (read and copy
+//! bandwidth on one and on every thread, each instruction-set path's multiply-add peak) and one frame of the resolve set against
 //! them: the room rendered at W×H, 1 sample, N point lights, written as an ISPC `.bin` and lit from it on one
 //! thread as `gbuf resolve` lights it (`analysis::job::resolve_frame`), then its 8-bit PNG, the f64 reference and
 //! FLIP against it, as `gbuf resolve --png` and `gbuf report` do: each stage's time with its rate and, where a limit
@@ -161,7 +161,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Stage {
             stage: "f64 reference (every sample)",
             ms: t_reference,
-            rate: "light-sample pairs/s",
+            rate: "",
             per_second: None,
             fraction_of_limit: None,
         },
