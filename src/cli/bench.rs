@@ -8,7 +8,7 @@
 use crate::cli::common::print_json;
 use anyhow::Context;
 use gbuf::analysis::job::{resolve_frame, ResolveJob};
-use gbuf::measure::machine::{fma_peaks, read_bandwidth, Bandwidth, Peak};
+use gbuf::measure::machine::{fma_peaks, memory_bandwidth, Bandwidth, Peak};
 use serde::Serialize;
 use std::io::Write;
 
@@ -68,7 +68,7 @@ struct Bench {
 /// Runs `gbuf bench`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let pb = crate::cli::spinner("measuring read bandwidth".to_string());
-    let bandwidth = read_bandwidth(args.mib as usize);
+    let bandwidth = memory_bandwidth(args.mib as usize);
     pb.set_message("measuring the multiply-add peak of each instruction set");
     let fma_peaks = fma_peaks();
     pb.set_message("rendering the frame");

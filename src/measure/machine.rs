@@ -62,7 +62,7 @@ fn copy(dst: &mut [u64], src: &[u64], key: u64) {
 /// Read and copy bandwidth over a buffer of `mib` MiB (at least 1) and a second one as large, both written first so
 /// that their pages exist.
 #[must_use]
-pub fn read_bandwidth(mib: usize) -> Bandwidth {
+pub fn memory_bandwidth(mib: usize) -> Bandwidth {
     let n = mib.max(1) * (1 << 20) / 8;
     let data: Vec<u64> = (0..n as u64).into_par_iter().collect();
     let best = |f: &mut dyn FnMut() -> u64| {
@@ -133,7 +133,7 @@ mod tests {
 
     #[test]
     fn probes_measure_positive_finite_rates() {
-        let b = read_bandwidth(8);
+        let b = memory_bandwidth(8);
         assert_eq!(b.bytes, 8 << 20);
         assert!(b.one_thread.is_finite() && b.one_thread > 1e8, "{b:?}");
         assert!(b.all_threads.is_finite() && b.all_threads > 1e8, "{b:?}");
