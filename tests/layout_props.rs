@@ -66,7 +66,13 @@ fn random_spec(seed: u64) -> LayoutSpec {
             fields.push(FieldSpec { attribute: slot.into(), codec, offset: offset + gap, bits, note: String::new() });
             offset += gap + bits;
         }
-        targets.push(TargetSpec { name: format!("t{t}"), format: format.name().into(), note: String::new(), fields });
+        targets.push(TargetSpec {
+            name: format!("t{t}"),
+            format: format.name().into(),
+            note: String::new(),
+            afrc: None,
+            fields,
+        });
     }
     LayoutSpec {
         name: format!("random-{seed}"),

@@ -57,7 +57,18 @@ fn sweep_rows_match_layouts_and_lossless_is_exact() {
     assert_eq!(out.rows.len(), 6);
     // Where the time went: each kind of stage once, in the order met, adding up to at most the sweep's time.
     let kinds: Vec<&str> = out.stage_seconds.iter().map(|(k, _)| k.as_str()).collect();
-    assert_eq!(kinds, ["reference", "detectors on the exact G-buffer", "pack/unpack", "detect", "resolve", "FLIP"]);
+    assert_eq!(
+        kinds,
+        [
+            "reference",
+            "detectors on the exact G-buffer",
+            "pack/unpack",
+            "compression models",
+            "detect",
+            "resolve",
+            "FLIP"
+        ]
+    );
     let staged: f64 = out.stage_seconds.iter().map(|(_, t)| t).sum();
     assert!(out.stage_seconds.iter().all(|(_, t)| *t >= 0.0) && staged <= out.seconds, "{staged} of {}", out.seconds);
     assert!(staged > 0.5 * out.seconds, "the stages cover the sweep: {staged} of {} s", out.seconds);
@@ -77,6 +88,21 @@ fn sweep_rows_match_layouts_and_lossless_is_exact() {
         assert_eq!(r.layout_error.unwrap().flip_ldr.is_some(), first, "{} × {}", r.layout, r.detector);
         assert!(r.aa_error.unwrap().flip_ldr.is_some() && r.aa_error.unwrap().flip_hdr.is_some());
         assert!(r.bandwidth_mb.tiled > 0.0 && r.bandwidth_mb.quad.unwrap() > r.bandwidth_mb.tiled / 2.0);
+        // Bytes after the compression models: the library's, from the layout packed whole; never above nominal plus
+        // metadata, and the traffic recomputed with them.
+        let c = r.compressed.unwrap();
+        let whole = gbuf::layout::compression::compressed_models(&l.pack(&gb).unwrap());
+        let want = gbuf::layout::compression::bytes_per_sample(&whole, gb.len() as u64);
+        for k in 0..3 {
+            assert!(
+                (c.bytes_per_sample[k] - want[k]).abs() * gb.len() as f64 <= 64.0,
+                "{}: {c:?} vs {want:?}",
+                r.layout
+            );
+            assert!(c.bytes_per_sample[k] <= 1.01 * f64::from(r.bytes_per_sample));
+            let t = gbuf::analysis::traffic::bandwidth(&gb, c.bytes_per_sample[k], None).tiled;
+            assert_eq!(c.tiled_mb[k], t);
+        }
         assert_eq!(r.timings["encode"].runs, 2);
         let sf = r.shading_fraction.unwrap();
         assert!((0.0..=1.0).contains(&sf));

@@ -101,9 +101,13 @@ pub struct AggregateRow {
     pub bandwidth_tiled_mb: Option<Stat>,
     /// Modelled traffic of the quad schedule, MB per frame.
     pub bandwidth_quad_mb: Option<Stat>,
+    /// Modelled traffic of the tiled schedule after the `dcc` compression model, MB per frame.
+    #[serde(default)]
+    pub bandwidth_tiled_dcc_mb: Option<Stat>,
     /// Decode operations per sample.
     pub decode_ops_per_sample: Option<u32>,
-    /// On the aggregate fronts (layout error by [`Over`] against bytes, and against the mean resolve pass time).
+    /// On the aggregate fronts (layout error by [`Over`] against bytes, the mean resolve pass time and the mean
+    /// traffic after compression).
     pub pareto: ParetoFlags,
 }
 
@@ -173,6 +177,7 @@ pub fn aggregate(rows: &[Row], over: Over) -> Vec<AggregateRow> {
                 resolve_pass_ms: stat(&|r| r.resolve_pass_ms),
                 bandwidth_tiled_mb: stat(&|r| Some(r.bandwidth_mb.tiled)),
                 bandwidth_quad_mb: stat(&|r| r.bandwidth_mb.quad),
+                bandwidth_tiled_dcc_mb: stat(&|r| r.compressed.map(|c| c.tiled_mb[0])),
                 decode_ops_per_sample: group[0].decode_ops_per_sample,
                 pareto: ParetoFlags::default(),
                 layout,
@@ -185,16 +190,20 @@ pub fn aggregate(rows: &[Row], over: Over) -> Vec<AggregateRow> {
     out
 }
 
-/// Marks the aggregate fronts: layout error (by `over`) against bytes per sample, and against the mean resolve
-/// pass time.
+/// Marks the aggregate fronts: layout error (by `over`) against bytes per sample, against the mean resolve pass
+/// time, and against the mean tiled traffic after the `dcc` compression model.
 fn mark_aggregate_pareto(rows: &mut [AggregateRow], over: Over) {
     let by_bytes: Vec<(f64, f64)> =
         rows.iter().map(|r| (f64::from(r.bytes_per_sample), r.ranked_error(over))).collect();
     let by_time: Vec<(f64, f64)> =
         rows.iter().map(|r| (r.resolve_pass_ms.as_ref().map_or(f64::NAN, |s| s.mean), r.ranked_error(over))).collect();
-    let (fb, ft) = (pareto::front(&by_bytes), pareto::front(&by_time));
+    let by_traffic: Vec<(f64, f64)> = rows
+        .iter()
+        .map(|r| (r.bandwidth_tiled_dcc_mb.as_ref().map_or(f64::NAN, |s| s.mean), r.ranked_error(over)))
+        .collect();
+    let (fb, ft, fc) = (pareto::front(&by_bytes), pareto::front(&by_time), pareto::front(&by_traffic));
     for (i, r) in rows.iter_mut().enumerate() {
-        r.pareto = ParetoFlags { bytes: fb[i], time: ft[i] };
+        r.pareto = ParetoFlags { bytes: fb[i], time: ft[i], compressed: fc[i] };
     }
 }
 

@@ -258,6 +258,7 @@ fn pack_fields(fields: &[(String, String, u32)], sets: &[Vec<usize>]) -> Option<
                     name: format!("gbuffer{k}"),
                     format: UINT_TARGETS[t].0.into(),
                     note: String::new(),
+                    afrc: None,
                     fields,
                 })
                 .collect(),
@@ -593,7 +594,13 @@ impl Space {
                     note: "stencil".into(),
                 });
             }
-            targets.push(TargetSpec { name: "depth".into(), format: fmt.into(), note: String::new(), fields: f });
+            targets.push(TargetSpec {
+                name: "depth".into(),
+                format: fmt.into(),
+                note: String::new(),
+                afrc: None,
+                fields: f,
+            });
             name.push_str(&format!("-d{codec}"));
         }
         targets.extend(pack_fields(&fields, sets)?);

@@ -211,6 +211,7 @@ mod tests {
                     name: "depth".into(),
                     format: "d32f".into(),
                     note: String::new(),
+                    afrc: None,
                     fields: vec![FieldSpec {
                         attribute: "depth".into(),
                         codec: "f32".into(),
@@ -223,6 +224,7 @@ mod tests {
                     name: "params".into(),
                     format: "rgba8".into(),
                     note: String::new(),
+                    afrc: None,
                     fields: vec![
                         f("metallic", "unorm-8", 0),
                         f("roughness", "unorm-8", 8),

@@ -64,6 +64,20 @@ pub struct ParetoFlags {
     pub bytes: bool,
     /// On the front of layout error against the resolve pass time (decode + lighting).
     pub time: bool,
+    /// On the front of layout error against the tiled traffic after the `dcc` compression model.
+    #[serde(default)]
+    pub compressed: bool,
+}
+
+/// A layout's G-buffer after framebuffer compression, per model (`dcc`, `ccs`, `afbc`; a target a model cannot hold
+/// counts its nominal bytes, as hardware stores it uncompressed): bytes per sample, and the tiled resolve's traffic
+/// with those bytes in place of the nominal ones.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Compressed {
+    /// Bytes per sample under each model, in `layout::compression::SCHEMES` order.
+    pub bytes_per_sample: [f64; 3],
+    /// Tiled-deferred traffic (MB per frame, [`Bandwidth::tiled`]'s model) under each model.
+    pub tiled_mb: [f64; 3],
 }
 
 /// Modelled G-buffer traffic of one frame, in MB (10⁶ bytes), per lighting schedule; docs/GUIDE.md gives the
@@ -156,6 +170,10 @@ pub struct Row {
     pub total_ms: Option<f64>,
     /// The full timings (median and spread) per stage.
     pub timings: BTreeMap<String, Timing>,
+    /// Bytes after framebuffer compression (`layout::compression`'s models of published constraints) and the
+    /// tiled resolve's traffic recomputed with them; `None` when the layout could not be packed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub compressed: Option<Compressed>,
     /// Pareto membership.
     pub pareto: ParetoFlags,
     /// Remarks (e.g. why a metric is missing).
@@ -201,14 +219,19 @@ impl Row {
     }
 }
 
-/// Marks the Pareto fronts (layout error against bytes, and against the resolve pass time) on `rows`.
+/// Marks the Pareto fronts (layout error against bytes, against the resolve pass time, and against the traffic after
+/// the `dcc` compression model) on `rows`.
 pub fn mark_pareto(rows: &mut [Row]) {
     let err = |r: &Row| if r.error.is_some() { f64::NAN } else { r.layout_rmse().unwrap_or(f64::NAN) };
-    let by_bytes: Vec<(f64, f64)> = rows.iter().map(|r| (f64::from(r.bytes_per_sample), err(r))).collect();
+    // Bytes in memory: the footprint (AFRC targets at their fixed rate), whose order within a frame is bytes per
+    // sample's.
+    let by_bytes: Vec<(f64, f64)> = rows.iter().map(|r| (r.footprint_bytes as f64, err(r))).collect();
     let by_time: Vec<(f64, f64)> = rows.iter().map(|r| (r.resolve_pass_ms.unwrap_or(f64::NAN), err(r))).collect();
-    let (fb, ft) = (pareto::front(&by_bytes), pareto::front(&by_time));
+    let by_traffic: Vec<(f64, f64)> =
+        rows.iter().map(|r| (r.compressed.map_or(f64::NAN, |c| c.tiled_mb[0]), err(r))).collect();
+    let (fb, ft, fc) = (pareto::front(&by_bytes), pareto::front(&by_time), pareto::front(&by_traffic));
     for (i, r) in rows.iter_mut().enumerate() {
-        r.pareto = ParetoFlags { bytes: fb[i], time: ft[i] };
+        r.pareto = ParetoFlags { bytes: fb[i], time: ft[i], compressed: fc[i] };
     }
 }
 
@@ -260,7 +283,10 @@ mod tests {
         let mk = |b, e: Option<f64>, t| {
             let mut r = Row {
                 bytes_per_sample: b,
+                footprint_bytes: u64::from(b) * 100,
                 layout_error: e.map(|rmse| ErrorSet { rmse, ..Default::default() }),
+                // Traffic after compression: 8, 12, 1 and 4 MB.
+                compressed: Some(Compressed { tiled_mb: [f64::from(b % 16 + b / 16); 3], ..Default::default() }),
                 ..Default::default()
             };
             for s in ["encode", "decode", "detect", "resolve"] {
@@ -272,6 +298,9 @@ mod tests {
         mark_pareto(&mut rows);
         let flags: Vec<(bool, bool)> = rows.iter().map(|r| (r.pareto.bytes, r.pareto.time)).collect();
         assert_eq!(flags, vec![(true, false), (true, true), (false, true), (false, false)]);
+        // Traffic after compression 8, 12 and 1 MB: the 16 B row compresses best and dominates the 8 B one.
+        let compressed: Vec<bool> = rows.iter().map(|r| r.pareto.compressed).collect();
+        assert_eq!(compressed, vec![false, true, true, false]);
         assert_eq!(rows[0].total_ms, Some(10.0));
         assert_eq!(rows[0].resolve_pass_ms, Some(5.0), "decode + resolve");
     }

@@ -9,13 +9,13 @@
 //! Besides the rows it keeps what the figures need: per-pixel error maps of every layout, the edge masks of the
 //! first layout, and a light-count map.
 
-use crate::analysis::row::{mark_pareto, time_runs, Row, Timing};
+use crate::analysis::row::{mark_pareto, time_runs, Compressed, Row, Timing};
 use crate::analysis::traffic::bandwidth;
 use crate::detect::{self, Detector, DetectorConfig, EdgeMask};
 use crate::error::Result;
 use crate::gbuffer::{Attribute, GBuffer};
 use crate::image::HdrImage;
-use crate::layout::{Layout, LitFrame, PackedFrame};
+use crate::layout::{Layout, LightingSource, LitFrame, PackedFrame, PreparedLighting};
 use crate::light::Light;
 use crate::measure;
 use crate::measure::flip::FlipMap;
@@ -301,11 +301,13 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
     let covered = detect::covered_per_pixel(gb);
     for (li, layout) in cfg.layouts.iter().enumerate() {
         let bytes = layout.bytes_per_sample() as u32;
+        // What the targets occupy in memory (AFRC targets at their fixed rate): the traffic's bytes.
+        let stored = layout.stored_bytes_per_sample();
         let base = Row {
             layout: layout.name().to_string(),
             bytes_per_sample: bytes,
             footprint_bytes: layout.footprint_bytes(gb.width, gb.height, gb.samples),
-            bandwidth_mb: bandwidth(gb, bytes, None),
+            bandwidth_mb: bandwidth(gb, stored, None),
             decode_ops_per_sample: Some(layout.decode_ops_per_sample()),
             ..Default::default()
         };
@@ -334,6 +336,9 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
             }
         };
         let mut attr_row = base.clone();
+        progress(done, total, Some(Stage::Compression), Some(layout.name()));
+        attr_row.compressed = compressed_row(layout, gb, &prepared);
+        progress(done, total, Some(Stage::PackUnpack), Some(layout.name()));
         // What the detectors and the resolve read: the packed targets band by band, or whole planes (the input
         // itself, or the lighting copy).
         let (frame, planes) = match prepared.frame(layout, gb) {
@@ -374,7 +379,7 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
             progress(done, total, Some(Stage::Detect), Some(&format!("{} × {}", layout.name(), det.name())));
             let mut row = Row { detector: det.name().to_string(), ..attr_row.clone() };
             row.aa_error = detectors[di].aa_error;
-            row.bandwidth_mb = bandwidth(gb, bytes, detectors[di].quad_light_fragments);
+            row.bandwidth_mb = bandwidth(gb, stored, detectors[di].quad_light_fragments);
             // Packed: the whole frame once, then sampled estimates (see `time_sampled_runs`).
             let detected = match (&frame, planes) {
                 (Some(f), _) => time_sampled_runs(
@@ -443,7 +448,7 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
                     Ok((res, t)) => {
                         r.set_timing("resolve", t);
                         if c == Some(Culling::Quad) {
-                            r.bandwidth_mb = bandwidth(gb, bytes, Some(res.stats.light_pairs_tested));
+                            r.bandwidth_mb = bandwidth(gb, stored, Some(res.stats.light_pairs_tested));
                         }
                         r.total_error = Some(error_set(&reference, &res.image, None));
                         if let Some(x) = exact[di].as_ref() {
@@ -511,6 +516,20 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
     })
 }
 
+/// A layout's bytes after the framebuffer-compression models and the tiled traffic with them: from its packed frame,
+/// or packed a band at a time when it is lit from the input or a decoded copy. `None` when it cannot be packed (the
+/// row says why elsewhere).
+fn compressed_row(layout: &Layout, gb: &GBuffer, prepared: &PreparedLighting) -> Option<Compressed> {
+    use crate::layout::compression;
+    let mut targets = match &prepared.source {
+        LightingSource::Packed(p) => compression::compressed_models(p),
+        LightingSource::Input | LightingSource::Copy(_) => compression::compressed_models_of(layout, gb).ok()?,
+    };
+    compression::fixed_rate(&mut targets, layout);
+    let bytes = compression::bytes_per_sample(&targets, gb.len() as u64);
+    Some(Compressed { bytes_per_sample: bytes, tiled_mb: bytes.map(|b| bandwidth(gb, b, None).tiled) })
+}
+
 /// Adds `s` seconds to `kind` in `stages` (appended when new, so the kinds stay in the order first met).
 pub fn add_stage_time(stages: &mut Vec<(String, f64)>, kind: &str, s: f64) {
     match stages.iter_mut().find(|(k, _)| k == kind) {
@@ -529,6 +548,8 @@ crate::named_enum! {
         Detectors => "detectors on the exact G-buffer",
         /// A layout's pack and unpack (timed runs included).
         PackUnpack => "pack/unpack",
+        /// A layout's bytes under the framebuffer-compression models.
+        Compression => "compression models",
         /// A detector on a decoded G-buffer.
         Detect => "detect",
         /// The resolve of a decoded G-buffer.

@@ -339,13 +339,13 @@ pub fn markdown_table() -> String {
 /// Modelled traffic of a layout of `bytes` per sample on `gb` (see [`Bandwidth`]): the tiled-deferred and
 /// deferred-quad models, in 10⁶ bytes per frame.
 #[must_use]
-pub fn bandwidth(gb: &GBuffer, bytes: u32, quad_light_fragments: Option<u64>) -> Bandwidth {
+pub fn bandwidth(gb: &GBuffer, bytes: impl Into<f64>, quad_light_fragments: Option<u64>) -> Bandwidth {
     // Only the counts these two models use (no pass over the coverage for covered pixels: this runs per sweep row).
     let n = Counts {
         pixels: gb.pixel_count() as f64,
         samples: f64::from(gb.samples),
         covered: (gb.len() - gb.background_samples()) as f64,
-        bytes: f64::from(bytes),
+        bytes: bytes.into(),
         light_pairs: quad_light_fragments.map(|l| l as f64),
         ..Counts::default()
     };

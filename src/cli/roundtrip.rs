@@ -41,7 +41,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let roundtrip = roundtrip(&loaded.gbuffer, &layout).with_context(|| format!("{file}: layout {}", layout.name()))?;
     let packed = layout.pack(&loaded.gbuffer).with_context(|| format!("{file}: layout {}", layout.name()))?;
     let code_space = gbuf::layout::codespace::code_space(&layout, &packed, &loaded.gbuffer.coverage);
-    let compression = gbuf::layout::compression::compressed(&packed);
+    let mut compression = gbuf::layout::compression::compressed(&packed);
+    gbuf::layout::compression::fixed_rate(&mut compression, &layout);
     drop(packed);
     let row = Row { file, roundtrip, code_space, compression };
     if args.json {
@@ -168,7 +169,7 @@ fn print_text(row: &Row) -> anyhow::Result<()> {
     };
     let (mut nominal, mut sums) = (0u64, [Some(0u64); 4]);
     for t in &row.compression {
-        let by: Vec<Option<u64>> = t.schemes.iter().map(|s| s.bytes).chain([Some(t.zstd)]).collect();
+        let by: Vec<Option<u64>> = t.schemes.iter().map(|s| s.bytes).chain([t.zstd]).collect();
         writeln!(
             out,
             "    {:<18} {:<12} {:>10} {:>16} {:>16} {:>16} {:>16}",

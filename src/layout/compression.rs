@@ -51,13 +51,88 @@ pub struct TargetBytes {
     pub nominal: u64,
     /// Per model.
     pub schemes: Vec<SchemeBytes>,
-    /// zstd at its highest level on each 256-byte block alone (a scale, not a bound).
-    pub zstd: u64,
+    /// zstd at its highest level on each 256-byte block alone (a scale, not a bound); `None` when not asked for
+    /// ([`compressed_models`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub zstd: Option<u64>,
 }
 
-/// The sizes of every target of `packed` under every model.
+impl TargetBytes {
+    /// Bytes in memory under `scheme`: the model's, or the nominal bytes where the model cannot hold the target (the
+    /// hardware then stores it uncompressed).
+    #[must_use]
+    pub fn stored(&self, scheme: &str) -> u64 {
+        self.schemes.iter().find(|s| s.scheme == scheme).and_then(|s| s.bytes).unwrap_or(self.nominal)
+    }
+}
+
+/// The model names, in the order every output lists them.
+pub const SCHEMES: [&str; 3] = ["dcc", "ccs", "afbc"];
+
+/// A whole packed G-buffer's bytes per sample under each model ([`SCHEMES`] order): every target's
+/// [`TargetBytes::stored`], summed, over the frame's samples.
+#[must_use]
+pub fn bytes_per_sample(targets: &[TargetBytes], samples: u64) -> [f64; 3] {
+    SCHEMES.map(|s| targets.iter().map(|t| t.stored(s)).sum::<u64>() as f64 / samples.max(1) as f64)
+}
+
+/// The sizes of every target of `packed` under every model, and zstd's.
 #[must_use]
 pub fn compressed(packed: &Packed) -> Vec<TargetBytes> {
+    sizes(packed, true)
+}
+
+/// [`compressed`] without zstd (its highest level costs most of the time): what every report row carries.
+#[must_use]
+pub fn compressed_models(packed: &Packed) -> Vec<TargetBytes> {
+    sizes(packed, false)
+}
+
+/// An AFRC target (`TargetSpec::afrc`) is already stored at its fixed rate, which no lossless model changes: each
+/// model's bytes for it become the fixed-rate bytes (the coding units' sizes, `layout::afrc`).
+pub fn fixed_rate(targets: &mut [TargetBytes], layout: &super::Layout) {
+    for ((t, spec), format) in targets.iter_mut().zip(&layout.spec().targets).zip(layout.formats()) {
+        if let Some(rate) = spec.afrc {
+            let texels = t.nominal / format.bytes() as u64;
+            let fixed = (texels * u64::from(super::afrc::bits_per_texel(*format, rate))).div_ceil(8);
+            for s in &mut t.schemes {
+                s.bytes = Some(fixed);
+            }
+        }
+    }
+}
+
+/// Rows per band of [`compressed_models_of`]: a multiple of every block height (16 at most), so the bands' blocks are
+/// the whole frame's.
+const BAND_ROWS: u32 = 64;
+
+/// [`compressed_models`] of `layout`'s packing of `gb`, packed [`BAND_ROWS`] rows at a time (never the whole frame at
+/// once, for a layout lit from the input or a decoded copy): every block is the whole frame's, so the sizes are the
+/// whole frame's but for the metadata's rounding up, at most a byte per band and target.
+pub fn compressed_models_of(
+    layout: &super::Layout,
+    gb: &crate::gbuffer::GBuffer,
+) -> crate::error::Result<Vec<TargetBytes>> {
+    let mut total: Vec<TargetBytes> = Vec::new();
+    layout.pack_bands(gb, BAND_ROWS, |band| {
+        let part = sizes(band, false);
+        if total.is_empty() {
+            total = part;
+            return;
+        }
+        for (t, p) in total.iter_mut().zip(part) {
+            t.nominal += p.nominal;
+            for (s, q) in t.schemes.iter_mut().zip(p.schemes) {
+                s.bytes = s.bytes.zip(q.bytes).map(|(a, b)| a + b);
+                s.blocks += q.blocks;
+                s.cleared += q.cleared;
+            }
+        }
+    })?;
+    Ok(total)
+}
+
+fn sizes(packed: &Packed, zstd: bool) -> Vec<TargetBytes> {
     packed
         .targets
         .iter()
@@ -82,7 +157,7 @@ pub fn compressed(packed: &Packed) -> Vec<TargetBytes> {
                     plane.blocks("ccs", 128, &[64, 128], 0.25),
                     afbc,
                 ],
-                zstd: plane.zstd(),
+                zstd: zstd.then(|| plane.zstd()),
             }
         })
         .collect()
@@ -149,19 +224,74 @@ impl Plane<'_> {
             .reduce(|| (0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2))
     }
 
+    /// Per component, the smallest and largest value in the block at `(x0, y0)` of `(bw, bh)` texels (clipped to the
+    /// frame) of sample plane `s`, into `out`; returns the texel count. What every delta-coded model needs, in one
+    /// pass over the texels as stored.
+    fn ranges(&self, x0: u32, y0: u32, shape: (u32, u32), s: u32, comps: &[(u32, u64)], out: &mut [(u64, u64)]) -> u64 {
+        // The component count as a constant, so the per-texel loop unrolls.
+        match comps.len() {
+            1 => self.ranges_n::<1>(x0, y0, shape, s, comps, out),
+            2 => self.ranges_n::<2>(x0, y0, shape, s, comps, out),
+            3 => self.ranges_n::<3>(x0, y0, shape, s, comps, out),
+            4 => self.ranges_n::<4>(x0, y0, shape, s, comps, out),
+            _ => self.ranges_n::<0>(x0, y0, shape, s, comps, out),
+        }
+    }
+
+    /// [`Plane::ranges`] for `N` components (0: any number).
+    #[inline(always)]
+    fn ranges_n<const N: usize>(
+        &self,
+        x0: u32,
+        y0: u32,
+        (bw, bh): (u32, u32),
+        s: u32,
+        comps: &[(u32, u64)],
+        out: &mut [(u64, u64)],
+    ) -> u64 {
+        let tb = self.format.bytes();
+        let stride = self.samples as usize * tb;
+        let comps = if N == 0 { comps } else { &comps[..N] };
+        let out = if N == 0 { out } else { &mut out[..N] };
+        out.fill((u64::MAX, 0));
+        let (x1, y1) = ((x0 + bw).min(self.width), (y0 + bh).min(self.height));
+        for y in y0..y1 {
+            let start = ((y as usize * self.width as usize + x0 as usize) * self.samples as usize + s as usize) * tb;
+            let row = &self.bytes[start..start + (x1 - x0 - 1) as usize * stride + tb];
+            for t in row.chunks(stride) {
+                let t = read_texel(&t[..tb]);
+                for (&(offset, mask), r) in comps.iter().zip(out.iter_mut()) {
+                    let v = (t >> offset) as u64 & mask;
+                    *r = (r.0.min(v), r.1.max(v));
+                }
+            }
+        }
+        u64::from((x1 - x0) * (y1 - y0))
+    }
+
+    /// The components' offsets and masks (no component is wider than 64 bits).
+    fn comps(&self) -> Vec<(u32, u64)> {
+        self.format
+            .components()
+            .iter()
+            .map(|c| (c.offset, if c.bits >= 64 { u64::MAX } else { (1u64 << c.bits) - 1 }))
+            .collect()
+    }
+
     /// A delta-coded block model of `block_bytes`-byte blocks stored at one of `sizes` (the last: uncompressed), zero
     /// blocks fast-cleared, plus `meta` bytes of metadata per block.
     fn blocks(&self, scheme: &'static str, block_bytes: usize, sizes: &[u64], meta: f64) -> SchemeBytes {
         let tb = self.format.bytes();
         let shape = block_shape(block_bytes, tb);
+        let comps = self.comps();
         let (mut total, blocks, cleared) = self.sum(shape, |sc, x0, y0, s| {
-            self.block(x0, y0, shape, s, &mut sc.texels);
-            let texels = &sc.texels;
-            let raw = (texels.len() * tb) as u64;
-            if texels.iter().all(|&t| t == 0) {
+            sc.ranges.resize(comps.len(), (0, 0));
+            let n = self.ranges(x0, y0, shape, s, &comps, &mut sc.ranges);
+            let raw = n * tb as u64;
+            if sc.ranges.iter().all(|r| r.1 == 0) {
                 return (0, true);
             }
-            let code = delta_bits(self.format, texels).div_ceil(8);
+            let code = delta_bits(self.format, n, &sc.ranges).div_ceil(8);
             // The smallest output size that holds the code, scaled to a partial block; else the block as it is.
             let scale = raw as f64 / f64::from(shape.0 * shape.1) / tb as f64;
             let fit = sizes.iter().map(|&z| (z as f64 * scale).ceil() as u64).find(|&z| z >= code);
@@ -175,16 +305,18 @@ impl Plane<'_> {
     /// their raw size); a superblock of one value is its header alone.
     fn afbc(&self) -> SchemeBytes {
         let tb = self.format.bytes() as u64;
+        let comps = self.comps();
         let (total, blocks, cleared) = self.sum((16, 16), |sc, x0, y0, s| {
-            self.block(x0, y0, (16, 16), s, &mut sc.texels);
-            if sc.texels.iter().all(|&t| t == sc.texels[0]) {
+            sc.ranges.resize(comps.len(), (0, 0));
+            self.ranges(x0, y0, (16, 16), s, &comps, &mut sc.ranges);
+            if sc.ranges.iter().all(|r| r.0 == r.1) {
                 return (16, true);
             }
             let mut bytes = 16;
             for sy in (y0..(y0 + 16).min(self.height)).step_by(4) {
                 for sx in (x0..(x0 + 16).min(self.width)).step_by(4) {
-                    self.block(sx, sy, (4, 4), s, &mut sc.sub);
-                    bytes += delta_bits(self.format, &sc.sub).div_ceil(8).min(sc.sub.len() as u64 * tb);
+                    let n = self.ranges(sx, sy, (4, 4), s, &comps, &mut sc.ranges);
+                    bytes += delta_bits(self.format, n, &sc.ranges).div_ceil(8).min(n * tb);
                 }
             }
             (bytes, false)
@@ -215,28 +347,36 @@ impl Plane<'_> {
 #[derive(Default)]
 struct Scratch {
     texels: Vec<u128>,
-    sub: Vec<u128>,
+    ranges: Vec<(u64, u64)>,
     raw: Vec<u8>,
     /// The thread's zstd context (`Some(None)`: zstd could not start; blocks then count raw).
     coder: Option<Option<zstd::bulk::Compressor<'static>>>,
 }
 
-/// Bits of a block coded as a base per component plus each texel's difference from it in the bits the block's range
-/// needs.
-fn delta_bits(format: Format, texels: &[u128]) -> u64 {
-    let mut bits = 0u64;
-    for c in format.components() {
-        let mask = if c.bits >= 128 { u128::MAX } else { (1u128 << c.bits) - 1 };
-        let (mut lo, mut hi) = (u128::MAX, 0u128);
-        for &t in texels {
-            let v = (t >> c.offset) & mask;
-            (lo, hi) = (lo.min(v), hi.max(v));
+/// Bits of a block of `n` texels coded as a base per component plus each texel's difference from it in the bits the
+/// block's range needs (`ranges`: each component's smallest and largest value, in the format's component order).
+fn delta_bits(format: Format, n: u64, ranges: &[(u64, u64)]) -> u64 {
+    format
+        .components()
+        .iter()
+        .zip(ranges)
+        .map(|(c, &(lo, hi))| u64::from(c.bits) + n * u64::from(u64::BITS - hi.saturating_sub(lo).leading_zeros()))
+        .sum()
+}
+
+/// A texel's little-endian bytes (1 to 16) as a word.
+#[inline(always)]
+fn read_texel(b: &[u8]) -> u128 {
+    match *b {
+        [a] => u128::from(a),
+        [a, b] => u128::from(u16::from_le_bytes([a, b])),
+        [a, b, c, d] => u128::from(u32::from_le_bytes([a, b, c, d])),
+        _ => {
+            let mut word = [0u8; 16];
+            word[..b.len()].copy_from_slice(b);
+            u128::from_le_bytes(word)
         }
-        let range = hi.saturating_sub(lo);
-        let need = u64::from(u128::BITS - range.leading_zeros());
-        bits += u64::from(c.bits) + texels.len() as u64 * need;
     }
-    bits
 }
 
 #[cfg(test)]
@@ -282,7 +422,7 @@ mod tests {
             let b = bytes(noise, s).unwrap();
             assert!(b >= noise.nominal && b <= noise.nominal + noise.nominal / 8, "{s}: {b} of {}", noise.nominal);
         }
-        assert!(noise.zstd >= noise.nominal, "zstd cannot shrink noise: {}", noise.zstd);
+        assert!(noise.zstd.unwrap() >= noise.nominal, "zstd cannot shrink noise: {:?}", noise.zstd);
     }
 
     #[test]

@@ -6,6 +6,7 @@
 //! its render targets ([`Packed`]); [`Layout::unpack`] reads them back into the G-buffer the lighting pass would
 //! see. Layouts come from [`Layout::builtins`] or from TOML/JSON files ([`Layout::load`], docs/LAYOUTS.md).
 
+pub mod afrc;
 pub(crate) mod bits;
 pub(crate) mod builtin;
 pub(crate) mod coder;
@@ -108,9 +109,13 @@ impl Layout {
             .collect()
     }
 
-    /// A built-in layout by name (the lit layouts and the visibility buffer's).
+    /// A built-in layout by name (the lit layouts and the visibility buffer's); `NAME@afrcK` is the built-in with
+    /// its eligible targets stored at AFRC `K` bits per component ([`Layout::with_afrc`]).
     #[must_use]
     pub fn by_name(name: &str) -> Option<Layout> {
+        if let Some((base, rate)) = name.rsplit_once("@afrc") {
+            return Layout::by_name(base)?.with_afrc(rate.parse().ok()?).ok();
+        }
         builtin::specs()
             .into_iter()
             .chain(builtin::visibility_specs())
@@ -135,6 +140,13 @@ impl Layout {
     pub fn by_name_or_path(name_or_path: &str) -> Result<Layout> {
         if let Some(l) = Layout::by_name(name_or_path) {
             return Ok(l);
+        }
+        // `NAME@afrcK`: the base layout's error, or the rate's.
+        if let Some((base, rate)) = name_or_path.rsplit_once("@afrc") {
+            let rate = rate.parse::<u32>().map_err(|_| {
+                Error::Argument(format!("{name_or_path:?}: AFRC's rate is a number of bits per component (2, 3 or 4)"))
+            })?;
+            return Layout::by_name_or_path(base)?.with_afrc(rate);
         }
         let path = Path::new(name_or_path);
         // A path (a separator or a file extension) that does not exist is a missing file, read as such below.
@@ -201,16 +213,54 @@ impl Layout {
         self.formats.iter().map(|f| f.bytes()).sum()
     }
 
+    /// Bytes one sample occupies in memory: [`Layout::bytes_per_sample`] with each AFRC target at its fixed rate
+    /// (fractional: RGBA8 at 3 bits per component is 1.5 bytes).
+    #[must_use]
+    pub fn stored_bytes_per_sample(&self) -> f64 {
+        self.formats
+            .iter()
+            .zip(&self.spec.targets)
+            .map(|(f, t)| t.afrc.map_or(f.bytes() as f64, |r| f64::from(afrc::bits_per_texel(*f, r)) / 8.0))
+            .sum()
+    }
+
+    /// This layout with every target AFRC can hold stored at `rate` bits per component, named `NAME@afrcRATE`. An
+    /// error when no target is eligible or the rate is not one of [`afrc::RATES`].
+    pub fn with_afrc(&self, rate: u32) -> Result<Layout> {
+        let mut spec = self.spec.clone();
+        let mut any = false;
+        for (t, f) in spec.targets.iter_mut().zip(&self.formats) {
+            if afrc::eligible(*f) {
+                t.afrc = Some(rate);
+                any = true;
+            }
+        }
+        if !any {
+            return Err(Error::Argument(format!(
+                "layout {:?} has no target AFRC can hold (8-bit UNORM: r8, rg8, rgba8, rgba8-srgb)",
+                self.name()
+            )));
+        }
+        spec.name = format!("{}@afrc{rate}", self.name());
+        Layout::from_spec(spec)
+    }
+
     /// Bits actually used by fields (excluding reserved bits).
     #[must_use]
     pub fn used_bits(&self) -> u32 {
         self.fields.iter().filter(|f| f.slot != Slot::Reserved).map(|f| f.bits).sum()
     }
 
-    /// Memory for a whole G-buffer: `width × height × samples × bytes_per_sample`.
+    /// Memory for a whole G-buffer: `width × height × samples ×` [`Layout::stored_bytes_per_sample`] (whole bytes).
     #[must_use]
     pub fn footprint_bytes(&self, width: u32, height: u32, samples: u32) -> u64 {
-        u64::from(width) * u64::from(height) * u64::from(samples) * self.bytes_per_sample() as u64
+        let bits: u64 = self
+            .formats
+            .iter()
+            .zip(&self.spec.targets)
+            .map(|(f, t)| u64::from(t.afrc.map_or(f.bits(), |r| afrc::bits_per_texel(*f, r))))
+            .sum();
+        (u64::from(width) * u64::from(height) * u64::from(samples) * bits).div_ceil(8)
     }
 
     /// Attributes the layout stores (in fields or through the material table), in canonical order.
@@ -281,6 +331,21 @@ fn validate(spec: &LayoutSpec) -> std::result::Result<Layout, String> {
         let format = Format::from_name(&t.format).ok_or_else(|| {
             format!("target {:?}: unknown format {:?}; known: {}", t.name, t.format, Format::known_names())
         })?;
+        if let Some(rate) = t.afrc {
+            if !afrc::eligible(format) {
+                return Err(format!(
+                    "target {:?}: AFRC (fixed-rate compression) holds only 8-bit UNORM targets (r8, rg8, rgba8, \
+                     rgba8-srgb), not {format}",
+                    t.name
+                ));
+            }
+            if !afrc::RATES.contains(&rate) {
+                return Err(format!(
+                    "target {:?}: AFRC at {rate} bits per component; the rates are 2, 3 and 4",
+                    t.name
+                ));
+            }
+        }
         formats.push(format);
         let mut placed: Vec<(u32, u32, String)> = Vec::new();
         for f in &t.fields {

@@ -73,6 +73,14 @@ impl Packed {
 /// 84-byte layout, several parallel blocks per thread.
 pub const BAND_SAMPLES: usize = 1 << 18;
 
+/// Every band of rows packed starts at a multiple of this many rows: the height of an AFRC coding unit.
+const AFRC_ROWS: usize = 4;
+
+/// Rows per band of about [`BAND_SAMPLES`] samples for rows of `row` samples: a multiple of [`AFRC_ROWS`].
+fn band_rows(row: usize) -> usize {
+    (BAND_SAMPLES / row.max(1) / AFRC_ROWS).max(1) * AFRC_ROWS
+}
+
 /// A timed roundtrip ([`Layout::roundtrip_timed`]).
 #[derive(Clone, Debug)]
 pub struct Roundtrip {
@@ -361,6 +369,7 @@ impl Layout {
     /// (ms).
     pub fn pack_timed(&self, gb: &GBuffer, runs: usize, stride: u32) -> Result<(Packed, Vec<f64>, Option<f64>)> {
         gb.validate()?;
+        self.check_afrc(gb)?;
         let depth_range = self.depth_range_for(gb);
         let coders = self.coders(depth_range)?;
         let t = Instant::now();
@@ -371,7 +380,7 @@ impl Layout {
         self.pack_samples(gb, &coders, &index, 0..gb.len(), &mut targets);
         let mut encode_ms = vec![t.elapsed().as_secs_f64() * 1e3];
         let row = (gb.width as usize * gb.samples as usize).max(1);
-        let band_len = row * (BAND_SAMPLES / row).max(1);
+        let band_len = row * band_rows(row);
         let bands = gb.len().div_ceil(band_len).max(1);
         let stride = stride.max(1) as usize;
         let mut scratch = self.empty_targets();
@@ -395,6 +404,35 @@ impl Layout {
             present: self.present(gb),
         };
         Ok((packed, encode_ms, table_ms))
+    }
+
+    /// Packs `gb` a band of `rows` rows at a time into band-sized targets and hands each band's [`Packed`] (its
+    /// `height` the band's) to `each`: the frame's packed bytes seen whole without holding them whole.
+    pub(crate) fn pack_bands(&self, gb: &GBuffer, rows: u32, mut each: impl FnMut(&Packed)) -> Result<()> {
+        gb.validate()?;
+        self.check_afrc(gb)?;
+        debug_assert!((rows as usize).is_multiple_of(AFRC_ROWS));
+        let depth_range = self.depth_range_for(gb);
+        let coders = self.coders(depth_range)?;
+        let (material_table, index) = self.material_index(gb);
+        let row = gb.width as usize * gb.samples as usize;
+        let mut band = Packed {
+            layout: self.name().to_string(),
+            width: gb.width,
+            height: 0,
+            samples: gb.samples,
+            targets: self.empty_targets(),
+            material_table,
+            depth_range,
+            present: self.present(gb),
+        };
+        for y0 in (0..gb.height).step_by(rows.max(1) as usize) {
+            let h = rows.max(1).min(gb.height - y0);
+            self.pack_samples(gb, &coders, &index, y0 as usize * row..(y0 + h) as usize * row, &mut band.targets);
+            band.height = h;
+            each(&band);
+        }
+        Ok(())
     }
 
     /// The texel of target `target` at a background sample: zero but a depth field, which holds its codec's
@@ -479,6 +517,27 @@ impl Layout {
             } else {
                 pack_target::<u128>(&fields, clear, &gb.coverage, size, row, range.start, &mut target.bytes);
             }
+            // What the GPU reads back of a fixed-rate target: the range starts at a whole coding unit (every caller's
+            // bands are multiples of `AFRC_ROWS` rows) and the frame is single-sampled (`check_afrc`).
+            if let Some(rate) = self.spec().targets[ti].afrc {
+                debug_assert!(gb.samples == 1 && (range.start / row.max(1)).is_multiple_of(AFRC_ROWS));
+                let rows = (range.len() / row.max(1)) as u32;
+                super::afrc::roundtrip(&mut target.bytes, target.format, gb.width, rows, rate);
+            }
+        }
+    }
+
+    /// An AFRC target cannot hold a multisampled frame: the error that says so, naming the target.
+    fn check_afrc(&self, gb: &GBuffer) -> Result<()> {
+        match self.spec().targets.iter().find(|t| t.afrc.is_some()) {
+            Some(t) if gb.samples > 1 => Err(Error::Argument(format!(
+                "layout {:?}: target {:?} is stored with AFRC, which holds no multisampled image (the frame has {} \
+                 samples per pixel)",
+                self.name(),
+                t.name,
+                gb.samples
+            ))),
+            _ => Ok(()),
         }
     }
 
@@ -663,11 +722,12 @@ impl Layout {
 
     fn roundtrip_runs(&self, gb: &GBuffer, runs: usize, derive_position: bool) -> Result<Roundtrip> {
         gb.validate()?;
+        self.check_afrc(gb)?;
         let depth_range = self.depth_range_for(gb);
         let coders = self.coders(depth_range)?;
         let present = self.present(gb);
         let row = (gb.width as usize * gb.samples as usize).max(1);
-        let band_len = row * (BAND_SAMPLES / row).max(1);
+        let band_len = row * band_rows(row);
         let mut targets = self.empty_targets();
         let mut out = gb.shell();
         let mut index = Vec::new();
@@ -756,10 +816,11 @@ impl Layout {
     /// differs); returns whether all compared equal and the encode and decode times (ms), scaled to the frame.
     fn roundtrip_bands(&self, gb: &GBuffer, stride: u32, check: bool) -> Result<(bool, f64, f64)> {
         gb.validate()?;
+        self.check_afrc(gb)?;
         let coders = self.coders(self.depth_range_for(gb))?;
         let present = self.present(gb);
         let (table, material) = self.material_index(gb);
-        let rows_per_band = (BAND_SAMPLES / (gb.width as usize * gb.samples as usize).max(1)).max(1) as u32;
+        let rows_per_band = band_rows(gb.width as usize * gb.samples as usize) as u32;
         let mut targets = self.empty_targets();
         let mut out = GBuffer::default();
         let (mut enc, mut dec) = (Duration::ZERO, Duration::ZERO);

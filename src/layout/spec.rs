@@ -64,6 +64,10 @@ pub struct TargetSpec {
     /// The fields. Bits not covered by a field are written as zero.
     #[serde(default)]
     pub fields: Vec<FieldSpec>,
+    /// Stored with Arm's fixed-rate compression at this many bits per component (2, 3 or 4; 8-bit UNORM formats,
+    /// single-sampled frames only): lossy, every coding unit at a fixed size (`layout::afrc`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub afrc: Option<u32>,
 }
 
 /// One field: an attribute (or a component of one), its codec, and its bit range within the target's texel.
@@ -217,6 +221,7 @@ mod tests {
                 name: "rt0".into(),
                 format: "rgba8".into(),
                 note: String::new(),
+                afrc: None,
                 fields: vec![FieldSpec {
                     attribute: "albedo".into(),
                     codec: "unorm8".into(),

@@ -59,6 +59,10 @@ pub struct CsvRow<'a> {
     pub decode_ops_per_sample: Num,
     pub bandwidth_tiled_mb: Num,
     pub bandwidth_quad_mb: Num,
+    pub dcc_bytes_per_sample: Num,
+    pub ccs_bytes_per_sample: Num,
+    pub afbc_bytes_per_sample: Num,
+    pub bandwidth_tiled_dcc_mb: Num,
     pub encode_ms: Num,
     pub encode_ms_min: Num,
     pub encode_ms_max: Num,
@@ -72,6 +76,7 @@ pub struct CsvRow<'a> {
     pub resolve_pass_ms: Num,
     pub pareto_bytes: bool,
     pub pareto_time: bool,
+    pub pareto_compressed: bool,
     pub note: String,
 }
 
@@ -120,6 +125,10 @@ impl<'a> CsvRow<'a> {
             decode_ops_per_sample: Num(r.decode_ops_per_sample.map(f64::from)),
             bandwidth_tiled_mb: Num(r.error.is_none().then_some(r.bandwidth_mb.tiled)),
             bandwidth_quad_mb: Num(r.bandwidth_mb.quad),
+            dcc_bytes_per_sample: Num(r.compressed.map(|c| c.bytes_per_sample[0])),
+            ccs_bytes_per_sample: Num(r.compressed.map(|c| c.bytes_per_sample[1])),
+            afbc_bytes_per_sample: Num(r.compressed.map(|c| c.bytes_per_sample[2])),
+            bandwidth_tiled_dcc_mb: Num(r.compressed.map(|c| c.tiled_mb[0])),
             encode_ms: Num(r.encode_ms),
             encode_ms_min: Num(r.timings.get("encode").map(|t| t.min_ms)),
             encode_ms_max: Num(r.timings.get("encode").map(|t| t.max_ms)),
@@ -133,6 +142,7 @@ impl<'a> CsvRow<'a> {
             resolve_pass_ms: Num(r.resolve_pass_ms),
             pareto_bytes: r.pareto.bytes,
             pareto_time: r.pareto.time,
+            pareto_compressed: r.pareto.compressed,
             note,
         }
     }
@@ -252,7 +262,7 @@ mod tests {
         let csv = to_csv(&[r.clone(), Row { error: Some("failed".into()), ..r }]);
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines.len(), 3);
-        assert_eq!(lines[0].split(',').count(), 47);
+        assert_eq!(lines[0].split(',').count(), 52);
         assert!(lines[0].starts_with("frame,layout,bytes_per_sample,footprint_bytes,detector,culling,"));
         assert_eq!(to_csv(&[]), format!("{}\n", lines[0]), "an empty report keeps its header");
         assert!(lines[1].starts_with(",\"a,b\",12,0,depth-normal,,"));
