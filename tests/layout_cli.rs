@@ -100,6 +100,19 @@ fn roundtrip_json_matches_the_library() {
         let afbc = g["schemes"].as_array().unwrap().iter().find(|s| s["scheme"] == "afbc").unwrap();
         assert!(afbc["bytes"].is_null(), "AFBC holds no multisampled target: {g}");
     }
+    // The normal target alone under each codec: the library's rows, and `--layout` and `--normal-targets` exclusive.
+    let rows = json(&gbuf(dir.path(), &["roundtrip", "room.exr", "--normal-targets", "--json"]));
+    let want = gbuf::analysis::normal_targets::normal_targets(&gb).unwrap();
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), want.len());
+    for (g, w) in rows.iter().zip(&want) {
+        assert_eq!(
+            (g["codec"].as_str().unwrap(), g["format"].as_str().unwrap()),
+            (w.codec.as_str(), w.format.as_str())
+        );
+        assert_close(&g["mean_deg"], w.mean_deg, &w.codec);
+        assert_close(&g["compressed"][0], w.compressed[0], &w.codec);
+    }
     let reference = json(&gbuf(dir.path(), &["roundtrip", "room.exr", "--layout", "reference-f32", "--json"]));
     assert_eq!(reference["normal_max_deg"], 0.0);
     assert_eq!(reference["depth_rel_max"], 0.0);

@@ -12,6 +12,7 @@ pub mod errors;
 pub mod forward;
 pub mod job;
 pub mod needs;
+pub mod normal_targets;
 pub mod pareto;
 pub mod pipelines;
 pub(crate) mod prune;

@@ -14,8 +14,12 @@ pub struct Args {
     #[command(flatten)]
     pub input: InputArgs,
     /// Layout: a built-in name (see `gbuf layouts`) or a TOML/JSON layout file.
-    #[arg(long, value_name = "NAME|PATH")]
-    pub layout: String,
+    #[arg(long, value_name = "NAME|PATH", required_unless_present = "normal_targets")]
+    pub layout: Option<String>,
+    /// Instead of a layout: the normal target alone under each normal codec in the format engines store it in, its
+    /// angular error on the dump and its bytes after the framebuffer-compression models.
+    #[arg(long, conflicts_with = "layout")]
+    pub normal_targets: bool,
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
@@ -35,7 +39,10 @@ struct Row {
 
 /// Runs `gbuf roundtrip`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let layout = Layout::by_name_or_path(&args.layout)?;
+    let Some(name) = args.layout.as_deref() else {
+        return normal_targets(&args);
+    };
+    let layout = Layout::by_name_or_path(name)?;
     let loaded = args.input.load().with_context(|| format!("loading {}", args.input.file.display()))?;
     let file = args.input.file.display().to_string();
     let roundtrip = roundtrip(&loaded.gbuffer, &layout).with_context(|| format!("{file}: layout {}", layout.name()))?;
@@ -49,6 +56,45 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return super::common::print_json(&row);
     }
     print_text(&row)
+}
+
+/// `--normal-targets`: the table of `gbuf::analysis::normal_targets`.
+fn normal_targets(args: &Args) -> anyhow::Result<()> {
+    let loaded = args.input.load().with_context(|| format!("loading {}", args.input.file.display()))?;
+    let file = args.input.file.display();
+    let rows = gbuf::analysis::normal_targets::normal_targets(&loaded.gbuffer).with_context(|| format!("{file}"))?;
+    if args.json {
+        return super::common::print_json(&rows);
+    }
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    let g = &loaded.gbuffer;
+    writeln!(
+        out,
+        "{file}: the normal target alone, {}×{}×{}; bytes per sample after framebuffer compression (models of published \
+         constraints, not a vendor's compressor)",
+        g.width, g.height, g.samples
+    )?;
+    writeln!(
+        out,
+        "  {:<22} {:<10} {:>8} {:>10} {:>10} {:>8} {:>8} {:>8}",
+        "codec", "format", "B/sample", "mean °", "max °", "dcc", "ccs", "afbc"
+    )?;
+    for r in &rows {
+        writeln!(
+            out,
+            "  {:<22} {:<10} {:>8} {:>10.4} {:>10.4} {:>8.3} {:>8.3} {:>8.3}",
+            r.codec,
+            r.format,
+            r.bytes_per_sample,
+            r.mean_deg,
+            r.max_deg,
+            r.compressed[0],
+            r.compressed[1],
+            r.compressed[2]
+        )?;
+    }
+    Ok(())
 }
 
 fn at(s: &SampleAt) -> String {

@@ -106,7 +106,7 @@ pub fn fixed_rate(targets: &mut [TargetBytes], layout: &super::Layout) {
 /// the whole frame's.
 const BAND_ROWS: u32 = 64;
 
-/// [`compressed_models`] of `layout`'s packing of `gb`, packed [`BAND_ROWS`] rows at a time (never the whole frame at
+/// [`compressed_models`] of `layout`'s packing of `gb`, packed 64 rows at a time (never the whole frame at
 /// once, for a layout lit from the input or a decoded copy): every block is the whole frame's, so the sizes are the
 /// whole frame's but for the metadata's rounding up, at most a byte per band and target.
 pub fn compressed_models_of(
@@ -452,5 +452,60 @@ mod tests {
             assert_eq!(block_shape(256, tb), want, "{tb}");
         }
         assert_eq!(block_shape(128, 4), (8, 4));
+    }
+
+    proptest::proptest! {
+        /// One 8 × 8 RGBA8 block (a DCC block, two CCS pairs, one AFBC superblock's 4 sub-blocks of 4 × 4): whatever
+        /// its texels, each model stores the closed form of its components' ranges. Blocks are drawn as a base plus
+        /// bounded noise per component, so cleared, constant, two-value, gradient-like and noisy blocks all occur.
+        #[test]
+        fn every_model_stores_the_closed_form_of_its_blocks(
+            base in proptest::array::uniform4(0u8..=255),
+            spread in proptest::array::uniform4(0u8..=8),
+            two_values in proptest::bool::ANY,
+            seed in proptest::prelude::any::<u64>(),
+        ) {
+            let mut rng = crate::base::rng::SplitMix64::new(seed);
+            let mut texels = [[0u8; 4]; 64];
+            for t in &mut texels {
+                for c in 0..4 {
+                    let m = if spread[c] == 0 { 0 } else { 1u64 << (spread[c] - 1) };
+                    let d = if two_values { (rng.next_u64() & 1) * m } else { rng.next_u64() % (2 * m.max(1)) };
+                    t[c] = base[c].saturating_add(d.min(255) as u8);
+                }
+            }
+            let p = packed(Format::Rgba8, 8, 8, 1, |x, y, _| u128::from(u32::from_le_bytes(texels[(y * 8 + x) as usize])));
+            let got = &compressed_models(&p)[0];
+            // Per component over `idx`: 8 base bits plus, per texel, the bits of the range.
+            let code = |idx: &[usize]| -> u64 {
+                (0..4)
+                    .map(|c| {
+                        let (lo, hi) = idx.iter().fold((255u8, 0u8), |(l, h), &i| (l.min(texels[i][c]), h.max(texels[i][c])));
+                        8 + idx.len() as u64 * u64::from(8 - (hi - lo).leading_zeros())
+                    })
+                    .sum::<u64>()
+                    .div_ceil(8)
+            };
+            let all: Vec<usize> = (0..64).collect();
+            let zero = texels.iter().all(|t| *t == [0; 4]);
+            let fit = |c: u64, sizes: &[u64]| *sizes.iter().find(|&&z| z >= c).unwrap_or(sizes.last().unwrap());
+            let dcc = if zero { 0 } else { fit(code(&all), &[64, 128, 192, 256]) } + 1;
+            proptest::prop_assert_eq!(bytes(got, "dcc"), Some(dcc));
+            let (top, bottom): (Vec<usize>, Vec<usize>) = all.iter().partition(|&&i| i < 32);
+            let pair = |idx: &[usize]| if idx.iter().all(|&i| texels[i] == [0; 4]) { 0 } else { fit(code(idx), &[64, 128]) };
+            proptest::prop_assert_eq!(bytes(got, "ccs"), Some(pair(&top) + pair(&bottom) + 1));
+            let uniform = texels.iter().all(|t| *t == texels[0]);
+            let afbc = if uniform {
+                16
+            } else {
+                16 + (0..4)
+                    .map(|q| {
+                        let sub: Vec<usize> = (0..16).map(|i| (q / 2 * 4 + i / 4) * 8 + q % 2 * 4 + i % 4).collect();
+                        code(&sub).min(64)
+                    })
+                    .sum::<u64>()
+            };
+            proptest::prop_assert_eq!(bytes(got, "afbc"), Some(afbc));
+        }
     }
 }
