@@ -206,6 +206,18 @@ fn layouts_check_says_where_each_layout_binds() {
     let text = gbuf(dir.path(), &["layouts", "--check", "fat-20", "--platform", "metal-apple2,webgpu"]);
     let text = String::from_utf8(text.stdout).unwrap();
     assert!(text.contains("fat-20 on metal-apple2: d24s8 is not a guaranteed attachment format"), "{text}");
+    // On a dump: each layout's bytes after the compression models, the library's; an AFRC layout refuses 4×.
+    let gb = render(SceneName::Room, 32, 16, 4).unwrap();
+    gbuf::io::canonical::write(&dir.path().join("room.exr"), &gb).unwrap();
+    let args = ["layouts", "--check", "fat-20", "fat-20@afrc3", "--platform", "webgpu", "--dump", "room.exr", "--json"];
+    let on = json(&gbuf(dir.path(), &args));
+    let fat = &on[0]["compressed"]["Ok"];
+    let want = gbuf::layout::compression::compressed_models_of(&Layout::by_name("fat-20").unwrap(), &gb).unwrap();
+    let want = gbuf::layout::compression::bytes_per_sample(&want, gb.len() as u64);
+    assert_close(&fat["dcc"], want[0], "fat-20 dcc");
+    assert_close(&fat["ccs"], want[1], "fat-20 ccs");
+    assert_eq!((fat["stored"].as_f64(), fat["afbc"].as_f64()), (Some(20.0), Some(20.0)), "no AFBC at 4×: {fat}");
+    assert!(on[1]["compressed"]["Err"].as_str().unwrap().contains("multisampled"), "{}", on[1]);
     let bad = gbuf(dir.path(), &["layouts", "--check", "--platform", "xbox"]);
     assert_eq!(bad.status.code(), Some(2));
     let err = String::from_utf8_lossy(&bad.stderr);

@@ -25,6 +25,10 @@ pub struct Args {
     /// With `--check`: only these platforms (comma-separated; `gbuf layouts --check` lists them all).
     #[arg(long, value_name = "LIST", value_delimiter = ',', requires = "check")]
     pub platform: Vec<String>,
+    /// With `--check`: each layout packed from this dump, and its bytes per sample after the framebuffer-compression
+    /// models (`gbuf roundtrip --layout L` gives them per target); the dump's sample count replaces `--msaa`.
+    #[arg(long, value_name = "FILE", requires = "check")]
+    pub dump: Option<std::path::PathBuf>,
     /// Print the one layout named as shader code instead (glsl, hlsl or wgsl): `GbufSurface`, `gbuf_pack_<target>`,
     /// `gbuf_unpack`, bit for bit what gbuf packs (docs/SHADERS.md). `renderdoc`: views for RenderDoc's texture
     /// viewer, one custom display shader per decoded attribute and the buffer viewer's format of each target, into
@@ -132,7 +136,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .collect::<anyhow::Result<_>>()?;
     if args.check {
         let layouts = if detailed { named } else { Layout::builtins() };
-        return check(&layouts, &args.platform, args.msaa, args.json, detailed);
+        let dump = match &args.dump {
+            Some(path) => Some(
+                gbuf::load(path, &Default::default()).with_context(|| format!("loading {}", path.display()))?.gbuffer,
+            ),
+            None => None,
+        };
+        let samples = dump.as_ref().map_or(args.msaa, |g| g.samples);
+        return check(&layouts, &args.platform, samples, args.json, detailed, dump.as_ref());
     }
     let layouts: Vec<Layout> =
         if detailed { named } else { Layout::builtins().into_iter().chain(Layout::visibility_builtins()).collect() };
@@ -207,10 +218,39 @@ struct FitRow {
     needs: Vec<&'static str>,
     /// Per target: whether Arm's AFBC can keep it compressed at this sample count.
     afbc: Vec<(String, &'static str)>,
+    /// With `--dump`: bytes per sample in memory and after each compression model (`dcc`, `ccs`, `afbc`), or why the
+    /// layout could not be packed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    compressed: Option<Result<Bytes, String>>,
+}
+
+/// A layout's bytes on a dump (`--check --dump`).
+#[derive(Clone, serde::Serialize)]
+struct Bytes {
+    stored: f64,
+    dcc: f64,
+    ccs: f64,
+    afbc: f64,
+}
+
+/// `layout`'s bytes per sample on `gb` after the compression models.
+fn bytes_on(layout: &Layout, gb: &gbuf::gbuffer::GBuffer) -> Result<Bytes, String> {
+    use gbuf::layout::compression;
+    let mut targets = compression::compressed_models_of(layout, gb).map_err(|e| e.to_string())?;
+    compression::fixed_rate(&mut targets, layout);
+    let [dcc, ccs, afbc] = compression::bytes_per_sample(&targets, gb.len() as u64);
+    Ok(Bytes { stored: layout.stored_bytes_per_sample(), dcc, ccs, afbc })
 }
 
 /// `gbuf layouts --check`: each layout's fit per platform.
-fn check(layouts: &[Layout], only: &[String], samples: u32, json: bool, detailed: bool) -> anyhow::Result<()> {
+fn check(
+    layouts: &[Layout],
+    only: &[String],
+    samples: u32,
+    json: bool,
+    detailed: bool,
+    dump: Option<&gbuf::gbuffer::GBuffer>,
+) -> anyhow::Result<()> {
     use gbuf::layout::limits::{self, Afbc, PLATFORMS};
     let mut platforms = super::common::platforms("--platform", only)?;
     if platforms.is_empty() {
@@ -219,6 +259,7 @@ fn check(layouts: &[Layout], only: &[String], samples: u32, json: bool, detailed
     let mut rows = Vec::new();
     for l in layouts {
         let formats = l.formats();
+        let compressed = dump.map(|gb| bytes_on(l, gb));
         let afbc: Vec<(String, &'static str)> = l
             .spec()
             .targets
@@ -244,6 +285,7 @@ fn check(layouts: &[Layout], only: &[String], samples: u32, json: bool, detailed
                 problems: c.problems,
                 needs: c.needs,
                 afbc: afbc.clone(),
+                compressed: compressed.clone(),
             });
         }
     }
@@ -295,6 +337,25 @@ fn check(layouts: &[Layout], only: &[String], samples: u32, json: bool, detailed
         for chunk in rows.chunks(platforms.len()) {
             let afbc: Vec<String> = chunk[0].afbc.iter().map(|(t, a)| format!("{t} {a}")).collect();
             writeln!(out, "  {} AFBC at {samples}×: {}", chunk[0].layout, afbc.join(", "))?;
+        }
+    }
+    if dump.is_some() {
+        writeln!(
+            out,
+            "\nBytes per sample on the dump after framebuffer compression (models of published constraints, not a \
+             vendor's compressor):\n{:<16} {:>8} {:>8} {:>8} {:>8}",
+            "layout", "stored", "dcc", "ccs", "afbc"
+        )?;
+        for chunk in rows.chunks(platforms.len()) {
+            match &chunk[0].compressed {
+                Some(Ok(b)) => writeln!(
+                    out,
+                    "{:<16} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
+                    chunk[0].layout, b.stored, b.dcc, b.ccs, b.afbc
+                )?,
+                Some(Err(e)) => writeln!(out, "{:<16} not packed: {e}", chunk[0].layout)?,
+                None => {}
+            }
         }
     }
     Ok(())
