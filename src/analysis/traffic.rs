@@ -329,11 +329,16 @@ pub fn legend() -> String {
 /// The footprint and traffic of every pipeline as the Markdown table of docs/GUIDE.md.
 #[must_use]
 pub fn markdown_table() -> String {
-    let mut s = String::from("| row | footprint (bytes) | traffic (bytes per frame) |\n|---|---|---|\n");
+    use crate::base::table::{Align, Table};
+    let mut t = Table::new([
+        ("row", Align::Left),
+        ("footprint (bytes)", Align::Left),
+        ("traffic (bytes per frame)", Align::Left),
+    ]);
     for p in Pipeline::ALL {
-        s.push_str(&format!("| {p} | {} | {} |\n", p.footprint_model().formula(true), p.traffic_model().formula(true)));
+        t.row([p.to_string(), p.footprint_model().formula(true), p.traffic_model().formula(true)]);
     }
-    s
+    t.finish()
 }
 
 /// Modelled traffic of a layout of `bytes` per sample on `gb` (see [`Bandwidth`]): the tiled-deferred and

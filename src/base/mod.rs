@@ -16,6 +16,7 @@
 //! | `memory`    | large planes from zeroed memory                                                    |
 //! | [`png`]     | the PNG encoder: bands of rows filtered and deflated in parallel                   |
 //! | [`alloc`]   | the command line's global allocator: large blocks in transparent huge pages        |
+//! | [`table`]   | [`table::Table`], the one way a Markdown table is written                          |
 
 pub mod alloc;
 pub(crate) mod fastmath;
@@ -29,4 +30,5 @@ pub mod names;
 pub mod picture;
 pub mod png;
 pub mod rng;
+pub mod table;
 pub mod timing;

@@ -499,22 +499,20 @@ fn brdf_comparison_markdown(reports: &[Report], rows: &[BrdfRow]) -> String {
          stores coarsely what only the second reads (GGX reads roughness and metallic; Blinn-Phong a specular \
          amount and power).\n"
     );
-    s.push_str("| layout | B/sample |");
+    use gbuf::base::table::{Align, Table};
+    let mut columns = vec![("layout".to_string(), Align::Left), ("B/sample".to_string(), Align::Right)];
     for r in reports {
         let b = r.lighting.as_ref().map_or("?", |l| l.brdf.name());
-        let _ = write!(s, " {b} RMSE | {b} rank |");
+        columns.extend([(format!("{b} RMSE"), Align::Right), (format!("{b} rank"), Align::Right)]);
     }
-    s.push_str("\n|---|--:|");
-    for _ in reports {
-        s.push_str("--:|--:|");
-    }
-    s.push('\n');
+    let mut t = Table::new(columns);
     for r in rows {
-        let _ = write!(s, "| {} | {} |", r.layout, r.bytes_per_sample);
+        let mut cells = vec![r.layout.clone(), r.bytes_per_sample.to_string()];
         for (_, e, k) in &r.under {
-            let _ = write!(s, " {} | {} |", fmt_opt(*e, 5), k.map_or("—".to_string(), |k| k.to_string()));
+            cells.extend([fmt_opt(*e, 5), k.map_or("—".to_string(), |k| k.to_string())]);
         }
-        s.push('\n');
+        t.row(cells);
     }
+    s.push_str(&t.finish());
     s
 }

@@ -4,6 +4,7 @@ use crate::analysis::aggregate::{AggregateRow, DetectorAggregate, Stat};
 use crate::analysis::needs::Needs;
 use crate::analysis::record::{Frame, Report};
 use crate::analysis::row::{ParetoFlags, Row};
+use crate::base::table::{Align, Table};
 use crate::measure::image::ErrorSet;
 use crate::report::format::fmt_opt;
 use std::fmt::Write as _;
@@ -15,7 +16,7 @@ fn pct(v: Option<f64>) -> String {
 /// The "what the scene needs" section.
 #[must_use]
 fn needs_section(n: &Needs) -> String {
-    let mut s = String::from("| | |\n|---|---|\n");
+    let mut t = Table::new([("", Align::Left), ("", Align::Left)]);
     let list = |v: &[String]| if v.is_empty() { "none".to_string() } else { v.join(", ") };
     let constants: Vec<String> = n
         .constant
@@ -26,16 +27,16 @@ fn needs_section(n: &Needs) -> String {
             format!("{a} = {}", vals.join(" "))
         })
         .collect();
-    let _ = writeln!(s, "| covered samples | {} |", n.covered_samples);
-    let _ = writeln!(s, "| constant attributes | {} |", list(&constants));
-    let _ = writeln!(s, "| absent attributes | {} |", list(&n.absent));
-    let _ = writeln!(s, "| derivable attributes | {} |", list(&n.derivable));
+    t.row(["covered samples".to_string(), n.covered_samples.to_string()]);
+    t.row(["constant attributes".to_string(), list(&constants)]);
+    t.row(["absent attributes".to_string(), list(&n.absent)]);
+    t.row(["derivable attributes".to_string(), list(&n.derivable)]);
     let mat = if n.material_count_capped {
         format!("more than {} (indirection not worthwhile)", n.material_count)
     } else {
         format!("{} → {} ID bits", n.material_count, n.material_id_bits.unwrap_or(0))
     };
-    let _ = writeln!(s, "| distinct material tuples (specular, power, roughness, metallic) | {mat} |");
+    t.row(["distinct material tuples (specular, power, roughness, metallic)".to_string(), mat]);
     let faces = match n.normals_face_camera {
         Some(true) => "yes: hemisphere encodings are safe".to_string(),
         Some(false) => format!(
@@ -45,7 +46,7 @@ fn needs_section(n: &Needs) -> String {
         ),
         None => "no normals".into(),
     };
-    let _ = writeln!(s, "| normals face the camera | {faces} |");
+    t.row(["normals face the camera".to_string(), faces]);
     if let Some([lo, hi]) = n.depth_range {
         let bits = n.depth_bits.map_or(String::new(), |b| {
             format!(
@@ -53,29 +54,31 @@ fn needs_section(n: &Needs) -> String {
                 b.relative_precision, b.linear_bits, b.log_bits
             )
         });
-        let _ = writeln!(s, "| depth range | {lo:.4} – {hi:.4}{bits} |");
+        t.row(["depth range".to_string(), format!("{lo:.4} – {hi:.4}{bits}")]);
     }
     for (k, [lo, hi]) in &n.ranges {
-        let _ = writeln!(s, "| range of {k} | {lo:.4} – {hi:.4} |");
+        t.row([format!("range of {k}"), format!("{lo:.4} – {hi:.4}")]);
     }
     if let Some(p) = &n.pruned_layout {
-        let _ = writeln!(
-            s,
-            "| pruned layout | `{}`: {} B/sample instead of {} (`{}`), saves {} B; RMSE {} (base {}){} |",
-            p.name,
-            p.bytes_per_sample,
-            p.base_bytes_per_sample,
-            p.base,
-            p.bytes_saved,
-            fmt_opt(p.rmse, 5),
-            fmt_opt(p.base_rmse, 5),
-            p.note.as_ref().map_or(String::new(), |n| format!(" — {n}"))
-        );
+        t.row([
+            "pruned layout".to_string(),
+            format!(
+                "`{}`: {} B/sample instead of {} (`{}`), saves {} B; RMSE {} (base {}){}",
+                p.name,
+                p.bytes_per_sample,
+                p.base_bytes_per_sample,
+                p.base,
+                p.bytes_saved,
+                fmt_opt(p.rmse, 5),
+                fmt_opt(p.base_rmse, 5),
+                p.note.as_ref().map_or(String::new(), |n| format!(" — {n}"))
+            ),
+        ]);
         if !p.changes.is_empty() {
-            let _ = writeln!(s, "| pruning | {} |", p.changes.join("; "));
+            t.row(["pruning".to_string(), p.changes.join("; ")]);
         }
     }
-    s
+    t.finish()
 }
 
 fn flip_pair(e: Option<&ErrorSet>) -> String {
@@ -113,44 +116,37 @@ const DECIDING: [&str; 8] = [
 #[must_use]
 fn rows_table(rows: &[Row]) -> String {
     let culling = rows.iter().any(|r| r.culling.is_some());
-    let mut s = String::from("| layout | B/sample | detector |");
+    let mut columns = vec![("layout", Align::Left), ("B/sample", Align::Right), ("detector", Align::Left)];
     if culling {
-        s.push_str(" culling |");
+        columns.push(("culling", Align::Left));
     }
-    for c in DECIDING {
-        let _ = write!(s, " {c} |");
-    }
-    s.push_str("\n|---|--:|---|");
-    if culling {
-        s.push_str("---|");
-    }
-    for _ in 1..DECIDING.len() {
-        s.push_str("--:|");
-    }
-    s.push_str("---|\n");
+    let last = DECIDING.len() - 1;
+    columns.extend(DECIDING.iter().enumerate().map(|(i, &c)| (c, if i == last { Align::Left } else { Align::Right })));
+    let mut t = Table::new(columns);
     for r in rows {
-        let _ = write!(s, "| {} | {} | {} |", r.layout, r.bytes_per_sample, r.detector);
+        let mut cells = vec![r.layout.clone(), r.bytes_per_sample.to_string(), r.detector.clone()];
         if culling {
-            let _ = write!(s, " {} |", r.culling.as_deref().unwrap_or("—"));
+            cells.push(r.culling.clone().unwrap_or_else(|| "—".into()));
         }
         if let Some(e) = &r.error {
-            let _ = writeln!(s, " error: {} |{}", e.replace('|', "/"), " |".repeat(DECIDING.len() - 1));
-            continue;
+            cells.push(format!("error: {e}"));
+            cells.extend(std::iter::repeat_n(String::new(), DECIDING.len() - 1));
+        } else {
+            let (l, e) = (r.layout_error.as_ref(), r.total_error.as_ref());
+            cells.extend([
+                fmt_opt(r.normal_max_deg, 3),
+                fmt_opt(l.map(|e| e.rmse), 5),
+                flip_pair(l),
+                flip_pair(e),
+                pct(r.shading_fraction),
+                r.decode_ops_per_sample.map_or("—".into(), |n| n.to_string()),
+                fmt_opt(r.resolve_pass_ms, 1),
+                pareto_cell(r.pareto).to_string(),
+            ]);
         }
-        let (l, t) = (r.layout_error.as_ref(), r.total_error.as_ref());
-        let _ = writeln!(
-            s,
-            " {} | {} | {} | {} | {} | {} | {} | {} |",
-            fmt_opt(r.normal_max_deg, 3),
-            fmt_opt(l.map(|e| e.rmse), 5),
-            flip_pair(l),
-            flip_pair(t),
-            pct(r.shading_fraction),
-            r.decode_ops_per_sample.map_or("—".into(), |n| n.to_string()),
-            fmt_opt(r.resolve_pass_ms, 1),
-            pareto_cell(r.pareto),
-        );
+        t.row(cells);
     }
+    let mut s = t.finish();
     s.push_str(
         "\nEvery other measure of these rows — footprint, PSNR, AA and total RMSE, precision and recall, traffic, each \
          stage's time with its spread — is in report.csv (and report.json).\n",
@@ -197,21 +193,30 @@ fn stat_cell(st: &Option<Stat>, prec: usize, frames: bool) -> String {
 /// The table of the rows aggregated over frames: mean / worst (worst frame).
 #[must_use]
 fn aggregate_table(rows: &[AggregateRow]) -> String {
-    let mut s = String::from(
-        "| layout | B/sample | detector | culling | frames | layout RMSE mean / worst (frame) | layout FLIP LDR mean / \
-         worst | AA RMSE mean / worst | total RMSE mean / worst | resolve pass ms mean / worst | traffic tiled MB \
-         mean | traffic quad MB mean | Pareto |\n|---|--:|---|---|--:|--:|--:|--:|--:|--:|--:|--:|---|\n",
-    );
+    use Align::{Left as L, Right as R};
+    let mut t = Table::new([
+        ("layout", L),
+        ("B/sample", R),
+        ("detector", L),
+        ("culling", L),
+        ("frames", R),
+        ("layout RMSE mean / worst (frame)", R),
+        ("layout FLIP LDR mean / worst", R),
+        ("AA RMSE mean / worst", R),
+        ("total RMSE mean / worst", R),
+        ("resolve pass ms mean / worst", R),
+        ("traffic tiled MB mean", R),
+        ("traffic quad MB mean", R),
+        ("Pareto", L),
+    ]);
     for r in rows {
         let failed = if r.failed_frames > 0 { format!(" ({} failed)", r.failed_frames) } else { String::new() };
-        let _ = writeln!(
-            s,
-            "| {} | {} | {} | {} | {}{failed} | {} | {} | {} | {} | {} | {} | {} | {} |",
-            r.layout,
-            r.bytes_per_sample,
-            r.detector,
-            r.culling.as_deref().unwrap_or("—"),
-            r.frames,
+        t.row([
+            r.layout.clone(),
+            r.bytes_per_sample.to_string(),
+            r.detector.clone(),
+            r.culling.clone().unwrap_or_else(|| "—".into()),
+            format!("{}{failed}", r.frames),
             stat_cell(&r.layout_rmse, 5, true),
             stat_cell(&r.layout_flip_ldr, 4, false),
             stat_cell(&r.aa_rmse, 5, false),
@@ -219,32 +224,35 @@ fn aggregate_table(rows: &[AggregateRow]) -> String {
             stat_cell(&r.resolve_pass_ms, 1, false),
             fmt_opt(r.bandwidth_tiled_mb.as_ref().map(|s| s.mean), 1),
             fmt_opt(r.bandwidth_quad_mb.as_ref().map(|s| s.mean), 1),
-            pareto_cell(r.pareto),
-        );
+            pareto_cell(r.pareto).to_string(),
+        ]);
     }
-    s
+    t.finish()
 }
 
 /// The detector table: anti-aliasing error against the shading each detector costs.
 #[must_use]
 fn detector_table(rows: &[DetectorAggregate]) -> String {
-    let mut s = String::from(
-        "| detector | shaded (mean) | AA RMSE mean / worst | AA FLIP LDR mean / worst | AA FLIP HDR mean / worst | \
-         on the front |\n|---|--:|--:|--:|--:|---|\n",
-    );
+    use Align::{Left as L, Right as R};
+    let mut t = Table::new([
+        ("detector", L),
+        ("shaded (mean)", R),
+        ("AA RMSE mean / worst", R),
+        ("AA FLIP LDR mean / worst", R),
+        ("AA FLIP HDR mean / worst", R),
+        ("on the front", L),
+    ]);
     for d in rows {
-        let _ = writeln!(
-            s,
-            "| {} | {} | {} | {} | {} | {} |",
-            d.detector,
+        t.row([
+            d.detector.clone(),
             pct(d.shading_fraction.as_ref().map(|s| s.mean)),
             stat_cell(&d.aa_rmse, 5, false),
             stat_cell(&d.aa_flip_ldr, 4, false),
             stat_cell(&d.aa_flip_hdr, 4, false),
-            if d.on_front { "yes" } else { "" }
-        );
+            if d.on_front { "yes" } else { "" }.to_string(),
+        ]);
     }
-    s
+    t.finish()
 }
 
 fn frame_header(s: &mut String, f: &Frame, rows: usize, runs: usize) {
@@ -329,26 +337,31 @@ fn compression(s: &mut String, rows: &[Row], multi: bool, samples: u64) {
     };
     let nominal = rank(&stored);
     let dcc = rank(&|r| r.compressed.map_or(f64::NAN, |c| c.bytes_per_sample[0]));
-    let _ = writeln!(
-        s,
-        "| layout | B/sample | dcc | ccs | afbc | tiled MB | tiled MB after dcc | rank nominal → dcc |\n|---|---|---|---|---|---|---|---|"
-    );
+    use Align::{Left as L, Right as R};
+    let mut t = Table::new([
+        ("layout", L),
+        ("B/sample", R),
+        ("dcc", R),
+        ("ccs", R),
+        ("afbc", R),
+        ("tiled MB", R),
+        ("tiled MB after dcc", R),
+        ("rank nominal → dcc", L),
+    ]);
     for (i, r) in layouts.iter().enumerate() {
         let c = r.compressed.expect("filtered above");
-        let _ = writeln!(
-            s,
-            "| {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {} → {} |",
-            r.layout,
-            format!("{:.2}", stored(r)).trim_end_matches('0').trim_end_matches('.'),
-            c.bytes_per_sample[0],
-            c.bytes_per_sample[1],
-            c.bytes_per_sample[2],
-            r.bandwidth_mb.tiled,
-            c.tiled_mb[0],
-            nominal[i],
-            dcc[i]
-        );
+        t.row([
+            r.layout.clone(),
+            format!("{:.2}", stored(r)).trim_end_matches('0').trim_end_matches('.').to_string(),
+            format!("{:.2}", c.bytes_per_sample[0]),
+            format!("{:.2}", c.bytes_per_sample[1]),
+            format!("{:.2}", c.bytes_per_sample[2]),
+            format!("{:.2}", r.bandwidth_mb.tiled),
+            format!("{:.2}", c.tiled_mb[0]),
+            format!("{} → {}", nominal[i], dcc[i]),
+        ]);
     }
+    s.push_str(&t.finish());
     // The one published aggregate to set the models against: Arm's AFBC sample.
     let afbc: Vec<f64> =
         layouts.iter().map(|r| r.compressed.expect("filtered above").bytes_per_sample[2] / stored(r)).collect();

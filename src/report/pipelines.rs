@@ -5,6 +5,7 @@
 use crate::analysis::forward::QuadShading;
 use crate::analysis::pipelines::{Pipeline, Pipelines};
 use crate::base::mask::EdgeMask;
+use crate::base::table::{Align, Table};
 use crate::error::{Error, Result};
 use crate::image::mlaa::display_luma;
 use crate::image::HdrImage;
@@ -26,29 +27,35 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
         "{w}×{ht} × {n} samples, {} lights; deferred rows: detector `{}`, layout `{}` ({} B/sample).\n",
         p.lights, p.detector, p.layout, p.gbuffer_bytes
     );
-    s.push_str(
-        "| pipeline | footprint MB | traffic MB/frame | shading | light pairs | SIMD util. | CPU ms | RMSE | \
-         LDR-FLIP | note |\n|---|--:|--:|--:|--:|--:|--:|--:|--:|---|\n",
-    );
+    use Align::{Left as L, Right as R};
+    let mut t = Table::new([
+        ("pipeline", L),
+        ("footprint MB", R),
+        ("traffic MB/frame", R),
+        ("shading", R),
+        ("light pairs", R),
+        ("SIMD util.", R),
+        ("CPU ms", R),
+        ("RMSE", R),
+        ("LDR-FLIP", R),
+        ("note", L),
+    ]);
     for r in &p.rows {
         let e = r.error.as_ref();
-        let _ = writeln!(
-            s,
-            "| {}{} | {:.2} | {:.1} | {} {} | {} | {:.0}% | {} | {} | {} | {} |",
-            r.pipeline,
-            if r.estimated { " (est.)" } else { "" },
-            r.footprint_mb,
-            r.bandwidth_mb,
-            r.shading,
-            r.shading_unit,
-            r.light_pairs,
-            100.0 * r.utilisation,
+        t.row([
+            format!("{}{}", r.pipeline, if r.estimated { " (est.)" } else { "" }),
+            format!("{:.2}", r.footprint_mb),
+            format!("{:.1}", r.bandwidth_mb),
+            format!("{} {}", r.shading, r.shading_unit),
+            r.light_pairs.to_string(),
+            format!("{:.0}%", 100.0 * r.utilisation),
             fmt_opt(r.cpu_ms, 1),
             fmt_opt(e.map(|e| e.rmse), 5),
             fmt_opt(e.and_then(|e| e.flip_ldr), 4),
-            r.note.replace('|', "/"),
-        );
+            r.note.clone(),
+        ]);
     }
+    s.push_str(&t.finish());
     // One line per reason (the forward rows share theirs).
     let mut reasons: Vec<&str> = p.skipped.iter().map(|(_, why)| why.as_str()).collect();
     reasons.dedup();
@@ -141,44 +148,47 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
         );
         let mut warps: Vec<u32> = p.utilisation.iter().map(|u| u.warp).collect();
         warps.dedup();
-        s.push_str("| schedule |");
-        for w in &warps {
-            let _ = write!(s, " W={w} |");
-        }
-        s.push_str("\n|---|");
-        s.push_str(&"--:|".repeat(warps.len()));
-        s.push('\n');
+        let mut t = Table::new(
+            std::iter::once(("schedule".to_string(), Align::Left))
+                .chain(warps.iter().map(|w| (format!("W={w}"), Align::Right))),
+        );
         for sched in crate::analysis::forward::MsaaSchedule::ALL {
-            let _ = write!(s, "| {sched} |");
-            for w in &warps {
+            t.row(std::iter::once(sched.to_string()).chain(warps.iter().map(|w| {
                 let u = p.utilisation.iter().find(|u| u.warp == *w && u.schedule == Some(sched));
-                let _ = write!(s, " {} |", u.map_or("—".into(), |u| format!("{:.1}%", 100.0 * u.ratio)));
-            }
-            s.push('\n');
+                u.map_or("—".into(), |u| format!("{:.1}%", 100.0 * u.ratio))
+            })));
         }
+        s.push_str(&t.finish());
     }
     if !p.schedules.is_empty() {
         let _ = writeln!(
             s,
-            "\nThe same three schedules run by gbuf's resolve on this CPU ({}-lane vectors, tiled culling):\n\n\
-             | schedule | CPU ms | evaluations | lane steps | utilisation | light pairs | G-buffer bytes read | same image |\n\
-             |---|--:|--:|--:|--:|--:|--:|---|",
+            "\nThe same three schedules run by gbuf's resolve on this CPU ({}-lane vectors, tiled culling):\n",
             crate::resolve::kernel_lanes()
         );
+        let mut t = Table::new([
+            ("schedule", L),
+            ("CPU ms", R),
+            ("evaluations", R),
+            ("lane steps", R),
+            ("utilisation", R),
+            ("light pairs", R),
+            ("G-buffer bytes read", R),
+            ("same image", L),
+        ]);
         for r in &p.schedules {
-            let _ = writeln!(
-                s,
-                "| {} | {:.1} | {} | {} | {:.1}% | {} | {} | {} |",
-                r.schedule,
-                r.ms,
-                r.evaluations,
-                r.lane_steps,
-                100.0 * r.evaluations as f64 / r.lane_steps.max(1) as f64,
-                r.light_pairs,
-                r.bytes_read,
-                if r.same_image { "yes" } else { "**no**" }
-            );
+            t.row([
+                r.schedule.to_string(),
+                format!("{:.1}", r.ms),
+                r.evaluations.to_string(),
+                r.lane_steps.to_string(),
+                format!("{:.1}%", 100.0 * r.evaluations as f64 / r.lane_steps.max(1) as f64),
+                r.light_pairs.to_string(),
+                r.bytes_read.to_string(),
+                if r.same_image { "yes" } else { "**no**" }.to_string(),
+            ]);
         }
+        s.push_str(&t.finish());
     }
     if !p.aa.is_empty() {
         let _ = writeln!(
@@ -190,20 +200,27 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
         if let Some(no_aa) = p.aa.first().filter(|r| !r.note.is_empty()) {
             let _ = writeln!(s, "The no-AA image is {}.\n", no_aa.note);
         }
-        s.push_str("| method | evaluations | G-buffer MB | CPU ms | RMSE | LDR-FLIP | HDR-FLIP |\n|---|--:|--:|--:|--:|--:|--:|\n");
+        let mut t = Table::new([
+            ("method", L),
+            ("evaluations", R),
+            ("G-buffer MB", R),
+            ("CPU ms", R),
+            ("RMSE", R),
+            ("LDR-FLIP", R),
+            ("HDR-FLIP", R),
+        ]);
         for r in &p.aa {
-            let _ = writeln!(
-                s,
-                "| {} | {} | {:.2} | {:.1} | {} | {} | {} |",
-                r.method,
-                r.evaluations,
-                r.footprint_mb,
-                r.ms,
+            t.row([
+                r.method.clone(),
+                r.evaluations.to_string(),
+                format!("{:.2}", r.footprint_mb),
+                format!("{:.1}", r.ms),
                 fmt_opt(Some(r.error.rmse), 5),
                 fmt_opt(r.error.flip_ldr, 4),
-                fmt_opt(r.error.flip_hdr, 4)
-            );
+                fmt_opt(r.error.flip_hdr, 4),
+            ]);
         }
+        s.push_str(&t.finish());
         for r in p.aa.iter().filter(|r| r.method.starts_with("vrs:")) {
             let _ = writeln!(s, "\n`{}`: {} (`gbuf vrs` compares generators and tile sizes).", r.method, r.note);
         }
@@ -227,31 +244,41 @@ pub fn pipelines_markdown(p: &Pipelines, level: usize) -> String {
             p.size.2,
             first.full_bytes_per_pixel
         );
-        s.push_str(
-            "| method | slots | B/pixel | vs full | MB | evaluations | evicted samples | discarded pixels | CPU ms | \
-             RMSE | LDR-FLIP | HDR-FLIP |\n|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n",
-        );
+        let mut t = Table::new([
+            ("method", L),
+            ("slots", R),
+            ("B/pixel", R),
+            ("vs full", R),
+            ("MB", R),
+            ("evaluations", R),
+            ("evicted samples", R),
+            ("discarded pixels", R),
+            ("CPU ms", R),
+            ("RMSE", R),
+            ("LDR-FLIP", R),
+            ("HDR-FLIP", R),
+        ]);
         for r in &p.compressed {
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {:.0}% | {:.2} | {} | {:.3}% | {} | {:.1} | {} | {} | {} |",
+            t.row([
                 match r.method {
                     crate::analysis::compress::Method::Streaming => "streaming",
                     crate::analysis::compress::Method::Aggregate => "aggregates",
-                },
-                r.slots,
-                r.bytes_per_pixel,
-                100.0 * f64::from(r.bytes_per_pixel) / f64::from(r.full_bytes_per_pixel.max(1)),
-                r.footprint_mb,
-                r.evaluations,
-                100.0 * r.evicted_fraction,
-                r.discarded_pixels,
-                r.ms,
+                }
+                .to_string(),
+                r.slots.to_string(),
+                r.bytes_per_pixel.to_string(),
+                format!("{:.0}%", 100.0 * f64::from(r.bytes_per_pixel) / f64::from(r.full_bytes_per_pixel.max(1))),
+                format!("{:.2}", r.footprint_mb),
+                r.evaluations.to_string(),
+                format!("{:.3}%", 100.0 * r.evicted_fraction),
+                r.discarded_pixels.to_string(),
+                format!("{:.1}", r.ms),
                 fmt_opt(Some(r.error.rmse), 5),
                 fmt_opt(r.error.flip_ldr, 4),
-                fmt_opt(r.error.flip_hdr, 4)
-            );
+                fmt_opt(r.error.flip_hdr, 4),
+            ]);
         }
+        s.push_str(&t.finish());
     }
     let _ = writeln!(s, "\n{h} Traffic model ({})\n", crate::analysis::traffic::legend());
     for r in &p.rows {
