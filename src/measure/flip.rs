@@ -221,16 +221,18 @@ pub fn hdr_flip_with(
     let exposures = exposure_list(start, stop, n);
 
     let npix = width * height;
-    let mut max_map = vec![0.0f32; npix];
-    let mut exposure_map = vec![0.0f32; npix];
+    let mut maxes = vec![vec![0.0f32; npix]];
+    let mut tags = vec![vec![0.0f32; npix]];
     if npix > 0 {
         let ctx = Ctx::new(width, height, opts.pixels_per_degree);
         for (i, &e) in exposures.iter().enumerate() {
             let enc = Encoding::Hdr { scale: 2.0f32.powf(e), tm };
             let tag = if n > 1 { i as f32 / (n - 1) as f32 } else { 0.0 };
-            run_bands(&ctx, reference_linear, test_linear, enc, &mut max_map, Some((&mut exposure_map, tag)));
+            let (r, t) = (Pixels::F32(reference_linear), [Pixels::F32(test_linear)]);
+            run_bands_many(&ctx, r, &t, enc, &mut maxes, Merge::Tagged(&mut tags, tag));
         }
     }
+    let (max_map, exposure_map) = (maxes.remove(0), tags.remove(0));
     let mean = mean_f64(&max_map);
     HdrFlip {
         map: FlipMap { width, height, values: max_map, mean },
@@ -379,11 +381,12 @@ fn check_sizes(r: &[f32], t: &[f32], w: usize, h: usize) {
 
 fn ldr_common(r: &[f32], t: &[f32], w: usize, h: usize, opts: &FlipOptions, enc: Encoding) -> FlipMap {
     check_sizes(r, t, w, h);
-    let mut values = vec![0.0f32; w * h];
+    let mut maps = vec![vec![0.0f32; w * h]];
     if w * h > 0 {
         let ctx = Ctx::new(w, h, opts.pixels_per_degree);
-        run_bands(&ctx, r, t, enc, &mut values, None);
+        run_bands_many(&ctx, Pixels::F32(r), &[Pixels::F32(t)], enc, &mut maps, Merge::Store);
     }
+    let values = maps.remove(0);
     let mean = mean_f64(&values);
     FlipMap { width: w, height: h, values, mean }
 }
@@ -594,27 +597,6 @@ fn max_color_distance() -> f32 {
     hyab.powf(GQC)
 }
 
-/// Runs one LDR-FLIP evaluation over the whole image, band-parallel.
-/// Without `merge`, writes the error map into `out`. With `merge = (exposure_map, tag)`,
-/// keeps the per-pixel maximum in `out` and writes `tag` to `exposure_map` where it grew.
-fn run_bands(ctx: &Ctx, r: &[f32], t: &[f32], enc: Encoding, out: &mut [f32], merge: Option<(&mut [f32], f32)>) {
-    let (w, h) = (ctx.w, ctx.h);
-    // A few bands per thread for load balance; each band re-filters 2*rmax halo rows.
-    let threads = rayon::current_num_threads().max(1);
-    let min_band = (4 * ctx.rmax).max(16);
-    let nbands = (threads * 3).min(h.div_ceil(min_band)).max(1);
-    let band_h = h.div_ceil(nbands).next_multiple_of(2); // rows are produced in pairs
-    let inp = Inputs { ctx, r, t, enc };
-    match merge {
-        None => out.par_chunks_mut(band_h * w).enumerate().for_each(|(b, o)| band(&inp, b * band_h, o, None)),
-        Some((em, tag)) => out
-            .par_chunks_mut(band_h * w)
-            .zip(em.par_chunks_mut(band_h * w))
-            .enumerate()
-            .for_each(|(b, (o, e))| band(&inp, b * band_h, o, Some((e, tag)))),
-    }
-}
-
 /// HDR-FLIP's merge of one exposure's row `e` into the running maximum `out`, writing `tag` into the exposure map
 /// `em` where the maximum grew.
 #[inline(always)]
@@ -624,15 +606,6 @@ fn keep_max(out: &mut [f32], em: &mut [f32], e: &[f32], tag: f32) {
         *o = if grow { v } else { *o };
         *x = if grow { tag } else { *x };
     }
-}
-
-/// What every band of one evaluation reads: the filters, the two images and their encoding.
-#[derive(Clone, Copy)]
-struct Inputs<'a> {
-    ctx: &'a Ctx,
-    r: &'a [f32],
-    t: &'a [f32],
-    enc: Encoding,
 }
 
 /// The instruction set the band kernels run on: the CPU's, capped by `GBUF_ISA` ([`Isa::detect`]); in tests, also
@@ -645,26 +618,6 @@ fn band_isa() -> Isa {
         return isa.min(cap);
     }
     isa
-}
-
-/// The band kernel compiled for [`band_isa`]'s level ([`crate::base::isa::run`]: AVX-512 and AVX2 builds of the same
-/// code on x86-64, no FMA contraction in any: every build gives the same bits).
-fn band(inp: &Inputs<'_>, y0: usize, out: &mut [f32], merge: Option<(&mut [f32], f32)>) {
-    /// [`band_impl`] under [`crate::base::isa::run`].
-    struct Band<'a, 'b, 'c> {
-        inp: &'a Inputs<'b>,
-        y0: usize,
-        out: &'a mut [f32],
-        merge: Option<(&'c mut [f32], f32)>,
-    }
-    impl crate::base::isa::Kernel for Band<'_, '_, '_> {
-        type Output = ();
-        #[inline(always)]
-        fn run(self, _: Isa) {
-            band_impl(self.inp, self.y0, self.out, self.merge);
-        }
-    }
-    crate::base::isa::run(band_isa(), Band { inp, y0, out, merge });
 }
 
 // ---------------------------------------------------------------------------
@@ -825,7 +778,8 @@ enum Merge<'a> {
 /// One test's rows of a band: its error map's, and its exposure map's when merging.
 type BandRows<'a> = (&'a mut [f32], Option<&'a mut [f32]>);
 
-/// [`run_bands`] for several tests: per band, the reference's features once, then each test against them.
+/// Every FLIP evaluation, band-parallel: per band, the reference's features once, then each test against them (a
+/// single pair is one test).
 fn run_bands_many(
     ctx: &Ctx,
     r: Pixels<'_>,
@@ -949,8 +903,8 @@ fn band_features(ctx: &Ctx, img: Pixels<'_>, enc: Encoding, y0: usize, rows: usi
     crate::base::isa::run(band_isa(), Features { ctx, img, enc, y0, rows, sink });
 }
 
-/// One image's pass of [`band_impl`]: the same ring, horizontal and vertical sums (7 planes instead of 14), then
-/// per pixel the Lab colour and feature magnitudes that [`vrow2`] computes for each image of a pair.
+/// One image's pass over a band: the ring of horizontally filtered rows (7 planes), the vertical sums, then per pixel
+/// the Lab colour and feature magnitudes.
 #[inline(always)]
 fn band_features_impl(ctx: &Ctx, img: Pixels<'_>, enc: Encoding, y0: usize, rows: usize, sink: &mut Sink<'_>) {
     const NH1: usize = NH / 2;
@@ -1029,58 +983,6 @@ const TW: usize = 256;
 const LANES: usize = 8;
 /// Tile columns are computed in multiples of this (see `conv_rows`).
 const COLS: usize = 4 * LANES;
-
-#[inline(always)]
-fn band_impl(inp: &Inputs<'_>, y0: usize, out: &mut [f32], mut merge: Option<(&mut [f32], f32)>) {
-    let Inputs { ctx, r, t, enc } = *inp;
-    let (w, h) = (ctx.w, ctx.h);
-    let rows = out.len() / w;
-    // Ring rows hold NH planes with the constant stride TW (cheap addressing).
-    let row_len = NH * TW;
-    let mut ring = vec![0.0f32; ctx.ring * row_len];
-    let mut pad = vec![0.0f32; 8 * (TW + 2 * ctx.rmax)];
-    let mut rgb = vec![0.0f32; 3 * (TW + 2 * ctx.rmax)];
-    let mut err = vec![0.0f32; 2 * TW];
-    let mut offs_s = vec![0usize; 2 * ctx.rs + 2];
-    let mut offs_f = vec![0usize; 2 * ctx.rf + 2];
-    let mut x0 = 0;
-    while x0 < w {
-        let tw = TW.min(w - x0); // output columns of this tile
-        let tws = tw.next_multiple_of(COLS); // computed columns (<= TW)
-        let mut next = y0.saturating_sub(ctx.rmax);
-        // Output rows are produced in pairs (y, y + 1); for an odd last row the
-        // second one is computed from clamped rows and discarded.
-        let mut y = y0;
-        while y < y0 + rows {
-            let hi = (y + 1 + ctx.rmax).min(h - 1);
-            while next <= hi {
-                let slot = next % ctx.ring;
-                let dst = &mut ring[slot * row_len..(slot + 1) * row_len];
-                hrow(ctx, &[Pixels::F32(r), Pixels::F32(t)], enc, next, x0, tw, tws, &mut pad, &mut rgb, dst);
-                next += 1;
-            }
-            // offs[i]: ring offset of input row clamp(y - radius + i), i = 0..=2 radius + 1.
-            for (i, o) in offs_s.iter_mut().enumerate() {
-                *o = ((y + i).saturating_sub(ctx.rs).min(h - 1) % ctx.ring) * row_len;
-            }
-            for (i, o) in offs_f.iter_mut().enumerate() {
-                *o = ((y + i).saturating_sub(ctx.rf).min(h - 1) % ctx.ring) * row_len;
-            }
-            vrow2(ctx, &ring, tws, &offs_s, &offs_f, &mut err);
-            for dy in 0..2.min(y0 + rows - y) {
-                let ry = y + dy - y0;
-                let e = &err[dy * TW..dy * TW + tw];
-                let orow = &mut out[ry * w + x0..ry * w + x0 + tw];
-                match merge.as_mut() {
-                    None => orow.copy_from_slice(e),
-                    Some((em, tag)) => keep_max(orow, &mut em[ry * w + x0..ry * w + x0 + tw], e, *tag),
-                }
-            }
-            y += 2;
-        }
-        x0 += tw;
-    }
-}
 
 /// Converts columns `[x0 - rmax, x0 + tws + rmax)` (clamped to the image) of row `y`
 /// of the images (both of a pair, or one) to YCxCz and filters them horizontally into `out`
@@ -1312,71 +1214,6 @@ unsafe fn vsum2<const P: usize, const Q: usize>(
     (a0, a1)
 }
 
-/// Vertical filtering of output rows y and y + 1 (tile columns) from the ring of
-/// horizontally filtered rows, then colour difference, feature difference and the
-/// final FLIP error, into `out[..TW]` and `out[TW..2 TW]`.
-#[inline(always)]
-fn vrow2(ctx: &Ctx, ring: &[f32], tws: usize, offs_s: &[usize], offs_f: &[usize], out: &mut [f32]) {
-    // Bounds for the unchecked loads.
-    assert!(tws.is_multiple_of(LANES) && tws <= TW && out.len() >= 2 * TW);
-    assert!(offs_s.len() == ctx.ws.len() + 1 && offs_f.len() == ctx.wf.len() + 1);
-    assert!(offs_s.iter().chain(offs_f).all(|&o| o + NH * TW <= ring.len()));
-    // Sums for the whole tile row pair: acc[row][plane] with planes
-    // 0..8 = Y, Cx, Cz1, Cz2 (reference), same (test); 8..16 = dx, ddx, dy, ddy (reference), same (test).
-    let mut acc = [[[0.0f32; TW]; 16]; 2];
-    let mut c = 0;
-    while c < tws {
-        let mut put = |j: usize, r: ([F8; 4], [F8; 4])| {
-            for k in 0..4 {
-                acc[0][j + k][c..c + LANES].copy_from_slice(&r.0[k].0);
-                acc[1][j + k][c..c + LANES].copy_from_slice(&r.1[k].0);
-            }
-        };
-        // Y and Cx of both images; then Cz1 and Cz2 of both images.
-        // SAFETY: c < tws ≤ TW in steps of LANES (tws a multiple of LANES); every offset + NH·TW ≤ ring.len()
-        // and every plane is < NH = 14, asserted above (the same for the vsum2 calls below).
-        let (ya, yb) = unsafe { vsum2(ring, offs_s, c, [HP_Y, HP_CX, 7 + HP_Y, 7 + HP_CX], &ctx.ws, [0, 1, 0, 1]) };
-        // SAFETY: as above.
-        let (za, zb) =
-            unsafe { vsum2(ring, offs_s, c, [HP_CZ1, HP_CZ2, 7 + HP_CZ1, 7 + HP_CZ2], &ctx.ws, [2, 3, 2, 3]) };
-        put(0, ([ya[0], ya[1], za[0], za[1]], [yb[0], yb[1], zb[0], zb[1]]));
-        put(4, ([ya[2], ya[3], za[2], za[3]], [yb[2], yb[3], zb[2], zb[3]]));
-        // Features: x-derivative planes times G, G plane times y-derivatives (per image).
-        for img in 0..2 {
-            let o = img * 7;
-            // SAFETY: as above (o + HP_G < NH).
-            let (a, b) =
-                unsafe { vsum2(ring, offs_f, c, [o + HP_DX, o + HP_DDX, o + HP_G, o + HP_G], &ctx.wf, [0, 0, 1, 2]) };
-            put(8 + img * 4, (a, b));
-        }
-        c += LANES;
-    }
-    // Per-pixel colour / feature differences (long independent loop, so the pow
-    // latency chains of neighbouring lanes overlap).
-    let (cmax, pccmax) = (ctx.cmax, ctx.pccmax);
-    for (row, o) in acc.iter().zip(out.chunks_exact_mut(TW)) {
-        let [sy_r, scx_r, sz1_r, sz2_r, sy_t, scx_t, sz1_t, sz2_t, dx_r, ddx_r, dy_r, ddy_r, dx_t, ddx_t, dy_t, ddy_t] =
-            row;
-        for i in 0..tws {
-            let cd = color_error(
-                sy_r[i],
-                scx_r[i],
-                sz1_r[i] + sz2_r[i],
-                sy_t[i],
-                scx_t[i],
-                sz1_t[i] + sz2_t[i],
-                cmax,
-                pccmax,
-            );
-            let er = (dx_r[i] * dx_r[i] + dy_r[i] * dy_r[i]).sqrt();
-            let pr = (ddx_r[i] * ddx_r[i] + ddy_r[i] * ddy_r[i]).sqrt();
-            let et = (dx_t[i] * dx_t[i] + dy_t[i] * dy_t[i]).sqrt();
-            let pt = (ddx_t[i] * ddx_t[i] + ddy_t[i] * ddy_t[i]).sqrt();
-            o[i] = flip_error(cd, er, pr, et, pt);
-        }
-    }
-}
-
 /// The FLIP error of a pixel from its colour error `cd` and the edge / point feature magnitudes of the reference
 /// (`er`, `pr`) and the test (`et`, `pt`).
 #[inline(always)]
@@ -1386,14 +1223,6 @@ fn flip_error(cd: f32, er: f32, pr: f32, et: f32, pt: f32) -> f32 {
     let m = if ed > pd { ed } else { pd };
     let fd = (std::f32::consts::FRAC_1_SQRT_2 * m).sqrt(); // ^gqf, gqf = 0.5
     fast_pow(cd, 1.0 - fd)
-}
-
-/// Colour error in [0, 1] between two CSF-filtered YCxCz colours.
-#[inline(always)]
-fn color_error(yr: f32, cxr: f32, czr: f32, yt: f32, cxt: f32, czt: f32, cmax: f32, pccmax: f32) -> f32 {
-    let (lr, ar, br) = ycxcz_to_lab_hunt(yr, cxr, czr);
-    let (lt, at, bt) = ycxcz_to_lab_hunt(yt, cxt, czt);
-    lab_error(lr, ar, br, lt, at, bt, cmax, pccmax)
 }
 
 /// Colour error in [0, 1] between two Hunt-adjusted Lab colours (HyAB, compressed).
@@ -1615,9 +1444,10 @@ mod tests {
         }
     }
 
-    /// Several tests against one reference, the reference filtered once, give each pair's maps bit for bit: LDR
-    /// and HDR (maps, exposure maps, means), two column tiles (the second partial), several bands, an identical
-    /// test, both code paths.
+    /// Several tests against one reference, the reference filtered once, give each test's maps alone bit for bit
+    /// (one band driver serves both: the buffers reused from test to test must not leak between them): LDR and HDR
+    /// (maps, exposure maps, means), two column tiles (the second partial), several bands, an identical test, both
+    /// code paths.
     #[test]
     fn many_tests_against_one_reference_equal_each_pair() {
         let _serial = forcing();
