@@ -443,10 +443,9 @@ fn compute_exposures(img: &[f32], tm: ToneMapper) -> (f32, f32) {
 /// The widest exposure range HDR-FLIP sweeps, in stops (f32 spans about 277 stops; real images a few dozen).
 pub const MAX_EXPOSURE_RANGE: f32 = 64.0;
 
-/// Number of f32 planes per horizontally filtered row: for each image
-/// (0 = reference, 1 = test) 7 planes: Y*gY, Cx*gCx, Cz*gCz1, Cz*gCz2 (CSF),
+/// Number of f32 planes per horizontally filtered row of an image: Y*gY, Cx*gCx, Cz*gCz1, Cz*gCz2 (CSF),
 /// Yn*dG, Yn*ddG, Yn*G (features).
-const NH: usize = 14;
+const NH: usize = 7;
 const HP_Y: usize = 0;
 const HP_CX: usize = 1;
 const HP_CZ1: usize = 2;
@@ -907,9 +906,8 @@ fn band_features(ctx: &Ctx, img: Pixels<'_>, enc: Encoding, y0: usize, rows: usi
 /// the Lab colour and feature magnitudes.
 #[inline(always)]
 fn band_features_impl(ctx: &Ctx, img: Pixels<'_>, enc: Encoding, y0: usize, rows: usize, sink: &mut Sink<'_>) {
-    const NH1: usize = NH / 2;
     let (w, h) = (ctx.w, ctx.h);
-    let row_len = NH1 * TW;
+    let row_len = NH * TW;
     let mut ring = vec![0.0f32; ctx.ring * row_len];
     let mut pad = vec![0.0f32; 4 * (TW + 2 * ctx.rmax)];
     let mut rgb = vec![0.0f32; 3 * (TW + 2 * ctx.rmax)];
@@ -942,7 +940,7 @@ fn band_features_impl(ctx: &Ctx, img: Pixels<'_>, enc: Encoding, y0: usize, rows
             let mut c = 0;
             while c < tws {
                 // SAFETY: c < tws ≤ TW in steps of LANES (tws a multiple of COLS, itself of LANES); every offset
-                // + row_len (= NH1·TW, and every plane here is < NH1) ≤ ring.len(), asserted above.
+                // + row_len (= NH·TW, and every plane here is < NH) ≤ ring.len(), asserted above.
                 let (a, b) = unsafe { vsum2(&ring, &offs_s, c, [HP_Y, HP_CX, HP_CZ1, HP_CZ2], &ctx.ws, [0, 1, 2, 3]) };
                 // SAFETY: as above.
                 let (fa, fb) = unsafe { vsum2(&ring, &offs_f, c, [HP_DX, HP_DDX, HP_G, HP_G], &ctx.wf, [0, 0, 1, 2]) };
@@ -977,7 +975,7 @@ fn band_features_impl(ctx: &Ctx, img: Pixels<'_>, enc: Encoding, y0: usize, rows
 }
 
 /// Column tile width: a tile's ring of horizontally filtered rows
-/// (`(2 rmax + 1) * NH * TW` floats, ~300 KB at 67 ppd) stays in L2.
+/// (`(2 rmax + 1) * NH * TW` floats, ~150 KB at 67 ppd) stays in L2.
 const TW: usize = 256;
 /// SIMD-friendly lane block of the inner loops.
 const LANES: usize = 8;
@@ -985,8 +983,8 @@ const LANES: usize = 8;
 const COLS: usize = 4 * LANES;
 
 /// Converts columns `[x0 - rmax, x0 + tws + rmax)` (clamped to the image) of row `y`
-/// of the images (both of a pair, or one) to YCxCz and filters them horizontally into `out`
-/// (7 planes per image of stride `TW`, `tws` columns each).
+/// of the images to YCxCz and filters them horizontally into `out` (`NH` planes per image of stride `TW`, `tws`
+/// columns each).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn hrow(
