@@ -104,3 +104,27 @@ fn budget_fit_keeps_only_layouts_that_bind_on_the_platforms() {
         }
     }
 }
+
+/// A single-sampled frame may store a built-in's 8-bit targets with AFRC: those candidates are measured within the
+/// budget by the bytes they occupy in memory; a multisampled frame (which AFRC cannot hold) gets none.
+#[test]
+fn afrc_built_ins_join_the_budget_of_single_sampled_frames() {
+    let one = scene::render(SceneName::Room, 64, 36, 1).unwrap();
+    let lights = scene::default_lights(SceneName::Room, &one);
+    let res = search(&one, &lights, &cfg(12, None)).unwrap();
+    let afrc: Vec<_> = res.measured.iter().filter(|c| c.kind == "built-in AFRC").collect();
+    assert!(
+        afrc.iter().any(|c| c.name == "fat-20@afrc2"),
+        "{:?}",
+        res.measured.iter().map(|c| &c.name).collect::<Vec<_>>()
+    );
+    for c in &afrc {
+        let l = Layout::from_spec(c.spec.clone()).unwrap();
+        assert!(c.name.contains("@afrc") && c.error.is_none() && c.rmse.is_some(), "{}", c.name);
+        assert_eq!(c.bytes_per_sample, l.stored_bytes_per_sample().ceil() as u32, "{}", c.name);
+        assert!(c.bytes_per_sample <= 12 && l.bytes_per_sample() > l.stored_bytes_per_sample() as usize);
+    }
+    let four = scene::render(SceneName::Room, 64, 36, 4).unwrap();
+    let res = search(&four, &lights, &cfg(12, None)).unwrap();
+    assert!(res.measured.iter().all(|c| c.kind != "built-in AFRC"));
+}

@@ -86,9 +86,10 @@ pub struct FrameMeasure {
 pub struct Candidate {
     /// Layout name.
     pub name: String,
-    /// `built-in`, `pruned built-in` or `generated`.
+    /// `built-in`, `built-in AFRC` (its 8-bit targets stored with Arm's fixed-rate compression, single-sampled frames
+    /// only), `pruned built-in` or `generated`.
     pub kind: String,
-    /// Bytes per sample.
+    /// Bytes per sample in memory (an AFRC target at its fixed rate; rounded up to whole bytes).
     pub bytes_per_sample: u32,
     /// What it stores, in one line.
     pub summary: String,
@@ -718,6 +719,11 @@ fn predict_layout(pricer: &Pricer<'_>, layout: &Layout) -> Result<f64> {
     Ok(mse.sqrt())
 }
 
+/// Bytes per sample a layout occupies in memory, whole bytes rounded up (an AFRC target at its fixed rate).
+fn stored_bytes(l: &Layout) -> u32 {
+    l.stored_bytes_per_sample().ceil() as u32
+}
+
 fn candidate(spec: LayoutSpec, kind: &str, predicted: Option<f64>) -> Candidate {
     Candidate {
         name: spec.name.clone(),
@@ -798,6 +804,16 @@ pub fn propose(gb: &GBuffer, lights: &[Light], cfg: &BudgetConfig) -> Result<Pro
         if l.bytes_per_sample() as u32 <= cfg.max_bytes && binds(&l) {
             cands.push(candidate(l.spec().clone(), "built-in", None));
         }
+        // A single-sampled frame may store the built-in's 8-bit targets with AFRC: fewer bytes in memory, lossy.
+        if gb.samples == 1 {
+            for rate in crate::layout::afrc::RATES {
+                if let Ok(al) = l.with_afrc(rate) {
+                    if stored_bytes(&al) <= cfg.max_bytes && binds(&al) {
+                        cands.push(candidate(al.spec().clone(), "built-in AFRC", None));
+                    }
+                }
+            }
+        }
         let (p, changes) = prune_spec(l.spec(), &needs);
         if !changes.is_empty() {
             if let Ok(pl) = Layout::from_spec(p.clone()) {
@@ -852,7 +868,7 @@ pub fn measure_frame(
         let mut m = FrameMeasure { frame: name.to_string(), predicted_rmse: None, layout_error: None, error: None };
         match Layout::from_spec(c.spec.clone()) {
             Ok(l) => {
-                c.bytes_per_sample = l.bytes_per_sample() as u32;
+                c.bytes_per_sample = stored_bytes(&l);
                 m.predicted_rmse = match (c.kind.as_str(), proposed_here.contains(&c.name)) {
                     ("generated", true) => c.predicted_rmse,
                     _ => predict_layout(&pricer, &l).ok(),
