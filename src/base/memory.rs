@@ -1,5 +1,8 @@
 //! Large planes allocated without a serial fill.
 
+/// From this many bytes, [`zeroed_on_huge_pages`] gives a block the global allocator maps on huge pages.
+pub const HUGE_FROM: usize = 1 << 20;
+
 /// `n` zero vectors from zeroed memory (`calloc`: the pages are zeroed lazily by the OS, when first written, rather
 /// than filled one by one, which `vec![Vec3::ZERO; n]` does serially). For large planes a loader fills in parallel.
 #[must_use]
@@ -13,9 +16,40 @@ pub fn zeroed_vec3(n: usize) -> Vec<glam::Vec3> {
     unsafe { Vec::from_raw_parts(ptr.cast::<glam::Vec3>(), len, cap) }
 }
 
+/// `n` zeros (`T` a number type), with the capacity raised to [`crate::base::alloc::LARGE`] bytes when they take
+/// [`HUGE_FROM`] bytes or more: the command line's allocator ([`crate::base::alloc::LargePages`]) then maps the
+/// block on 2 MiB pages, faulted in a dozen times instead of some 700 times a 2.7 MB picture. For the outputs of a
+/// one-frame process (`gbuf resolve`'s 8-bit picture and light counts at 720p), which fill every value once: 3 ms
+/// of a 60 ms process on a 2-core KVM guest. Only the pages written are resident (at most one huge page beyond
+/// `n`). Lowering the allocator's own threshold instead made `gbuf report`, which frees and makes blocks of 1–4
+/// MB all the time, pay 1.3–3.4 s more system time (docs/RESOLVE.md, "How the kernel is built").
+#[must_use]
+pub fn zeroed_on_huge_pages<T: Copy + Default>(n: usize) -> Vec<T> {
+    let size = std::mem::size_of::<T>().max(1);
+    let cap = if n.saturating_mul(size) >= HUGE_FROM { n.max(crate::base::alloc::LARGE.div_ceil(size)) } else { n };
+    // `vec!` of a number type's zero asks the allocator for zeroed memory (`alloc_zeroed`): no fill here.
+    let mut v = vec![T::default(); cap];
+    v.truncate(n);
+    v
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn zeroed_on_huge_pages_is_zeros_with_a_large_block_from_a_megabyte() {
+        for n in [0, 5, HUGE_FROM / 4 - 1, HUGE_FROM / 4, 3 << 20] {
+            let mut v: Vec<u32> = zeroed_on_huge_pages(n);
+            assert_eq!(v.len(), n);
+            assert!(v.iter().all(|&x| x == 0));
+            let large = n * 4 >= HUGE_FROM;
+            assert_eq!(v.capacity() * 4 >= crate::base::alloc::LARGE, large, "{n}");
+            assert!(large || v.capacity() == n, "{n}: no block rounded below the threshold");
+            v.push(9); // a valid Vec: it grows and drops
+            assert_eq!(v[n], 9);
+        }
+    }
 
     #[test]
     fn zeroed_vec3_is_zero_vectors_of_the_asked_length() {

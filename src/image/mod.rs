@@ -144,7 +144,7 @@ impl HdrImage {
         // Rows in parallel: a fixed cost of every `gbuf resolve --png`.
         use rayon::prelude::*;
         let lut = Gamma22Lut::get();
-        let mut out = vec![0u8; 3 * self.rgb.len()];
+        let mut out = crate::base::memory::zeroed_on_huge_pages(3 * self.rgb.len());
         // The pixels' channels in memory order are the bytes' order.
         let channels: &[f32] = bytemuck::cast_slice(&self.rgb);
         let band = 3 * 16 * self.width.max(1) as usize;

@@ -232,7 +232,7 @@ fn resolve_into_isa(
     }
     let mut heat = std::mem::take(&mut out.lights_per_pixel);
     if heat.is_empty() {
-        heat = vec![0; n];
+        heat = crate::base::memory::zeroed_on_huge_pages(n);
     } else {
         heat.resize(n, 0);
     }
