@@ -254,9 +254,45 @@ pub struct Pipelines {
     /// The compressed-G-buffer rows, one per slot count.
     #[serde(default)]
     pub compressed: Vec<CompressedRow>,
-    /// The images of [`Pipelines::aa`] (same order), for pictures; not serialised.
+    /// The rectangle `(x, y, width, height)` of the anti-aliasing pictures: at most [`AA_CROP`] pixels where the
+    /// no-AA image differs most from the reference ([`aa_crop`]); not serialised.
+    #[serde(skip)]
+    pub aa_crop: (u32, u32, u32, u32),
+    /// That rectangle of each image of [`Pipelines::aa`] (same order), for pictures: the whole images (25 MB each
+    /// at 1080p) are dropped once measured; not serialised.
     #[serde(skip)]
     pub aa_images: Vec<HdrImage>,
+}
+
+/// Size of the anti-aliasing crop in image pixels (smaller images are shown whole).
+pub const AA_CROP: (u32, u32) = (64, 40);
+
+/// The crop `(x, y, width, height)` of at most [`AA_CROP`] pixels where `image` differs most from `reference` (sum of
+/// the differences of MLAA's display-encoded luma, [`crate::image::mlaa::display_luma`], non-finite as 0; the first
+/// such window in reading order). Images of another size than the reference give the top-left corner.
+#[must_use]
+pub fn aa_crop(image: &HdrImage, reference: &HdrImage) -> (u32, u32, u32, u32) {
+    use crate::image::mlaa::display_luma;
+    let (w, h) = (reference.width, reference.height);
+    let (cw, ch) = (AA_CROP.0.min(w), AA_CROP.1.min(h));
+    if (image.width, image.height) != (w, h) || image.rgb.len() != reference.rgb.len() {
+        return (0, 0, cw, ch);
+    }
+    let diff: Vec<f32> =
+        image.rgb.iter().zip(&reference.rgb).map(|(&a, &b)| (display_luma(a) - display_luma(b)).abs()).collect();
+    let (x, y) = crate::base::picture::busiest_window(&diff, w, h, cw, ch);
+    (x, y, cw, ch)
+}
+
+/// The rectangle `(x0, y0, cw, ch)` of `img` (which holds it) as an image of its own.
+#[must_use]
+pub fn crop(img: &HdrImage, (x0, y0, cw, ch): (u32, u32, u32, u32)) -> HdrImage {
+    let mut out = HdrImage::new(cw, ch);
+    for y in 0..ch {
+        let row = ((y0 + y) * img.width + x0) as usize;
+        out.rgb[(y * cw) as usize..((y + 1) * cw) as usize].copy_from_slice(&img.rgb[row..row + cw as usize]);
+    }
+    out
 }
 
 /// `bytes` as B, kB or MB.
@@ -533,9 +569,12 @@ pub fn pipelines_with(
         Some(v) => flips.fill(reference, v, &mut rows, &mut aa, &mut compressed),
         None => drop(flips),
     }
-    // The batch is gone: each image is the anti-aliasing rows' own again (a copy only where two rows share one).
-    let aa_images: Vec<HdrImage> =
-        aa_images.into_iter().map(|i| Arc::try_unwrap(i).unwrap_or_else(|i| (*i).clone())).collect();
+    // The batch is gone: only the crop of each image is kept for the pictures.
+    let aa_crop = aa_images.first().map_or((0, 0, 0, 0), |no_aa| aa_crop(no_aa, reference));
+    let aa_images: Vec<HdrImage> = aa_images
+        .iter()
+        .map(|i| if (i.width, i.height) == (w, h) { crop(i, aa_crop) } else { HdrImage::new(0, 0) })
+        .collect();
     let (rematerialised, rematerialise_error) = match cfg.geometry {
         Some(name) => match rematerialise(name, gb) {
             Ok(r) => (Some(r), None),
@@ -567,6 +606,7 @@ pub fn pipelines_with(
         rematerialise_error,
         visibility_packing,
         compressed,
+        aa_crop,
         aa_images,
     })
 }
@@ -1012,33 +1052,72 @@ fn covered_pixels(gb: &GBuffer) -> f64 {
 /// Packs and unpacks `gb` with the visibility buffer's `layout` and counts what changed in what re-materialisation
 /// reads: triangle and instance IDs (exact or not) and depth.
 pub fn visibility_packing(gb: &GBuffer, layout: &Layout) -> Result<VisibilityPacking> {
-    let back = layout.unpack(&layout.pack(gb)?, gb)?;
-    let covered = || (0..gb.len()).filter(|&i| gb.coverage[i]);
-    let mismatches = |a: Option<&Vec<u32>>, b: Option<&Vec<u32>>| match (a, b) {
-        (Some(a), Some(b)) => covered().filter(|&i| a[i] != b[i]).count() as u64,
-        (Some(_), None) => covered().count() as u64,
-        _ => 0,
-    };
-    let depth_max_rel_error = match (&gb.depth, &back.depth) {
-        (Some(a), Some(b)) => covered()
-            .map(|i| {
-                let (x, y) = (f64::from(a[i]), f64::from(b[i]));
-                if x == y {
-                    0.0
-                } else {
-                    (x - y).abs() / x.abs().max(f64::from(f32::MIN_POSITIVE))
-                }
+    use crate::gbuffer::Attribute;
+    use rayon::prelude::*;
+    /// What one band of rows finds: ID mismatches, the largest relative depth error, and which of depth, primitive
+    /// and object IDs the decoded band holds.
+    #[derive(Default)]
+    struct Part {
+        primitive: u64,
+        object: u64,
+        depth: f64,
+        kept: [bool; 3],
+    }
+    // The packed targets decoded band by band (the whole unpacked frame, with the positions derived from its depth,
+    // was the report's largest allocation at its end).
+    let packed = layout.pack(gb)?;
+    let frame = layout.frame(&packed, gb)?;
+    let only = [Attribute::Depth, Attribute::PrimitiveId, Attribute::ObjectId];
+    let row = gb.width as usize * gb.samples as usize;
+    let bands: Vec<std::ops::Range<u32>> = (0..gb.height).step_by(16).map(|y| y..(y + 16).min(gb.height)).collect();
+    let parts = bands
+        .into_par_iter()
+        .map_init(GBuffer::default, |band, rows| -> Result<Part> {
+            frame.decode_rows_only(rows.clone(), band, &only)?;
+            let range = rows.start as usize * row..rows.end as usize * row;
+            let covered = || range.clone().filter(|&i| gb.coverage[i]);
+            let mismatches = |a: Option<&Vec<u32>>, b: Option<&Vec<u32>>| match (a, b) {
+                (Some(a), Some(b)) => covered().filter(|&i| a[i] != b[i - range.start]).count() as u64,
+                (Some(_), None) => covered().count() as u64,
+                _ => 0,
+            };
+            let depth = match (&gb.depth, &band.depth) {
+                (Some(a), Some(b)) => covered()
+                    .map(|i| {
+                        let (x, y) = (f64::from(a[i]), f64::from(b[i - range.start]));
+                        if x == y {
+                            0.0
+                        } else {
+                            (x - y).abs() / x.abs().max(f64::from(f32::MIN_POSITIVE))
+                        }
+                    })
+                    .fold(0.0, f64::max),
+                (Some(_), None) => f64::INFINITY,
+                _ => 0.0,
+            };
+            Ok(Part {
+                primitive: mismatches(gb.primitive_id.as_ref(), band.primitive_id.as_ref()),
+                object: mismatches(gb.object_id.as_ref(), band.object_id.as_ref()),
+                depth,
+                kept: [band.depth.is_some(), band.primitive_id.is_some(), band.object_id.is_some()],
             })
-            .fold(0.0, f64::max),
-        (Some(_), None) => f64::INFINITY,
-        _ => 0.0,
-    };
+        })
+        .collect::<Result<Vec<Part>>>()?;
+    let total = parts.iter().fold(Part { kept: [true; 3], ..Part::default() }, |t, p| Part {
+        primitive: t.primitive + p.primitive,
+        object: t.object + p.object,
+        depth: t.depth.max(p.depth),
+        kept: [t.kept[0] & p.kept[0], t.kept[1] & p.kept[1], t.kept[2] & p.kept[2]],
+    });
     let mut missing = Vec::new();
-    for (name, had, kept) in [
-        ("depth", gb.depth.is_some(), back.depth.is_some()),
-        ("primitive_id", gb.primitive_id.is_some(), back.primitive_id.is_some()),
-        ("object_id", gb.object_id.is_some(), back.object_id.is_some()),
-    ] {
+    for ((name, had), kept) in [
+        ("depth", gb.depth.is_some()),
+        ("primitive_id", gb.primitive_id.is_some()),
+        ("object_id", gb.object_id.is_some()),
+    ]
+    .into_iter()
+    .zip(total.kept)
+    {
         if had && !kept {
             missing.push(name.to_string());
         }
@@ -1046,9 +1125,9 @@ pub fn visibility_packing(gb: &GBuffer, layout: &Layout) -> Result<VisibilityPac
     Ok(VisibilityPacking {
         layout: layout.name().to_string(),
         bytes: layout.bytes_per_sample() as u32,
-        primitive_id_mismatches: mismatches(gb.primitive_id.as_ref(), back.primitive_id.as_ref()),
-        object_id_mismatches: mismatches(gb.object_id.as_ref(), back.object_id.as_ref()),
-        depth_max_rel_error,
+        primitive_id_mismatches: total.primitive,
+        object_id_mismatches: total.object,
+        depth_max_rel_error: total.depth,
         missing,
     })
 }

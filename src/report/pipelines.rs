@@ -7,7 +7,6 @@ use crate::analysis::pipelines::{Pipeline, Pipelines};
 use crate::base::mask::EdgeMask;
 use crate::base::table::{Align, Table};
 use crate::error::{Error, Result};
-use crate::image::mlaa::display_luma;
 use crate::image::HdrImage;
 use crate::report::figures::image_picture;
 use crate::report::format::fmt_opt;
@@ -324,8 +323,6 @@ pub fn shading_heatmaps_png(forward: &QuadShading, deferred: &EdgeMask) -> Resul
     Ok((crate::base::picture::png_bytes(&img)?, max as u32))
 }
 
-/// Size of the anti-aliasing crop in image pixels (smaller images are shown whole) and its magnification.
-pub const AA_CROP: (u32, u32) = (64, 40);
 /// Each crop pixel is drawn as a square of this many picture pixels (nearest neighbour, so aliasing stays visible).
 pub const AA_CROP_ZOOM: u32 = 4;
 
@@ -363,60 +360,51 @@ fn aa_losers_note(rows: &[crate::analysis::pipelines::AaRow]) -> String {
     )
 }
 
-/// The crop `(x, y, width, height)` of at most [`AA_CROP`] pixels where `image` differs most from `reference` (sum of
-/// the differences of MLAA's display-encoded luma, [`display_luma`], non-finite as 0; the first such window in
-/// reading order). Images of another size than the
-/// reference give the top-left corner.
-#[must_use]
-fn aa_crop(image: &HdrImage, reference: &HdrImage) -> (u32, u32, u32, u32) {
-    let (w, h) = (reference.width, reference.height);
-    let (cw, ch) = (AA_CROP.0.min(w), AA_CROP.1.min(h));
-    if (image.width, image.height) != (w, h) || image.rgb.len() != reference.rgb.len() {
-        return (0, 0, cw, ch);
-    }
-    let diff: Vec<f32> =
-        image.rgb.iter().zip(&reference.rgb).map(|(&a, &b)| (display_luma(a) - display_luma(b)).abs()).collect();
-    let (x, y) = crate::base::picture::busiest_window(&diff, w, h, cw, ch);
-    (x, y, cw, ch)
-}
-
-/// The crop `(x, y, w, h)` of `img`, as the report shows images ([`image_picture`]: Reinhard, sRGB) and magnified
-/// `zoom` times (nearest neighbour).
-fn crop_picture(img: &HdrImage, (x0, y0, cw, ch): (u32, u32, u32, u32), zoom: u32) -> RgbImage {
-    let mut crop = HdrImage::new(cw, ch);
-    for y in 0..ch {
-        let row = ((y0 + y) * img.width + x0) as usize;
-        crop.rgb[(y * cw) as usize..((y + 1) * cw) as usize].copy_from_slice(&img.rgb[row..row + cw as usize]);
-    }
-    image::imageops::resize(&image_picture(&crop), cw * zoom, ch * zoom, image::imageops::FilterType::Nearest)
+/// `img` as the report shows images ([`image_picture`]: Reinhard, sRGB), magnified `zoom` times (nearest
+/// neighbour).
+fn zoomed_picture(img: &HdrImage, zoom: u32) -> RgbImage {
+    image::imageops::resize(
+        &image_picture(img),
+        img.width * zoom,
+        img.height * zoom,
+        image::imageops::FilterType::Nearest,
+    )
 }
 
 /// The anti-aliasing picture: the same crop (`aa_crop` of the no-AA image) of the every-sample reference and of
 /// each method's image in [`Pipelines::aa`], magnified [`AA_CROP_ZOOM`]×, each captioned with its method and error
 /// (LDR-FLIP when measured, else RMSE). Returns the picture and the crop.
 pub fn aa_crop_picture(p: &Pipelines, reference: &HdrImage) -> Result<(RgbImage, (u32, u32, u32, u32))> {
-    let Some(no_aa) = p.aa_images.first() else {
+    let crop = p.aa_crop;
+    let (x, y, cw, ch) = crop;
+    if p.aa_images.is_empty() {
         return Err(Error::Argument("no anti-aliasing images to show".into()));
-    };
+    }
     if p.aa_images.len() != p.aa.len()
-        || p.aa_images.iter().any(|i| (i.width, i.height) != (reference.width, reference.height))
+        || p.aa_images.iter().any(|i| (i.width, i.height) != (cw, ch))
+        || x + cw > reference.width
+        || y + ch > reference.height
     {
         return Err(Error::Mismatch(format!(
-            "anti-aliasing images ({}) do not match the rows ({}) or the reference's size {}×{}",
+            "anti-aliasing crops ({}) do not match the rows ({}), their {cw}×{ch} rectangle at ({x}, {y}), or the \
+             reference's size {}×{}",
             p.aa_images.len(),
             p.aa.len(),
             reference.width,
             reference.height
         )));
     }
-    let crop = aa_crop(no_aa, reference);
-    let mut panels = vec![("reference (every sample)".to_string(), crop_picture(reference, crop, AA_CROP_ZOOM))];
+    let zoom = AA_CROP_ZOOM;
+    let mut panels = vec![(
+        "reference (every sample)".to_string(),
+        zoomed_picture(&crate::analysis::pipelines::crop(reference, crop), zoom),
+    )];
     for (row, img) in p.aa.iter().zip(&p.aa_images) {
         let err = match row.error.flip_ldr {
             Some(f) => format!("LDR-FLIP {f:.4}"),
             None => format!("RMSE {:.4}", row.error.rmse),
         };
-        panels.push((format!("{} · {err}", row.method), crop_picture(img, crop, AA_CROP_ZOOM)));
+        panels.push((format!("{} · {err}", row.method), zoomed_picture(img, zoom)));
     }
     let title = format!(
         "The same {}×{} crop at ({}, {}) under each method, {}× (crop of largest no-AA error)",
