@@ -53,7 +53,7 @@ pub const FFX_VARIANCE_CUTOFF: f32 = 0.015;
 pub const FFX_WAVE: u32 = 64;
 
 /// The factors `--max-flip` scales the smoothness thresholds by (1: the default rule).
-pub const RULE_SCALES: [f32; 7] = [0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0];
+pub const RULE_SCALES: [f32; 9] = [0.0625, 0.125, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0];
 
 /// One SRI's answer.
 #[derive(Clone, Debug, Serialize)]

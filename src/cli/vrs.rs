@@ -42,7 +42,7 @@ pub struct Args {
     /// Skip FLIP (numerical errors only).
     #[arg(long, conflicts_with = "max_flip")]
     pub no_flip: bool,
-    /// Also find, per tile size, the largest saving of gbuf's rule (its thresholds scaled from ¼ to 16×) whose
+    /// Also find, per tile size, the largest saving of gbuf's rule (its thresholds scaled from 1/16 to 16×) whose
     /// LDR-FLIP against the full-rate image stays at or under this value: a `gbuffer-max-flip` row.
     #[arg(long, value_name = "FLIP")]
     pub max_flip: Option<f64>,
