@@ -136,6 +136,12 @@ fn sweep_rows_match_layouts_and_lossless_is_exact() {
         assert_eq!(r.total_error.unwrap().rmse, r.aa_error.unwrap().rmse, "{}", r.detector);
         if let Some(f) = l.flip_ldr {
             assert_eq!((f, l.flip_hdr), (0.0, Some(0.0)));
+            // Its image is its detector's exact image: its FLIP against the reference is that image's (taken, not
+            // filtered again), which a lossy layout's is not.
+            let (t, a) = (r.total_error.unwrap(), r.aa_error.unwrap());
+            assert!(t.flip_ldr.is_some() && (t.flip_ldr, t.flip_hdr) == (a.flip_ldr, a.flip_hdr), "{t:?} {a:?}");
+            let lossy = out.rows.iter().find(|x| x.layout == "minimal-8" && x.detector == r.detector).unwrap();
+            assert_ne!(lossy.total_error.unwrap().flip_ldr, a.flip_ldr);
         }
     }
     // The AA error is the detector's, the same for every layout; shading more samples aliases less.

@@ -489,12 +489,26 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
         drop(prepared);
         if pending.len() >= FLIP_BATCH {
             progress(done, total, Some(Stage::Flip), None);
-            flush_flip(&mut pending, &mut rows, &reference, &exact, &cfg.viewing, &mut worst_flip, &mut shown);
+            flush_flip(
+                &mut pending,
+                &mut rows,
+                (&reference, &exact, &detectors),
+                &cfg.viewing,
+                &mut worst_flip,
+                &mut shown,
+            );
         }
     }
     if !pending.is_empty() {
         progress(done, total, Some(Stage::Flip), None);
-        flush_flip(&mut pending, &mut rows, &reference, &exact, &cfg.viewing, &mut worst_flip, &mut shown);
+        flush_flip(
+            &mut pending,
+            &mut rows,
+            (&reference, &exact, &detectors),
+            &cfg.viewing,
+            &mut worst_flip,
+            &mut shown,
+        );
     }
     progress(total, total, None, None);
     mark_pareto(&mut rows);
@@ -616,8 +630,7 @@ struct PendingFlip {
 fn flush_flip(
     pending: &mut Vec<PendingFlip>,
     rows: &mut [Row],
-    reference: &HdrImage,
-    exact: &[Option<HdrImage>],
+    (reference, exact, detectors): (&HdrImage, &[Option<HdrImage>], &[DetectorResult]),
     viewing: &Viewing,
     worst: &mut Option<(String, FlipMap)>,
     shown: &mut Vec<(String, Vec<u8>)>,
@@ -631,8 +644,23 @@ fn flush_flip(
         e.flip_hdr = Some(hdr);
         Some(map)
     };
-    let images: Vec<&HdrImage> = pending.iter().map(|p| &p.image).collect();
-    for (p, f) in pending.iter().zip(flip_many(reference, &images, viewing)) {
+    // An image equal bit for bit to its detector's exact image (a lossless layout's) has that image's FLIP against
+    // the reference, measured with the detectors: not filtered again.
+    let known = |p: &PendingFlip| -> Option<(f64, f64)> {
+        let x = exact.get(p.detector)?.as_ref()?;
+        let e = detectors.get(p.detector)?.aa_error.as_ref()?;
+        let same = (x.width, x.height) == (p.image.width, p.image.height) && x.rgb == p.image.rgb;
+        same.then_some((e.flip_ldr?, e.flip_hdr?))
+    };
+    let (done, todo): (Vec<&PendingFlip>, Vec<&PendingFlip>) = pending.iter().partition(|p| known(p).is_some());
+    for p in done {
+        if let (Some(e), Some((ldr, hdr))) = (rows[p.row].total_error.as_mut(), known(p)) {
+            (e.flip_ldr, e.flip_hdr) = (Some(ldr), Some(hdr));
+        }
+    }
+    let images: Vec<&HdrImage> = todo.iter().map(|p| &p.image).collect();
+    let measured = if images.is_empty() { Vec::new() } else { flip_many(reference, &images, viewing) };
+    for (p, f) in todo.iter().zip(measured) {
         set(&mut rows[p.row].total_error, f);
     }
     let mut layout_maps: Vec<Option<FlipMap>> = pending.iter().map(|_| None).collect();
