@@ -297,6 +297,7 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
     let mut worst_flip: Option<(String, FlipMap)> = None;
     let mut shown: Vec<(String, Vec<u8>)> = Vec::new();
     let mut pending: Vec<PendingFlip> = Vec::new();
+    let against = FlipAgainst { reference: &reference, exact: &exact, detectors: &detectors, viewing: &cfg.viewing };
     // Layouts keep the coverage: one count of covered samples serves every row's shading fraction.
     let covered = detect::covered_per_pixel(gb);
     for (li, layout) in cfg.layouts.iter().enumerate() {
@@ -489,26 +490,12 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
         drop(prepared);
         if pending.len() >= FLIP_BATCH {
             progress(done, total, Some(Stage::Flip), None);
-            flush_flip(
-                &mut pending,
-                &mut rows,
-                (&reference, &exact, &detectors),
-                &cfg.viewing,
-                &mut worst_flip,
-                &mut shown,
-            );
+            flush_flip(&mut pending, &mut rows, &against, &mut worst_flip, &mut shown);
         }
     }
     if !pending.is_empty() {
         progress(done, total, Some(Stage::Flip), None);
-        flush_flip(
-            &mut pending,
-            &mut rows,
-            (&reference, &exact, &detectors),
-            &cfg.viewing,
-            &mut worst_flip,
-            &mut shown,
-        );
+        flush_flip(&mut pending, &mut rows, &against, &mut worst_flip, &mut shown);
     }
     progress(total, total, None, None);
     mark_pareto(&mut rows);
@@ -624,17 +611,26 @@ struct PendingFlip {
     image: HdrImage,
 }
 
+/// What the pending rows' images are compared with: the reference, each detector's exact image and its FLIP
+/// against the reference, and how images are viewed.
+struct FlipAgainst<'a> {
+    reference: &'a HdrImage,
+    exact: &'a [Option<HdrImage>],
+    detectors: &'a [DetectorResult],
+    viewing: &'a Viewing,
+}
+
 /// FLIP of the pending rows' images: all of them against the reference in one batch, then per detector against
 /// that detector's exact image. Keeps the decisive row with the largest layout LDR-FLIP in `worst` (the first on
 /// ties, in row order).
 fn flush_flip(
     pending: &mut Vec<PendingFlip>,
     rows: &mut [Row],
-    (reference, exact, detectors): (&HdrImage, &[Option<HdrImage>], &[DetectorResult]),
-    viewing: &Viewing,
+    against: &FlipAgainst<'_>,
     worst: &mut Option<(String, FlipMap)>,
     shown: &mut Vec<(String, Vec<u8>)>,
 ) {
+    let FlipAgainst { reference, exact, detectors, viewing } = *against;
     for p in pending.iter().filter(|p| p.decisive) {
         shown.push((rows[p.row].layout.clone(), p.image.to_srgb8(viewing.tone())));
     }
