@@ -349,7 +349,14 @@ impl GBuffer {
             }
         };
         let len = checked_len(width, height, samples)?;
-        Ok(GBuffer { width, height, samples, sample_positions, coverage: vec![false; len], ..Default::default() })
+        Ok(GBuffer {
+            width,
+            height,
+            samples,
+            sample_positions,
+            coverage: crate::base::memory::zeroed_on_huge_pages(len),
+            ..Default::default()
+        })
     }
 
     /// Number of pixels.

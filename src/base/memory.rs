@@ -1,7 +1,7 @@
 //! Large planes allocated without a serial fill.
 
 /// From this many bytes, [`zeroed_on_huge_pages`] gives a block the global allocator maps on huge pages.
-pub const HUGE_FROM: usize = 1 << 20;
+pub const HUGE_FROM: usize = 512 << 10;
 
 /// `n` zero vectors from zeroed memory (`calloc`: the pages are zeroed lazily by the OS, when first written, rather
 /// than filled one by one, which `vec![Vec3::ZERO; n]` does serially). For large planes a loader fills in parallel.
@@ -18,10 +18,10 @@ pub fn zeroed_vec3(n: usize) -> Vec<glam::Vec3> {
 
 /// `n` zeros (`T` a number type), with the capacity raised to [`crate::base::alloc::LARGE`] bytes when they take
 /// [`HUGE_FROM`] bytes or more: the command line's allocator ([`crate::base::alloc::LargePages`]) then maps the
-/// block on 2 MiB pages, faulted in a dozen times instead of some 700 times a 2.7 MB picture. For the outputs of a
-/// one-frame process (`gbuf resolve`'s 8-bit picture and light counts at 720p), which fill every value once: 3 ms
-/// of a 60 ms process on a 2-core KVM guest. Only the pages written are resident (at most one huge page beyond
-/// `n`). Lowering the allocator's own threshold instead made `gbuf report`, which frees and makes blocks of 1–4
+/// block on 2 MiB pages, faulted in a dozen times instead of some 700 times a 2.7 MB picture. For a frame's planes
+/// that a one-frame process fills once (`gbuf resolve` at 720p: its 8-bit picture and light counts, the coverage
+/// and the 1-sample mask copied from it): 6 ms of a 59 ms process on a 2-core KVM guest. Only the pages written
+/// are resident (at most one huge page beyond `n`). Lowering the allocator's own threshold instead made `gbuf report`, which frees and makes blocks of 1–4
 /// MB all the time, pay 1.3–3.4 s more system time (docs/RESOLVE.md, "How the kernel is built").
 #[must_use]
 pub fn zeroed_on_huge_pages<T: Copy + Default>(n: usize) -> Vec<T> {

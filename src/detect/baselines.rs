@@ -13,7 +13,10 @@ pub fn none(gb: &GBuffer) -> EdgeMask {
     let s = gb.samples as usize;
     if s == 1 {
         // One sample a pixel: the mask is the coverage (a copy, where the per-pixel driver cost 2 ms at 720p).
-        let shade_count = gb.coverage.iter().map(|&c| u8::from(c)).collect();
+        let mut shade_count: Vec<u8> = crate::base::memory::zeroed_on_huge_pages(gb.coverage.len());
+        for (m, &c) in shade_count.iter_mut().zip(&gb.coverage) {
+            *m = u8::from(c);
+        }
         return EdgeMask { width: gb.width, height: gb.height, samples: 1, shade_count };
     }
     per_pixel(gb, |_, _, base| u8::from(pixel_coverage(&gb.coverage, base, s) != PixelCoverage::Empty))
