@@ -284,17 +284,6 @@ pub fn aa_crop(image: &HdrImage, reference: &HdrImage) -> (u32, u32, u32, u32) {
     (x, y, cw, ch)
 }
 
-/// The rectangle `(x0, y0, cw, ch)` of `img` (which holds it) as an image of its own.
-#[must_use]
-pub fn crop(img: &HdrImage, (x0, y0, cw, ch): (u32, u32, u32, u32)) -> HdrImage {
-    let mut out = HdrImage::new(cw, ch);
-    for y in 0..ch {
-        let row = ((y0 + y) * img.width + x0) as usize;
-        out.rgb[(y * cw) as usize..((y + 1) * cw) as usize].copy_from_slice(&img.rgb[row..row + cw as usize]);
-    }
-    out
-}
-
 /// `bytes` as B, kB or MB.
 fn fmt_bytes(bytes: u64) -> String {
     match bytes {
@@ -573,7 +562,7 @@ pub fn pipelines_with(
     let aa_crop = aa_images.first().map_or((0, 0, 0, 0), |no_aa| aa_crop(no_aa, reference));
     let aa_images: Vec<HdrImage> = aa_images
         .iter()
-        .map(|i| if (i.width, i.height) == (w, h) { crop(i, aa_crop) } else { HdrImage::new(0, 0) })
+        .map(|i| if (i.width, i.height) == (w, h) { i.crop(aa_crop) } else { HdrImage::new(0, 0) })
         .collect();
     let (rematerialised, rematerialise_error) = match cfg.geometry {
         Some(name) => match rematerialise(name, gb) {

@@ -648,10 +648,12 @@ fn flush_flip(
         let same = (x.width, x.height) == (p.image.width, p.image.height) && x.rgb == p.image.rgb;
         same.then_some((e.flip_ldr?, e.flip_hdr?))
     };
-    let (done, todo): (Vec<&PendingFlip>, Vec<&PendingFlip>) = pending.iter().partition(|p| known(p).is_some());
-    for p in done {
-        if let (Some(e), Some((ldr, hdr))) = (rows[p.row].total_error.as_mut(), known(p)) {
-            (e.flip_ldr, e.flip_hdr) = (Some(ldr), Some(hdr));
+    let mut todo = Vec::new();
+    for p in pending.iter() {
+        match (known(p), rows[p.row].total_error.as_mut()) {
+            (Some((ldr, hdr)), Some(e)) => (e.flip_ldr, e.flip_hdr) = (Some(ldr), Some(hdr)),
+            (Some(_), None) => {}
+            (None, _) => todo.push(p),
         }
     }
     let images: Vec<&HdrImage> = todo.iter().map(|p| &p.image).collect();

@@ -118,6 +118,17 @@ impl HdrImage {
         HdrImage { width, height, rgb: crate::base::memory::zeroed_vec3(width as usize * height as usize) }
     }
 
+    /// The rectangle `(x0, y0, width, height)` of this image, which must hold it, as an image of its own.
+    #[must_use]
+    pub fn crop(&self, (x0, y0, cw, ch): (u32, u32, u32, u32)) -> HdrImage {
+        let mut out = HdrImage::new(cw, ch);
+        for y in 0..ch {
+            let row = ((y0 + y) * self.width + x0) as usize;
+            out.rgb[(y * cw) as usize..((y + 1) * cw) as usize].copy_from_slice(&self.rgb[row..row + cw as usize]);
+        }
+        out
+    }
+
     /// 8-bit sRGB bytes (RGB, row-major) after `tone`, rounded to nearest.
     #[must_use]
     pub fn to_srgb8(&self, tone: ToneMap) -> Vec<u8> {

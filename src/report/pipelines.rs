@@ -395,10 +395,7 @@ pub fn aa_crop_picture(p: &Pipelines, reference: &HdrImage) -> Result<(RgbImage,
         )));
     }
     let zoom = AA_CROP_ZOOM;
-    let mut panels = vec![(
-        "reference (every sample)".to_string(),
-        zoomed_picture(&crate::analysis::pipelines::crop(reference, crop), zoom),
-    )];
+    let mut panels = vec![("reference (every sample)".to_string(), zoomed_picture(&reference.crop(crop), zoom))];
     for (row, img) in p.aa.iter().zip(&p.aa_images) {
         let err = match row.error.flip_ldr {
             Some(f) => format!("LDR-FLIP {f:.4}"),
