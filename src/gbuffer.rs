@@ -332,6 +332,117 @@ pub trait PlaneMapper {
     fn map<T: Copy + Default + Send + Sync>(&mut self, attr: Attribute, plane: &[T]) -> Option<Vec<T>>;
 }
 
+/// One sample's attributes as values: the record beside [`GBuffer::plane`] and [`GBuffer::slot`] for code that
+/// reads, combines and writes whole samples (MSAA compression's slots). Read with [`GBuffer::sample`] (an absent
+/// plane reads as zero) and written with [`SamplesMut::set`] (only into the planes present).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Sample {
+    /// View-space depth.
+    pub depth: f32,
+    /// View-space position.
+    pub position: Vec3,
+    /// View-space unit normal.
+    pub normal: Vec3,
+    /// Linear RGB albedo.
+    pub albedo: Vec3,
+    /// Specular amount / scalar F0.
+    pub specular: f32,
+    /// Blinn-Phong specular power.
+    pub specular_power: f32,
+    /// Perceptual roughness.
+    pub roughness: f32,
+    /// Metallic.
+    pub metallic: f32,
+    /// Material ID.
+    pub material_id: u32,
+    /// Object ID.
+    pub object_id: u32,
+    /// Primitive ID.
+    pub primitive_id: u32,
+    /// Screen-space motion in pixels.
+    pub motion: Vec2,
+}
+
+impl Sample {
+    /// `self · a + other · b` for every float attribute (per component); the IDs are `self`'s.
+    #[must_use]
+    pub fn blend(&self, a: f32, other: &Sample, b: f32) -> Sample {
+        Sample {
+            depth: self.depth * a + other.depth * b,
+            position: self.position * a + other.position * b,
+            normal: self.normal * a + other.normal * b,
+            albedo: self.albedo * a + other.albedo * b,
+            specular: self.specular * a + other.specular * b,
+            specular_power: self.specular_power * a + other.specular_power * b,
+            roughness: self.roughness * a + other.roughness * b,
+            metallic: self.metallic * a + other.metallic * b,
+            motion: self.motion * a + other.motion * b,
+            ..*self
+        }
+    }
+
+    /// Every float attribute times `k`; the IDs kept.
+    #[must_use]
+    pub fn scaled(&self, k: f32) -> Sample {
+        Sample {
+            depth: self.depth * k,
+            position: self.position * k,
+            normal: self.normal * k,
+            albedo: self.albedo * k,
+            specular: self.specular * k,
+            specular_power: self.specular_power * k,
+            roughness: self.roughness * k,
+            metallic: self.metallic * k,
+            motion: self.motion * k,
+            ..*self
+        }
+    }
+}
+
+/// A run of consecutive samples of a G-buffer (a row of pixels, say), coverage and every plane borrowed mutably:
+/// what [`GBuffer::sample_runs_mut`] splits a buffer into, so that runs are written in parallel.
+#[derive(Debug)]
+pub struct SamplesMut<'a> {
+    /// The run's coverage.
+    pub coverage: &'a mut [bool],
+    depth: Option<&'a mut [f32]>,
+    position: Option<&'a mut [Vec3]>,
+    normal: Option<&'a mut [Vec3]>,
+    albedo: Option<&'a mut [Vec3]>,
+    specular: Option<&'a mut [f32]>,
+    specular_power: Option<&'a mut [f32]>,
+    roughness: Option<&'a mut [f32]>,
+    metallic: Option<&'a mut [f32]>,
+    material_id: Option<&'a mut [u32]>,
+    object_id: Option<&'a mut [u32]>,
+    primitive_id: Option<&'a mut [u32]>,
+    motion: Option<&'a mut [Vec2]>,
+}
+
+impl SamplesMut<'_> {
+    /// Writes `v` into sample `i` of the run, in every plane present (coverage is not touched).
+    #[inline]
+    pub fn set(&mut self, i: usize, v: &Sample) {
+        fn put<T: Copy>(p: &mut Option<&mut [T]>, i: usize, x: T) {
+            if let Some(p) = p {
+                p[i] = x;
+            }
+        }
+        put(&mut self.depth, i, v.depth);
+        put(&mut self.position, i, v.position);
+        put(&mut self.normal, i, v.normal);
+        put(&mut self.albedo, i, v.albedo);
+        put(&mut self.specular, i, v.specular);
+        put(&mut self.specular_power, i, v.specular_power);
+        put(&mut self.roughness, i, v.roughness);
+        put(&mut self.metallic, i, v.metallic);
+        put(&mut self.material_id, i, v.material_id);
+        put(&mut self.object_id, i, v.object_id);
+        put(&mut self.primitive_id, i, v.primitive_id);
+        put(&mut self.motion, i, v.motion);
+    }
+}
+
 impl GBuffer {
     /// An empty G-buffer (all background, no attributes) of the given size with standard (or, for non-standard
     /// counts that are perfect squares, ordered-grid) sample positions.
@@ -447,6 +558,77 @@ impl GBuffer {
             Attribute::PrimitiveId => PlaneRef::U32(self.primitive_id.as_deref()?),
             Attribute::Motion => PlaneRef::Vec2(self.motion.as_deref()?),
         })
+    }
+
+    /// Sample `i`'s attributes ([`Sample`]); an absent plane reads as zero.
+    #[must_use]
+    pub fn sample(&self, i: usize) -> Sample {
+        fn at<T: Copy + Default>(p: &Option<Vec<T>>, i: usize) -> T {
+            p.as_ref().map_or(T::default(), |v| v[i])
+        }
+        Sample {
+            depth: at(&self.depth, i),
+            position: at(&self.position, i),
+            normal: at(&self.normal, i),
+            albedo: at(&self.albedo, i),
+            specular: at(&self.specular, i),
+            specular_power: at(&self.specular_power, i),
+            roughness: at(&self.roughness, i),
+            metallic: at(&self.metallic, i),
+            material_id: at(&self.material_id, i),
+            object_id: at(&self.object_id, i),
+            primitive_id: at(&self.primitive_id, i),
+            motion: at(&self.motion, i),
+        }
+    }
+
+    /// Coverage and every plane split into runs of `len` samples (the last may be shorter), in order: for writing
+    /// whole samples run by run in parallel ([`SamplesMut::set`]).
+    pub fn sample_runs_mut(&mut self, len: usize) -> Vec<SamplesMut<'_>> {
+        fn runs<T>(p: &mut Option<Vec<T>>, len: usize) -> Box<dyn Iterator<Item = Option<&mut [T]>> + '_> {
+            match p {
+                Some(v) => Box::new(v.chunks_mut(len).map(Some)),
+                None => Box::new(std::iter::repeat_with(|| None)),
+            }
+        }
+        let len = len.max(1);
+        let (mut depth, mut position, mut normal, mut albedo) = (
+            runs(&mut self.depth, len),
+            runs(&mut self.position, len),
+            runs(&mut self.normal, len),
+            runs(&mut self.albedo, len),
+        );
+        let (mut specular, mut specular_power, mut roughness, mut metallic) = (
+            runs(&mut self.specular, len),
+            runs(&mut self.specular_power, len),
+            runs(&mut self.roughness, len),
+            runs(&mut self.metallic, len),
+        );
+        let (mut material_id, mut object_id, mut primitive_id, mut motion) = (
+            runs(&mut self.material_id, len),
+            runs(&mut self.object_id, len),
+            runs(&mut self.primitive_id, len),
+            runs(&mut self.motion, len),
+        );
+        // A present plane shorter than coverage (an invalid buffer) leaves the runs past its end without it.
+        self.coverage
+            .chunks_mut(len)
+            .map(|coverage| SamplesMut {
+                coverage,
+                depth: depth.next().flatten(),
+                position: position.next().flatten(),
+                normal: normal.next().flatten(),
+                albedo: albedo.next().flatten(),
+                specular: specular.next().flatten(),
+                specular_power: specular_power.next().flatten(),
+                roughness: roughness.next().flatten(),
+                metallic: metallic.next().flatten(),
+                material_id: material_id.next().flatten(),
+                object_id: object_id.next().flatten(),
+                primitive_id: primitive_id.next().flatten(),
+                motion: motion.next().flatten(),
+            })
+            .collect()
     }
 
     /// The storage slot of `attr`'s plane (present or not).
@@ -706,6 +888,78 @@ pub trait BandSource: Sync {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A G-buffer with every plane, each sample's values distinct per plane and per sample.
+    fn full(w: u32, h: u32, s: u32) -> GBuffer {
+        let mut gb = GBuffer::new(w, h, s).unwrap();
+        let n = gb.len();
+        gb.coverage = (0..n).map(|i| i % 3 != 0).collect();
+        let f = |k: f32| Some((0..n).map(|i| i as f32 + k).collect::<Vec<f32>>());
+        let v3 = |k: f32| Some((0..n).map(|i| Vec3::new(i as f32, k, -(i as f32))).collect::<Vec<Vec3>>());
+        (gb.depth, gb.specular, gb.specular_power, gb.roughness, gb.metallic) =
+            (f(0.5), f(1.5), f(2.5), f(3.5), f(4.5));
+        (gb.position, gb.normal, gb.albedo) = (v3(1.0), v3(2.0), v3(3.0));
+        let ids = |k: u32| Some((0..n as u32).map(|i| i * 7 + k).collect::<Vec<u32>>());
+        (gb.material_id, gb.object_id, gb.primitive_id) = (ids(1), ids(2), ids(3));
+        gb.motion = Some((0..n).map(|i| Vec2::new(i as f32, 9.0)).collect());
+        gb
+    }
+
+    /// Every sample read as a record and written back through runs of any length rebuilds the buffer bit for bit;
+    /// an absent plane reads as zero and is not created by a write.
+    #[test]
+    fn sample_records_round_trip_through_runs() {
+        let src = full(5, 3, 4);
+        for every_plane in [true, false] {
+            let mut src = src.clone();
+            if !every_plane {
+                src.remove(Attribute::Albedo);
+                src.remove(Attribute::ObjectId);
+            }
+            for len in [1, 4, 7, 20, 60, 1000] {
+                let mut out = src.clone();
+                out.visit_planes_mut(&mut {
+                    struct Garbage;
+                    impl PlaneVisitor for Garbage {
+                        fn visit<T: Copy + Default + Send + Sync>(&mut self, _: Attribute, p: &mut [T]) {
+                            p.fill(T::default());
+                        }
+                    }
+                    Garbage
+                });
+                out.coverage.fill(false);
+                let mut at = 0;
+                for mut run in out.sample_runs_mut(len) {
+                    for j in 0..run.coverage.len() {
+                        run.set(j, &src.sample(at + j));
+                        run.coverage[j] = src.coverage[at + j];
+                    }
+                    at += run.coverage.len();
+                }
+                assert_eq!(at, src.len());
+                assert_eq!(out, src, "runs of {len}, every plane: {every_plane}");
+            }
+            if !every_plane {
+                assert_eq!(src.sample(6).albedo, Vec3::ZERO);
+                assert_eq!(src.sample(6).object_id, 0);
+            }
+        }
+    }
+
+    /// `blend` and `scaled` act on every float attribute and keep the IDs of `self`.
+    #[test]
+    fn sample_blend_is_per_attribute() {
+        let gb = full(2, 1, 1);
+        let (a, b) = (gb.sample(0), gb.sample(1));
+        let m = a.blend(0.25, &b, 0.75);
+        assert_eq!(m.depth, 0.5 * 0.25 + 1.5 * 0.75);
+        assert_eq!(m.metallic, 4.5 * 0.25 + 5.5 * 0.75);
+        assert_eq!(m.normal, a.normal * 0.25 + b.normal * 0.75);
+        assert_eq!(m.motion, Vec2::new(0.75, 9.0));
+        assert_eq!((m.material_id, m.object_id, m.primitive_id), (1, 2, 3));
+        let s = b.scaled(2.0);
+        assert_eq!((s.roughness, s.albedo, s.primitive_id), (9.0, Vec3::new(2.0, 6.0, -2.0), 10));
+    }
 
     #[test]
     fn standard_positions_are_inside_the_pixel_and_distinct() {

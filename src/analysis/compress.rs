@@ -42,9 +42,9 @@ use crate::analysis::surfaces::MERGE_DOT;
 use crate::base::mask::EdgeMask;
 use crate::detect::{self, Detector};
 use crate::error::{Error, Result};
-use crate::gbuffer::{Attribute, GBuffer, PlaneMapper};
+use crate::gbuffer::{Attribute, GBuffer, PlaneMapper, Sample, SamplesMut};
 use crate::image::HdrImage;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
@@ -176,37 +176,14 @@ impl Source<'_> {
 #[derive(Clone, Copy, Debug, Default)]
 struct Fields {
     weight: f32,
-    depth: f32,
-    position: Vec3,
-    normal: Vec3,
-    albedo: Vec3,
-    specular: f32,
-    specular_power: f32,
-    roughness: f32,
-    metallic: f32,
-    motion: Vec2,
-    /// Material, object and primitive ID.
-    ids: [u32; 3],
+    sample: Sample,
 }
 
 impl Fields {
     fn of(src: &Source<'_>, i: usize, weight: f32) -> Self {
-        let gb = src.gb;
-        let f = |p: &Option<Vec<f32>>| p.as_ref().map_or(0.0, |v| v[i]);
-        let v = |p: &Option<Vec<Vec3>>| p.as_ref().map_or(Vec3::ZERO, |v| v[i]);
-        Fields {
-            weight,
-            depth: f(&gb.depth),
-            position: src.position[i],
-            normal: v(&gb.normal),
-            albedo: v(&gb.albedo),
-            specular: f(&gb.specular),
-            specular_power: f(&gb.specular_power),
-            roughness: f(&gb.roughness),
-            metallic: f(&gb.metallic),
-            motion: gb.motion.as_ref().map_or(Vec2::ZERO, |v| v[i]),
-            ids: [&gb.material_id, &gb.object_id, &gb.primitive_id].map(|p| p.as_ref().map_or(0, |v| v[i])),
-        }
+        let mut sample = src.gb.sample(i);
+        sample.position = src.position[i];
+        Fields { weight, sample }
     }
 
     /// The mean of the samples `members` (the first is the nearest: its IDs are kept), the specular power widened
@@ -215,37 +192,19 @@ impl Fields {
         let mut it = members;
         let first = it.next().expect("a layer has a sample");
         let mut sum = Fields::of(src, first, 1.0);
-        let first_normal = sum.normal;
+        let first_normal = sum.sample.normal;
         for i in it {
-            let f = Fields::of(src, i, 1.0);
             sum.weight += 1.0;
-            sum.depth += f.depth;
-            sum.position += f.position;
-            sum.normal += f.normal;
-            sum.albedo += f.albedo;
-            sum.specular += f.specular;
-            sum.specular_power += f.specular_power;
-            sum.roughness += f.roughness;
-            sum.metallic += f.metallic;
-            sum.motion += f.motion;
+            sum.sample = sum.sample.blend(1.0, &Fields::of(src, i, 1.0).sample, 1.0);
         }
-        let inv = 1.0 / sum.weight;
-        let mean_normal = sum.normal * inv;
-        let rho = mean_normal.length().min(1.0);
-        let power = sum.specular_power * inv;
-        Fields {
-            weight: sum.weight,
-            depth: sum.depth * inv,
-            position: sum.position * inv,
-            normal: mean_normal.normalize_or(first_normal),
-            albedo: sum.albedo * inv,
-            specular: sum.specular * inv,
-            specular_power: if rho > 0.0 && power > 0.0 { rho * power / (rho + power * (1.0 - rho)) } else { power },
-            roughness: sum.roughness * inv,
-            metallic: sum.metallic * inv,
-            motion: sum.motion * inv,
-            ids: sum.ids,
+        let mut mean = sum.sample.scaled(1.0 / sum.weight);
+        let rho = mean.normal.length().min(1.0);
+        let power = mean.specular_power;
+        mean.normal = mean.normal.normalize_or(first_normal);
+        if rho > 0.0 && power > 0.0 {
+            mean.specular_power = rho * power / (rho + power * (1.0 - rho));
         }
+        Fields { weight: sum.weight, sample: mean }
     }
 
     /// The coverage-weighted mean of `a` and `b`.
@@ -253,74 +212,31 @@ impl Fields {
         let w = a.weight + b.weight;
         let (ta, tb) = (a.weight / w, b.weight / w);
         let larger = if b.weight > a.weight { b } else { a };
-        let normal = if a.normal.dot(b.normal) > 0.0 {
-            (a.normal * ta + b.normal * tb).normalize_or(larger.normal)
+        let (na, nb) = (a.sample.normal, b.sample.normal);
+        let normal = if na.dot(nb) > 0.0 {
+            (na * ta + nb * tb).normalize_or(larger.sample.normal)
         } else {
-            larger.normal
+            larger.sample.normal
         };
-        Fields {
-            weight: w,
-            depth: a.depth * ta + b.depth * tb,
-            position: a.position * ta + b.position * tb,
+        let ids = larger.sample;
+        let sample = Sample {
             normal,
-            albedo: a.albedo * ta + b.albedo * tb,
-            specular: a.specular * ta + b.specular * tb,
-            specular_power: a.specular_power * ta + b.specular_power * tb,
-            roughness: a.roughness * ta + b.roughness * tb,
-            metallic: a.metallic * ta + b.metallic * tb,
-            motion: a.motion * ta + b.motion * tb,
-            ids: larger.ids,
-        }
+            material_id: ids.material_id,
+            object_id: ids.object_id,
+            primitive_id: ids.primitive_id,
+            ..a.sample.blend(ta, &b.sample, tb)
+        };
+        Fields { weight: w, sample }
     }
 }
 
-/// One row of pixels of the compressed G-buffer being written (each plane the input has, and position).
+/// One row of pixels of the compressed G-buffer being written: its samples (each plane the input has, and
+/// position) and the row's per-pixel counts.
 struct RowOut<'a> {
-    coverage: &'a mut [bool],
-    depth: Option<&'a mut [f32]>,
-    position: &'a mut [Vec3],
-    normal: Option<&'a mut [Vec3]>,
-    albedo: Option<&'a mut [Vec3]>,
-    specular: Option<&'a mut [f32]>,
-    specular_power: Option<&'a mut [f32]>,
-    roughness: Option<&'a mut [f32]>,
-    metallic: Option<&'a mut [f32]>,
-    motion: Option<&'a mut [Vec2]>,
-    ids: [Option<&'a mut [u32]>; 3],
+    samples: SamplesMut<'a>,
     slots: &'a mut [u8],
     shade_count: &'a mut [u8],
     scale: &'a mut [f32],
-}
-
-impl RowOut<'_> {
-    /// Writes `f` into sample `i` of the row.
-    fn write(&mut self, f: &Fields, i: usize) {
-        fn put<T: Copy>(p: &mut Option<&mut [T]>, i: usize, x: T) {
-            if let Some(v) = p.as_mut() {
-                v[i] = x;
-            }
-        }
-        put(&mut self.depth, i, f.depth);
-        self.position[i] = f.position;
-        put(&mut self.normal, i, f.normal);
-        put(&mut self.albedo, i, f.albedo);
-        put(&mut self.specular, i, f.specular);
-        put(&mut self.specular_power, i, f.specular_power);
-        put(&mut self.roughness, i, f.roughness);
-        put(&mut self.metallic, i, f.metallic);
-        put(&mut self.motion, i, f.motion);
-        for (o, &id) in self.ids.iter_mut().zip(&f.ids) {
-            put(o, i, id);
-        }
-    }
-}
-
-/// Splits `plane` (present or not) into `rows` rows.
-fn rows_of<T>(plane: &mut Option<Vec<T>>, row: usize, rows: usize) -> Vec<Option<&mut [T]>> {
-    match plane {
-        Some(v) => v.chunks_mut(row).map(Some).collect(),
-        None => (0..rows).map(|_| None).collect(),
-    }
 }
 
 /// What one pixel's compression counted.
@@ -432,59 +348,14 @@ fn run_rows<S: Default + Send>(
     }
     let mut c = Compressed::empty(gb.width, h as u32, gb.samples, config, method, fragment_key(gb));
     let counts = {
-        let GBuffer {
-            coverage,
-            depth,
-            position,
-            normal,
-            albedo,
-            specular,
-            specular_power,
-            roughness,
-            metallic,
-            motion,
-            material_id,
-            object_id,
-            primitive_id,
-            ..
-        } = &mut out;
-        let mut it = (
-            coverage.chunks_mut(row),
-            rows_of(depth, row, h).into_iter(),
-            position.as_mut().expect("set above").chunks_mut(row),
-            rows_of(normal, row, h).into_iter(),
-            rows_of(albedo, row, h).into_iter(),
-            rows_of(specular, row, h).into_iter(),
-            rows_of(specular_power, row, h).into_iter(),
-            rows_of(roughness, row, h).into_iter(),
-            rows_of(metallic, row, h).into_iter(),
-            rows_of(motion, row, h).into_iter(),
-            rows_of(material_id, row, h).into_iter(),
-            rows_of(object_id, row, h).into_iter(),
-            rows_of(primitive_id, row, h).into_iter(),
-            c.slots_per_pixel.chunks_mut(w),
-            c.mask.shade_count.chunks_mut(w),
-            c.scale.chunks_mut(w),
-        );
-        let mut rows = Vec::with_capacity(h);
-        for _ in 0..h {
-            rows.push(RowOut {
-                coverage: it.0.next().expect("h rows"),
-                depth: it.1.next().expect("h rows"),
-                position: it.2.next().expect("h rows"),
-                normal: it.3.next().expect("h rows"),
-                albedo: it.4.next().expect("h rows"),
-                specular: it.5.next().expect("h rows"),
-                specular_power: it.6.next().expect("h rows"),
-                roughness: it.7.next().expect("h rows"),
-                metallic: it.8.next().expect("h rows"),
-                motion: it.9.next().expect("h rows"),
-                ids: [it.10.next().expect("h rows"), it.11.next().expect("h rows"), it.12.next().expect("h rows")],
-                slots: it.13.next().expect("h rows"),
-                shade_count: it.14.next().expect("h rows"),
-                scale: it.15.next().expect("h rows"),
-            });
-        }
+        let rows: Vec<RowOut<'_>> = out
+            .sample_runs_mut(row)
+            .into_iter()
+            .zip(c.slots_per_pixel.chunks_mut(w))
+            .zip(c.mask.shade_count.chunks_mut(w))
+            .zip(c.scale.chunks_mut(w))
+            .map(|(((samples, slots), shade_count), scale)| RowOut { samples, slots, shade_count, scale })
+            .collect();
         let su = s as usize;
         rows.into_par_iter()
             .enumerate()
@@ -503,13 +374,13 @@ fn run_rows<S: Default + Send>(
                             kept |= mask;
                             for j in 0..su {
                                 if mask >> j & 1 == 1 {
-                                    o.write(fields, x * su + j);
+                                    o.samples.set(x * su + j, &fields.sample);
                                 }
                             }
                         }
                         let covered = gb.coverage[base..base + su].iter().filter(|&&c| c).count();
                         for j in 0..su {
-                            o.coverage[x * su + j] = kept >> j & 1 == 1;
+                            o.samples.coverage[x * su + j] = kept >> j & 1 == 1;
                         }
                         let kept_n = kept.count_ones() as usize;
                         o.slots[x] = slots.len() as u8;
@@ -617,7 +488,7 @@ fn stream_pixel<'g>(gb: &'g GBuffer, cfg: &StreamingConfig) -> impl PixelFn<Stre
                     let m = Fields::merge(&a, &b);
                     t.mask |= f.mask;
                     t.z = (t.z.0.min(f.z.0), t.z.1.max(f.z.1));
-                    t.normal = m.normal;
+                    t.normal = m.sample.normal;
                     t.z_mean = mean_depth(t.mask, base, |i| src.z(i));
                     match t.merged {
                         Some(idx) => merged[idx] = m,

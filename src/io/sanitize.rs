@@ -5,7 +5,7 @@
 //! finite). Background samples are included: a loader that wants sky to carry +Inf depth must mark it uncovered and
 //! zero it first (they all do).
 
-use crate::gbuffer::{Attribute, GBuffer};
+use crate::gbuffer::{Attribute, GBuffer, PlaneSlot};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
@@ -67,17 +67,11 @@ fn vec3s(p: &mut [Vec3]) -> (u64, u64) {
 pub fn sanitize(gb: &mut GBuffer) -> Vec<(&'static str, u64, u64)> {
     let mut out = Vec::new();
     for attr in Attribute::ALL {
-        let counts = match attr {
-            Attribute::Depth => gb.depth.as_deref_mut().map(scalars),
-            Attribute::Position => gb.position.as_deref_mut().map(vec3s),
-            Attribute::Normal => gb.normal.as_deref_mut().map(vec3s),
-            Attribute::Albedo => gb.albedo.as_deref_mut().map(vec3s),
-            Attribute::Specular => gb.specular.as_deref_mut().map(scalars),
-            Attribute::SpecularPower => gb.specular_power.as_deref_mut().map(scalars),
-            Attribute::Roughness => gb.roughness.as_deref_mut().map(scalars),
-            Attribute::Metallic => gb.metallic.as_deref_mut().map(scalars),
-            Attribute::Motion => gb.motion.as_deref_mut().map(vec2s),
-            Attribute::MaterialId | Attribute::ObjectId | Attribute::PrimitiveId => None,
+        let counts = match gb.slot(attr) {
+            PlaneSlot::F32(p) => p.as_deref_mut().map(scalars),
+            PlaneSlot::Vec2(p) => p.as_deref_mut().map(vec2s),
+            PlaneSlot::Vec3(p) => p.as_deref_mut().map(vec3s),
+            PlaneSlot::U32(_) => None,
         };
         if let Some((nan, inf)) = counts.filter(|c| c.0 + c.1 > 0) {
             out.push((attr.name(), nan, inf));

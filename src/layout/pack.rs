@@ -13,7 +13,7 @@ use super::coder::{encode_id, Coder, Slot};
 use super::material::MaterialTable;
 use super::{Field, Format, Layout, DEFAULT_DEPTH_RANGE};
 use crate::error::{Error, Result};
-use crate::gbuffer::{Attribute, BandSource, GBuffer};
+use crate::gbuffer::{Attribute, BandSource, GBuffer, PlaneSlot};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::ops::Range;
@@ -944,29 +944,21 @@ impl Texels<'_> {
 }
 
 fn scalar_plane(gb: &mut GBuffer, a: Attribute, n: usize) -> Result<&mut Vec<f32>> {
-    let p = match a {
-        Attribute::Depth => &mut gb.depth,
-        Attribute::Specular => &mut gb.specular,
-        Attribute::SpecularPower => &mut gb.specular_power,
-        Attribute::Roughness => &mut gb.roughness,
-        Attribute::Metallic => &mut gb.metallic,
-        _ => return Err(Error::Internal(format!("{} is not a scalar attribute", a.name()))),
-    };
-    Ok(p.get_or_insert_with(|| vec![0.0; n]))
+    match gb.slot(a) {
+        PlaneSlot::F32(p) => Ok(p.get_or_insert_with(|| vec![0.0; n])),
+        _ => Err(Error::Internal(format!("{} is not a scalar attribute", a.name()))),
+    }
 }
 
 fn id_plane(gb: &mut GBuffer, a: Attribute, n: usize) -> Result<&mut Vec<u32>> {
-    let p = match a {
-        Attribute::MaterialId => &mut gb.material_id,
-        Attribute::ObjectId => &mut gb.object_id,
-        Attribute::PrimitiveId => &mut gb.primitive_id,
-        _ => return Err(Error::Internal(format!("{} is not an ID attribute", a.name()))),
-    };
-    Ok(p.get_or_insert_with(|| vec![0; n]))
+    match gb.slot(a) {
+        PlaneSlot::U32(p) => Ok(p.get_or_insert_with(|| vec![0; n])),
+        _ => Err(Error::Internal(format!("{} is not an ID attribute", a.name()))),
+    }
 }
 
-/// Sets attribute `a` to the constant `v` on covered samples and 0 elsewhere, in place (the plane is created if
-/// missing, reused otherwise).
+/// Sets attribute `a` to the constant `v` (its components; an ID is `v[0]` rounded down) on covered samples and 0
+/// elsewhere, in place (the plane is created if missing, reused otherwise).
 fn set_constant(gb: &mut GBuffer, a: Attribute, v: &[f32], n: usize) {
     fn fill<T: Copy + Send + Sync>(plane: &mut Option<Vec<T>>, cov: &[bool], n: usize, val: T, zero: T) {
         let plane = plane.get_or_insert_with(|| vec![zero; n]);
@@ -977,24 +969,11 @@ fn set_constant(gb: &mut GBuffer, a: Attribute, v: &[f32], n: usize) {
         });
     }
     let cov = std::mem::take(&mut gb.coverage);
-    match a {
-        Attribute::Normal | Attribute::Albedo | Attribute::Position => {
-            let plane = match a {
-                Attribute::Normal => &mut gb.normal,
-                Attribute::Albedo => &mut gb.albedo,
-                _ => &mut gb.position,
-            };
-            fill(plane, &cov, n, Vec3::new(v[0], v[1], v[2]), Vec3::ZERO);
-        }
-        Attribute::Motion => fill(&mut gb.motion, &cov, n, Vec2::new(v[0], v[1]), Vec2::ZERO),
-        Attribute::MaterialId => fill(&mut gb.material_id, &cov, n, v[0] as u32, 0),
-        Attribute::ObjectId => fill(&mut gb.object_id, &cov, n, v[0] as u32, 0),
-        Attribute::PrimitiveId => fill(&mut gb.primitive_id, &cov, n, v[0] as u32, 0),
-        Attribute::Depth => fill(&mut gb.depth, &cov, n, v[0], 0.0),
-        Attribute::Specular => fill(&mut gb.specular, &cov, n, v[0], 0.0),
-        Attribute::SpecularPower => fill(&mut gb.specular_power, &cov, n, v[0], 0.0),
-        Attribute::Roughness => fill(&mut gb.roughness, &cov, n, v[0], 0.0),
-        Attribute::Metallic => fill(&mut gb.metallic, &cov, n, v[0], 0.0),
+    match gb.slot(a) {
+        PlaneSlot::F32(p) => fill(p, &cov, n, v[0], 0.0),
+        PlaneSlot::Vec2(p) => fill(p, &cov, n, Vec2::new(v[0], v[1]), Vec2::ZERO),
+        PlaneSlot::Vec3(p) => fill(p, &cov, n, Vec3::new(v[0], v[1], v[2]), Vec3::ZERO),
+        PlaneSlot::U32(p) => fill(p, &cov, n, v[0] as u32, 0),
     }
     gb.coverage = cov;
 }
