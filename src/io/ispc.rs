@@ -626,6 +626,11 @@ impl crate::base::isa::Kernel for Convert<'_, '_> {
         let mut bits = vec![0u16; w];
         let mut halves = [vec![0.0f32; w], vec![0.0f32; w]];
         let mut view = vec![0.0f32; w];
+        // Rows of x, y, z in structure of arrays: each loop below computes one row's values into them (vectorised),
+        // then one loop interleaves them into the plane's `Vec3`s.
+        let mut soa = [vec![0.0f32; w], vec![0.0f32; w], vec![0.0f32; w]];
+        // The pixel centres' x in normalised device coordinates, the same for every row.
+        let ndc_x: Vec<f32> = (0..w).map(|x| (x as f32 + 0.5) * 2.0 / w as f32 - 1.0).collect();
         // Array `k` (elements of `elem` bytes) over row `y`; the header check bounded every array by the chunk.
         // Functions inlined, not closures: a closure called would be compiled apart, for the baseline.
         #[inline(always)]
@@ -635,8 +640,14 @@ impl crate::base::isa::Kernel for Convert<'_, '_> {
         }
         #[inline(always)]
         fn halves_of(bytes: &[u8], bits: &mut [u16], out: &mut [f32]) {
-            for (b, v) in bytes.chunks_exact(2).zip(bits.iter_mut()) {
-                *v = u16::from_le_bytes([b[0], b[1]]);
+            // The file's halves are little-endian: on such a CPU a copy of the bytes (the array need not be aligned
+            // for `u16`), else swapped one by one.
+            if cfg!(target_endian = "little") {
+                bytemuck::cast_slice_mut::<u16, u8>(bits).copy_from_slice(bytes);
+            } else {
+                for (b, v) in bytes.chunks_exact(2).zip(bits.iter_mut()) {
+                    *v = u16::from_le_bytes([b[0], b[1]]);
+                }
             }
             bits.reinterpret_cast::<f16>().convert_to_f32_slice(out);
         }
@@ -658,21 +669,30 @@ impl crate::base::isa::Kernel for Convert<'_, '_> {
             }
             if let (Some(d), Some(pos)) = (depth.as_deref_mut(), position.as_deref_mut()) {
                 let sy = -(((y as f32 + 0.5) * 2.0 / ht as f32) - 1.0);
-                let rows = d[o..o + w].iter_mut().zip(pos[o..o + w].iter_mut());
-                for (x, ((d, pos), &vz)) in rows.zip(view.iter()).enumerate() {
-                    let sx = (x as f32 + 0.5) * 2.0 / w as f32 - 1.0;
-                    // An uncovered pixel's view depth is 0: its position comes out 0 too.
-                    *d = vz;
-                    *pos = Vec3::new(sx * vz / p00, sy * vz / p11, -vz);
+                d[o..o + w].copy_from_slice(&view);
+                // An uncovered pixel's view depth is 0: its position comes out 0 too.
+                let [px, py, _] = &mut soa;
+                for (((px, py), &sx), &vz) in px.iter_mut().zip(py.iter_mut()).zip(&ndc_x).zip(&view) {
+                    (*px, *py) = (sx * vz / p00, sy * vz / p11);
+                }
+                for (((pos, &x), &y), &vz) in pos[o..o + w].iter_mut().zip(px.iter()).zip(py.iter()).zip(&view) {
+                    *pos = Vec3::new(x, y, -vz);
                 }
             }
             if let Some(n) = normal.as_deref_mut() {
                 let [ex, ey] = &mut halves;
                 halves_of(array_row(h, chunk, w, 1, 2, y), &mut bits, ex);
                 halves_of(array_row(h, chunk, w, 2, 2, y), &mut bits, ey);
-                for (((n, &c), &x), &y) in n[o..o + w].iter_mut().zip(cov.iter()).zip(ex.iter()).zip(ey.iter()) {
+                let [nx, ny, nz] = &mut soa;
+                for ((((nx, ny), nz), &x), &y) in
+                    nx.iter_mut().zip(ny.iter_mut()).zip(nz.iter_mut()).zip(&*ex).zip(&*ey)
+                {
                     let v = decode_spheremap(x, y);
-                    *n = if c { v } else { Vec3::ZERO };
+                    (*nx, *ny, *nz) = (v.x, v.y, v.z);
+                }
+                let soa_rows = nx.iter().zip(ny.iter()).zip(nz.iter());
+                for ((n, &c), ((&x, &y), &z)) in n[o..o + w].iter_mut().zip(cov.iter()).zip(soa_rows) {
+                    *n = if c { Vec3::new(x, y, z) } else { Vec3::ZERO };
                 }
             }
             for (k, plane) in [(3, spec.as_deref_mut()), (4, power.as_deref_mut())] {
