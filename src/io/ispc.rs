@@ -476,8 +476,9 @@ impl Arrays {
         let filled: Vec<BandSurvey> = missing
             .into_par_iter()
             .map_init(GBuffer::default, |band, rows| {
-                self.decode_band(rows, band, Some(&SURVEYED));
-                band_survey(band)
+                let mut tally = RowCounts::default();
+                self.decode_band_tallied(rows, band, Some(&SURVEYED), Some(&mut tally));
+                tally.survey(band.len() as u64)
             })
             .collect();
         let mut out = Checks { sanitized: Vec::new(), checks: crate::io::plausible::Survey::default() };
@@ -498,6 +499,18 @@ impl Arrays {
     /// Rows `rows` into `out` (a G-buffer of `width × rows` pixels, its planes reused): the planes of `only`
     /// (`None`: all) as [`read`] converts them, not yet sanitised. Returns the pixels whose depth is out of range.
     fn decode_band(&self, rows: Range<u32>, out: &mut GBuffer, only: Option<&[Attribute]>) -> u64 {
+        self.decode_band_tallied(rows, out, only, None)
+    }
+
+    /// [`Arrays::decode_band`], and when `tally` is given (every [`SURVEYED`] plane decoded) the load's sanitising
+    /// and checks done on each row as it is converted: the band comes out sanitised, as [`band_survey`] leaves it.
+    fn decode_band_tallied(
+        &self,
+        rows: Range<u32>,
+        out: &mut GBuffer,
+        only: Option<&[Attribute]>,
+        tally: Option<&mut RowCounts>,
+    ) -> u64 {
         let h = &self.header;
         let (w, n) = (h.width as u32, h.width as usize * rows.len());
         (out.width, out.height, out.samples) = (w, rows.end - rows.start, 1);
@@ -528,7 +541,8 @@ impl Arrays {
             spec: plane(&mut out.specular, want(Attribute::Specular), n, 0.0),
             power: plane(&mut out.specular_power, want(Attribute::SpecularPower), n, 0.0),
         };
-        planes.convert(h, self.chunk())
+        debug_assert!(tally.is_none() || SURVEYED.iter().all(|&a| want(a)), "a tally needs every surveyed plane");
+        planes.convert(h, self.chunk(), tally)
     }
 }
 
@@ -544,11 +558,13 @@ impl BandSource for Arrays {
         out: &mut GBuffer,
         only: Option<&[Attribute]>,
     ) -> Result<()> {
-        self.decode_band(rows.clone(), out, only);
         // What the load does to the whole frame, on the band (NaN and ±Inf replaced), counted with the checks'
-        // counts when the band holds every plane they read: the load's checks without a pass of their own.
+        // counts when the band holds every plane they read: the load's checks without a pass of their own, done
+        // on each row as it is converted.
         if only.is_none_or(|o| SURVEYED.iter().all(|a| o.contains(a))) {
-            let counts = band_survey(out);
+            let mut tally = RowCounts::default();
+            self.decode_band_tallied(rows.clone(), out, only, Some(&mut tally));
+            let counts = tally.survey(out.len() as u64);
             // A band decoded again (a frame lit twice) is counted once, and the list stays as long as the frame's
             // bands.
             let mut seen = self.tally.lock();
@@ -556,6 +572,7 @@ impl BandSource for Arrays {
                 seen.push((rows, counts));
             }
         } else {
+            self.decode_band(rows, out, only);
             crate::io::sanitize::sanitize(out);
         }
         Ok(())
@@ -564,6 +581,7 @@ impl BandSource for Arrays {
 
 /// Sanitises a band decoded with every surveyed plane and returns what the load's checks count on it (albedo is
 /// unorm8: never sanitised, never checked).
+#[cfg(test)]
 fn band_survey(band: &mut GBuffer) -> BandSurvey {
     let sanitized = crate::io::sanitize::sanitize(band);
     let albedo = band.albedo.take();
@@ -595,13 +613,88 @@ impl Planes<'_> {
     /// branch-free over its row, compiled for the widest instruction set the CPU has
     /// ([`crate::base::isa::run`]): the same IEEE operations in the same order on every path (no contraction),
     /// so the planes are the same bits everywhere.
-    fn convert(self, h: &Header, chunk: &[u8]) -> u64 {
+    fn convert(self, h: &Header, chunk: &[u8], tally: Option<&mut RowCounts>) -> u64 {
         let mut out_of_range = 0;
         crate::base::isa::run(
             crate::base::isa::Isa::detect(),
-            Convert { planes: self, h, chunk, out_of_range: &mut out_of_range },
+            Convert { planes: self, h, chunk, out_of_range: &mut out_of_range, tally },
         );
         out_of_range
+    }
+}
+
+/// What the load's sanitising pass and plausibility checks count on a band ([`band_survey`]'s numbers, bit for bit),
+/// counted by [`Planes::convert`] on each row while it is in cache, with the values replaced as it goes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct RowCounts {
+    /// NaN and ±Inf components replaced in position, normal, specular amount and specular power (depth and
+    /// albedo are finite by construction).
+    fixed: [(u64, u64); 4],
+    covered: u64,
+    zero_normal: u64,
+    bad_normal: u64,
+    away: u64,
+    below_near: u64,
+}
+
+impl RowCounts {
+    /// The normal checks of `io::plausible`'s `count` on one row (normals already sanitised, zero where
+    /// uncovered; positions `(x, y, −view)`), with the same operations in the same order.
+    #[inline(always)]
+    fn count_normals(
+        &mut self,
+        cov: &[bool],
+        [nx, ny, nz]: [&mut Vec<f32>; 3],
+        [px, py]: [&Vec<f32>; 2],
+        view: &[f32],
+    ) {
+        use crate::io::plausible::{UNIT_TOLERANCE, ZERO_NORMAL};
+        // Counted in 32 bits (a row has fewer than 2³² pixels): twice the lanes of 64-bit sums.
+        let (mut zero, mut bad, mut away) = (0u32, 0u32, 0u32);
+        let normals = nx.iter().zip(ny.iter()).zip(nz.iter());
+        let rest = cov.iter().zip(px.iter()).zip(py.iter()).zip(view);
+        for (((&x, &y), &z), (((&c, &px), &py), &view)) in normals.zip(rest) {
+            // `Vec3::length` and `n.dot(−p)`: −(−view) is view exactly.
+            let len = ((x * x + y * y) + z * z).sqrt();
+            let valid = len.is_finite() & ((len - 1.0).abs() <= UNIT_TOLERANCE);
+            let facing = (x * -px + y * -py) + z * view;
+            zero += u32::from(c & (len < ZERO_NORMAL));
+            bad += u32::from(c & !valid);
+            away += u32::from(c & valid & (facing < 0.0));
+        }
+        self.zero_normal += u64::from(zero);
+        self.bad_normal += u64::from(bad);
+        self.away += u64::from(away);
+    }
+
+    /// The band's survey: the sanitising pass's list (canonical order, planes with anything replaced) and the
+    /// checks' counts over `samples` samples.
+    fn survey(&self, samples: u64) -> BandSurvey {
+        let names = ["position", "normal", "specular", "specular_power"];
+        let sanitized =
+            names.into_iter().zip(self.fixed).filter(|(_, (nan, inf))| nan + inf > 0).map(|(n, (a, b))| (n, a, b));
+        let counts = [self.covered, self.zero_normal, self.bad_normal, self.away, self.below_near];
+        (sanitized.collect(), crate::io::plausible::Survey::of_counts(samples, counts))
+    }
+}
+
+/// Replaces NaN by 0 and ±Inf by ±`f32::MAX` in `v` (as `io::sanitize` does), counting them; branch-free.
+#[inline(always)]
+fn fix_counted(v: &mut [f32], (nan, inf): &mut (u64, u64)) {
+    // A row of finite values (all of a well-formed file) is only read, by a test that runs in vector lanes.
+    if v.iter().fold(true, |ok, x| ok & x.is_finite()) {
+        return;
+    }
+    for x in v.iter_mut() {
+        *nan += u64::from(x.is_nan());
+        *inf += u64::from(x.is_infinite());
+        *x = if x.is_nan() {
+            0.0
+        } else if x.is_infinite() {
+            f32::MAX.copysign(*x)
+        } else {
+            *x
+        };
     }
 }
 
@@ -611,6 +704,7 @@ struct Convert<'a, 'b> {
     h: &'b Header,
     chunk: &'b [u8],
     out_of_range: &'b mut u64,
+    tally: Option<&'b mut RowCounts>,
 }
 
 impl crate::base::isa::Kernel for Convert<'_, '_> {
@@ -618,7 +712,7 @@ impl crate::base::isa::Kernel for Convert<'_, '_> {
     #[inline(always)]
     fn run(self, _: crate::base::isa::Isa) {
         use half::slice::{HalfBitsSliceExt, HalfFloatSliceExt};
-        let Convert { planes, h, chunk, out_of_range } = self;
+        let Convert { planes, h, chunk, out_of_range, mut tally } = self;
         let (w, ht) = (h.width as usize, h.height as usize);
         let p = &h.proj;
         let (p22, p32, p00, p11) = (p[2][2], p[3][2], p[0][0], p[1][1]);
@@ -629,6 +723,9 @@ impl crate::base::isa::Kernel for Convert<'_, '_> {
         // Rows of x, y, z in structure of arrays: each loop below computes one row's values into them (vectorised),
         // then one loop interleaves them into the plane's `Vec3`s.
         let mut soa = [vec![0.0f32; w], vec![0.0f32; w], vec![0.0f32; w]];
+        let mut pxy = [vec![0.0f32; w], vec![0.0f32; w]];
+        // The plausibility checks' near plane (`io::plausible`'s).
+        let near = h.camera().znear * 0.999;
         // The pixel centres' x in normalised device coordinates, the same for every row.
         let ndc_x: Vec<f32> = (0..w).map(|x| (x as f32 + 0.5) * 2.0 / w as f32 - 1.0).collect();
         // Array `k` (elements of `elem` bytes) over row `y`; the header check bounded every array by the chunk.
@@ -667,13 +764,23 @@ impl crate::base::isa::Kernel for Convert<'_, '_> {
                 *c = in_front;
                 *v = if in_front { view_z } else { 0.0 };
             }
+            if let Some(t) = tally.as_deref_mut() {
+                // Depth is finite by construction (0 where it is not finite and positive): nothing to sanitise.
+                t.covered += u64::from(cov.iter().map(|&c| u32::from(c)).sum::<u32>());
+                t.below_near += u64::from(cov.iter().zip(&view).map(|(&c, &d)| u32::from(c & (d < near))).sum::<u32>());
+            }
             if let (Some(d), Some(pos)) = (depth.as_deref_mut(), position.as_deref_mut()) {
                 let sy = -(((y as f32 + 0.5) * 2.0 / ht as f32) - 1.0);
                 d[o..o + w].copy_from_slice(&view);
                 // An uncovered pixel's view depth is 0: its position comes out 0 too.
-                let [px, py, _] = &mut soa;
+                let [px, py] = &mut pxy;
                 for (((px, py), &sx), &vz) in px.iter_mut().zip(py.iter_mut()).zip(&ndc_x).zip(&view) {
                     (*px, *py) = (sx * vz / p00, sy * vz / p11);
+                }
+                if let Some(t) = tally.as_deref_mut() {
+                    // z = −view depth is finite; x and y need not be (a projection with a tiny scale).
+                    fix_counted(px, &mut t.fixed[0]);
+                    fix_counted(py, &mut t.fixed[0]);
                 }
                 for (((pos, &x), &y), &vz) in pos[o..o + w].iter_mut().zip(px.iter()).zip(py.iter()).zip(&view) {
                     *pos = Vec3::new(x, y, -vz);
@@ -690,17 +797,31 @@ impl crate::base::isa::Kernel for Convert<'_, '_> {
                     let v = decode_spheremap(x, y);
                     (*nx, *ny, *nz) = (v.x, v.y, v.z);
                 }
+                for (((nx, ny), nz), &c) in nx.iter_mut().zip(ny.iter_mut()).zip(nz.iter_mut()).zip(cov.iter()) {
+                    (*nx, *ny, *nz) = if c { (*nx, *ny, *nz) } else { (0.0, 0.0, 0.0) };
+                }
+                if let Some(t) = tally.as_deref_mut() {
+                    for v in [&mut *nx, &mut *ny, &mut *nz] {
+                        fix_counted(v, &mut t.fixed[1]);
+                    }
+                    t.count_normals(cov, [nx, ny, nz], [&pxy[0], &pxy[1]], &view);
+                }
                 let soa_rows = nx.iter().zip(ny.iter()).zip(nz.iter());
-                for ((n, &c), ((&x, &y), &z)) in n[o..o + w].iter_mut().zip(cov.iter()).zip(soa_rows) {
-                    *n = if c { Vec3::new(x, y, z) } else { Vec3::ZERO };
+                for (n, ((&x, &y), &z)) in n[o..o + w].iter_mut().zip(soa_rows) {
+                    *n = Vec3::new(x, y, z);
                 }
             }
             for (k, plane) in [(3, spec.as_deref_mut()), (4, power.as_deref_mut())] {
                 if let Some(v) = plane {
-                    halves_of(array_row(h, chunk, w, k, 2, y), &mut bits, &mut halves[0]);
-                    for ((v, &c), &s) in v[o..o + w].iter_mut().zip(cov.iter()).zip(&halves[0]) {
-                        *v = if c { s } else { 0.0 };
+                    let row = &mut halves[0];
+                    halves_of(array_row(h, chunk, w, k, 2, y), &mut bits, row);
+                    for (s, &c) in row.iter_mut().zip(cov.iter()) {
+                        *s = if c { *s } else { 0.0 };
                     }
+                    if let Some(t) = tally.as_deref_mut() {
+                        fix_counted(row, &mut t.fixed[k - 1]);
+                    }
+                    v[o..o + w].copy_from_slice(row);
                 }
             }
             if let Some(a) = albedo.as_deref_mut() {
@@ -802,7 +923,7 @@ fn decode(h: &Header, chunk: &[u8], path: &Path) -> Result<Loaded> {
         })
         .collect();
     use rayon::prelude::*;
-    let out_of_range: u64 = bands.into_par_iter().map(|b| b.convert(h, chunk)).sum();
+    let out_of_range: u64 = bands.into_par_iter().map(|b| b.convert(h, chunk, None)).sum();
     gb.depth = Some(depth);
     gb.position = Some(position);
     gb.normal = Some(normal);
@@ -946,6 +1067,59 @@ pub fn write(path: &Path, gb: &GBuffer, lights: &[Light]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The load's sanitising and checks counted row by row as the band is converted ([`RowCounts`]) equal the passes
+    /// over the decoded band ([`band_survey`]), counts and replaced values alike, on a room whose arrays are
+    /// spoiled with NaN and ±Inf halves, depths outside [0, 1) and normal pairs that decode to nothing, for every
+    /// band height and instruction set the CPU has.
+    #[test]
+    fn counting_while_converting_equals_the_passes_over_the_band() {
+        let gb = crate::scene::render(crate::scene::SceneName::Room, 71, 37, 1).unwrap();
+        let lights = crate::resolve::fixture::lights_on_surfaces(&gb, 10, 3.0, 7);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("spoiled.bin");
+        write(&path, &gb, &lights).unwrap();
+        let mut bytes = std::fs::read(&path).unwrap();
+        let h = Header::parse(&bytes).unwrap();
+        let at = |k: usize, elem: usize, i: usize| HEADER_BYTES + h.offsets[k] as usize + elem * i;
+        for i in (0..gb.len()).filter(|&i| gb.coverage[i]) {
+            for (k, m, v) in [
+                (3, 11, f16::NAN),
+                (4, 13, f16::INFINITY),
+                (4, 17, f16::NEG_INFINITY),
+                (1, 19, f16::NAN),
+                (2, 37, f16::INFINITY),
+                (1, 41, f16::from_f32(0.5)),
+            ] {
+                if i % m == 0 {
+                    bytes[at(k, 2, i)..at(k, 2, i) + 2].copy_from_slice(&v.to_bits().to_le_bytes());
+                }
+            }
+            for (m, z) in [(23, 2.0f32), (29, -0.5), (31, f32::NAN)] {
+                if i % m == 0 {
+                    bytes[at(0, 4, i)..at(0, 4, i) + 4].copy_from_slice(&z.to_le_bytes());
+                }
+            }
+        }
+        std::fs::write(&path, &bytes).unwrap();
+        let arrays = Arrays::read(&path, &LoadOptions::default()).unwrap();
+        let mut fixed = 0;
+        for band_rows in [1u32, 5, 16, 37] {
+            for y in (0..37).step_by(band_rows as usize) {
+                let rows = y..(y + band_rows).min(37);
+                let (mut a, mut b) = (GBuffer::default(), GBuffer::default());
+                arrays.decode_band(rows.clone(), &mut a, Some(&SURVEYED));
+                let want = band_survey(&mut a);
+                let mut tally = RowCounts::default();
+                arrays.decode_band_tallied(rows.clone(), &mut b, Some(&SURVEYED), Some(&mut tally));
+                let got = tally.survey(b.len() as u64);
+                assert_eq!(got, want, "rows {rows:?}");
+                assert_eq!(a, b, "rows {rows:?}: the band's planes");
+                fixed += want.0.iter().map(|s| s.1 + s.2).sum::<u64>();
+            }
+        }
+        assert!(fixed > 100, "the spoiled values were found: {fixed}");
+    }
 
     /// f16 carries 11 significant bits; a spheremap pair decoded from f16 is within this of the unit normal.
     const F16_NORMAL_TOL: f32 = 4e-3;

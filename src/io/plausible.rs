@@ -42,7 +42,7 @@ pub fn normal_is_valid(n: glam::Vec3) -> bool {
 }
 
 /// What one pass over the covered samples counts.
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct Counts {
     covered: u64,
     zero_normal: u64,
@@ -142,7 +142,7 @@ impl crate::base::isa::Kernel for CountChunk<'_> {
 
 /// What one pass over a G-buffer's samples counts for the checks, with the planes it has: of a whole frame
 /// ([`Survey::of`]), or summed over its bands (a frame decoded band by band, never whole).
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct Survey {
     counts: Counts,
     samples: u64,
@@ -162,6 +162,19 @@ impl Survey {
             position: gb.position.is_some(),
             depth: gb.depth.is_some(),
             albedo: gb.albedo.is_some(),
+        }
+    }
+
+    /// The survey of `samples` samples with every plane but albedo, from counts taken elsewhere: the ISPC reader's
+    /// row counts, counted row by row as it converts them, with `count`'s definitions.
+    pub(crate) fn of_counts(samples: u64, [covered, zero_normal, bad_normal, away, below_near]: [u64; 5]) -> Survey {
+        Survey {
+            counts: Counts { covered, zero_normal, bad_normal, away, below_near, ..Counts::default() },
+            samples,
+            normal: true,
+            position: true,
+            depth: true,
+            albedo: false,
         }
     }
 
