@@ -503,7 +503,7 @@ impl Arrays {
     }
 
     /// [`Arrays::decode_band`], and when `tally` is given (every [`SURVEYED`] plane decoded) the load's sanitising
-    /// and checks done on each row as it is converted: the band comes out sanitised, as [`band_survey`] leaves it.
+    /// and checks done on each row as it is converted: the band comes out sanitised, as `io::sanitize` leaves it.
     fn decode_band_tallied(
         &self,
         rows: Range<u32>,
@@ -623,8 +623,9 @@ impl Planes<'_> {
     }
 }
 
-/// What the load's sanitising pass and plausibility checks count on a band ([`band_survey`]'s numbers, bit for bit),
-/// counted by [`Planes::convert`] on each row while it is in cache, with the values replaced as it goes.
+/// What the load's sanitising pass (`io::sanitize`) and plausibility survey (`io::plausible`) count on a band, the
+/// same numbers, counted by [`Planes::convert`] on each row while it is in cache, with the values replaced as it
+/// goes (a unit test holds it to the two passes over the decoded band).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct RowCounts {
     /// NaN and ±Inf components replaced in position, normal, specular amount and specular power (depth and
@@ -678,7 +679,7 @@ impl RowCounts {
     }
 }
 
-/// Replaces NaN by 0 and ±Inf by ±`f32::MAX` in `v` (as `io::sanitize` does), counting them; branch-free.
+/// Replaces NaN by 0 and ±Inf by ±`f32::MAX` in `v` (as `io::sanitize` does), counting them.
 #[inline(always)]
 fn fix_counted(v: &mut [f32], (nan, inf): &mut (u64, u64)) {
     // A row of finite values (all of a well-formed file) is only read, by a test that runs in vector lanes.
