@@ -375,11 +375,14 @@ impl<'a> SurfaceReader<'a> {
                     Some(plane) => {
                         let v = gather(plane, idx, run);
                         let (x, y, z) = (&mut it.nx[r.clone()], &mut it.ny[r.clone()], &mut it.nz[r.clone()]);
+                        // Counted in 32 bits within the vector: 64-bit sums kept the AVX2 loop scalar.
+                        let mut nbad = 0u32;
                         for k in 0..LANES {
                             let (n, ok) = normalized(v[k]);
-                            bad.normal += u64::from(!ok);
+                            nbad += u32::from(!ok);
                             (x[k], y[k], z[k]) = (n.x, n.y, n.z);
                         }
+                        bad.normal += u64::from(nbad);
                     }
                     None => {
                         it.nx[r.clone()].fill(0.0);
@@ -391,11 +394,13 @@ impl<'a> SurfaceReader<'a> {
                     Some(plane) => {
                         let v = gather(plane, idx, run);
                         let (x, y, z) = (&mut it.ar[r.clone()], &mut it.ag[r.clone()], &mut it.ab[r.clone()]);
+                        let mut nbad = 0u32;
                         for k in 0..LANES {
                             let (a, ok) = albedo_clamped(v[k]);
-                            bad.albedo += u64::from(!ok);
+                            nbad += u32::from(!ok);
                             (x[k], y[k], z[k]) = (a.x, a.y, a.z);
                         }
+                        bad.albedo += u64::from(nbad);
                     }
                     None => {
                         it.ar[r.clone()].fill(DEFAULT_ALBEDO);
@@ -548,11 +553,13 @@ fn fill_scalars(
         return;
     };
     let v = gather(plane, idx, run);
+    let mut nbad = 0u32;
     for k in 0..LANES {
         let (x, ok) = clamped(v[k], dflt[k], lo, hi);
-        *count += u64::from(!ok);
+        nbad += u32::from(!ok);
         out[k] = x;
     }
+    *count += u64::from(nbad);
 }
 
 /// Values `plane[idx[k]]` for one vector of items: a slice copy when the indices are consecutive.
