@@ -756,15 +756,18 @@ impl crate::base::isa::Kernel for Convert<'_, '_> {
             let cov = &mut coverage[o..o + w];
             // z = 1 is the cleared depth buffer (sky); anything outside [0, 1), or whose view depth is not finite
             // and positive, has no surface in front of the camera.
+            // Counted in 32 bits per row (64-bit sums keep the AVX2 loop scalar).
+            let mut row_oor = 0u32;
             for ((c, v), zb) in cov.iter_mut().zip(view.iter_mut()).zip(array_row(h, chunk, w, 0, 4, y).chunks_exact(4))
             {
                 let z = f32::from_le_bytes([zb[0], zb[1], zb[2], zb[3]]);
                 let view_z = p32 / (z - p22);
                 let in_front = (0.0..1.0).contains(&z) & view_z.is_finite() & (view_z > 0.0);
-                oor += u64::from(!in_front & (z != 1.0));
+                row_oor += u32::from(!in_front & (z != 1.0));
                 *c = in_front;
                 *v = if in_front { view_z } else { 0.0 };
             }
+            oor += u64::from(row_oor);
             if let Some(t) = tally.as_deref_mut() {
                 // Depth is finite by construction (0 where it is not finite and positive): nothing to sanitise.
                 t.covered += u64::from(cov.iter().map(|&c| u32::from(c)).sum::<u32>());
