@@ -649,7 +649,6 @@ impl RowCounts {
         [px, py]: [&Vec<f32>; 2],
         view: &[f32],
     ) {
-        use crate::io::plausible::{UNIT_TOLERANCE, ZERO_NORMAL};
         // Counted in 32 bits (a row has fewer than 2³² pixels): twice the lanes of 64-bit sums.
         let (mut zero, mut bad, mut away) = (0u32, 0u32, 0u32);
         let normals = nx.iter().zip(ny.iter()).zip(nz.iter());
@@ -657,11 +656,10 @@ impl RowCounts {
         for (((&x, &y), &z), (((&c, &px), &py), &view)) in normals.zip(rest) {
             // `Vec3::length` and `n.dot(−p)`: −(−view) is view exactly.
             let len = ((x * x + y * y) + z * z).sqrt();
-            let valid = len.is_finite() & ((len - 1.0).abs() <= UNIT_TOLERANCE);
-            let facing = (x * -px + y * -py) + z * view;
-            zero += u32::from(c & (len < ZERO_NORMAL));
-            bad += u32::from(c & !valid);
-            away += u32::from(c & valid & (facing < 0.0));
+            let [z0, b, a] = crate::io::plausible::normal_flags(len, (x * -px + y * -py) + z * view);
+            zero += u32::from(c & z0);
+            bad += u32::from(c & b);
+            away += u32::from(c & a);
         }
         self.zero_normal += u64::from(zero);
         self.bad_normal += u64::from(bad);
@@ -679,24 +677,11 @@ impl RowCounts {
     }
 }
 
-/// Replaces NaN by 0 and ±Inf by ±`f32::MAX` in `v` (as `io::sanitize` does), counting them.
+/// `io::sanitize`'s fix of `v` (NaN → 0, ±Inf → ±`f32::MAX`), its counts added to `counts`.
 #[inline(always)]
-fn fix_counted(v: &mut [f32], (nan, inf): &mut (u64, u64)) {
-    // A row of finite values (all of a well-formed file) is only read, by a test that runs in vector lanes.
-    if v.iter().fold(true, |ok, x| ok & x.is_finite()) {
-        return;
-    }
-    for x in v.iter_mut() {
-        *nan += u64::from(x.is_nan());
-        *inf += u64::from(x.is_infinite());
-        *x = if x.is_nan() {
-            0.0
-        } else if x.is_infinite() {
-            f32::MAX.copysign(*x)
-        } else {
-            *x
-        };
-    }
+fn fix_counted(v: &mut [f32], counts: &mut (u64, u64)) {
+    let (nan, inf) = crate::io::sanitize::fix_run(v);
+    (counts.0, counts.1) = (counts.0 + nan, counts.1 + inf);
 }
 
 /// [`Planes::convert`]'s work, run under [`crate::base::isa::run`].

@@ -92,6 +92,15 @@ fn count(gb: &GBuffer) -> Counts {
         .reduce(Counts::default, Counts::add)
 }
 
+/// A covered normal's checks from its length and its dot product with the direction to the camera (`−p`, or +Z
+/// without positions): [near zero, not unit length, valid but facing away]. The one definition, used by [`count`]
+/// and by the ISPC reader's row counts.
+#[inline(always)]
+pub(crate) fn normal_flags(len: f32, facing: f32) -> [bool; 3] {
+    let valid = len.is_finite() & ((len - 1.0).abs() <= UNIT_TOLERANCE);
+    [len < ZERO_NORMAL, !valid, valid & (facing < 0.0)]
+}
+
 /// One block of [`count`]'s pass, compiled for the widest instruction set the CPU has (integer counts and a
 /// maximum: the same on every path).
 struct CountChunk<'a> {
@@ -112,15 +121,14 @@ impl crate::base::isa::Kernel for CountChunk<'_> {
         let mut c = Counts { covered: cov.iter().map(|&c| u64::from(c)).sum(), ..Counts::default() };
         if let Some(n) = n {
             for (j, (n, &cv)) in n.iter().zip(cov).enumerate() {
-                let len = n.length();
-                let valid = len.is_finite() && (len - 1.0).abs() <= UNIT_TOLERANCE;
                 let facing = match p {
                     Some(p) => n.dot(-p[j]),
                     None => n.z,
                 };
-                c.zero_normal += u64::from(cv && len < ZERO_NORMAL);
-                c.bad_normal += u64::from(cv && !valid);
-                c.away += u64::from(cv && valid && facing < 0.0);
+                let [zero, bad, away] = normal_flags(n.length(), facing);
+                c.zero_normal += u64::from(cv & zero);
+                c.bad_normal += u64::from(cv & bad);
+                c.away += u64::from(cv & away);
             }
         }
         if let Some(p) = p {
