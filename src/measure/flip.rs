@@ -690,6 +690,24 @@ enum Pixels<'a> {
     Srgb8(&'a [u8]),
 }
 
+impl Pixels<'_> {
+    /// Whether pixels `from..to` are the same bits in both images (images of different kinds never are).
+    fn row_eq(&self, other: &Pixels<'_>, from: usize, to: usize) -> bool {
+        match (self, other) {
+            (Pixels::F32(a), Pixels::F32(b)) => {
+                bytemuck::cast_slice::<f32, u8>(&a[3 * from..3 * to])
+                    == bytemuck::cast_slice::<f32, u8>(&b[3 * from..3 * to])
+            }
+            (Pixels::Srgb8(a), Pixels::Srgb8(b)) => a[3 * from..3 * to] == b[3 * from..3 * to],
+            _ => false,
+        }
+    }
+}
+
+/// Whether band passes skip the windows a test shares with a donor ([`Same`]); off only in the test that checks
+/// skipping changes no bit.
+static SKIP_EQUAL: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(true);
+
 /// HDR-FLIP of several linear test images against one reference with the reference defaults ([`hdr_flip`] for
 /// each, bit for bit): the exposures come from the reference, and at each exposure the reference is filtered once
 /// instead of once per test.
@@ -814,13 +832,18 @@ fn run_bands_many(
         buffer.resize(FEATURES * rows * w, 0.0);
         let feats = &mut buffer[..FEATURES * rows * w];
         band_features(ctx, r, enc, y0, rows, &mut Sink::Store(feats));
-        for (k, (out, em)) in outs.iter_mut().enumerate() {
+        let mut masks = Vec::new();
+        for k in 0..outs.len() {
+            let (done, rest) = outs.split_at_mut(k);
+            let (out, em) = &mut rest[0];
             let keep = match em.as_deref_mut() {
                 Some(e) => Keep::Tagged(e, tag),
                 None if max => Keep::Max,
                 None => Keep::Store,
             };
-            band_features(ctx, tests[k], enc, y0, rows, &mut Sink::Compare { reference: feats, out, keep });
+            let same = Same::new(ctx, r, &tests[..=k], y0, rows, &mut masks);
+            let mut sink = Sink::Compare { reference: feats, out, keep, same, donors: done };
+            band_features(ctx, tests[k], enc, y0, rows, &mut sink);
         }
         BAND_FEATURES.set(buffer);
     });
@@ -846,7 +869,98 @@ enum Keep<'a> {
 /// tagging where it grew (HDR-FLIP's exposures). Buffers are band-sized, `FEATURES` planes of `rows × w`.
 enum Sink<'a> {
     Store(&'a mut [f32]),
-    Compare { reference: &'a [f32], out: &'a mut [f32], keep: Keep<'a> },
+    Compare { reference: &'a [f32], out: &'a mut [f32], keep: Keep<'a>, same: Same<'a>, donors: &'a [BandRows<'a>] },
+}
+
+impl Sink<'_> {
+    /// Hands output rows `ry..ry + n` (band rows) of the tile at `x0` over without filtering, when their whole
+    /// window is equal in the test and in a donor ([`Same`]); whether it did. Equal inputs give equal features, bit
+    /// for bit (each output is the same sums of the same values), so a test equal to the reference there errs by
+    /// exactly 0 (`lab_error` and `flip_error` of equal features are 0), and a test equal to an earlier test of the
+    /// same call errs as that test did: its rows (the running maximum and exposure map too, as every exposure
+    /// skips the same pixels) are copied.
+    fn skip(&mut self, ctx: &Ctx, x0: usize, ry: usize, n: usize) -> bool {
+        let Sink::Compare { out, keep, same, donors, .. } = self else { return false };
+        let Some(donor) = same.donor(x0 / TW, ry, n) else { return false };
+        #[cfg(test)]
+        tests::SKIPPED.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+        let w = ctx.w;
+        let cols = (w - x0).min(TW);
+        for r in ry..ry + n {
+            let at = r * w + x0..r * w + x0 + cols;
+            match (donor, &mut *keep) {
+                // Equal to the reference: an error of 0, which no running maximum (≥ 0) keeps.
+                (0, Keep::Store) => out[at].fill(0.0),
+                (0, Keep::Max | Keep::Tagged(..)) => {}
+                (j, keep) => {
+                    let (rows, tags) = &donors[j - 1];
+                    out[at.clone()].copy_from_slice(&rows[at.clone()]);
+                    if let (Keep::Tagged(em, _), Some(tags)) = (keep, tags) {
+                        em[at.clone()].copy_from_slice(&tags[at]);
+                    }
+                }
+            }
+        }
+        true
+    }
+}
+
+/// Where a test's band can skip filtering: per column tile and input row, a bit per donor whose pixels there equal
+/// the test's, bit for bit (bit 0 the reference, bit `j + 1` the call's test `j`, the first 63). An output row's
+/// window — the rows and columns its filters read — is equal where every row of it has the donor's bit. A sky, a
+/// background, a region where two detectors shade alike: the report's tests share most of a frame with the
+/// reference or with each other.
+struct Same<'a> {
+    /// Bits per (tile, row of `rows_lo..=rows_hi`), tile-major.
+    masks: &'a [u64],
+    y0: usize,
+    rows_lo: usize,
+    rows_hi: usize,
+    rmax: usize,
+    h: usize,
+}
+
+impl<'a> Same<'a> {
+    /// The masks of the last of `tests` (against the reference `r` and the tests before it) over the rows the band
+    /// `y0..y0 + rows` reads, into `buffer`.
+    fn new(ctx: &Ctx, r: Pixels<'_>, tests: &[Pixels<'_>], y0: usize, rows: usize, buffer: &'a mut Vec<u64>) -> Self {
+        let (w, h, rmax) = (ctx.w, ctx.h, ctx.rmax);
+        let rows_lo = y0.saturating_sub(rmax);
+        let rows_hi = (y0 + rows + rmax).min(h - 1);
+        let n = rows_hi + 1 - rows_lo;
+        let tiles = w.div_ceil(TW);
+        buffer.clear();
+        buffer.resize(tiles * n, 0);
+        let (test, earlier) = tests.split_last().expect("a test");
+        if !SKIP_EQUAL.load(std::sync::atomic::Ordering::Relaxed) {
+            return Same { masks: buffer, y0, rows_lo, rows_hi, rmax, h };
+        }
+        for t in 0..tiles {
+            let x0 = t * TW;
+            let lo = x0.saturating_sub(rmax);
+            let hi = (x0 + TW + rmax).min(w);
+            for y in rows_lo..=rows_hi {
+                let mut bits = u64::from(test.row_eq(&r, y * w + lo, y * w + hi));
+                for (j, e) in earlier.iter().take(63).enumerate() {
+                    bits |= u64::from(test.row_eq(e, y * w + lo, y * w + hi)) << (j + 1);
+                }
+                buffer[t * n + y - rows_lo] = bits;
+            }
+        }
+        Same { masks: buffer, y0, rows_lo, rows_hi, rmax, h }
+    }
+
+    /// The donor (0: the reference, `j + 1`: test `j`) whose pixels equal the test's over the whole window of output
+    /// rows `ry..ry + n` of the band (from its first row) in column tile `tile`, if one does.
+    fn donor(&self, tile: usize, ry: usize, n: usize) -> Option<usize> {
+        let y = self.y0 + ry;
+        let lo = y.saturating_sub(self.rmax);
+        let hi = (y + n - 1 + self.rmax).min(self.h - 1);
+        let rows = self.rows_hi + 1 - self.rows_lo;
+        let masks = &self.masks[tile * rows..(tile + 1) * rows];
+        let all = masks[lo - self.rows_lo..=hi - self.rows_lo].iter().fold(u64::MAX, |a, &m| a & m);
+        (all != 0).then(|| all.trailing_zeros() as usize)
+    }
 }
 
 /// Hands tile row `ry` (columns `x0..x0 + n`) of the features `f` to `sink`.
@@ -861,7 +975,7 @@ fn sink_row(ctx: &Ctx, sink: &mut Sink<'_>, rows: usize, ry: usize, x0: usize, f
                 feats[at(p)..at(p) + n].copy_from_slice(&plane[..n]);
             }
         }
-        Sink::Compare { reference, out, keep } => {
+        Sink::Compare { reference, out, keep, .. } => {
             let (cmax, pccmax) = (ctx.cmax, ctx.pccmax);
             let r = |p: usize| &reference[at(p)..at(p) + n];
             let (lr, ar, br, er, pr) = (r(0), r(1), r(2), r(3), r(4));
@@ -922,6 +1036,12 @@ fn band_features_impl(ctx: &Ctx, img: Pixels<'_>, enc: Encoding, y0: usize, rows
         let mut next = y0.saturating_sub(ctx.rmax);
         let mut y = y0;
         while y < y0 + rows {
+            if sink.skip(ctx, x0, y - y0, 2.min(y0 + rows - y)) {
+                y += 2;
+                continue;
+            }
+            // The rows this pair reads, from the first not yet in the ring (rows skipped above never entered it).
+            next = next.max(y.saturating_sub(ctx.rmax));
             let hi = (y + 1 + ctx.rmax).min(h - 1);
             while next <= hi {
                 let slot = next % ctx.ring;
@@ -1480,6 +1600,57 @@ mod tests {
         }
         force(None);
         assert!(ldr_flip_many(&a, &[], w, h, &opts).is_empty());
+    }
+
+    /// Output rows handed over without filtering, in tile rows ([`Sink::skip`]).
+    pub(super) static SKIPPED: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+    /// Skipping the windows a test shares with the reference or an earlier test changes no bit of any map, exposure
+    /// map or mean: LDR, HDR and HDR means; tests equal to the reference in a band of rows and a block of columns
+    /// (a border tile among them), tests equal to an earlier test there, a test equal to an earlier one throughout,
+    /// several bands and two column tiles, every level this CPU runs. And it skips.
+    #[test]
+    fn skipping_equal_windows_changes_no_bit() {
+        let _serial = forcing();
+        let (w, h) = (300, 130);
+        let a = lcg_image(w, h, 5);
+        // `b`: `a` but for rows 40..70; `c`: `b` but for a block of columns at the right border; `d`: `b`'s copy.
+        let mut b = a.clone();
+        let noise = lcg_image(w, h, 17);
+        b[40 * w * 3..70 * w * 3].copy_from_slice(&noise[40 * w * 3..70 * w * 3]);
+        let mut c = b.clone();
+        for y in 0..h {
+            c[(y * w + 270) * 3..(y * w + 300) * 3].copy_from_slice(&noise[(y * w + 270) * 3..(y * w + 300) * 3]);
+        }
+        let d = b.clone();
+        let opts = FlipOptions { pixels_per_degree: 30.0 };
+        let hd = |x: &[f32]| -> Vec<f32> { x.iter().map(|v| v * v * 30.0).collect() };
+        let (ha, hb, hc, hdd) = (hd(&a), hd(&b), hd(&c), hd(&d));
+        let run = |skip: bool| {
+            SKIP_EQUAL.store(skip, std::sync::atomic::Ordering::Relaxed);
+            let ldr = ldr_flip_many(&a, &[&b, &c, &d], w, h, &opts);
+            let hdr = hdr_flip_many(&ha, &[&hb, &hc, &hdd], w, h, &opts);
+            let means = hdr_flip_means(&ha, &[&hb, &hc, &hdd], w, h, &opts);
+            SKIP_EQUAL.store(true, std::sync::atomic::Ordering::Relaxed);
+            (ldr, hdr, means)
+        };
+        for isa in std::iter::once(Isa::Baseline).chain(Isa::available()) {
+            force(Some(isa));
+            let (l0, h0, m0) = run(false);
+            let before = SKIPPED.load(std::sync::atomic::Ordering::Relaxed);
+            let (l1, h1, m1) = run(true);
+            let skipped = SKIPPED.load(std::sync::atomic::Ordering::Relaxed) - before;
+            assert!(skipped > 3 * h, "{}: {skipped} rows skipped", isa.name());
+            for (x, y) in l1.iter().zip(&l0) {
+                assert_eq!((&x.values, x.mean), (&y.values, y.mean), "{}: LDR", isa.name());
+            }
+            for (x, y) in h1.iter().zip(&h0) {
+                assert_eq!((&x.map.values, &x.exposure_map), (&y.map.values, &y.exposure_map), "{}: HDR", isa.name());
+            }
+            assert_eq!(m1, m0, "{}: HDR means", isa.name());
+            assert!(l0[0].mean > 0.0 && l0[1].mean > l0[0].mean && l0[2].values == l0[0].values);
+        }
+        force(None);
     }
 
     #[test]
