@@ -22,7 +22,7 @@ use crate::image::mlaa::{mlaa, MlaaConfig, MlaaStats};
 use crate::image::HdrImage;
 use crate::layout::Layout;
 use crate::light::Light;
-use crate::measure::image::{error_set, flip_many, ErrorSet, Viewing};
+use crate::measure::image::{error_set, flip_means, ErrorSet, Viewing};
 use crate::resolve::{self, Culling, MsaaSchedule, ResolveConfig, Schedule};
 use crate::scene::rematerialise::{rematerialise, Rematerialised};
 use crate::scene::SceneName;
@@ -469,10 +469,10 @@ impl<'a> FlipBatch<'a> {
     ) {
         let images = self.images.into_inner();
         let tests: Vec<&HdrImage> = images.iter().map(|i| &**i).collect();
-        let results = if tests.is_empty() { Vec::new() } else { flip_many(reference, &tests, viewing) };
+        let results = if tests.is_empty() { Vec::new() } else { flip_means(reference, &tests, viewing) };
         for (slot, key) in self.wants.into_inner() {
             let flip = match key {
-                Some(FlipKey::New(k)) => results[k].as_ref().map(|(map, hdr)| (map.mean, *hdr)),
+                Some(FlipKey::New(k)) => results[k],
                 Some(FlipKey::Known(k)) => Some((self.known[k].ldr, self.known[k].hdr)),
                 None => None,
             };

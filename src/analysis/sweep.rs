@@ -19,7 +19,7 @@ use crate::layout::{Layout, LightingSource, LitFrame, PackedFrame, PreparedLight
 use crate::light::Light;
 use crate::measure;
 use crate::measure::flip::FlipMap;
-use crate::measure::image::{error_set, flip_many, ErrorSet, Viewing};
+use crate::measure::image::{error_set, flip_many, flip_means, ErrorSet, Viewing};
 use crate::resolve::{self, Culling, ResolveConfig};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -240,9 +240,9 @@ fn detector_results(
         let lit: Vec<(usize, &HdrImage)> =
             images.iter().enumerate().filter_map(|(i, m)| Some((i, m.as_ref()?))).collect();
         let tests: Vec<&HdrImage> = lit.iter().map(|(_, m)| *m).collect();
-        for ((i, _), f) in lit.iter().zip(flip_many(reference, &tests, v)) {
-            if let (Some(e), Some((map, hdr))) = (results[*i].aa_error.as_mut(), f) {
-                e.flip_ldr = Some(map.mean);
+        for ((i, _), f) in lit.iter().zip(flip_means(reference, &tests, v)) {
+            if let (Some(e), Some((ldr, hdr))) = (results[*i].aa_error.as_mut(), f) {
+                e.flip_ldr = Some(ldr);
                 e.flip_hdr = Some(hdr);
             }
         }
@@ -657,9 +657,12 @@ fn flush_flip(
         }
     }
     let images: Vec<&HdrImage> = todo.iter().map(|p| &p.image).collect();
-    let measured = if images.is_empty() { Vec::new() } else { flip_many(reference, &images, viewing) };
+    // Against the reference only the means are wanted: no maps.
+    let measured = if images.is_empty() { Vec::new() } else { flip_means(reference, &images, viewing) };
     for (p, f) in todo.iter().zip(measured) {
-        set(&mut rows[p.row].total_error, f);
+        if let (Some(e), Some((ldr, hdr))) = (rows[p.row].total_error.as_mut(), f) {
+            (e.flip_ldr, e.flip_hdr) = (Some(ldr), Some(hdr));
+        }
     }
     let mut layout_maps: Vec<Option<FlipMap>> = pending.iter().map(|_| None).collect();
     for (d, x) in exact.iter().enumerate() {

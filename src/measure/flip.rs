@@ -223,17 +223,11 @@ pub fn hdr_flip_with(
     let npix = width * height;
     let mut maxes = vec![vec![0.0f32; npix]];
     let mut tags = vec![vec![0.0f32; npix]];
-    if npix > 0 {
-        let ctx = Ctx::new(width, height, opts.pixels_per_degree);
-        for (i, &e) in exposures.iter().enumerate() {
-            let enc = Encoding::Hdr { scale: 2.0f32.powf(e), tm };
-            let tag = if n > 1 { i as f32 / (n - 1) as f32 } else { 0.0 };
-            let (r, t) = (Pixels::F32(reference_linear), [Pixels::F32(test_linear)]);
-            run_bands_many(&ctx, r, &t, enc, &mut maxes, Merge::Tagged(&mut tags, tag));
-        }
-    }
+    let encs = hdr_encodings(&exposures, tm);
+    let (r, t) = (Pixels::F32(reference_linear), [Pixels::F32(test_linear)]);
+    let sums = run_flip(width, height, opts, r, &t, &encs, Maps::Frame(&mut maxes, Some(&mut tags)));
     let (max_map, exposure_map) = (maxes.remove(0), tags.remove(0));
-    let mean = mean_f64(&max_map);
+    let mean = mean_of(&sums[0], npix);
     HdrFlip {
         map: FlipMap { width, height, values: max_map, mean },
         exposures,
@@ -382,21 +376,18 @@ fn check_sizes(r: &[f32], t: &[f32], w: usize, h: usize) {
 fn ldr_common(r: &[f32], t: &[f32], w: usize, h: usize, opts: &FlipOptions, enc: Encoding) -> FlipMap {
     check_sizes(r, t, w, h);
     let mut maps = vec![vec![0.0f32; w * h]];
-    if w * h > 0 {
-        let ctx = Ctx::new(w, h, opts.pixels_per_degree);
-        run_bands_many(&ctx, Pixels::F32(r), &[Pixels::F32(t)], enc, &mut maps, Merge::Store);
-    }
+    let sums = run_flip(w, h, opts, Pixels::F32(r), &[Pixels::F32(t)], &[enc], Maps::Frame(&mut maps, None));
     let values = maps.remove(0);
-    let mean = mean_f64(&values);
-    FlipMap { width: w, height: h, values, mean }
+    FlipMap { width: w, height: h, values, mean: mean_of(&sums[0], w * h) }
 }
 
-fn mean_f64(v: &[f32]) -> f64 {
-    if v.is_empty() {
+/// A map's mean from its row sums ([`run_bands`]): the rows summed in order, so that a mean is the same bits
+/// whichever bands and threads made it, and whether or not the map was kept.
+fn mean_of(row_sums: &[f64], npix: usize) -> f64 {
+    if npix == 0 {
         return 0.0;
     }
-    let s: f64 = v.par_chunks(1 << 14).map(|c| c.iter().map(|&x| x as f64).sum::<f64>()).sum();
-    s / v.len() as f64
+    row_sums.iter().sum::<f64>() / npix as f64
 }
 
 /// Start/stop exposures from the reference image, as in the HDR-FLIP paper (Sec. 4.2)
@@ -671,16 +662,31 @@ fn ldr_many(
 ) -> Vec<FlipMap> {
     let npix = width * height;
     let mut maps: Vec<Vec<f32>> = tests.iter().map(|_| vec![0.0f32; npix]).collect();
-    if npix > 0 && !tests.is_empty() {
-        let ctx = Ctx::new(width, height, opts.pixels_per_degree);
-        run_bands_many(&ctx, reference, tests, Encoding::Srgb, &mut maps, Merge::Store);
-    }
+    let sums = run_flip(width, height, opts, reference, tests, &[Encoding::Srgb], Maps::Frame(&mut maps, None));
     maps.into_iter()
-        .map(|values| {
-            let mean = mean_f64(&values);
-            FlipMap { width, height, values, mean }
-        })
+        .zip(sums)
+        .map(|(values, sums)| FlipMap { width, height, values, mean: mean_of(&sums, npix) })
         .collect()
+}
+
+/// The mean LDR-FLIP of each 8-bit sRGB test against `reference` ([`ldr_flip_many_srgb8`]'s means, bit for bit)
+/// without the maps: each band's errors are summed and dropped.
+#[must_use]
+pub fn ldr_flip_means_srgb8(
+    reference: &[u8],
+    tests: &[&[u8]],
+    width: usize,
+    height: usize,
+    opts: &FlipOptions,
+) -> Vec<f64> {
+    let n = width.checked_mul(height).and_then(|n| n.checked_mul(3)).expect("FLIP: image size overflows usize");
+    assert_eq!(reference.len(), n, "FLIP: reference image must have width * height * 3 values");
+    for t in tests {
+        assert_eq!(t.len(), n, "FLIP: test image must have width * height * 3 values");
+    }
+    let tests: Vec<Pixels<'_>> = tests.iter().map(|t| Pixels::Srgb8(t)).collect();
+    let sums = run_flip(width, height, opts, Pixels::Srgb8(reference), &tests, &[Encoding::Srgb], Maps::SumsOnly);
+    sums.iter().map(|s| mean_of(s, width * height)).collect()
 }
 
 /// An image's interleaved RGB values as FLIP reads them: floats, or sRGB bytes read as `byte / 255`.
@@ -718,26 +724,31 @@ pub fn hdr_flip_many(
     height: usize,
     opts: &FlipOptions,
 ) -> Vec<HdrFlip> {
-    let (exposures, start, stop, tm, maxes, tags) = hdr_many(reference_linear, tests, width, height, opts, true);
+    let (exposures, start, stop, tm) = hdr_range(reference_linear, tests, width, height);
+    let npix = width * height;
+    let mut maxes: Vec<Vec<f32>> = tests.iter().map(|_| vec![0.0f32; npix]).collect();
+    let mut tags: Vec<Vec<f32>> = tests.iter().map(|_| vec![0.0f32; npix]).collect();
+    let tests: Vec<Pixels<'_>> = tests.iter().map(|t| Pixels::F32(t)).collect();
+    let encs = hdr_encodings(&exposures, tm);
+    let r = Pixels::F32(reference_linear);
+    let sums = run_flip(width, height, opts, r, &tests, &encs, Maps::Frame(&mut maxes, Some(&mut tags)));
     maxes
         .into_iter()
         .zip(tags)
-        .map(|(values, exposure_map)| {
-            let mean = mean_f64(&values);
-            HdrFlip {
-                map: FlipMap { width, height, values, mean },
-                exposures: exposures.clone(),
-                start_exposure: start,
-                stop_exposure: stop,
-                tone_mapper: tm,
-                exposure_map,
-            }
+        .zip(sums)
+        .map(|((values, exposure_map), sums)| HdrFlip {
+            map: FlipMap { width, height, values, mean: mean_of(&sums, npix) },
+            exposures: exposures.clone(),
+            start_exposure: start,
+            stop_exposure: stop,
+            tone_mapper: tm,
+            exposure_map,
         })
         .collect()
 }
 
-/// The mean HDR-FLIP of each test ([`hdr_flip_many`]'s `map.mean`, bit for bit) without its exposure map: a third
-/// of the memory per test while the exposures run (the per-pixel maximum only), and nothing kept after.
+/// The mean HDR-FLIP of each test ([`hdr_flip_many`]'s `map.mean`, bit for bit) without its maps: each band's
+/// maxima over the exposures are summed and dropped, so nothing per test outlives its band.
 #[must_use]
 pub fn hdr_flip_means(
     reference_linear: &[f32],
@@ -746,110 +757,142 @@ pub fn hdr_flip_means(
     height: usize,
     opts: &FlipOptions,
 ) -> Vec<f64> {
-    let (.., maxes, _) = hdr_many(reference_linear, tests, width, height, opts, false);
-    maxes.iter().map(|m| mean_f64(m)).collect()
+    let (exposures, .., tm) = hdr_range(reference_linear, tests, width, height);
+    let tests: Vec<Pixels<'_>> = tests.iter().map(|t| Pixels::F32(t)).collect();
+    let encs = hdr_encodings(&exposures, tm);
+    let sums = run_flip(width, height, opts, Pixels::F32(reference_linear), &tests, &encs, Maps::SumsOnly);
+    sums.iter().map(|s| mean_of(s, width * height)).collect()
 }
 
-/// What [`hdr_flip_many`] computes: the exposures, the range and tone mapper they came from, each test's per-pixel
-/// maximum over the exposures and, when `tagged`, its exposure map (else empty vectors).
-#[allow(clippy::type_complexity)]
-fn hdr_many(
+/// The exposures HDR-FLIP runs against `reference_linear` with the default tone mapper, their range and the tone
+/// mapper (the tests' sizes checked).
+fn hdr_range(
     reference_linear: &[f32],
     tests: &[&[f32]],
     width: usize,
     height: usize,
-    opts: &FlipOptions,
-    tagged: bool,
-) -> (Vec<f32>, f32, f32, ToneMapper, Vec<Vec<f32>>, Vec<Vec<f32>>) {
+) -> (Vec<f32>, f32, f32, ToneMapper) {
     for t in tests {
         check_sizes(reference_linear, t, width, height);
     }
     let tm = ToneMapper::default();
     let (start, stop) = compute_exposures(reference_linear, tm);
-    let n = exposure_count(start, stop);
-    let exposures = exposure_list(start, stop, n);
-    let npix = width * height;
-    let mut maxes: Vec<Vec<f32>> = tests.iter().map(|_| vec![0.0f32; npix]).collect();
-    let mut tags: Vec<Vec<f32>> = tests.iter().map(|_| if tagged { vec![0.0f32; npix] } else { Vec::new() }).collect();
-    if npix > 0 && !tests.is_empty() {
-        let ctx = Ctx::new(width, height, opts.pixels_per_degree);
-        for (i, &e) in exposures.iter().enumerate() {
-            let enc = Encoding::Hdr { scale: 2.0f32.powf(e), tm };
-            let tag = i as f32 / (n - 1) as f32;
-            let tests: Vec<Pixels<'_>> = tests.iter().map(|t| Pixels::F32(t)).collect();
-            let merge = if tagged { Merge::Tagged(&mut tags, tag) } else { Merge::Max };
-            run_bands_many(&ctx, Pixels::F32(reference_linear), &tests, enc, &mut maxes, merge);
-        }
-    }
-    (exposures, start, stop, tm, maxes, tags)
+    let exposures = exposure_list(start, stop, exposure_count(start, stop));
+    (exposures, start, stop, tm)
 }
 
-/// How [`run_bands_many`] writes each test's errors: as they are (LDR-FLIP), or into a running per-pixel maximum
-/// (HDR-FLIP's exposures), with the exposure maps and this exposure's tag when they are kept.
-enum Merge<'a> {
-    Store,
-    Max,
-    Tagged(&'a mut [Vec<f32>], f32),
+/// One encoding per exposure: scaled by `2^e`, then tone mapped by `tm`.
+fn hdr_encodings(exposures: &[f32], tm: ToneMapper) -> Vec<Encoding> {
+    exposures.iter().map(|&e| Encoding::Hdr { scale: 2.0f32.powf(e), tm }).collect()
 }
 
-/// One test's rows of a band: its error map's, and its exposure map's when merging.
+/// Where [`run_bands`] puts each test's errors besides its row sums: whole-frame maps (with several encodings, the
+/// per-pixel maximum over them, and with the second vector the exposure map: the index of the encoding that gave
+/// it, over their count less one), or nowhere.
+enum Maps<'a> {
+    Frame(&'a mut [Vec<f32>], Option<&'a mut [Vec<f32>]>),
+    SumsOnly,
+}
+
+/// One test's rows of a band: its errors', and its exposure map's when kept.
 type BandRows<'a> = (&'a mut [f32], Option<&'a mut [f32]>);
 
-/// Every FLIP evaluation, band-parallel: per band, the reference's features once, then each test against them (a
-/// single pair is one test).
-fn run_bands_many(
-    ctx: &Ctx,
+/// [`run_bands`] on a `w × h` frame, when there is anything to compare: each test's row sums (zeros otherwise).
+fn run_flip(
+    w: usize,
+    h: usize,
+    opts: &FlipOptions,
     r: Pixels<'_>,
     tests: &[Pixels<'_>],
-    enc: Encoding,
-    outs: &mut [Vec<f32>],
-    merge: Merge<'_>,
-) {
+    encs: &[Encoding],
+    maps: Maps<'_>,
+) -> Vec<Vec<f64>> {
+    if w * h == 0 || tests.is_empty() {
+        return tests.iter().map(|_| vec![0.0; h]).collect();
+    }
+    run_bands(&Ctx::new(w, h, opts.pixels_per_degree), r, tests, encs, maps)
+}
+
+/// Every FLIP evaluation, band-parallel and band-major: per band, each encoding (LDR-FLIP's one, HDR-FLIP's
+/// exposures) in turn — the reference's features once, then each test against them, keeping the per-pixel maximum
+/// over the encodings — and at the end each test's row sums, the band's errors then being dropped unless `maps`
+/// keeps them. A test's pass skips the windows it shares with the reference or an earlier test ([`Same`], found
+/// once per band for every encoding). A single pair is one test.
+fn run_bands(ctx: &Ctx, r: Pixels<'_>, tests: &[Pixels<'_>], encs: &[Encoding], maps: Maps<'_>) -> Vec<Vec<f64>> {
     let (w, h) = (ctx.w, ctx.h);
     let threads = rayon::current_num_threads().max(1);
     let min_band = (4 * ctx.rmax).max(16);
     let nbands = (threads * 3).min(h.div_ceil(min_band)).max(1);
     let band_h = h.div_ceil(nbands).next_multiple_of(2);
-    // Per band, the rows of every test's output (and exposure map).
-    let mut bands: Vec<Vec<BandRows<'_>>> = (0..h.div_ceil(band_h)).map(|_| Vec::new()).collect();
-    let max = !matches!(merge, Merge::Store);
-    let (tag, mut tag_maps) = match merge {
-        Merge::Tagged(m, tag) => (tag, Some(m.iter_mut().map(|m| m.chunks_mut(band_h * w)).collect::<Vec<_>>())),
-        Merge::Store | Merge::Max => (0.0, None),
+    let max = encs.len() > 1 || matches!(encs.first(), Some(Encoding::Hdr { .. }));
+    let mut sums: Vec<Vec<f64>> = tests.iter().map(|_| vec![0.0; h]).collect();
+    // Per band, per test: its row sums, and its rows of the kept maps.
+    type TestBand<'a> = (&'a mut [f64], Option<BandRows<'a>>);
+    let mut bands: Vec<Vec<TestBand<'_>>> = (0..h.div_ceil(band_h)).map(|_| Vec::new()).collect();
+    let (mut values, mut tags) = match maps {
+        Maps::Frame(v, t) => (Some(v.iter_mut()), t.map(|t| t.iter_mut())),
+        Maps::SumsOnly => (None, None),
     };
-    for (k, out) in outs.iter_mut().enumerate() {
-        for (b, rows) in out.chunks_mut(band_h * w).enumerate() {
-            let e = tag_maps.as_mut().map(|t| t[k].next().expect("as many exposure-map bands as map bands"));
-            bands[b].push((rows, e));
+    for s in &mut sums {
+        let mut v = values.as_mut().map(|it| it.next().expect("a map per test").chunks_mut(band_h * w));
+        let mut t = tags.as_mut().map(|it| it.next().expect("an exposure map per test").chunks_mut(band_h * w));
+        for (b, rows) in s.chunks_mut(band_h).enumerate() {
+            let map = v.as_mut().map(|c| (c.next().expect("a band"), t.as_mut().map(|c| c.next().expect("a band"))));
+            bands[b].push((rows, map));
         }
     }
     bands.into_par_iter().enumerate().for_each(|(b, mut outs)| {
         let y0 = b * band_h;
-        let rows = outs[0].0.len() / w;
+        let rows = outs[0].0.len();
         // Taken, not borrowed: a nested call on this thread would find an empty buffer, never a held borrow.
         let mut buffer = BAND_FEATURES.take();
         // Every value is written by the reference's pass before the tests read it: no zeroing needed.
         buffer.resize(FEATURES * rows * w, 0.0);
         let feats = &mut buffer[..FEATURES * rows * w];
-        band_features(ctx, r, enc, y0, rows, &mut Sink::Store(feats));
-        let mut masks = Vec::new();
-        for k in 0..outs.len() {
-            let (done, rest) = outs.split_at_mut(k);
-            let (out, em) = &mut rest[0];
-            let keep = match em.as_deref_mut() {
-                Some(e) => Keep::Tagged(e, tag),
-                None if max => Keep::Max,
-                None => Keep::Store,
-            };
-            let same = Same::new(ctx, r, &tests[..=k], y0, rows, &mut masks);
-            let mut sink = Sink::Compare { reference: feats, out, keep, same, donors: done };
-            band_features(ctx, tests[k], enc, y0, rows, &mut sink);
+        // The errors of tests whose maps are not kept: band-sized, from 0 (the maxima start there).
+        let mut local = BAND_ERRORS.take();
+        local.clear();
+        if outs[0].1.is_none() {
+            local.resize(tests.len() * rows * w, 0.0);
         }
+        let mut local_rows = local.chunks_mut(rows * w);
+        let mut errs: Vec<BandRows<'_>> = outs
+            .iter_mut()
+            .map(|(_, m)| m.take().unwrap_or_else(|| (local_rows.next().expect("a band per test"), None)))
+            .collect();
+        let mut masks: Vec<Vec<u64>> = tests.iter().map(|_| Vec::new()).collect();
+        let same: Vec<Same<'_>> =
+            masks.iter_mut().enumerate().map(|(k, m)| Same::new(ctx, r, &tests[..=k], y0, rows, m)).collect();
+        for (i, &enc) in encs.iter().enumerate() {
+            band_features(ctx, r, enc, y0, rows, &mut Sink::Store(feats));
+            let tag = if encs.len() > 1 { i as f32 / (encs.len() - 1) as f32 } else { 0.0 };
+            for k in 0..tests.len() {
+                let (done, rest) = errs.split_at_mut(k);
+                let (out, em) = &mut rest[0];
+                let keep = match em.as_deref_mut() {
+                    Some(e) => Keep::Tagged(e, tag),
+                    None if max => Keep::Max,
+                    None => Keep::Store,
+                };
+                let mut sink = Sink::Compare { reference: feats, out, keep, same: same[k], donors: done };
+                band_features(ctx, tests[k], enc, y0, rows, &mut sink);
+            }
+        }
+        for ((row_sums, _), (errors, _)) in outs.iter_mut().zip(&errs) {
+            for (s, row) in row_sums.iter_mut().zip(errors.chunks_exact(w)) {
+                *s = row.iter().map(|&x| f64::from(x)).sum();
+            }
+        }
+        drop(errs);
+        BAND_ERRORS.set(local);
         BAND_FEATURES.set(buffer);
     });
+    sums
 }
 
 thread_local! {
+    /// A band's errors per test where the maps are not kept ([`Maps::SumsOnly`]), kept like [`BAND_FEATURES`].
+    static BAND_ERRORS: std::cell::RefCell<Vec<f32>> = const { std::cell::RefCell::new(Vec::new()) };
     /// A band's reference features, kept by each thread from band to band and from call to call. A fresh buffer per
     /// band (about 7 MB at 1080p) was a fresh mapping every time (large blocks are mapped, `base::alloc`): the
     /// kernel zeroing its pages took 12% of an HDR-FLIP (a 1080p pair, 13 exposures, Zen 4).
@@ -910,6 +953,7 @@ impl Sink<'_> {
 /// window — the rows and columns its filters read — is equal where every row of it has the donor's bit. A sky, a
 /// background, a region where two detectors shade alike: the report's tests share most of a frame with the
 /// reference or with each other.
+#[derive(Clone, Copy)]
 struct Same<'a> {
     /// Bits per (tile, row of `rows_lo..=rows_hi`), tile-major.
     masks: &'a [u64],

@@ -212,12 +212,36 @@ fn shown(img: &HdrImage, viewing: &Viewing) -> Vec<u8> {
 }
 
 /// FLIP of several tests against one reference (`None` for a test of another size): each test's numbers are those
-/// of `flip::ldr_flip` / `flip::hdr_flip` on the pair bit for bit, with the reference filtered once per pass instead
-/// of once per test. The HDR exposures run first and keep only each test's running maximum (no exposure map), then
-/// the LDR pass makes the maps: the two kinds of per-test buffers never exist at once, and the displayed and linear
-/// copies of the tests exist one kind at a time.
+/// of `flip::ldr_flip` / `flip::hdr_flip` on the pair (the means within the last bits of their sums' order), with
+/// the reference filtered once per pass instead of once per test. The HDR exposures run first and keep nothing per
+/// test beyond a band, then the LDR pass makes the maps; the displayed and linear copies of the tests exist one kind
+/// at a time.
 #[must_use]
 pub fn flip_many(reference: &HdrImage, tests: &[&HdrImage], viewing: &Viewing) -> Vec<Option<(flip::FlipMap, f64)>> {
+    let (w, h) = (reference.width as usize, reference.height as usize);
+    let opts = flip::FlipOptions { pixels_per_degree: viewing.pixels_per_degree };
+    let zero = || flip::FlipMap { width: w, height: h, values: vec![0.0; w * h], mean: 0.0 };
+    flip_batch(reference, tests, viewing, zero, |r, t| flip::ldr_flip_many_srgb8(r, t, w, h, &opts))
+}
+
+/// [`flip_many`]'s means alone, (LDR-FLIP, HDR-FLIP) per test: no map is made, so a test costs no memory beyond
+/// its displayed copy and a band of errors.
+#[must_use]
+pub fn flip_means(reference: &HdrImage, tests: &[&HdrImage], viewing: &Viewing) -> Vec<Option<(f64, f64)>> {
+    let (w, h) = (reference.width as usize, reference.height as usize);
+    let opts = flip::FlipOptions { pixels_per_degree: viewing.pixels_per_degree };
+    flip_batch(reference, tests, viewing, || 0.0, |r, t| flip::ldr_flip_means_srgb8(r, t, w, h, &opts))
+}
+
+/// [`flip_many`] and [`flip_means`]: HDR means of the tests that fit and differ from the reference, then `ldr` on
+/// their displayed copies (a map or a mean each, `zero` for a test equal to the reference).
+fn flip_batch<L>(
+    reference: &HdrImage,
+    tests: &[&HdrImage],
+    viewing: &Viewing,
+    zero: impl Fn() -> L,
+    ldr: impl FnOnce(&[u8], &[&[u8]]) -> Vec<L>,
+) -> Vec<Option<(L, f64)>> {
     let same = |t: &&HdrImage| {
         t.width == reference.width && t.height == reference.height && t.rgb.len() == reference.rgb.len()
     };
@@ -236,10 +260,9 @@ pub fn flip_many(reference: &HdrImage, tests: &[&HdrImage], viewing: &Viewing) -
         // The displayed images as bytes: a quarter of their floats (a 1080p test is 6 MB instead of 25).
         let tests: Vec<Vec<u8>> = fit.iter().map(|t| shown(t, viewing)).collect();
         let views: Vec<&[u8]> = tests.iter().map(Vec::as_slice).collect();
-        flip::ldr_flip_many_srgb8(&shown(reference, viewing), &views, w, h, &opts)
+        ldr(&shown(reference, viewing), &views)
     };
     let mut results = ldr.into_iter().zip(hdr).map(|(l, h)| Some((l, h)));
-    let zero = || flip::FlipMap { width: w, height: h, values: vec![0.0; w * h], mean: 0.0 };
     tests
         .iter()
         .map(|t| match (same(t), equal(t)) {
