@@ -132,7 +132,9 @@ impl HdrImage {
     /// 8-bit sRGB bytes (RGB, row-major) after `tone`, rounded to nearest.
     #[must_use]
     pub fn to_srgb8(&self, tone: ToneMap) -> Vec<u8> {
-        self.encode_rgb8(|x| (srgb_encode(tone.apply(x)) * 255.0 + 0.5) as u8)
+        // The tone map's output is in [0, 1] (NaN → 0): the table gives `srgb8_shown`'s code without a `powf`.
+        let lut = srgb8_shown_table();
+        self.encode_rgb8(|x| lut.encode_unit(tone.apply(x)))
     }
 
     /// Interleaved RGB bytes, `enc` applied to every channel, rows in parallel.
@@ -238,9 +240,44 @@ impl Gamma22Lut {
     }
 }
 
+/// [`HdrImage::to_srgb8`]'s code of a tone-mapped channel `y` in [0, 1]: `srgb_encode(y) · 255`, rounded half up.
+fn srgb8_shown(y: f32) -> u8 {
+    (srgb_encode(y) * 255.0 + 0.5) as u8
+}
+
+/// [`srgb8_shown`] by its thresholds (`base::lut`), built once per process: the displayed copy of every image
+/// LDR-FLIP compares and every A/B view paid a `powf` per channel.
+fn srgb8_shown_table() -> &'static CodeLut {
+    static LUT: std::sync::OnceLock<CodeLut> = std::sync::OnceLock::new();
+    LUT.get_or_init(|| CodeLut::build(srgb8_shown))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The displayed copy's table gives the formula's code: every threshold and 64 bit patterns either side, every
+    /// 97th bit pattern of [0, 1]; and `to_srgb8` equals the formula on an image with out-of-range, negative and
+    /// non-finite channels under both tone curves.
+    #[test]
+    fn shown_table_equals_the_formula() {
+        let lut = srgb8_shown_table();
+        let clean = |x: f32| if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
+        let diff = lut.first_difference(|x| lut.encode_unit(clean(x)), |x| srgb8_shown(clean(x)), 64, 97);
+        assert_eq!(diff, None, "the table and the formula differ at {diff:?}");
+        let xs: Vec<f32> = (0..=u32::MAX).step_by(65_537).map(f32::from_bits).collect();
+        let specials = [0.0, -0.0, 1.0, 1e30, f32::NAN, f32::INFINITY, f32::NEG_INFINITY, f32::MIN_POSITIVE];
+        let all: Vec<f32> = xs.iter().copied().chain(specials).collect();
+        let mut img = HdrImage::new(all.len().div_ceil(3) as u32, 1);
+        for (p, c) in img.rgb.iter_mut().zip(all.chunks(3)) {
+            *p = Vec3::new(c[0], c.get(1).copied().unwrap_or(0.5), c.get(2).copied().unwrap_or(2.0));
+        }
+        for tone in [ToneMap::Reinhard { exposure: 1.7 }, ToneMap::Clamp { exposure: 0.3 }] {
+            let got = img.to_srgb8(tone);
+            let want: Vec<u8> = img.rgb.iter().flat_map(|p| p.to_array()).map(|x| srgb8_shown(tone.apply(x))).collect();
+            assert_eq!(got, want, "{tone:?}");
+        }
+    }
 
     #[test]
     fn gamma22_table_equals_the_formula() {
