@@ -643,13 +643,23 @@ pub fn ldr_flip_many_srgb8(
     height: usize,
     opts: &FlipOptions,
 ) -> Vec<FlipMap> {
+    let (reference, tests) = srgb8_pixels(reference, tests, width, height);
+    ldr_many(reference, &tests, width, height, opts)
+}
+
+/// 8-bit sRGB images as FLIP reads them, their sizes checked (`width × height × 3` bytes each).
+fn srgb8_pixels<'a>(
+    reference: &'a [u8],
+    tests: &[&'a [u8]],
+    width: usize,
+    height: usize,
+) -> (Pixels<'a>, Vec<Pixels<'a>>) {
     let n = width.checked_mul(height).and_then(|n| n.checked_mul(3)).expect("FLIP: image size overflows usize");
     assert_eq!(reference.len(), n, "FLIP: reference image must have width * height * 3 values");
     for t in tests {
         assert_eq!(t.len(), n, "FLIP: test image must have width * height * 3 values");
     }
-    let tests: Vec<Pixels<'_>> = tests.iter().map(|t| Pixels::Srgb8(t)).collect();
-    ldr_many(Pixels::Srgb8(reference), &tests, width, height, opts)
+    (Pixels::Srgb8(reference), tests.iter().map(|t| Pixels::Srgb8(t)).collect())
 }
 
 /// The LDR-FLIP maps of `tests` against `reference` (sizes checked by the caller), the reference filtered once.
@@ -679,13 +689,8 @@ pub fn ldr_flip_means_srgb8(
     height: usize,
     opts: &FlipOptions,
 ) -> Vec<f64> {
-    let n = width.checked_mul(height).and_then(|n| n.checked_mul(3)).expect("FLIP: image size overflows usize");
-    assert_eq!(reference.len(), n, "FLIP: reference image must have width * height * 3 values");
-    for t in tests {
-        assert_eq!(t.len(), n, "FLIP: test image must have width * height * 3 values");
-    }
-    let tests: Vec<Pixels<'_>> = tests.iter().map(|t| Pixels::Srgb8(t)).collect();
-    let sums = run_flip(width, height, opts, Pixels::Srgb8(reference), &tests, &[Encoding::Srgb], Maps::SumsOnly);
+    let (reference, tests) = srgb8_pixels(reference, tests, width, height);
+    let sums = run_flip(width, height, opts, reference, &tests, &[Encoding::Srgb], Maps::SumsOnly);
     sums.iter().map(|s| mean_of(s, width * height)).collect()
 }
 
