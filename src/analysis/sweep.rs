@@ -196,7 +196,6 @@ fn detector_results(
     cfg: &SweepConfig,
     reference: &HdrImage,
 ) -> (Vec<Option<HdrImage>>, Vec<DetectorResult>) {
-    let viewing = (cfg.flip != FlipRows::None).then_some(&cfg.viewing);
     let mut images = Vec::new();
     let mut results = Vec::new();
     for &d in &cfg.detectors {
@@ -235,18 +234,7 @@ fn detector_results(
         }
         results.push(r);
     }
-    // FLIP of every detector's image against the reference in one batch (the reference filtered once).
-    if let Some(v) = viewing {
-        let lit: Vec<(usize, &HdrImage)> =
-            images.iter().enumerate().filter_map(|(i, m)| Some((i, m.as_ref()?))).collect();
-        let tests: Vec<&HdrImage> = lit.iter().map(|(_, m)| *m).collect();
-        for ((i, _), f) in lit.iter().zip(flip_means(reference, &tests, v)) {
-            if let (Some(e), Some((ldr, hdr))) = (results[*i].aa_error.as_mut(), f) {
-                e.flip_ldr = Some(ldr);
-                e.flip_hdr = Some(hdr);
-            }
-        }
-    }
+    // Their FLIP against the reference comes with the first batch of rows' images ([`flush_flip`]).
     mark_detector_front(&mut results);
     (images, results)
 }
@@ -287,7 +275,7 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
     done += 1;
     progress(done, total, Some(Stage::Detectors), None);
     // The resolve is bit-identical across culling modes, so one exact image per detector serves every culling.
-    let (exact, detectors) = detector_results(gb, lights, cfg, &reference);
+    let (exact, mut detectors) = detector_results(gb, lights, cfg, &reference);
     done += 1;
 
     let mut rows = Vec::new();
@@ -297,7 +285,9 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
     let mut worst_flip: Option<(String, FlipMap)> = None;
     let mut shown: Vec<(String, Vec<u8>)> = Vec::new();
     let mut pending: Vec<PendingFlip> = Vec::new();
-    let against = FlipAgainst { reference: &reference, exact: &exact, detectors: &detectors, viewing: &cfg.viewing };
+    let against = FlipAgainst { reference: &reference, exact: &exact, viewing: &cfg.viewing };
+    // The detectors' exact images wait for the first batch too (the reference filtered once for both).
+    let mut detectors_waiting = cfg.flip != FlipRows::None;
     // Layouts keep the coverage: one count of covered samples serves every row's shading fraction.
     let covered = detect::covered_per_pixel(gb);
     for (li, layout) in cfg.layouts.iter().enumerate() {
@@ -490,12 +480,34 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
         drop(prepared);
         if pending.len() >= FLIP_BATCH {
             progress(done, total, Some(Stage::Flip), None);
-            flush_flip(&mut pending, &mut rows, &against, &mut worst_flip, &mut shown);
+            flush_flip(
+                &mut pending,
+                &mut rows,
+                &against,
+                &mut worst_flip,
+                &mut shown,
+                &mut detectors,
+                &mut detectors_waiting,
+            );
         }
     }
-    if !pending.is_empty() {
+    if !pending.is_empty() || detectors_waiting {
         progress(done, total, Some(Stage::Flip), None);
-        flush_flip(&mut pending, &mut rows, &against, &mut worst_flip, &mut shown);
+        flush_flip(
+            &mut pending,
+            &mut rows,
+            &against,
+            &mut worst_flip,
+            &mut shown,
+            &mut detectors,
+            &mut detectors_waiting,
+        );
+    }
+    // Rows took their detector's anti-aliasing error when made, before its FLIP was measured.
+    for r in rows.iter_mut().filter(|r| r.aa_error.is_some()) {
+        if let Some(d) = detectors.iter().find(|d| d.detector == r.detector) {
+            r.aa_error = d.aa_error;
+        }
     }
     progress(total, total, None, None);
     mark_pareto(&mut rows);
@@ -611,26 +623,30 @@ struct PendingFlip {
     image: HdrImage,
 }
 
-/// What the pending rows' images are compared with: the reference, each detector's exact image and its FLIP
-/// against the reference, and how images are viewed.
+/// What the pending rows' images are compared with: the reference, each detector's exact image, and how images are
+/// viewed.
 struct FlipAgainst<'a> {
     reference: &'a HdrImage,
     exact: &'a [Option<HdrImage>],
-    detectors: &'a [DetectorResult],
     viewing: &'a Viewing,
 }
 
-/// FLIP of the pending rows' images: all of them against the reference in one batch, then per detector against
-/// that detector's exact image. Keeps the decisive row with the largest layout LDR-FLIP in `worst` (the first on
-/// ties, in row order).
+/// FLIP of the pending rows' images: all of them against the reference in one batch (with the detectors' exact
+/// images while `detectors_waiting`, their anti-aliasing FLIP then set), then per detector against that detector's
+/// exact image. Keeps the decisive row with the largest layout LDR-FLIP in `worst` (the first on ties, in row
+/// order). A lossless layout's image, equal to its detector's exact image, costs the batch almost nothing: every
+/// window is equal to an earlier test's, whose errors it takes.
+#[allow(clippy::too_many_arguments)]
 fn flush_flip(
     pending: &mut Vec<PendingFlip>,
     rows: &mut [Row],
     against: &FlipAgainst<'_>,
     worst: &mut Option<(String, FlipMap)>,
     shown: &mut Vec<(String, Vec<u8>)>,
+    detectors: &mut [DetectorResult],
+    detectors_waiting: &mut bool,
 ) {
-    let FlipAgainst { reference, exact, detectors, viewing } = *against;
+    let FlipAgainst { reference, exact, viewing } = *against;
     for p in pending.iter().filter(|p| p.decisive) {
         shown.push((rows[p.row].layout.clone(), p.image.to_srgb8(viewing.tone())));
     }
@@ -640,29 +656,24 @@ fn flush_flip(
         e.flip_hdr = Some(hdr);
         Some(map)
     };
-    // An image equal bit for bit to its detector's exact image (a lossless layout's) has that image's FLIP against
-    // the reference, measured with the detectors: not filtered again.
-    let known = |p: &PendingFlip| -> Option<(f64, f64)> {
-        let x = exact.get(p.detector)?.as_ref()?;
-        let e = detectors.get(p.detector)?.aa_error.as_ref()?;
-        let same = (x.width, x.height) == (p.image.width, p.image.height) && x.rgb == p.image.rgb;
-        same.then_some((e.flip_ldr?, e.flip_hdr?))
-    };
-    let mut todo = Vec::new();
-    for p in pending.iter() {
-        match (known(p), rows[p.row].total_error.as_mut()) {
-            (Some((ldr, hdr)), Some(e)) => (e.flip_ldr, e.flip_hdr) = (Some(ldr), Some(hdr)),
-            (Some(_), None) => {}
-            (None, _) => todo.push(p),
-        }
-    }
-    let images: Vec<&HdrImage> = todo.iter().map(|p| &p.image).collect();
-    // Against the reference only the means are wanted: no maps.
-    let measured = if images.is_empty() { Vec::new() } else { flip_means(reference, &images, viewing) };
-    for (p, f) in todo.iter().zip(measured) {
-        if let (Some(e), Some((ldr, hdr))) = (rows[p.row].total_error.as_mut(), f) {
+    let put = |e: Option<&mut ErrorSet>, f: Option<(f64, f64)>| {
+        if let (Some(e), Some((ldr, hdr))) = (e, f) {
             (e.flip_ldr, e.flip_hdr) = (Some(ldr), Some(hdr));
         }
+    };
+    // Against the reference only the means are wanted: no maps.
+    let lit: Vec<usize> =
+        if *detectors_waiting { (0..exact.len()).filter(|&d| exact[d].is_some()).collect() } else { Vec::new() };
+    let images: Vec<&HdrImage> =
+        lit.iter().filter_map(|&d| exact[d].as_ref()).chain(pending.iter().map(|p| &p.image)).collect();
+    let measured = if images.is_empty() { Vec::new() } else { flip_means(reference, &images, viewing) };
+    let (of_detectors, of_rows) = measured.split_at(measured.len().min(lit.len()));
+    for (&d, &f) in lit.iter().zip(of_detectors) {
+        put(detectors[d].aa_error.as_mut(), f);
+    }
+    *detectors_waiting = false;
+    for (p, &f) in pending.iter().zip(of_rows) {
+        put(rows[p.row].total_error.as_mut(), f);
     }
     let mut layout_maps: Vec<Option<FlipMap>> = pending.iter().map(|_| None).collect();
     for (d, x) in exact.iter().enumerate() {
