@@ -1649,6 +1649,13 @@ mod tests {
             // The means alone, without exposure maps: the same bits.
             let means = hdr_flip_means(&ha, &[&hb, &ha, &hc], w, h, &opts);
             assert_eq!(means, hdr.iter().map(HdrFlip::mean).collect::<Vec<_>>(), "HDR means, generic {generic}");
+            // And LDR's on 8-bit images, without maps.
+            let bytes = |x: &[f32]| -> Vec<u8> { x.iter().map(|v| (v * 255.0 + 0.5) as u8).collect() };
+            let (ba, bb, bc) = (bytes(&a), bytes(&b), bytes(&c));
+            let maps = ldr_flip_many_srgb8(&ba, &[&bb, &ba, &bc], w, h, &opts);
+            let means = ldr_flip_means_srgb8(&ba, &[&bb, &ba, &bc], w, h, &opts);
+            assert_eq!(means, maps.iter().map(|m| m.mean).collect::<Vec<_>>(), "LDR means, generic {generic}");
+            assert!(means[0] > 0.0 && means[1] == 0.0);
         }
         force(None);
         assert!(ldr_flip_many(&a, &[], w, h, &opts).is_empty());
