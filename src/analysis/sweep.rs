@@ -282,12 +282,9 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
     let mut maps = Vec::new();
     let mut masks = Vec::new();
     let mut lights_per_pixel = None;
-    let mut worst_flip: Option<(String, FlipMap)> = None;
-    let mut shown: Vec<(String, Vec<u8>)> = Vec::new();
-    let mut pending: Vec<PendingFlip> = Vec::new();
     let against = FlipAgainst { reference: &reference, exact: &exact, viewing: &cfg.viewing };
     // The detectors' exact images wait for the first batch too (the reference filtered once for both).
-    let mut detectors_waiting = cfg.flip != FlipRows::None;
+    let mut flips = FlipQueue { detectors_waiting: cfg.flip != FlipRows::None, ..FlipQueue::default() };
     // Layouts keep the coverage: one count of covered samples serves every row's shading fraction.
     let covered = detect::covered_per_pixel(gb);
     for (li, layout) in cfg.layouts.iter().enumerate() {
@@ -460,7 +457,12 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
                             lights_per_pixel = Some(res.lights_per_pixel.clone());
                         }
                         if flip {
-                            pending.push(PendingFlip { row: rows.len(), detector: di, decisive, image: res.image });
+                            flips.pending.push(PendingFlip {
+                                row: rows.len(),
+                                detector: di,
+                                decisive,
+                                image: res.image,
+                            });
                         }
                     }
                     Err(e) => r.error = Some(format!("resolve failed: {e}")),
@@ -478,31 +480,16 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
         // displayed copies and maps then never share the memory with it.
         drop(frame);
         drop(prepared);
-        if pending.len() >= FLIP_BATCH {
+        if flips.pending.len() >= FLIP_BATCH {
             progress(done, total, Some(Stage::Flip), None);
-            flush_flip(
-                &mut pending,
-                &mut rows,
-                &against,
-                &mut worst_flip,
-                &mut shown,
-                &mut detectors,
-                &mut detectors_waiting,
-            );
+            flips.flush(&mut rows, &against, &mut detectors);
         }
     }
-    if !pending.is_empty() || detectors_waiting {
+    if !flips.pending.is_empty() || flips.detectors_waiting {
         progress(done, total, Some(Stage::Flip), None);
-        flush_flip(
-            &mut pending,
-            &mut rows,
-            &against,
-            &mut worst_flip,
-            &mut shown,
-            &mut detectors,
-            &mut detectors_waiting,
-        );
+        flips.flush(&mut rows, &against, &mut detectors);
     }
+    let FlipQueue { worst: worst_flip, shown, .. } = flips;
     // Rows took their detector's anti-aliasing error when made, before its FLIP was measured.
     for r in rows.iter_mut().filter(|r| r.aa_error.is_some()) {
         if let Some(d) = detectors.iter().find(|d| d.detector == r.detector) {
@@ -631,70 +618,75 @@ struct FlipAgainst<'a> {
     viewing: &'a Viewing,
 }
 
-/// FLIP of the pending rows' images: all of them against the reference in one batch (with the detectors' exact
-/// images while `detectors_waiting`, their anti-aliasing FLIP then set), then per detector against that detector's
-/// exact image. Keeps the decisive row with the largest layout LDR-FLIP in `worst` (the first on ties, in row
-/// order). A lossless layout's image, equal to its detector's exact image, costs the batch almost nothing: every
-/// window is equal to an earlier test's, whose errors it takes.
-#[allow(clippy::too_many_arguments)]
-fn flush_flip(
-    pending: &mut Vec<PendingFlip>,
-    rows: &mut [Row],
-    against: &FlipAgainst<'_>,
-    worst: &mut Option<(String, FlipMap)>,
-    shown: &mut Vec<(String, Vec<u8>)>,
-    detectors: &mut [DetectorResult],
-    detectors_waiting: &mut bool,
-) {
-    let FlipAgainst { reference, exact, viewing } = *against;
-    for p in pending.iter().filter(|p| p.decisive) {
-        shown.push((rows[p.row].layout.clone(), p.image.to_srgb8(viewing.tone())));
-    }
-    let set = |e: &mut Option<ErrorSet>, f: Option<(FlipMap, f64)>| -> Option<FlipMap> {
-        let (e, (map, hdr)) = (e.as_mut()?, f?);
-        e.flip_ldr = Some(map.mean);
-        e.flip_hdr = Some(hdr);
-        Some(map)
-    };
-    let put = |e: Option<&mut ErrorSet>, f: Option<(f64, f64)>| {
-        if let (Some(e), Some((ldr, hdr))) = (e, f) {
-            (e.flip_ldr, e.flip_hdr) = (Some(ldr), Some(hdr));
+/// The sweep's FLIP state: the rows' images waiting for a batch, whether the detectors' exact images still wait for
+/// one, and what the batches keep for the figures.
+#[derive(Default)]
+struct FlipQueue {
+    pending: Vec<PendingFlip>,
+    detectors_waiting: bool,
+    /// The decisive row with the largest layout LDR-FLIP, and its map (the first on ties, in row order).
+    worst: Option<(String, FlipMap)>,
+    /// The decisive rows' images as displayed.
+    shown: Vec<(String, Vec<u8>)>,
+}
+
+impl FlipQueue {
+    /// FLIP of the pending rows' images: all of them against the reference in one batch (with the detectors' exact
+    /// images while they wait, their anti-aliasing FLIP then set), then per detector against that detector's exact
+    /// image. A lossless layout's image, equal to its detector's exact image, costs the batch almost nothing: every
+    /// window is equal to an earlier test's, whose errors it takes.
+    fn flush(&mut self, rows: &mut [Row], against: &FlipAgainst<'_>, detectors: &mut [DetectorResult]) {
+        let FlipQueue { pending, detectors_waiting, worst, shown } = self;
+        let FlipAgainst { reference, exact, viewing } = *against;
+        for p in pending.iter().filter(|p| p.decisive) {
+            shown.push((rows[p.row].layout.clone(), p.image.to_srgb8(viewing.tone())));
         }
-    };
-    // Against the reference only the means are wanted: no maps.
-    let lit: Vec<usize> =
-        if *detectors_waiting { (0..exact.len()).filter(|&d| exact[d].is_some()).collect() } else { Vec::new() };
-    let images: Vec<&HdrImage> =
-        lit.iter().filter_map(|&d| exact[d].as_ref()).chain(pending.iter().map(|p| &p.image)).collect();
-    let measured = if images.is_empty() { Vec::new() } else { flip_means(reference, &images, viewing) };
-    let (of_detectors, of_rows) = measured.split_at(measured.len().min(lit.len()));
-    for (&d, &f) in lit.iter().zip(of_detectors) {
-        put(detectors[d].aa_error.as_mut(), f);
-    }
-    *detectors_waiting = false;
-    for (p, &f) in pending.iter().zip(of_rows) {
-        put(rows[p.row].total_error.as_mut(), f);
-    }
-    let mut layout_maps: Vec<Option<FlipMap>> = pending.iter().map(|_| None).collect();
-    for (d, x) in exact.iter().enumerate() {
-        let Some(x) = x else { continue };
-        let group: Vec<usize> = (0..pending.len()).filter(|&i| pending[i].detector == d).collect();
-        if group.is_empty() {
-            continue;
+        let set = |e: &mut Option<ErrorSet>, f: Option<(FlipMap, f64)>| -> Option<FlipMap> {
+            let (e, (map, hdr)) = (e.as_mut()?, f?);
+            e.flip_ldr = Some(map.mean);
+            e.flip_hdr = Some(hdr);
+            Some(map)
+        };
+        let put = |e: Option<&mut ErrorSet>, f: Option<(f64, f64)>| {
+            if let (Some(e), Some((ldr, hdr))) = (e, f) {
+                (e.flip_ldr, e.flip_hdr) = (Some(ldr), Some(hdr));
+            }
+        };
+        // Against the reference only the means are wanted: no maps.
+        let lit: Vec<usize> =
+            if *detectors_waiting { (0..exact.len()).filter(|&d| exact[d].is_some()).collect() } else { Vec::new() };
+        let images: Vec<&HdrImage> =
+            lit.iter().filter_map(|&d| exact[d].as_ref()).chain(pending.iter().map(|p| &p.image)).collect();
+        let measured = if images.is_empty() { Vec::new() } else { flip_means(reference, &images, viewing) };
+        let (of_detectors, of_rows) = measured.split_at(measured.len().min(lit.len()));
+        for (&d, &f) in lit.iter().zip(of_detectors) {
+            put(detectors[d].aa_error.as_mut(), f);
         }
-        let images: Vec<&HdrImage> = group.iter().map(|&i| &pending[i].image).collect();
-        for (&i, f) in group.iter().zip(flip_many(x, &images, viewing)) {
-            layout_maps[i] = set(&mut rows[pending[i].row].layout_error, f);
+        *detectors_waiting = false;
+        for (p, &f) in pending.iter().zip(of_rows) {
+            put(rows[p.row].total_error.as_mut(), f);
         }
-    }
-    for (p, map) in pending.iter().zip(layout_maps) {
-        if let Some(map) = map.filter(|_| p.decisive) {
-            if worst.as_ref().is_none_or(|(_, w)| map.mean > w.mean) {
-                *worst = Some((rows[p.row].layout.clone(), map));
+        let mut layout_maps: Vec<Option<FlipMap>> = pending.iter().map(|_| None).collect();
+        for (d, x) in exact.iter().enumerate() {
+            let Some(x) = x else { continue };
+            let group: Vec<usize> = (0..pending.len()).filter(|&i| pending[i].detector == d).collect();
+            if group.is_empty() {
+                continue;
+            }
+            let images: Vec<&HdrImage> = group.iter().map(|&i| &pending[i].image).collect();
+            for (&i, f) in group.iter().zip(flip_many(x, &images, viewing)) {
+                layout_maps[i] = set(&mut rows[pending[i].row].layout_error, f);
             }
         }
+        for (p, map) in pending.iter().zip(layout_maps) {
+            if let Some(map) = map.filter(|_| p.decisive) {
+                if worst.as_ref().is_none_or(|(_, w)| map.mean > w.mean) {
+                    *worst = Some((rows[p.row].layout.clone(), map));
+                }
+            }
+        }
+        pending.clear();
     }
-    pending.clear();
 }
 
 /// Copies the roundtrip's attribute errors into a row (`derived`: the lighting derives positions from the stored
