@@ -6,6 +6,9 @@
 //!   exposure, the count taken from the reference image as NVIDIA's code does);
 //! - `flip/ldr-4-pairs/1920x1080` and `flip/ldr-4-batched/1920x1080`: four tests against one reference, as four
 //!   pairs and as one `ldr_flip_many` (the reference filtered once; the same maps bit for bit);
+//! - `flip/hdr-4-means/1920x1080` and `flip/hdr-4-means-sky/1920x1080`: four linear tests against one reference,
+//!   means only (`hdr_flip_means`, as the report's batches), the second with the top third of every test equal to
+//!   the reference, as a sky or background is: the ratio is what skipping the shared windows saves;
 //! - `flip/rmse/1920x1080`: the baseline, `measure::image::compare` (RMSE, PSNR, max, relative MSE) of the same
 //!   pair: what every report row computes anyway.
 //!
@@ -16,7 +19,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use gbuf::image::HdrImage;
-use gbuf::measure::flip::{hdr_flip, ldr_flip, ldr_flip_many, FlipOptions};
+use gbuf::measure::flip::{hdr_flip, hdr_flip_means, ldr_flip, ldr_flip_many, FlipOptions};
 use gbuf::measure::image::compare;
 use glam::Vec3;
 use std::hint::black_box;
@@ -73,6 +76,17 @@ fn benches(c: &mut Criterion) {
     group.bench_function(format!("ldr-4-batched/{W}x{H}"), |bn| {
         bn.iter(|| ldr_flip_many(black_box(&sa), &refs, W, H, &opts).iter().map(|m| m.mean).sum::<f64>())
     });
+    // Four HDR tests, means only; then the same with their top third equal to the reference (a sky).
+    let hdr_tests: Vec<Vec<f32>> = (0..4).map(|k| lb.iter().map(|v| v * (1.0 - 0.01 * k as f32)).collect()).collect();
+    let sky = 3 * W * (H / 3);
+    let sky_tests: Vec<Vec<f32>> =
+        hdr_tests.iter().map(|t| la[..sky].iter().chain(&t[sky..]).copied().collect()).collect();
+    for (name, tests) in [("hdr-4-means", &hdr_tests), ("hdr-4-means-sky", &sky_tests)] {
+        let views: Vec<&[f32]> = tests.iter().map(Vec::as_slice).collect();
+        group.bench_function(format!("{name}/{W}x{H}"), |bn| {
+            bn.iter(|| hdr_flip_means(black_box(&la), &views, W, H, &opts).iter().sum::<f64>())
+        });
+    }
     group.finish();
 }
 
