@@ -829,7 +829,7 @@ fn run_bands(ctx: &Ctx, r: Pixels<'_>, tests: &[Pixels<'_>], encs: &[Encoding], 
     let min_band = (4 * ctx.rmax).max(16);
     // Eight bands per thread: a band's cost varies with what it shares with the reference (a sky band skips most
     // of its work), and with three the last band of a batch ran alone (room 1080p × 4 report, FLIP stage 6.1–7.0 →
-    // 5.6–6.4 s, Zen 4, 2 threads); each band's halo of 2·rmax filtered rows is the price.
+    // 5.6–6.4 s, two runs each, Zen 4 AVX-512, 2 threads); each band's halo of 2·rmax filtered rows is the price.
     let nbands = (threads * 8).min(h.div_ceil(min_band)).max(1);
     let band_h = h.div_ceil(nbands).next_multiple_of(2);
     let max = encs.len() > 1 || matches!(encs.first(), Some(Encoding::Hdr { .. }));
