@@ -152,14 +152,15 @@ fn benches(c: &mut Criterion) {
     vrs_benches(c, &gb4, &lights, &mask4);
 }
 
-/// Shading less than once per pixel on the 4× bench frame: the SRI generators' own time (pixels per second), and the
+/// Shading less than once per pixel on the 4× bench frame: the SRI generators' own time (pixels per second; gbuf's
+/// with and without its preview of the lights), and the
 /// resolve shaded by gbuf's SRI at tile 16 against the full-rate resolve with the same mask, the evaluations of
 /// each printed beside them (`resolve/vrs/…`).
 fn vrs_benches(c: &mut Criterion, gb4: &gbuf::GBuffer, lights: &[gbuf::Light], mask4: &gbuf::base::mask::EdgeMask) {
     use gbuf::detect::rate::{evaluations, ffx_sri, gbuffer_sri, CoarseMode, Rate, Sri};
     use gbuf::resolve::{resolve_coarse, Coarse};
     let tiled = ResolveConfig::default();
-    let sri = gbuffer_sri(gb4, mask4, 16, false, &Default::default()).expect("sri");
+    let sri = gbuffer_sri(gb4, None, mask4, 16, false, &Default::default()).expect("sri");
     let full_image = resolve(gb4, lights, mask4, &tiled).unwrap().image;
     let full = evaluations(gb4, mask4, &Sri::uniform(W, H, 16, Rate::R1x1));
     let coarse = evaluations(gb4, mask4, &sri);
@@ -171,7 +172,12 @@ fn vrs_benches(c: &mut Criterion, gb4: &gbuf::GBuffer, lights: &[gbuf::Light], m
     g.sample_size(10);
     g.throughput(criterion::Throughput::Elements(u64::from(W * H)));
     g.bench_function("sri/gbuffer-16/4x/1280x720", |b| {
-        b.iter(|| black_box(gbuffer_sri(gb4, mask4, 16, false, &Default::default()).unwrap()))
+        b.iter(|| black_box(gbuffer_sri(gb4, None, mask4, 16, false, &Default::default()).unwrap()))
+    });
+    // With the lights: the rule's preview term lights every covered pixel once (its lights culled per tile).
+    let preview = gbuf::resolve::LightPreview::new(gb4, lights, tiled.falloff, tiled.brdf, Default::default()).unwrap();
+    g.bench_function("sri/gbuffer-preview-16/4x/1280x720", |b| {
+        b.iter(|| black_box(gbuffer_sri(gb4, Some(&preview), mask4, 16, false, &Default::default()).unwrap()))
     });
     g.bench_function("sri/ffx-16/1280x720", |b| b.iter(|| black_box(ffx_sri(&full_image, 16, 0.015, 64).unwrap())));
     g.bench_function("full-rate/4x-adaptive/1280x720", |b| {

@@ -58,7 +58,11 @@ pub fn run_frame(
     for d in &mut out.detectors {
         d.frame.clone_from(&input.name);
     }
-    let (mut files, mut figures) = figures::figures(gb, &out, with_plots, prefix)?;
+    // The shading-rate figure's rule previews the lighting (none where the frame gives no positions to light).
+    let r = &cfg.resolve;
+    let preview = crate::resolve::LightPreview::new(gb, input.lights, r.falloff, r.brdf, cfg.viewing.tone()).ok();
+    let preview = preview.as_ref().map(|p| p as &dyn crate::detect::rate::Preview);
+    let (mut files, mut figures) = figures::figures(gb, preview, &out, with_plots, prefix)?;
     // What only the figures read is drawn: dropped before the pipelines, whose images are then the frame's peak
     // (the error maps, the displayed copies and FLIP map, the light counts: some 130 MB at 1080p).
     (out.maps, out.shown, out.reference_shown, out.worst_flip, out.lights_per_pixel) =

@@ -284,7 +284,13 @@ fn vrs_writes_the_sri_it_measures_and_saves_evaluations() {
     let gb = &loaded.gbuffer;
     let mask = detect(gb, Detector::Lauritzen, &DetectorConfig::default()).unwrap();
     let rule = gbuf::detect::rate::Smoothness::default();
-    let sri = gbuf::detect::rate::gbuffer_sri(gb, &mask, 16, true, &rule).unwrap();
+    // With the lights and the lighting `gbuf vrs` chooses for the frame (the rule's preview term reads them).
+    let lights = loaded.lights.clone().expect("the fixture's sidecar has lights");
+    let lighting = gbuf::resolve::Lighting::choose(None, None, &gb.attributes());
+    let preview =
+        gbuf::resolve::LightPreview::new(gb, &lights, lighting.falloff, lighting.brdf, Default::default()).unwrap();
+    let lit: Option<&dyn gbuf::detect::rate::Preview> = Some(&preview);
+    let sri = gbuf::detect::rate::gbuffer_sri(gb, lit, &mask, 16, true, &rule).unwrap();
     let read =
         gbuf::layout::texture::read(&out.join("sri_gbuffer_16.dds"), gbuf::layout::Format::R8, &Default::default())
             .unwrap();
@@ -311,9 +317,10 @@ fn vrs_writes_the_sri_it_measures_and_saves_evaluations() {
         normal_deg: rule.normal_deg * 0.25,
         albedo: rule.albedo * 0.25,
         lobe: rule.lobe * 0.25,
+        preview: rule.preview * 0.25,
         ..rule
     };
-    let strict = gbuf::detect::rate::gbuffer_sri(gb, &mask, 16, false, &strictest).unwrap();
+    let strict = gbuf::detect::rate::gbuffer_sri(gb, lit, &mask, 16, false, &strictest).unwrap();
     assert!(evals(best) <= gbuf::detect::rate::evaluations(gb, &mask, &strict));
     // Sharing only the lighting ignores albedo contrast: at least as coarse as broadcasting.
     let lighting = run("lighting");

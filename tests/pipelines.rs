@@ -394,7 +394,12 @@ fn the_aa_table_has_gbufs_shading_rate_over_adaptive_msaa() {
     let loaded = gbuf::io::load(&raster, &Default::default()).unwrap();
     let gb = &loaded.gbuffer;
     let mask = gbuf::detect::detect(gb, gbuf::detect::Detector::Lauritzen, &Default::default()).unwrap();
-    let sri = gbuf::detect::rate::gbuffer_sri(gb, &mask, 16, false, &Default::default()).unwrap();
+    // The rule with its preview of the frame's lights, lit as `gbuf pipelines` lights it.
+    let lights = loaded.lights.clone().expect("the fixture's sidecar has lights");
+    let lighting = gbuf::resolve::Lighting::choose(None, None, &gb.attributes());
+    let preview =
+        gbuf::resolve::LightPreview::new(gb, &lights, lighting.falloff, lighting.brdf, Default::default()).unwrap();
+    let sri = gbuf::detect::rate::gbuffer_sri(gb, Some(&preview), &mask, 16, false, &Default::default()).unwrap();
     assert_eq!(vrs["evaluations"].as_u64().unwrap(), gbuf::detect::rate::evaluations(gb, &mask, &sri));
     assert!(vrs["evaluations"].as_u64().unwrap() * 10 < msaa["evaluations"].as_u64().unwrap() * 7, "{vrs}");
     let flip = |r: &serde_json::Value| r["error"]["flip_ldr"].as_f64().unwrap();

@@ -195,7 +195,7 @@ fn coarse_shading_time() {
     let lights = gbuf::scene::default_lights(gbuf::scene::SceneName::Room, &gb);
     let mask = detect(&gb, Detector::Lauritzen, &DetectorConfig::default()).unwrap();
     let t0 = Instant::now();
-    let sri = gbuffer_sri(&gb, &mask, 16, false, &Default::default()).unwrap();
+    let sri = gbuffer_sri(&gb, None, &mask, 16, false, &Default::default()).unwrap();
     let t_sri = t0.elapsed().as_secs_f64() * 1e3;
     let brdf = gbuf::resolve::Brdf::Ggx;
     let cfg = ResolveConfig { brdf, ..Default::default() };

@@ -956,7 +956,10 @@ impl Measure<'_> {
         // detector's adaptive MSAA (coarse pixels never cross a resolve tile of an even size).
         if cfg.resolve.tile_size.is_multiple_of(2) {
             let mask = detect::detect(gb, cfg.detector, &cfg.detector_config)?;
-            let sri = crate::detect::rate::gbuffer_sri(gb, &mask, VRS_TILE, false, &Default::default())?;
+            let tone = cfg.viewing.as_ref().map_or_else(Default::default, Viewing::tone);
+            let preview = resolve::LightPreview::new(gb, self.lights, cfg.resolve.falloff, cfg.resolve.brdf, tone)?;
+            let sri =
+                crate::detect::rate::gbuffer_sri(gb, Some(&preview), &mask, VRS_TILE, false, &Default::default())?;
             let rc = ResolveConfig { culling: Culling::Tiled, schedule: Schedule::Deferred, ..cfg.resolve };
             let coarse = resolve::Coarse { sri: &sri, mode: crate::detect::rate::CoarseMode::Broadcast };
             let t = Instant::now();

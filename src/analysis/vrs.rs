@@ -80,6 +80,9 @@ pub struct VrsRow {
     /// Its light loop's: the work lists shaded against their lights (ms; the work lists' reading of the G-buffer
     /// and the culling are in `resolve_ms` only).
     pub shade_ms: f64,
+    /// The time the generator took to make the SRI (ms, wall, rayon's threads; `None` for the oracle, which is no
+    /// generator).
+    pub sri_ms: Option<f64>,
     /// For `gbuffer-max-flip`: the factor the rule's thresholds were scaled by.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rule_scale: Option<f32>,
@@ -130,6 +133,9 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
     let pixels = gb.pixel_count().max(1) as f64;
     let full_evals = mask.evaluations(&detect::covered_per_pixel(gb));
     let rule = Smoothness { broadcast: cfg.mode == CoarseMode::Broadcast, ..cfg.rule };
+    let tone = cfg.viewing.as_ref().map_or_else(Default::default, Viewing::tone);
+    let preview = resolve::LightPreview::new(gb, lights, cfg.resolve.falloff, cfg.resolve.brdf, tone)?;
+    let lit: Option<&dyn rate::Preview> = Some(&preview);
     let mut out = VrsOutput {
         mode: match cfg.mode {
             CoarseMode::Broadcast => "broadcast",
@@ -162,7 +168,11 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
         uniform.push(displayed_errors(&image, &reference));
     }
     // One SRI's row: its coarse image, evaluations and errors.
-    let measure = |generator: &str, tile: u32, sri: &Sri, scale: Option<f32>| -> Result<(VrsRow, HdrImage)> {
+    let measure = |generator: &str,
+                   tile: u32,
+                   (sri, sri_ms): (&Sri, Option<f64>),
+                   scale: Option<f32>|
+     -> Result<(VrsRow, HdrImage)> {
         let coarse = resolve::resolve_coarse(gb, lights, &mask, Coarse { sri, mode: cfg.mode }, &cfg.resolve)?;
         let evaluations = coarse.stats.shading_evaluations;
         let (resolve_ms, shade_ms) = (coarse.stats.ms.total, shade_ms(&coarse.stats));
@@ -178,6 +188,7 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
             vs_reference: error_set(&reference, &image, v),
             resolve_ms,
             shade_ms,
+            sri_ms,
             rule_scale: scale,
         };
         Ok((row, image))
@@ -188,14 +199,15 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
         out.sris.push(sri);
     };
     for &tile in &cfg.tiles {
-        let sri = rate::gbuffer_sri(gb, &mask, tile, cfg.extra_rates, &rule)?;
-        let measured = measure("gbuffer", tile, &sri, None)?;
+        let (sri, ms) = timed(|| rate::gbuffer_sri(gb, lit, &mask, tile, cfg.extra_rates, &rule))?;
+        let measured = measure("gbuffer", tile, (&sri, Some(ms)), None)?;
         let budget = measured.0.evaluations;
         push(&mut out, measured, sri.clone());
         // FidelityFX VRS's rule on the full-rate image as "the previous frame" (a static camera).
         // (At 8× MSAA and beyond the hardware clamps its 2 × 2 tiles.)
-        let ffx = rate::ffx_sri(&full, tile, FFX_VARIANCE_CUTOFF, cfg.ffx_wave)?.clamped(gb.samples, false);
-        push(&mut out, measure("ffx", tile, &ffx, None)?, ffx);
+        let (ffx, ms) = timed(|| rate::ffx_sri(&full, tile, FFX_VARIANCE_CUTOFF, cfg.ffx_wave))?;
+        let ffx = ffx.clamped(gb.samples, false);
+        push(&mut out, measure("ffx", tile, (&ffx, Some(ms)), None)?, ffx);
         // The oracle at gbuf's budget: per tile the rates' errors against the reference and their evaluations.
         let tiles = sri.rates.len();
         let (mut error, mut evals) = (vec![Vec::new(); tiles], vec![Vec::new(); tiles]);
@@ -214,7 +226,7 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
         let oracle = rate::cheapest_sri(&sri, &rates, &error, &evals, budget)
             .filter(|o| objective(o) <= objective(&sri))
             .unwrap_or_else(|| sri.clone());
-        push(&mut out, measure("oracle", tile, &oracle, None)?, oracle);
+        push(&mut out, measure("oracle", tile, (&oracle, None), None)?, oracle);
         if let (Some(max), Some(_)) = (cfg.max_flip, v) {
             // The rule's thresholds scaled from strict to loose; the most evaluations saved within the FLIP bound.
             let mut best: Option<((VrsRow, HdrImage), Sri)> = None;
@@ -224,13 +236,14 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
                     normal_deg: rule.normal_deg * scale,
                     albedo: rule.albedo * scale,
                     lobe: rule.lobe * scale,
+                    preview: rule.preview * scale,
                     ..rule
                 };
-                let s = rate::gbuffer_sri(gb, &mask, tile, cfg.extra_rates, &r)?;
+                let (s, ms) = timed(|| rate::gbuffer_sri(gb, lit, &mask, tile, cfg.extra_rates, &r))?;
                 if best.as_ref().is_some_and(|b| b.0 .0.evaluations <= rate::evaluations(gb, &mask, &s)) {
                     continue;
                 }
-                let m = measure("gbuffer-max-flip", tile, &s, Some(scale))?;
+                let m = measure("gbuffer-max-flip", tile, (&s, Some(ms)), Some(scale))?;
                 if m.0.vs_full_rate.flip_ldr.is_some_and(|f| f <= max) {
                     best = Some((m, s));
                 }
@@ -242,6 +255,13 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
     }
     out.full_rate = full;
     Ok(out)
+}
+
+/// `f`'s result and its wall time (ms).
+fn timed<T>(f: impl FnOnce() -> Result<T>) -> Result<(T, f64)> {
+    let t = std::time::Instant::now();
+    let v = f()?;
+    Ok((v, t.elapsed().as_secs_f64() * 1e3))
 }
 
 /// A resolve's light loop: its work lists shaded against their lights (ms).

@@ -55,6 +55,10 @@ pub struct Args {
     /// The wave width FidelityFX VRS's reductions run over: 64 on AMD's GPUs (its SDK's build), 32 on NVIDIA's.
     #[arg(long, value_name = "LANES", default_value_t = gbuf::analysis::vrs::FFX_WAVE)]
     pub ffx_wave: u32,
+    /// gbuf's rule: the largest mean error per pixel of a tile, in 8-bit codes, that sharing evaluations may cost
+    /// by the lighting's preview (0: the G-buffer alone, without the lights).
+    #[arg(long, value_name = "CODES", default_value_t = gbuf::detect::rate::DEFAULT_PREVIEW * 255.0)]
+    pub preview: f32,
     /// Machine-readable output on stdout.
     #[arg(long)]
     pub json: bool,
@@ -86,12 +90,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         detector_config: args.thresholds.config()?,
         resolve: lighting.apply(ResolveConfig::default()),
         viewing: (!args.no_flip).then(Viewing::default),
-        rule: Default::default(),
+        rule: gbuf::detect::rate::Smoothness { preview: args.preview / 255.0, ..Default::default() },
         max_flip: args.max_flip,
         ffx_wave: args.ffx_wave,
     };
     if !(args.ffx_wave.is_power_of_two() && (4..=128).contains(&args.ffx_wave)) {
         crate::usage!("--ffx-wave {}: a power of two from 4 to 128", args.ffx_wave);
+    }
+    if !(args.preview.is_finite() && args.preview >= 0.0) {
+        crate::usage!("--preview {}: a mean error in 8-bit codes ≥ 0, e.g. 0.1 (0: no preview term)", args.preview);
     }
     if args.max_flip.is_some_and(|f| !(f.is_finite() && f > 0.0)) {
         crate::usage!("--max-flip: a positive FLIP value, e.g. 0.01");
@@ -139,13 +146,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         if args.extra_rates { ", additional rates on" } else { "" }
     );
     println!(
-        "{:<26} {:>5} {:>9} {:>7} {:>8} | vs full rate: {:>9} {:>8} {:>8} | vs reference: {:>9} {:>8} {:>8} | tiles \
-         per rate",
+        "{:<26} {:>5} {:>9} {:>7} {:>8} {:>6} | vs full rate: {:>9} {:>8} {:>8} | vs reference: {:>9} {:>8} {:>8} | \
+         tiles per rate",
         "generator",
         "tile",
         "eval/px",
         "saved",
         "shade ms",
+        "SRI ms",
         "RMSE",
         "LDR-FLIP",
         "HDR-FLIP",
@@ -155,12 +163,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
     let r = &out.full_rate_vs_reference;
     println!(
-        "{:<26} {:>5} {:>9.3} {:>6.1}% {:>8.1} | {:>23} {:>9} {:>8} | {:>28.3e} {} |",
+        "{:<26} {:>5} {:>9.3} {:>6.1}% {:>8.1} {:>6} | {:>23} {:>9} {:>8} | {:>28.3e} {} |",
         "full rate",
         "-",
         out.full_rate_evaluations_per_pixel,
         0.0,
         out.full_rate_shade_ms,
+        "-",
         "",
         "",
         "",
@@ -174,12 +183,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             None => row.generator.clone(),
         };
         println!(
-            "{:<26} {:>5} {:>9.3} {:>6.1}% {:>8.1} | {:>23.3e} {} | {:>28.3e} {} | {}",
+            "{:<26} {:>5} {:>9.3} {:>6.1}% {:>8.1} {:>6} | {:>23.3e} {} | {:>28.3e} {} | {}",
             name,
             row.tile,
             row.evaluations_per_pixel,
             100.0 * row.saved,
             row.shade_ms,
+            row.sri_ms.map_or_else(|| "-".to_string(), |ms| format!("{ms:.1}")),
             row.vs_full_rate.rmse,
             flip(&row.vs_full_rate),
             row.vs_reference.rmse,

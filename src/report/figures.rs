@@ -162,6 +162,7 @@ pub fn aggregate_figures(rows: &[AggregateRow], over: Over) -> Result<(Vec<Attac
 /// captions.
 pub fn figures(
     gb: &GBuffer,
+    preview: Option<&dyn crate::detect::rate::Preview>,
     out: &SweepOutput,
     with_plots: bool,
     prefix: &str,
@@ -252,7 +253,7 @@ pub fn figures(
         // (Only where the frame gives the detector what it reads: the figure is an illustration, not a measurement.)
         let tile = crate::analysis::pipelines::VRS_TILE;
         let sri = crate::detect::detect(gb, crate::detect::Detector::Lauritzen, &Default::default())
-            .and_then(|mask| crate::detect::rate::gbuffer_sri(gb, &mask, tile, false, &Default::default()));
+            .and_then(|mask| crate::detect::rate::gbuffer_sri(gb, preview, &mask, tile, false, &Default::default()));
         if let Ok(sri) = sri {
             let rates = sri.picture(w, h);
             let over: Vec<u8> =
