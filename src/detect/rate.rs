@@ -224,7 +224,9 @@ impl Sri {
 /// albedo to the whole coarse pixel, so albedo contrast shows directly). Specular amount and roughness must agree
 /// within `albedo` too (they shape the lobe). A coarse pixel is allowed when every pair of horizontally (for its
 /// width) or vertically (for its height) adjacent pixels inside it is smooth; a tile takes the coarsest rate every
-/// coarse pixel in it allows, per direction.
+/// coarse pixel in it allows, per direction. Given a [`Preview`] of the lighting, the tile then takes the coarsest of
+/// those sizes whose mean preview error stays within [`Smoothness::preview`]: what the G-buffer cannot see, the
+/// lighting's own gradients (docs/DECISIONS.md, "Shading rates from the G-buffer").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Smoothness {
     /// Largest relative depth step.
@@ -238,7 +240,7 @@ pub struct Smoothness {
     /// On metals (metallic ≥ 0.5), the largest normal turn in units of the GGX lobe width `roughness²` (radians;
     /// 0: no such limit).
     pub lobe: f32,
-    /// When the lights are given ([`SriLighting`]): the largest mean error per covered pixel of a tile, in displayed
+    /// When a [`Preview`] of the lighting is given: the largest mean error per covered pixel of a tile, in displayed
     /// units (sRGB-encoded [0, 1]: 1/255 is one 8-bit code), that sharing evaluations may cost, estimated from the
     /// lighting's preview (`resolve::LightPreview`). A tile takes the coarsest rate the other tests allow whose
     /// pixels' previews differ from their coarse pixel's representative's by at most this on average (0: no such
