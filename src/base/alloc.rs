@@ -75,6 +75,53 @@ mod os {
         start
     }
 
+    /// Resizes a block [`map`] returned from `old` to `new` bytes (both multiples of [`HUGE`]) without copying: the
+    /// kernel moves its pages. In place when the addresses after it are free (or it shrinks), else to a fresh
+    /// 2 MiB boundary (reserved first, then the pages moved onto it), so that it keeps its huge pages. Only the pages
+    /// a grown block adds are new; null when the kernel refuses (the block is then untouched).
+    ///
+    /// # Safety
+    /// `ptr` and `old` are a live block of [`map`]'s; on success the caller uses only the returned block.
+    pub unsafe fn remap(ptr: *mut u8, old: usize, new: usize) -> *mut u8 {
+        // SAFETY: resizing the caller's own mapping in place (no flags: it never moves).
+        let same = unsafe { libc::mremap(ptr.cast(), old, new, 0) };
+        if same != libc::MAP_FAILED {
+            return same.cast();
+        }
+        let Some(over) = new.checked_add(HUGE) else { return std::ptr::null_mut() };
+        // SAFETY: an inaccessible anonymous reservation at an address the kernel chooses: nothing existing is
+        // affected.
+        let raw = unsafe {
+            libc::mmap(std::ptr::null_mut(), over, libc::PROT_NONE, libc::MAP_PRIVATE | libc::MAP_ANONYMOUS, -1, 0)
+        };
+        if raw == libc::MAP_FAILED {
+            return std::ptr::null_mut();
+        }
+        let raw = raw.cast::<u8>();
+        let lead = raw.align_offset(HUGE);
+        // SAFETY: `lead < HUGE`, so `[target, target + new)` lies inside the reservation.
+        let target = unsafe { raw.add(lead) };
+        // SAFETY: the caller's mapping moved onto the aligned part of our own reservation, which it replaces.
+        let moved = unsafe {
+            libc::mremap(ptr.cast(), old, new, libc::MREMAP_MAYMOVE | libc::MREMAP_FIXED, target.cast::<libc::c_void>())
+        };
+        // SAFETY: the reservation's parts outside the moved block (all of it on failure) are ours and unused.
+        unsafe {
+            if moved == libc::MAP_FAILED {
+                libc::munmap(raw.cast(), over);
+                return std::ptr::null_mut();
+            }
+            if lead > 0 {
+                libc::munmap(raw.cast(), lead);
+            }
+            let tail = over - lead - new;
+            if tail > 0 {
+                libc::munmap(target.add(new).cast(), tail);
+            }
+        }
+        target
+    }
+
     /// Unmaps a block [`map`] returned, of `len` bytes.
     ///
     /// # Safety
@@ -88,6 +135,9 @@ mod os {
 #[cfg(not(target_os = "linux"))]
 mod os {
     pub fn map(_: usize) -> *mut u8 {
+        unreachable!("no block is mapped outside Linux")
+    }
+    pub unsafe fn remap(_: *mut u8, _: usize, _: usize) -> *mut u8 {
         unreachable!("no block is mapped outside Linux")
     }
     pub unsafe fn unmap(_: *mut u8, _: usize) {
@@ -138,19 +188,44 @@ unsafe impl GlobalAlloc for LargePages {
             (false, false) => unsafe { System.realloc(ptr, layout, new_size) },
             // The same whole huge pages: the block already holds `new_size` bytes.
             (true, true) if rounded(layout.size()) == rounded(new_size) => ptr,
-            _ => {
-                // SAFETY: `new` has a non-zero size (`new_size ≥ 1` by the contract).
-                let to = unsafe { self.alloc(new) };
-                if !to.is_null() {
-                    // SAFETY: both blocks hold at least the smaller size; they are distinct allocations.
-                    unsafe {
-                        std::ptr::copy_nonoverlapping(ptr, to, layout.size().min(new_size));
-                        self.dealloc(ptr, layout);
-                    }
+            // A mapped block resized: its pages moved by the kernel, not copied (nor the copy's pages made and
+            // zeroed: a growing vector faulted its whole length in again at every doubling).
+            (true, true) => {
+                // SAFETY: `ptr` is a live mapped block of `rounded(layout.size())` bytes (`mapped(layout)`); on
+                // success only the returned block is used, and `mapped(new)` frees it with the new rounded length.
+                let moved = unsafe { os::remap(ptr, rounded(layout.size()), rounded(new_size)) };
+                if moved.is_null() {
+                    // SAFETY: as below, the general path (allocate, copy, release).
+                    unsafe { self.copy_to_new(ptr, layout, new) }
+                } else {
+                    moved
                 }
-                to
+            }
+            // SAFETY: `new` has a non-zero size (`new_size ≥ 1` by the contract) and `ptr` is a live block of
+            // `layout`.
+            _ => unsafe { self.copy_to_new(ptr, layout, new) },
+        }
+    }
+}
+
+impl LargePages {
+    /// `realloc` by allocating a block of `new`, copying, then releasing the old one (null, with the old block
+    /// untouched, when the allocation fails).
+    ///
+    /// # Safety
+    /// `ptr` is a live block of `layout` from this allocator; `new` has a non-zero size.
+    unsafe fn copy_to_new(&self, ptr: *mut u8, layout: Layout, new: Layout) -> *mut u8 {
+        // SAFETY: `new` has a non-zero size (this function's contract).
+        let to = unsafe { self.alloc(new) };
+        if !to.is_null() {
+            // SAFETY: both blocks hold at least the smaller size; they are distinct allocations; `ptr` is released
+            // once, with its own layout.
+            unsafe {
+                std::ptr::copy_nonoverlapping(ptr, to, layout.size().min(new.size()));
+                self.dealloc(ptr, layout);
             }
         }
+        to
     }
 }
 
@@ -162,9 +237,15 @@ mod tests {
     #[test]
     fn blocks_keep_their_bytes_across_the_threshold() {
         let a = LargePages;
-        for (size, new_size) in
-            [(64, LARGE + 1), (LARGE + 1, 64), (LARGE, LARGE + HUGE), (LARGE + 5, LARGE + 7), (3 * LARGE, LARGE - 1)]
-        {
+        for (size, new_size) in [
+            (64, LARGE + 1),
+            (LARGE + 1, 64),
+            (LARGE, LARGE + HUGE),
+            (LARGE + 5, LARGE + 7),
+            (3 * LARGE, LARGE - 1),
+            (LARGE + 1, 6 * LARGE),
+            (8 * LARGE, 2 * LARGE),
+        ] {
             let layout = Layout::from_size_align(size, 16).unwrap();
             // SAFETY: a non-zero layout; every pointer is checked before use and released once with its layout.
             unsafe {
@@ -180,12 +261,49 @@ mod tests {
                 }
                 let q = a.realloc(p, layout, new_size);
                 assert!(!q.is_null(), "{size} → {new_size}");
+                if mapped(Layout::from_size_align(new_size, 16).unwrap()) {
+                    assert_eq!(q as usize % HUGE, 0, "{size} → {new_size}: still at a huge page");
+                }
                 for i in (0..size.min(new_size)).step_by(4093) {
                     assert_eq!(*q.add(i), (i % 251) as u8, "{size} → {new_size}: byte {i}");
                 }
                 *q.add(new_size - 1) = 7;
                 a.dealloc(q, Layout::from_size_align(new_size, 16).unwrap());
             }
+        }
+    }
+
+    /// A mapped block that cannot grow where it is (the next page is taken) moves, keeps its bytes and its 2 MiB
+    /// boundary, and is released whole.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_blocked_block_moves_its_pages() {
+        let a = LargePages;
+        let layout = Layout::from_size_align(LARGE, 64).unwrap();
+        // SAFETY: a fresh block, a fresh guard page after it (MAP_FIXED_NOREPLACE fails rather than replace
+        // anything), every pointer released once with its own size.
+        unsafe {
+            let p = a.alloc(layout);
+            assert!(!p.is_null());
+            std::slice::from_raw_parts_mut(p, LARGE).iter_mut().enumerate().for_each(|(i, b)| *b = (i % 253) as u8);
+            let end = p.add(rounded(LARGE));
+            let guard = libc::mmap(
+                end.cast(),
+                4096,
+                libc::PROT_NONE,
+                libc::MAP_PRIVATE | libc::MAP_ANONYMOUS | libc::MAP_FIXED_NOREPLACE,
+                -1,
+                0,
+            );
+            let q = a.realloc(p, layout, 5 * LARGE);
+            assert!(!q.is_null() && q as usize % HUGE == 0);
+            if guard != libc::MAP_FAILED {
+                assert_ne!(q, p, "the guard page after it leaves no room in place");
+                libc::munmap(guard, 4096);
+            }
+            assert!(std::slice::from_raw_parts(q, LARGE).iter().enumerate().all(|(i, &b)| b == (i % 253) as u8));
+            assert!(std::slice::from_raw_parts(q.add(LARGE), 4 * LARGE).iter().all(|&b| b == 0), "new pages are zero");
+            a.dealloc(q, Layout::from_size_align(5 * LARGE, 64).unwrap());
         }
     }
 }
