@@ -296,7 +296,7 @@ mod tests {
                 0,
             );
             let q = a.realloc(p, layout, 5 * LARGE);
-            assert!(!q.is_null() && q as usize % HUGE == 0);
+            assert!(!q.is_null() && (q as usize).is_multiple_of(HUGE));
             if guard != libc::MAP_FAILED {
                 assert_ne!(q, p, "the guard page after it leaves no room in place");
                 libc::munmap(guard, 4096);
