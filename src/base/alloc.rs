@@ -78,7 +78,8 @@ mod os {
     /// Resizes a block [`map`] returned from `old` to `new` bytes (both multiples of [`HUGE`]) without copying: the
     /// kernel moves its pages. In place when the addresses after it are free (or it shrinks), else to a fresh
     /// 2 MiB boundary (reserved first, then the pages moved onto it), so that it keeps its huge pages. Only the pages
-    /// a grown block adds are new; null when the kernel refuses (the block is then untouched).
+    /// a grown block adds are new. Null when the kernel refuses: the block is then whole and where it was (a failed
+    /// move may leave part of the reservation mapped, inaccessible: address space, not memory).
     ///
     /// # Safety
     /// `ptr` and `old` are a live block of [`map`]'s; on success the caller uses only the returned block.
@@ -87,6 +88,10 @@ mod os {
         let same = unsafe { libc::mremap(ptr.cast(), old, new, 0) };
         if same != libc::MAP_FAILED {
             return same.cast();
+        }
+        // Only a growing block moves (a shrink in place cannot lack room).
+        if new <= old {
+            return std::ptr::null_mut();
         }
         let Some(over) = new.checked_add(HUGE) else { return std::ptr::null_mut() };
         // SAFETY: an inaccessible anonymous reservation at an address the kernel chooses: nothing existing is
@@ -105,18 +110,19 @@ mod os {
         let moved = unsafe {
             libc::mremap(ptr.cast(), old, new, libc::MREMAP_MAYMOVE | libc::MREMAP_FIXED, target.cast::<libc::c_void>())
         };
-        // SAFETY: the reservation's parts outside the moved block (all of it on failure) are ours and unused.
+        // SAFETY: the reservation's parts outside `[target, target + new)` are ours and unused, moved or not. That range
+        // is left alone even on failure: the kernel may already have unmapped it, and something else may have been
+        // mapped there since.
         unsafe {
-            if moved == libc::MAP_FAILED {
-                libc::munmap(raw.cast(), over);
-                return std::ptr::null_mut();
-            }
             if lead > 0 {
                 libc::munmap(raw.cast(), lead);
             }
             let tail = over - lead - new;
             if tail > 0 {
                 libc::munmap(target.add(new).cast(), tail);
+            }
+            if moved == libc::MAP_FAILED {
+                return std::ptr::null_mut();
             }
         }
         target

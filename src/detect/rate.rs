@@ -244,7 +244,8 @@ pub struct Smoothness {
     /// units (sRGB-encoded [0, 1]: 1/255 is one 8-bit code), that sharing evaluations may cost, estimated from the
     /// lighting's preview (`resolve::LightPreview`). A tile takes the coarsest rate the other tests allow whose
     /// pixels' previews differ from their coarse pixel's representative's by at most this on average (0: no such
-    /// limit).
+    /// limit). The previews are the broadcast colour's: in `lighting` mode, whose remodulation restores each pixel's
+    /// albedo, they bound its error from above.
     pub preview: f32,
 }
 
@@ -283,7 +284,7 @@ struct Band {
     ab: Vec<f32>,
     material: Vec<u32>,
     object: Vec<u32>,
-    /// The lighting's displayed preview (empty without lights).
+    /// The lighting's displayed preview (empty without a [`Preview`]).
     preview: Vec<f32>,
 }
 
@@ -519,6 +520,10 @@ impl crate::base::isa::Kernel for BandRates<'_> {
                     .iter()
                     .flat_map(|&cw| [1, 2, 4].map(|ch| (cw, ch)))
                     .filter(|&(cw, ch)| cw <= rw && ch <= rh)
+                    // Only the sizes the rate set holds as they are (others would be checked but emitted smaller).
+                    .filter(|&(cw, ch)| {
+                        Rate::fit(cw as u32, ch as u32, self.extra, gb.samples).size() == (cw as u32, ch as u32)
+                    })
                     .collect();
                 // Fewest evaluations first; of equal ones, the squarer (2 × 2 before 4 × 1).
                 sizes.sort_by_key(|&(cw, ch)| (std::cmp::Reverse(cw * ch), cw.abs_diff(ch)));
@@ -542,7 +547,7 @@ pub trait Preview: Sync {
 }
 
 /// What the rule has read of a band, per pixel at its sample (`at` of [`Preview::pixels`]): the view depth (0 where
-/// the frame has none), the unit normal (zero where it had none or a bad one), the raw albedo (read only when the
+/// the frame has none), the unit normal (+Z where the frame has none, zero where it is bad), the raw albedo (read only when the
 /// frame has one), the roughness in [0, 1] (read only when the frame has one) and the raw metallic (0 where the
 /// frame has none).
 pub struct Gathered<'b> {
@@ -558,8 +563,8 @@ pub struct Gathered<'b> {
     pub metallic: &'b [f32],
 }
 
-/// gbuf's SRI of `gb` (tile size `tile`: 8, 16 or 32), from the edge `mask` and the G-buffer alone ([`Smoothness`]);
-/// `extra` allows the rates beyond 2 × 2. Bands of tile rows run in parallel on rayon's current pool, each compiled
+/// gbuf's SRI of `gb` (tile size `tile`: 8, 16 or 32), from the edge `mask`, the G-buffer and, when given, the
+/// `preview` of its lighting ([`Smoothness`]); `extra` allows the rates beyond 2 × 2. Bands of tile rows run in parallel on rayon's current pool, each compiled
 /// for the CPU's widest instruction set.
 pub fn gbuffer_sri(
     gb: &GBuffer,

@@ -264,11 +264,12 @@ pub fn figures(
             figs.push(Figure {
                 file,
                 caption: format!(
-                "A/B: gbuf's shading-rate image (tile {tile}, from the G-buffer and the lauritzen mask, before any \
-                 lighting) over the reference, same crop: green 1×1, blue 2×1, cyan 1×2, yellow 2×2; {:.0}% of the \
-                 frame's tiles shade coarser than once per pixel (`gbuf vrs` measures what that costs)",
-                100.0 * coarse
-            ),
+                    "A/B: gbuf's shading-rate image (tile {tile}, from the G-buffer{} and the lauritzen mask, before \
+                     the lighting) over the reference, same crop: green 1×1, blue 2×1, cyan 1×2, yellow 2×2; {:.0}% \
+                     of the frame's tiles shade coarser than once per pixel (`gbuf vrs` measures what that costs)",
+                    if preview.is_some() { ", a preview of its lights" } else { "" },
+                    100.0 * coarse
+                ),
                 against: Some(ab_reference.clone()),
             });
         }

@@ -121,7 +121,8 @@ impl<'a> LightPreview<'a> {
             Some(_) => order
                 .iter()
                 .map(|&k| Vec3::new(g.albedo[0][k], g.albedo[1][k], g.albedo[2][k]))
-                .map(|c| if c.is_finite() { c.clamp(Vec3::ZERO, Vec3::ONE) } else { Vec3::ZERO })
+                // As the resolve: a channel that is not a finite non-negative number is 0.
+                .map(|c| Vec3::from_array(c.to_array().map(|v| if v.is_finite() && v >= 0.0 { v } else { 0.0 })))
                 .collect(),
             None => vec![Vec3::splat(DEFAULT_ALBEDO); n],
         };
@@ -234,7 +235,9 @@ impl<'a> LightPreview<'a> {
                 // The resolve's environment factor is the diffuse lobe times π (irradiance = π × mean radiance).
                 let mean = env.sky * (0.5 + 0.5 * c) + env.ground * (0.5 - 0.5 * c);
                 for (ch, (total, diffuse)) in sum.iter_mut().zip(&s.diffuse).enumerate() {
-                    total[k] += diffuse[k] * std::f32::consts::PI * mean[ch];
+                    // GGX's diffuse lobe at normal incidence keeps 1 − F0 (`s.spec` is F0 there).
+                    let kept = if self.brdf == Brdf::Ggx { 1.0 - s.spec[ch][k] } else { 1.0 };
+                    total[k] += diffuse[k] * kept * std::f32::consts::PI * mean[ch];
                 }
             }
         }
