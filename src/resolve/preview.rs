@@ -40,6 +40,7 @@ pub struct LightPreview<'a> {
 /// One band's surfaces as structure of arrays (one entry per pixel).
 #[derive(Default)]
 struct Surfaces {
+    /// Position (−1 where unusable).
     p: [Vec<f32>; 3],
     n: [Vec<f32>; 3],
     /// The view direction (unit, towards the eye).
@@ -53,6 +54,32 @@ struct Surfaces {
     /// GGX: `max(N·V, MIN_NDOTV)`.
     nv: Vec<f32>,
     valid: Vec<bool>,
+}
+
+impl Surfaces {
+    fn clear(&mut self) {
+        let [p, n, v, d, sp] = [&mut self.p, &mut self.n, &mut self.v, &mut self.diffuse, &mut self.spec];
+        for a in p.iter_mut().chain(n).chain(v).chain(d).chain(sp) {
+            a.clear();
+        }
+        self.s1.clear();
+        self.nv.clear();
+        self.valid.clear();
+    }
+}
+
+/// A thread's working arrays of [`LightPreview::pixels_impl`], kept from band to band (the report's 1080p bands
+/// otherwise allocated and faulted in some 25 arrays each).
+#[derive(Default)]
+struct Scratch {
+    surfaces: Surfaces,
+    order: Vec<usize>,
+    ends: Vec<usize>,
+    sum: [Vec<f32>; 3],
+}
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
 }
 
 impl<'a> LightPreview<'a> {
@@ -70,109 +97,76 @@ impl<'a> LightPreview<'a> {
         })
     }
 
-    /// The surfaces of the pixels `p0 + order[j]` at their samples `at[order[j]]`, in the order of `order`, from what
-    /// the caller gathered (`g`, per pixel of the band) and the planes it did not, with the resolve's defaults and
-    /// clamps (not its counts: a preview).
+    /// The surfaces of the pixels `p0 + order[j]` at their samples `at[order[j]]`, in the order of `order`, into `s`
+    /// (cleared first: its arrays keep their capacity from band to band), from what the caller gathered (`g`, per
+    /// pixel of the band) and the planes it did not, with the resolve's defaults and clamps (not its counts: a
+    /// preview). One pass over the pixels.
     #[inline(always)]
-    fn surfaces(&self, p0: usize, order: &[usize], at: &[usize], g: &Gathered<'_>) -> Surfaces {
+    fn surfaces(&self, p0: usize, order: &[usize], at: &[usize], g: &Gathered<'_>, s: &mut Surfaces) {
         let gb = self.reader.gbuffer();
         let (w, spp) = (gb.width as usize, gb.samples as usize);
-        let n = order.len();
-        let plane = |v: Option<&Vec<f32>>, default: f32, lo: f32, hi: f32| -> Vec<f32> {
-            match v {
-                Some(v) => order
-                    .iter()
-                    .map(|&k| v[at[k]])
-                    .map(|x| if x.is_nan() { default } else { x.clamp(lo, hi) })
-                    .collect(),
-                None => vec![default; n],
-            }
+        s.clear();
+        let plane = |v: Option<&Vec<f32>>, i: usize, default: f32, hi: f32| match v {
+            Some(v) if !v[i].is_nan() => v[i].clamp(0.0, hi),
+            _ => default,
         };
-        let mut s = Surfaces::default();
-        // Positions: the plane's, or the camera ray through the sample times its depth.
-        let pos: Vec<Vec3> = match (&gb.position, gb.depth.is_some(), self.reader.rays()) {
-            (Some(pos), _, _) => order.iter().map(|&k| pos[at[k]]).collect(),
-            (None, true, Some(rays)) => order
-                .iter()
-                .map(|&k| {
-                    let p = p0 + k;
-                    let o = gb.sample_positions[at[k] - p * spp];
-                    super::surface::position_from_depth(&rays, (p % w) as u32, (p / w) as u32, o, g.depth[k])
-                })
-                .collect(),
-            _ => vec![Vec3::NAN; n],
-        };
-        s.valid = pos.iter().map(|&p| usable_position(p)).collect();
-        for c in 0..3 {
-            s.p[c] = pos.iter().zip(&s.valid).map(|(p, &ok)| if ok { p[c] } else { -1.0 }).collect();
-        }
-        let nrm: Vec<Vec3> = order
-            .iter()
-            .map(|&k| Vec3::new(g.normal[0][k], g.normal[1][k], g.normal[2][k]))
-            .map(|v| if v == Vec3::ZERO { Vec3::Z } else { v })
-            .collect();
-        let view: Vec<Vec3> = pos.iter().map(|p| -p.normalize_or(Vec3::NEG_Z)).collect();
-        for c in 0..3 {
-            s.n[c] = nrm.iter().map(|v| v[c]).collect();
-            s.v[c] = view.iter().map(|v| v[c]).collect();
-        }
-        s.nv = nrm.iter().zip(&view).map(|(n, v)| n.dot(*v).max(MIN_NDOTV)).collect();
-        let albedo: Vec<Vec3> = match gb.albedo {
-            Some(_) => order
-                .iter()
-                .map(|&k| Vec3::new(g.albedo[0][k], g.albedo[1][k], g.albedo[2][k]))
-                // As the resolve: a channel that is not a finite non-negative number is 0.
-                .map(|c| Vec3::from_array(c.to_array().map(|v| if v.is_finite() && v >= 0.0 { v } else { 0.0 })))
-                .collect(),
-            None => vec![Vec3::splat(DEFAULT_ALBEDO); n],
-        };
+        let rays = self.reader.rays();
         let pi = std::f32::consts::PI;
-        let channels = |v: &[Vec3]| -> [Vec<f32>; 3] { [0, 1, 2].map(|c| v.iter().map(|x| x[c]).collect()) };
-        match self.brdf {
-            Brdf::Lambert => {
-                s.s1 = vec![0.0; n];
-                s.diffuse = channels(&albedo.iter().map(|a| *a / pi).collect::<Vec<_>>());
-                s.spec = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+        for &k in order {
+            let i = at[k];
+            // Positions: the plane's, or the camera ray through the sample times its depth.
+            let pos = match (&gb.position, gb.depth.is_some(), &rays) {
+                (Some(pos), _, _) => pos[i],
+                (None, true, Some(rays)) => {
+                    let p = p0 + k;
+                    let o = gb.sample_positions[i - p * spp];
+                    super::surface::position_from_depth(rays, (p % w) as u32, (p / w) as u32, o, g.depth[k])
+                }
+                _ => Vec3::NAN,
+            };
+            let valid = usable_position(pos);
+            let n = Vec3::new(g.normal[0][k], g.normal[1][k], g.normal[2][k]);
+            let n = if n == Vec3::ZERO { Vec3::Z } else { n };
+            let v = -pos.normalize_or(Vec3::NEG_Z);
+            for c in 0..3 {
+                s.p[c].push(if valid { pos[c] } else { -1.0 });
+                s.n[c].push(n[c]);
+                s.v[c].push(v[c]);
             }
-            Brdf::Ggx => {
-                let metal: Vec<f32> = order
-                    .iter()
-                    .map(|&k| g.metallic[k])
-                    .map(|m| if m.is_nan() { 0.0 } else { m.clamp(0.0, 1.0) })
-                    .collect();
-                let rough: Vec<f32> = match gb.roughness {
-                    Some(_) => order.iter().map(|&k| g.roughness[k]).collect(),
-                    None => plane(gb.specular_power.as_ref(), DEFAULT_SPECULAR_POWER, 0.0, MAX_SPECULAR_POWER)
-                        .into_iter()
-                        .map(roughness_from_power)
-                        .collect(),
-                };
-                s.diffuse = channels(&albedo.iter().zip(&metal).map(|(a, m)| *a * (1.0 - m) / pi).collect::<Vec<_>>());
-                s.s1 = rough.iter().map(|r| (r * r).max(MIN_ALPHA).powi(2)).collect();
-                s.spec = channels(
-                    &albedo
-                        .iter()
-                        .zip(&metal)
-                        .map(|(c, &m)| Vec3::splat(DIELECTRIC_F0).lerp(*c, m))
-                        .collect::<Vec<_>>(),
-                );
+            s.nv.push(n.dot(v).max(MIN_NDOTV));
+            s.valid.push(valid);
+            // As the resolve: a channel that is not a finite non-negative number is 0.
+            let albedo = match gb.albedo {
+                Some(_) => Vec3::from_array([0, 1, 2].map(|c| g.albedo[c][k]).map(|a| {
+                    if a.is_finite() && a >= 0.0 {
+                        a
+                    } else {
+                        0.0
+                    }
+                })),
+                None => Vec3::splat(DEFAULT_ALBEDO),
+            };
+            let power = || plane(gb.specular_power.as_ref(), i, DEFAULT_SPECULAR_POWER, MAX_SPECULAR_POWER);
+            let (diffuse, spec, s1) = match self.brdf {
+                Brdf::Lambert => (albedo / pi, Vec3::ZERO, 0.0),
+                Brdf::Ggx => {
+                    let m = g.metallic[k];
+                    let m = if m.is_nan() { 0.0 } else { m.clamp(0.0, 1.0) };
+                    let rough = if gb.roughness.is_some() { g.roughness[k] } else { roughness_from_power(power()) };
+                    let f0 = Vec3::splat(DIELECTRIC_F0).lerp(albedo, m);
+                    (albedo * (1.0 - m) / pi, f0, (rough * rough).max(MIN_ALPHA).powi(2))
+                }
+                Brdf::BlinnPhong => {
+                    let (sp, pw) = (plane(gb.specular.as_ref(), i, DEFAULT_SPECULAR, f32::MAX), power());
+                    (albedo, albedo * (sp * (pw + 2.0) / 8.0), pw)
+                }
+            };
+            for c in 0..3 {
+                s.diffuse[c].push(diffuse[c]);
+                s.spec[c].push(spec[c]);
             }
-            Brdf::BlinnPhong => {
-                let spec = plane(gb.specular.as_ref(), DEFAULT_SPECULAR, 0.0, f32::MAX);
-                let power = plane(gb.specular_power.as_ref(), DEFAULT_SPECULAR_POWER, 0.0, MAX_SPECULAR_POWER);
-                s.diffuse = channels(&albedo);
-                s.spec = channels(
-                    &albedo
-                        .iter()
-                        .zip(&spec)
-                        .zip(&power)
-                        .map(|((a, sp), pw)| *a * (sp * (pw + 2.0) / 8.0))
-                        .collect::<Vec<_>>(),
-                );
-                s.s1 = power;
-            }
+            s.s1.push(s1);
         }
-        s
     }
 
     /// `out[k]`: the displayed preview of sample `at[k]`, a flat index of pixel `p0 + k` (0 where that sample is
@@ -190,71 +184,73 @@ impl<'a> LightPreview<'a> {
         let block = block.max(1);
         // Only covered samples: the others stay 0.
         let coverage = &self.reader.gbuffer().coverage;
-        let (mut order, mut ends) = (Vec::with_capacity(n), Vec::new());
-        for x0 in (0..w).step_by(block) {
-            for r in 0..rows {
-                order.extend((r * w + x0..r * w + (x0 + block).min(w)).filter(|&k| coverage[at[k]]));
+        SCRATCH.with_borrow_mut(|scratch| {
+            let Scratch { surfaces: s, order, ends, sum } = scratch;
+            order.clear();
+            ends.clear();
+            for x0 in (0..w).step_by(block) {
+                for r in 0..rows {
+                    order.extend((r * w + x0..r * w + (x0 + block).min(w)).filter(|&k| coverage[at[k]]));
+                }
+                ends.push(order.len());
             }
-            ends.push(order.len());
-        }
-        let s = self.surfaces(p0, &order, at, g);
-        let mut sum = [vec![0.0f32; order.len()], vec![0.0f32; order.len()], vec![0.0f32; order.len()]];
-        let mut culled = Vec::with_capacity(self.lights.len());
-        let mut start = 0;
-        for &end in &ends {
-            let span = start..end;
-            start = end;
-            let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-            for k in span.clone() {
-                if s.valid[k] {
-                    let p = Vec3::new(s.p[0][k], s.p[1][k], s.p[2][k]);
-                    (lo, hi) = (lo.min(p), hi.max(p));
+            self.surfaces(p0, order, at, g, s);
+            let s = &*s;
+            for a in sum.iter_mut() {
+                a.clear();
+                a.resize(order.len(), 0.0);
+            }
+            let mut culled = Vec::with_capacity(self.lights.len());
+            let mut start = 0;
+            for &end in ends.iter() {
+                let span = start..end;
+                start = end;
+                let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+                for k in span.clone() {
+                    if s.valid[k] {
+                        let p = Vec3::new(s.p[0][k], s.p[1][k], s.p[2][k]);
+                        (lo, hi) = (lo.min(p), hi.max(p));
+                    }
+                }
+                // Each light's sphere against the box (directional lights have an infinite radius).
+                culled.clear();
+                culled.extend(self.lights.rec.iter().filter(|l| {
+                    let c = Vec3::new(l.px, l.py, l.pz);
+                    l.w == 0.0 || c.clamp(lo, hi).distance_squared(c) < l.r2
+                }));
+                for l in &culled {
+                    match (self.brdf, self.falloff) {
+                        (Brdf::Lambert, Falloff::Gltf) => light_pass::<0, 0>(l, s, span.clone(), sum),
+                        (Brdf::Lambert, Falloff::Linear) => light_pass::<0, 1>(l, s, span.clone(), sum),
+                        (Brdf::Ggx, Falloff::Gltf) => light_pass::<1, 0>(l, s, span.clone(), sum),
+                        (Brdf::Ggx, Falloff::Linear) => light_pass::<1, 1>(l, s, span.clone(), sum),
+                        (Brdf::BlinnPhong, Falloff::Gltf) => light_pass::<2, 0>(l, s, span.clone(), sum),
+                        (Brdf::BlinnPhong, Falloff::Linear) => light_pass::<2, 1>(l, s, span.clone(), sum),
+                    }
                 }
             }
-            // Each light's sphere against the box (directional lights have an infinite radius).
-            culled.clear();
-            culled.extend(self.lights.rec.iter().filter(|l| {
-                let c = Vec3::new(l.px, l.py, l.pz);
-                l.w == 0.0 || c.clamp(lo, hi).distance_squared(c) < l.r2
-            }));
-            for l in &culled {
-                let sum = &mut sum;
-                match (self.brdf, self.falloff) {
-                    (Brdf::Lambert, Falloff::Gltf) => light_pass::<0, 0>(l, &s, span.clone(), sum),
-                    (Brdf::Lambert, Falloff::Linear) => light_pass::<0, 1>(l, &s, span.clone(), sum),
-                    (Brdf::Ggx, Falloff::Gltf) => light_pass::<1, 0>(l, &s, span.clone(), sum),
-                    (Brdf::Ggx, Falloff::Linear) => light_pass::<1, 1>(l, &s, span.clone(), sum),
-                    (Brdf::BlinnPhong, Falloff::Gltf) => light_pass::<2, 0>(l, &s, span.clone(), sum),
-                    (Brdf::BlinnPhong, Falloff::Linear) => light_pass::<2, 1>(l, &s, span.clone(), sum),
+            for env in &self.environment {
+                for k in 0..order.len() {
+                    let c = (s.n[0][k] * env.up.x + s.n[1][k] * env.up.y + s.n[2][k] * env.up.z).clamp(-1.0, 1.0);
+                    // The resolve's environment factor is the diffuse lobe times π (irradiance = π × mean radiance).
+                    let mean = env.sky * (0.5 + 0.5 * c) + env.ground * (0.5 - 0.5 * c);
+                    for (ch, (total, diffuse)) in sum.iter_mut().zip(&s.diffuse).enumerate() {
+                        // GGX's diffuse lobe at normal incidence keeps 1 − F0 (`s.spec` is F0 there).
+                        let kept = if self.brdf == Brdf::Ggx { 1.0 - s.spec[ch][k] } else { 1.0 };
+                        total[k] += diffuse[k] * kept * std::f32::consts::PI * mean[ch];
+                    }
                 }
             }
-        }
-        for env in &self.environment {
-            for k in 0..order.len() {
-                let c = (s.n[0][k] * env.up.x + s.n[1][k] * env.up.y + s.n[2][k] * env.up.z).clamp(-1.0, 1.0);
-                // The resolve's environment factor is the diffuse lobe times π (irradiance = π × mean radiance).
-                let mean = env.sky * (0.5 + 0.5 * c) + env.ground * (0.5 - 0.5 * c);
-                for (ch, (total, diffuse)) in sum.iter_mut().zip(&s.diffuse).enumerate() {
-                    // GGX's diffuse lobe at normal incidence keeps 1 − F0 (`s.spec` is F0 there).
-                    let kept = if self.brdf == Brdf::Ggx { 1.0 - s.spec[ch][k] } else { 1.0 };
-                    total[k] += diffuse[k] * kept * std::f32::consts::PI * mean[ch];
-                }
+            out.clear();
+            out.resize(n, 0.0);
+            let [r, g, b] = &*sum;
+            for ((((&k, r), g), b), &valid) in order.iter().zip(r).zip(g).zip(b).zip(&s.valid) {
+                let y = self.tone.apply(LUMA.x * r + LUMA.y * g + LUMA.z * b);
+                // sRGB's encoding, with the crate's branch-free power.
+                let shown = if y <= 0.003_130_8 { 12.92 * y } else { 1.055 * pow_clamped(y, 1.0 / 2.4) - 0.055 };
+                out[k] = if valid { shown } else { 0.0 };
             }
-        }
-        let [r, g, b] = &sum;
-        let mut lum: Vec<f32> =
-            r.iter().zip(g).zip(b).map(|((r, g), b)| LUMA.x * r + LUMA.y * g + LUMA.z * b).collect();
-        for (e, &valid) in lum.iter_mut().zip(&s.valid) {
-            let y = self.tone.apply(*e);
-            // sRGB's encoding, with the crate's branch-free power.
-            let shown = if y <= 0.003_130_8 { 12.92 * y } else { 1.055 * pow_clamped(y, 1.0 / 2.4) - 0.055 };
-            *e = if valid { shown } else { 0.0 };
-        }
-        out.clear();
-        out.resize(n, 0.0);
-        for (&k, &v) in order.iter().zip(&lum) {
-            out[k] = v;
-        }
+        });
     }
 }
 
