@@ -182,7 +182,8 @@ fn time_per_frame() {
 }
 
 /// Coarse shading's time against the full-rate resolve's on the room at `GBUF_PERF_SIZE` (default 1920×1080) × 4
-/// with its default lights, lauritzen edges and gbuf's SRI at tile 16 (broadcast): per case the best wall time of
+/// with its default lights, lauritzen edges and gbuf's SRI at tile 16 with its lighting preview (broadcast): per case
+/// the best wall time of
 /// `GBUF_PERF_FRAMES` frames on one thread, alternating, with the stage split and the evaluations.
 #[test]
 #[ignore = "measurement, not a test: run in release with --ignored --nocapture"]
@@ -194,11 +195,13 @@ fn coarse_shading_time() {
     let gb = gbuf::scene::render(gbuf::scene::SceneName::Room, w, h, 4).unwrap();
     let lights = gbuf::scene::default_lights(gbuf::scene::SceneName::Room, &gb);
     let mask = detect(&gb, Detector::Lauritzen, &DetectorConfig::default()).unwrap();
-    let t0 = Instant::now();
-    let sri = gbuffer_sri(&gb, None, &mask, 16, false, &Default::default()).unwrap();
-    let t_sri = t0.elapsed().as_secs_f64() * 1e3;
     let brdf = gbuf::resolve::Brdf::Ggx;
     let cfg = ResolveConfig { brdf, ..Default::default() };
+    // The rule as `gbuf vrs` runs it: the G-buffer tests and the preview of the lighting.
+    let preview = gbuf::resolve::LightPreview::new(&gb, &lights, cfg.falloff, brdf, Default::default()).unwrap();
+    let t0 = Instant::now();
+    let sri = gbuffer_sri(&gb, Some(&preview), &mask, 16, false, &Default::default()).unwrap();
+    let t_sri = t0.elapsed().as_secs_f64() * 1e3;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
     let coarse = Coarse { sri: &sri, mode: CoarseMode::Broadcast };
     let mut best = [f64::INFINITY; 2];
