@@ -221,7 +221,7 @@ fn aggregates_widen_the_specular_lobe_where_normals_disagree() {
 
 #[test]
 fn lighting_strip_by_strip_is_lighting_the_whole_compressed_frame() {
-    use gbuf::analysis::compress::{light_compressed, Method};
+    use gbuf::analysis::compress::{light_compressed, CompressFrame, Method};
     for scene in [SceneName::Room, SceneName::Stress] {
         let gb = render(scene, 61, 45, 4).unwrap();
         let lights = default_lights(scene, &gb);
@@ -233,7 +233,8 @@ fn lighting_strip_by_strip_is_lighting_the_whole_compressed_frame() {
             };
             let want = whole.light(&lights, &rc).unwrap();
             for strip in [1, 7, 16, 64] {
-                let lit = light_compressed(&gb, method, &cfg(slots, true), &lights, &rc, strip).unwrap();
+                let frame = CompressFrame::new(&gb).unwrap();
+                let lit = light_compressed(&frame, method, &cfg(slots, true), &lights, &rc, strip).unwrap();
                 let what = format!("{scene:?} {method:?} {slots} slots, strips of {strip}");
                 assert!(
                     want.image

@@ -271,6 +271,12 @@ struct Prepared<'a> {
 
 /// Checks `slots` (1..=samples, at most 64 samples) and derives what [`run_rows`] reads.
 fn prepare<'a>(gb: &'a GBuffer, slots: u32, what: &str) -> Result<Prepared<'a>> {
+    check_slots(gb, slots, what)?;
+    derive(gb)
+}
+
+/// Whether `gb` can be compressed into `slots` (1..=samples, at most 64 samples).
+fn check_slots(gb: &GBuffer, slots: u32, what: &str) -> Result<()> {
     gb.validate()?;
     let s = gb.samples;
     if slots == 0 || slots > s {
@@ -279,6 +285,12 @@ fn prepare<'a>(gb: &'a GBuffer, slots: u32, what: &str) -> Result<Prepared<'a>> 
     if s > 64 {
         return Err(Error::Argument(format!("MSAA G-buffer compression masks hold 64 samples, not {s}")));
     }
+    Ok(())
+}
+
+/// What [`run_rows`] reads of `gb`, whatever the method and slot count: its positions, view depth and slopes.
+fn derive(gb: &GBuffer) -> Result<Prepared<'_>> {
+    gb.validate()?;
     // Positions for the lighting pass: the input's, or derived from depth (one plane; the input is not copied).
     let position: Cow<'_, [Vec3]> = match &gb.position {
         Some(p) => Cow::Borrowed(p),
@@ -602,27 +614,40 @@ pub struct LitCompressed {
     pub discarded_pixels: u64,
 }
 
-/// Compresses `gb` ([`compress`] for [`Method::Streaming`], [`aggregate`] with `cfg.slots` layers for
+/// What every compression of one frame reads (its positions, derived from depth when it has none, its view depth
+/// and depth slopes), derived once ([`CompressFrame::new`]) for all the methods and slot counts
+/// [`light_compressed`] runs on the frame.
+pub struct CompressFrame<'a>(Prepared<'a>);
+
+impl<'a> CompressFrame<'a> {
+    /// Derives what the compressors read of `gb`; fails when it has no positions and no depth with a camera.
+    pub fn new(gb: &'a GBuffer) -> Result<Self> {
+        derive(gb).map(CompressFrame)
+    }
+}
+
+/// Compresses the frame ([`compress`] for [`Method::Streaming`], [`aggregate`] with `cfg.slots` layers for
 /// [`Method::Aggregate`]) and lights it, `strip_rows` rows at a time: the same image as compressing the whole frame
 /// and calling [`Compressed::light`] (the resolve reads the slots' positions, so a strip lights as the frame does;
 /// tested), without the whole compressed G-buffer in memory.
 pub fn light_compressed(
-    gb: &GBuffer,
+    frame: &CompressFrame<'_>,
     method: Method,
     cfg: &StreamingConfig,
     lights: &[crate::light::Light],
     rc: &crate::resolve::ResolveConfig,
     strip_rows: usize,
 ) -> Result<LitCompressed> {
+    let (pre, gb) = (&frame.0, frame.0.gb);
     match method {
         Method::Streaming => {
-            let pre = prepare(gb, cfg.slots, "surface slots")?;
-            strips(&pre, *cfg, method, &stream_pixel(gb, cfg), lights, rc, strip_rows)
+            check_slots(gb, cfg.slots, "surface slots")?;
+            strips(pre, *cfg, method, &stream_pixel(gb, cfg), lights, rc, strip_rows)
         }
         Method::Aggregate => {
-            let pre = prepare(gb, cfg.slots, "aggregates")?;
+            check_slots(gb, cfg.slots, "aggregates")?;
             let config = StreamingConfig { slots: cfg.slots, merge: false };
-            strips(&pre, config, method, &aggregate_pixel(gb, cfg.slots), lights, rc, strip_rows)
+            strips(pre, config, method, &aggregate_pixel(gb, cfg.slots), lights, rc, strip_rows)
         }
     }
 }

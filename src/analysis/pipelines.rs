@@ -11,7 +11,9 @@
 //! `forward-msaa` detector's image); the deferred rows shade what the chosen detector asks. Forward rows need
 //! primitive IDs: without them they are listed with the reason and no numbers.
 
-use crate::analysis::compress::{footprint, light_compressed, FragmentKey, Method, StreamingConfig, STRIP_ROWS};
+use crate::analysis::compress::{
+    footprint, light_compressed, CompressFrame, FragmentKey, Method, StreamingConfig, STRIP_ROWS,
+};
 use crate::analysis::forward::{self, ForwardSamples, FragmentLists, QuadShading, Utilisation};
 use crate::analysis::traffic::{bandwidth, Counts};
 use crate::base::mask::EdgeMask;
@@ -1007,10 +1009,12 @@ impl Measure<'_> {
             // AGAA's configuration: 2 aggregates per pixel.
             (gb.samples >= 2).then_some((Method::Aggregate, 2)),
         );
+        // Positions, depth and slopes, derived once for every row (not part of a row's time: a renderer has them).
+        let frame = CompressFrame::new(gb)?;
         for (method, k) in runs {
             let t = Instant::now();
-            let mut lit =
-                light_compressed(gb, method, &StreamingConfig { slots: k, merge: true }, self.lights, &rc, STRIP_ROWS)?;
+            let slots = StreamingConfig { slots: k, merge: true };
+            let mut lit = light_compressed(&frame, method, &slots, self.lights, &rc, STRIP_ROWS)?;
             let ms = t.elapsed().as_secs_f64() * 1e3;
             let f = footprint(cfg.gbuffer_bytes, gb.samples, k);
             let error = self.err(&lit.image);
