@@ -546,9 +546,9 @@ pub trait Preview: Sync {
     fn pixels(&self, p0: usize, at: &[usize], g: &Gathered<'_>, block: usize, out: &mut Vec<f32>);
 }
 
-/// What the rule has read of a band, per pixel at its sample (`at` of [`Preview::pixels`]): the view depth (0 where
-/// the frame has none), the unit normal (+Z where the frame has none, zero where it is bad), the raw albedo (read only when the
-/// frame has one), the roughness in [0, 1] (read only when the frame has one) and the raw metallic (0 where the
+/// What the rule has read of a band, per pixel at its sample (`at` of [`Preview::pixels`]): the view depth (0 where the
+/// frame has none), the unit normal (+Z where the frame has none, zero where it is bad), the raw albedo (read only when
+/// the frame has one), the roughness in [0, 1] (read only when the frame has one) and the raw metallic (0 where the
 /// frame has none).
 pub struct Gathered<'b> {
     /// View depth.
@@ -564,8 +564,8 @@ pub struct Gathered<'b> {
 }
 
 /// gbuf's SRI of `gb` (tile size `tile`: 8, 16 or 32), from the edge `mask`, the G-buffer and, when given, the
-/// `preview` of its lighting ([`Smoothness`]); `extra` allows the rates beyond 2 × 2. Bands of tile rows run in parallel on rayon's current pool, each compiled
-/// for the CPU's widest instruction set.
+/// `preview` of its lighting ([`Smoothness`]); `extra` allows the rates beyond 2 × 2. Bands of tile rows run in
+/// parallel on rayon's current pool, each compiled for the CPU's widest instruction set.
 pub fn gbuffer_sri(
     gb: &GBuffer,
     preview: Option<&dyn Preview>,
