@@ -179,7 +179,9 @@ fn vrs_benches(c: &mut Criterion, gb4: &gbuf::GBuffer, lights: &[gbuf::Light], m
     g.bench_function("sri/gbuffer-preview-16/4x/1280x720", |b| {
         b.iter(|| black_box(gbuffer_sri(gb4, Some(&preview), mask4, 16, false, &Default::default()).unwrap()))
     });
-    g.bench_function("sri/ffx-16/1280x720", |b| b.iter(|| black_box(ffx_sri(&full_image, 16, 0.015, 64).unwrap())));
+    g.bench_function("sri/ffx-16/1280x720", |b| {
+        b.iter(|| black_box(ffx_sri(&full_image, 16, 0.015, 64, false).unwrap()))
+    });
     g.bench_function("full-rate/4x-adaptive/1280x720", |b| {
         b.iter(|| black_box(resolve(gb4, lights, mask4, &tiled).unwrap()))
     });

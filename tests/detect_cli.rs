@@ -327,4 +327,23 @@ fn vrs_writes_the_sri_it_measures_and_saves_evaluations() {
     for tile in [8, 16] {
         assert!(evals(row(&lighting, "gbuffer", tile)) <= evals(row(&broadcast, "gbuffer", tile)));
     }
+    // ffx with the additional rates is AMD's build that has them, on the full-rate image the run wrote, clamped to
+    // the frame's 4 samples as D3D12 clamps it.
+    let full_rate =
+        gbuf::image::file::read(&out.join("full_rate.exr"), &gbuf::io::ReadLimits::default()).unwrap().image;
+    let ffx = gbuf::detect::rate::ffx_sri(&full_rate, 16, 0.015, 64, true).unwrap().clamped(gb.samples, true);
+    let read = gbuf::layout::texture::read(&out.join("sri_ffx_16.dds"), gbuf::layout::Format::R8, &Default::default())
+        .unwrap();
+    assert_eq!(read.bytes, ffx.d3d12_texels());
+    // A looser VarianceCutoff coarsens ffx; a negative one is refused.
+    let loose = gbuf_cmd(
+        dir.path(),
+        &["vrs", fixture.to_str().unwrap(), "--tile", "16", "--no-flip", "--ffx-cutoff", "1", "--json"],
+    );
+    assert!(loose.status.success(), "{}", support::stderr(&loose));
+    let loose: serde_json::Value = serde_json::from_slice(&loose.stdout).unwrap();
+    assert!(evals(row(&loose, "ffx", 16)) < evals(row(&broadcast, "ffx", 16)));
+    let bad = gbuf_cmd(dir.path(), &["vrs", fixture.to_str().unwrap(), "--ffx-cutoff=-1"]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(support::stderr(&bad).contains("--ffx-cutoff"), "{}", support::stderr(&bad));
 }

@@ -39,7 +39,7 @@ ENTRY = {"glsl": "main", "hlsl": "CS"}
 SRI_FORMAT = {"glsl": "r8", "hlsl": "r32"}
 CUTOFF = 0.015  # AMD's sample's VarianceCutoff; gbuf's FFX_VARIANCE_CUTOFF
 MOTION_FACTOR = 0.01  # AMD's sample's default; it scales the motion vectors' length, zero here
-RATES = {0: "1x1", 1: "1x2", 4: "2x1", 5: "2x2"}
+RATES = {0: "1x1", 1: "1x2", 4: "2x1", 5: "2x2", 6: "2x4", 9: "4x2", 10: "4x4"}
 FIX = ROOT / "fixtures"
 FRAMES = [  # name, file, gbuf's extra arguments
     ("blender_1x", FIX / "blender_1x.exr", []),
@@ -120,26 +120,26 @@ def ffx_source(args, work):
     return out, f"{src} at {args.ffx_ref} (commit {commit}), extracted to {out}"
 
 
-def compile_shaders(src, work, langs, tiles):
+def compile_shaders(src, work, langs, tiles, extras):
     spv = {}
     inc = [f"-I{src / GPU}", f"-I{src / GPU / 'vrs'}"]
     for lang in langs:
         if not (src / PASS[lang]).exists():
             say(f"--ffx-src: {src / PASS[lang]} missing")
             sys.exit(2)
-        for tile in tiles:
-            out = work / f"ffx_vrs_{lang}_{tile}.spv"
+        for tile, extra in ((t, e) for t in tiles for e in extras):
+            out = work / f"ffx_vrs_{lang}_{tile}{'_extra' if extra else ''}.spv"
             # As AMD's build compiles the pass (sdk/src/backends/vk/CMakeShadersVRS.txt, CMakeCompileVRSShaders.txt):
-            # glslang, Vulkan 1.2, FFX_GPU, the base-rates permutation at this tile size.
+            # glslang, Vulkan 1.2, FFX_GPU, the base-rates or the additional-rates permutation at this tile size.
             cmd = ["glslangValidator", "-V", "--target-env", "vulkan1.2", "-S", "comp", "-Os", "-DFFX_GPU=1",
-                   "-DFFX_VRS_OPTION_ADDITIONALSHADINGRATES=0", f"-DFFX_VARIABLESHADING_TILESIZE={tile}", *inc,
-                   "-o", str(out)]
+                   f"-DFFX_VRS_OPTION_ADDITIONALSHADINGRATES={int(extra)}", f"-DFFX_VARIABLESHADING_TILESIZE={tile}",
+                   *inc, "-o", str(out)]
             if lang == "glsl":
                 cmd += ["-DFFX_GLSL=1"]
             else:
                 cmd += ["-D", "-e", "CS", "-DFFX_HLSL=1", "--shift-image-binding", "10", "--shift-cbuffer-binding", "20"]
-            run(cmd + [str(src / PASS[lang])], what=f"glslangValidator ({lang}, tile {tile})")
-            spv[lang, tile] = out
+            run(cmd + [str(src / PASS[lang])], what=f"glslangValidator ({lang}, tile {tile}, extra {int(extra)})")
+            spv[lang, tile, extra] = out
     return spv
 
 
@@ -176,14 +176,26 @@ def read_dds_r8(path):
     return np.frombuffer(d[off:off + width * height], np.uint8).reshape(height, width)
 
 
-def clamp_to_samples(sri, samples):
-    """D3D12's clamp of a tile's rate at `samples` samples (a coarse pixel spans at most 16 samples), as gbuf
-    applies it to its ffx SRI (`Sri::clamped`): 2x2 becomes 1x2 at 8x, everything 1x1 at 16x."""
+def clamp_to_samples(sri, samples, extra):
+    """D3D12's clamp of a tile's rate at `samples` samples (a coarse pixel spans at most 16 samples; the rates beyond
+    2x2 only with `extra`), as gbuf applies it to its ffx SRI (`Sri::clamped`, `Rate::fit`): the longer side halved
+    until the rate is allowed (2x2 becomes 1x2 at 8x, everything 1x1 at 16x)."""
+    def fit(code):
+        w, h = 1 << (code >> 2), 1 << (code & 3)
+        while True:
+            if (w, h) == (4, 1):
+                w = 2
+            if (w, h) == (1, 4):
+                h = 2
+            if ((w * h <= 4 or extra) and w * h * max(samples, 1) <= 16) or (w, h) == (1, 1):
+                return (w.bit_length() - 1) << 2 | (h.bit_length() - 1)
+            if w >= h:
+                w //= 2
+            else:
+                h //= 2
     out = sri.copy()
-    if samples >= 16:
-        out[:] = 0
-    elif samples >= 8:
-        out[out == 5] = 1
+    for code in RATES:
+        out[sri == code] = fit(code)
     return out
 
 
@@ -230,14 +242,17 @@ def main():
     ap.add_argument("--lang", default="glsl", help="AMD's passes: glsl (Vulkan backend), hlsl (DX12 backend)")
     ap.add_argument("--frame", action="append", default=[], type=Path, help="another dump (any gbuf reads)")
     ap.add_argument("--room", metavar="WxH", help="also a `gbuf scene room` frame of this size (e.g. 1280x720)")
+    ap.add_argument("--rates", default="base", help="AMD's builds of the pass: base (1x1 to 2x2), extra (the "
+                    "additional rates to 4x4, against `gbuf vrs --extra-rates`), or base,extra")
     ap.add_argument("--show", type=int, default=5, help="differing tiles to explain per frame and tile size")
     args = ap.parse_args()
     t0 = time.time()
     icds = prerequisites(args)
     tiles = [int(t) for t in args.tiles.split(",")]
     langs = args.lang.split(",")
-    if any(t not in (8, 16, 32) for t in tiles) or any(lang not in PASS for lang in langs):
-        say("--tiles: 8, 16, 32; --lang: glsl, hlsl")
+    extras = [{"base": False, "extra": True}.get(r) for r in args.rates.split(",")]
+    if any(t not in (8, 16, 32) for t in tiles) or any(lang not in PASS for lang in langs) or None in extras:
+        say("--tiles: 8, 16, 32; --lang: glsl, hlsl; --rates: base, extra")
         sys.exit(2)
     work = args.work.resolve()
     work.mkdir(parents=True, exist_ok=True)
@@ -245,7 +260,7 @@ def main():
 
     src, described = ffx_source(args, work)
     say(f"AMD's source: {described}")
-    spv = compile_shaders(src, work, langs, tiles)
+    spv = compile_shaders(src, work, langs, tiles, extras)
     harness = work / "vrs_dispatch"
     run(["gcc", "-O1", "-Wall", "-o", str(harness), str(HERE / "vrs_dispatch.c"), "-lvulkan"], what="gcc")
     env = dict(os.environ, VK_ICD_FILENAMES=":".join(icds), VK_DRIVER_FILES=":".join(icds))
@@ -275,53 +290,63 @@ def main():
         # Always required explicitly: lavapipe left to itself reduces over 4 lanes while reporting 8.
         wave = wave or int(dev["subgroupSize"])
         say(f"device: {dev['device']}, subgroups of {wave} lanes required")
-        # Lavapipe fills a subgroup along x only: a group 8 threads wide (tiles 8 and 16) reduces over min(W, 8).
-        lanes = {tile: min(wave, 16 if tile == 32 else 8) for tile in tiles}
-        for name, path, extra in frames:
-            for used in sorted(set(lanes.values())):
-                sub = [t for t in tiles if lanes[t] == used]
-                gwave = args.gbuf_wave or used
-                out = work / name / f"lanes{wave}_{used}_gbuf{gwave}"
-                p = run([args.gbuf, "vrs", str(path), "--tile", ",".join(map(str, sub)), "--no-flip",
-                         "--ffx-wave", str(gwave), "--out", str(out), *extra], what=f"gbuf vrs {name}")
-                samples = int(re.search(r"(\d+)×(\d+)×(\d+)", p.stdout).group(3))
-                rgba = read_exr_rgba(out / "full_rate.exr")
-                h, w = rgba.shape[:2]
-                colour = out / "full_rate.rgba32f"
-                rgba.tofile(colour)
-                for tile, lang in ((t, la) for t in sub for la in langs):
-                    ours = read_dds_r8(out / f"sri_ffx_{tile}.dds")
-                    amd_path = out / f"sri_amd_{lang}_{tile}.u8"
-                    run([str(harness), str(spv[lang, tile]), ENTRY[lang], str(colour), str(w), str(h), str(tile),
-                         str(CUTOFF), str(MOTION_FACTOR), str(amd_path), BINDINGS[lang], str(wave), SRI_FORMAT[lang]],
-                        env=wenv, what=f"vrs_dispatch {name} tile {tile} {lang}")
-                    amd = np.fromfile(amd_path, np.uint8).reshape(ours.shape)
-                    if (amd == 255).any():
-                        say(f"{name} tile {tile}: AMD's pass left {(amd == 255).sum()} texels unwritten")
-                        sys.exit(3)
-                    amd = clamp_to_samples(amd, samples)
-                    same = int((amd == ours).sum())
-                    hist = " ".join(f"{RATES[v]} {int((amd == v).sum())}" for v in sorted(RATES) if (amd == v).any())
-                    table.append((name, f"{w}x{h}x{samples}", f"{wave}/{used}/{gwave}", tile, lang, ours.size, same,
-                                  hist))
-                    if same == ours.size:
-                        continue
-                    differs = True
-                    bad = np.argwhere(amd != ours)
-                    say(f"{name} tile {tile} ({lang}, {used} lanes, gbuf --ffx-wave {gwave}): {len(bad)} tiles "
-                        f"differ; the first {min(args.show, len(bad))}:")
-                    for ty, tx in bad[:args.show]:
-                        per_wave = explain(rgba, tile, used, int(tx), int(ty))
-                        say(f"  tile ({tx},{ty}): gbuf {RATES.get(ours[ty, tx], ours[ty, tx])}, AMD "
-                            f"{RATES.get(amd[ty, tx], amd[ty, tx])}; per-wave max (dx, dy, range) of its group, "
-                            f"cutoff {CUTOFF}: " + "; ".join(f"({d[0]:.6g}, {d[1]:.6g}, {d[2]:.6g})" for d in per_wave))
+        # Lavapipe fills a subgroup along x only: a group 8 threads wide (tiles 8 and 16; every tile of the build
+        # with the additional rates) reduces over min(W, 8).
+        for ext in extras:
+            lanes = {tile: min(wave, 16 if tile == 32 and not ext else 8) for tile in tiles}
+            rates = "extra" if ext else "base"
+            for name, path, extra in frames:
+                for used in sorted(set(lanes.values())):
+                    sub = [t for t in tiles if lanes[t] == used]
+                    gwave = args.gbuf_wave or used
+                    out = work / name / f"lanes{wave}_{used}_gbuf{gwave}{'_extra' if ext else ''}"
+                    p = run([args.gbuf, "vrs", str(path), "--tile", ",".join(map(str, sub)), "--no-flip",
+                             "--ffx-wave", str(gwave), "--out", str(out), *(["--extra-rates"] if ext else []), *extra],
+                            what=f"gbuf vrs {name}")
+                    samples = int(re.search(r"(\d+)×(\d+)×(\d+)", p.stdout).group(3))
+                    rgba = read_exr_rgba(out / "full_rate.exr")
+                    h, w = rgba.shape[:2]
+                    colour = out / "full_rate.rgba32f"
+                    rgba.tofile(colour)
+                    for tile, lang in ((t, la) for t in sub for la in langs):
+                        ours = read_dds_r8(out / f"sri_ffx_{tile}.dds")
+                        amd_path = out / f"sri_amd_{lang}_{tile}.u8"
+                        run([str(harness), str(spv[lang, tile, ext]), ENTRY[lang], str(colour), str(w), str(h),
+                             str(tile), str(CUTOFF), str(MOTION_FACTOR), str(amd_path), BINDINGS[lang], str(wave),
+                             SRI_FORMAT[lang], str(int(ext))],
+                            env=wenv, what=f"vrs_dispatch {name} tile {tile} {lang} {rates}")
+                        amd = np.fromfile(amd_path, np.uint8).reshape(ours.shape)
+                        if (amd == 255).any():
+                            say(f"{name} tile {tile}: AMD's pass left {(amd == 255).sum()} texels unwritten")
+                            sys.exit(3)
+                        amd = clamp_to_samples(amd, samples, ext)
+                        same = int((amd == ours).sum())
+                        hist = " ".join(f"{RATES[v]} {int((amd == v).sum())}" for v in sorted(RATES)
+                                        if (amd == v).any())
+                        table.append((name, f"{w}x{h}x{samples}", f"{wave}/{used}/{gwave}", tile, lang, rates,
+                                      ours.size, same, hist))
+                        if same == ours.size:
+                            continue
+                        differs = True
+                        bad = np.argwhere(amd != ours)
+                        say(f"{name} tile {tile} ({lang}, {rates} rates, {used} lanes, gbuf --ffx-wave {gwave}): "
+                            f"{len(bad)} tiles differ; the first {min(args.show, len(bad))}:")
+                        for ty, tx in bad[:args.show]:
+                            why = ""
+                            if not ext:
+                                per_wave = explain(rgba, tile, used, int(tx), int(ty))
+                                why = (f"; per-wave max (dx, dy, range) of its group, cutoff {CUTOFF}: "
+                                       + "; ".join(f"({d[0]:.6g}, {d[1]:.6g}, {d[2]:.6g})" for d in per_wave))
+                            say(f"  tile ({tx},{ty}): gbuf {RATES.get(ours[ty, tx], ours[ty, tx])}, AMD "
+                                f"{RATES.get(amd[ty, tx], amd[ty, tx])}{why}")
     say("")
     say("lanes: the subgroup size required / the lanes each reduction spans / gbuf's --ffx-wave")
-    say(f"{'frame':<14} {'size':<12} {'lanes':>8} {'tile':>4} {'pass':<5} {'tiles':>6} {'identical':>9} {'%':>7}  "
-        "AMD's rates")
-    for name, size, wave, tile, lang, n, same, hist in table:
-        say(f"{name:<14} {size:<12} {wave:>8} {tile:>4} {lang:<5} {n:>6} {same:>9} {100.0 * same / n:>6.2f}%  {hist}")
-    total, same = sum(r[5] for r in table), sum(r[6] for r in table)
+    say(f"{'frame':<14} {'size':<12} {'lanes':>8} {'tile':>4} {'pass':<5} {'rates':<5} {'tiles':>6} "
+        f"{'identical':>9} {'%':>7}  AMD's rates")
+    for name, size, wave, tile, lang, rates, n, same, hist in table:
+        say(f"{name:<14} {size:<12} {wave:>8} {tile:>4} {lang:<5} {rates:<5} {n:>6} {same:>9} "
+            f"{100.0 * same / n:>6.2f}%  {hist}")
+    total, same = sum(r[6] for r in table), sum(r[7] for r in table)
     say(f"total: {same} of {total} tiles identical; {time.time() - t0:.1f} s")
     sys.exit(1 if differs else 0)
 

@@ -4,7 +4,7 @@
 // rows top first, to OUT. Not part of CI; run.py builds and runs it (gcc vrs_dispatch.c -lvulkan).
 //
 //   vrs_dispatch --info
-//   vrs_dispatch SPV ENTRY COLOR.f32 WIDTH HEIGHT TILE CUTOFF MOTION_FACTOR OUT.u8 BIND_COLOR,BIND_MOTION,BIND_SRI,BIND_CB WAVE FMT
+//   vrs_dispatch SPV ENTRY COLOR.f32 WIDTH HEIGHT TILE CUTOFF MOTION_FACTOR OUT.u8 BIND_COLOR,BIND_MOTION,BIND_SRI,BIND_CB WAVE FMT [EXTRA]
 //
 // WAVE > 0 asks for that subgroup size (VK_EXT_subgroup_size_control; full subgroups where the group's width, 8
 // threads, 16 at tile 32, is a multiple of it: lavapipe fills a subgroup along x only, so a wider subgroup holds one
@@ -111,9 +111,9 @@ static void barrier(VkCommandBuffer cb, VkImage im, VkImageLayout from, VkImageL
 
 int main(int argc, char **argv) {
     int info = argc == 2 && !strcmp(argv[1], "--info");
-    if (!info && argc != 13) {
+    if (!info && argc != 13 && argc != 14) {
         fprintf(stderr, "usage: vrs_dispatch --info | SPV ENTRY COLOR.f32 WIDTH HEIGHT TILE CUTOFF MOTION_FACTOR OUT.u8 "
-                        "BC,BM,BS,BU WAVE r8|r32\n");
+                        "BC,BM,BS,BU WAVE r8|r32 [EXTRA 0|1]\n");
         return 2;
     }
     VkApplicationInfo app = {VK_STRUCTURE_TYPE_APPLICATION_INFO, NULL, "vrs_dispatch", 1, NULL, 0, VK_API_VERSION_1_3};
@@ -176,10 +176,16 @@ int main(int argc, char **argv) {
     VkQueue queue;
     vkGetDeviceQueue(dev, qf, 0, &queue);
 
-    // The SRI: ceil(size / tile) texels; the tile-8 pass writes 2 × 2 tiles per group, so round up to even.
+    // The SRI: ceil(size / tile) texels; the tile-8 pass writes 2 × 2 tiles per group, so round up to even. The
+    // pass built with the additional rates (EXTRA 1) runs a group per 32 × 32 pixels, writing 32 / tile tiles a side.
     uint32_t cols = (W + tile - 1) / tile, rows = (H + tile - 1) / tile;
     uint32_t gx = tile == 8 ? (cols + 1) / 2 : cols, gy = tile == 8 ? (rows + 1) / 2 : rows;
     uint32_t sw = tile == 8 ? 2 * gx : cols, sh = tile == 8 ? 2 * gy : rows;
+    if (argc == 14 && atoi(argv[13])) {
+        uint32_t nb = 32 / tile;
+        gx = (cols * tile + 31) / 32, gy = (rows * tile + 31) / 32;
+        sw = gx * nb, sh = gy * nb;
+    }
 
     size_t clen;
     float *color = slurp(color_path, &clen);

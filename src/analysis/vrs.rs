@@ -44,6 +44,8 @@ pub struct VrsConfig {
     pub max_flip: Option<f64>,
     /// The wave width `ffx`'s reductions run over ([`FFX_WAVE`] on AMD's GPUs; 32 on NVIDIA's).
     pub ffx_wave: u32,
+    /// `ffx`'s `VarianceCutoff` ([`FFX_VARIANCE_CUTOFF`] as AMD's sample sets it).
+    pub ffx_cutoff: f32,
 }
 
 /// FidelityFX VRS's `VarianceCutoff` as AMD's sample sets it.
@@ -205,8 +207,9 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
         push(&mut out, measured, sri.clone());
         // FidelityFX VRS's rule on the full-rate image as "the previous frame" (a static camera).
         // (At 8× MSAA and beyond the hardware clamps its 2 × 2 tiles.)
-        let (ffx, ms) = timed(|| rate::ffx_sri(&full, tile, FFX_VARIANCE_CUTOFF, cfg.ffx_wave))?;
-        let ffx = ffx.clamped(gb.samples, false);
+        // With the additional rates it is AMD's build of the pass that has them.
+        let (ffx, ms) = timed(|| rate::ffx_sri(&full, tile, cfg.ffx_cutoff, cfg.ffx_wave, cfg.extra_rates))?;
+        let ffx = ffx.clamped(gb.samples, cfg.extra_rates);
         push(&mut out, measure("ffx", tile, (&ffx, Some(ms)), None)?, ffx);
         // The oracle at gbuf's budget: per tile the rates' errors against the reference and their evaluations.
         let tiles = sri.rates.len();

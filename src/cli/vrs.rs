@@ -55,6 +55,10 @@ pub struct Args {
     /// The wave width FidelityFX VRS's reductions run over: 64 on AMD's GPUs (its SDK's build), 32 on NVIDIA's.
     #[arg(long, value_name = "LANES", default_value_t = gbuf::analysis::vrs::FFX_WAVE)]
     pub ffx_wave: u32,
+    /// FidelityFX VRS's `VarianceCutoff`: the luminance difference (linear, 0.30 R + 0.59 G + 0.11 B) under which
+    /// it shades coarser. AMD's sample sets 0.015.
+    #[arg(long, value_name = "LUMINANCE", default_value_t = gbuf::analysis::vrs::FFX_VARIANCE_CUTOFF)]
+    pub ffx_cutoff: f32,
     /// gbuf's rule: the largest mean error per pixel of a tile, in 8-bit codes, that sharing evaluations may cost
     /// by the lighting's preview (0: the G-buffer alone, without the lights).
     #[arg(long, value_name = "CODES", default_value_t = gbuf::detect::rate::DEFAULT_PREVIEW * 255.0)]
@@ -93,9 +97,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         rule: gbuf::detect::rate::Smoothness { preview: args.preview / 255.0, ..Default::default() },
         max_flip: args.max_flip,
         ffx_wave: args.ffx_wave,
+        ffx_cutoff: args.ffx_cutoff,
     };
     if !(args.ffx_wave.is_power_of_two() && (4..=128).contains(&args.ffx_wave)) {
         crate::usage!("--ffx-wave {}: a power of two from 4 to 128", args.ffx_wave);
+    }
+    if !(args.ffx_cutoff.is_finite() && args.ffx_cutoff >= 0.0) {
+        crate::usage!("--ffx-cutoff {}: a luminance difference of 0 or more", args.ffx_cutoff);
     }
     if !(args.preview.is_finite() && args.preview >= 0.0) {
         crate::usage!("--preview {}: a mean error in 8-bit codes ≥ 0, e.g. 0.1 (0: no preview term)", args.preview);

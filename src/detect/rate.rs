@@ -109,6 +109,12 @@ impl Rate {
         ((w.trailing_zeros() << 2) | h.trailing_zeros()) as u8
     }
 
+    /// The rate of a `D3D12_SHADING_RATE` value ([`Rate::d3d12`]); a value that names none is full rate.
+    #[must_use]
+    pub fn from_d3d12(code: u8) -> Rate {
+        Rate::ALL.into_iter().find(|r| r.d3d12() == code).unwrap_or(Rate::R1x1)
+    }
+
     /// Name, `WxH`.
     #[must_use]
     pub fn name(self) -> &'static str {
@@ -607,9 +613,15 @@ pub fn gbuffer_sri(
 /// codes (`wave` lanes per wave: 64 as AMD's SDK compiles it for its GPUs). The tile-8 path reproduces AMD's
 /// grouping (a 16 × 16 group's four tiles gather its coarse pixels by the parity of their column and row, written
 /// transposed), so that the SRI equals the shader's tile for tile.
-pub fn ffx_sri(image: &crate::image::HdrImage, tile: u32, variance_cutoff: f32, wave: u32) -> Result<Sri> {
+///
+/// With `extra` it is AMD's other build of the pass (`FFX_VARIABLESHADING_ADDITIONALSHADINGRATES`), with the rates
+/// to 4 × 4: [`ffx_sri_additional`].
+pub fn ffx_sri(image: &crate::image::HdrImage, tile: u32, variance_cutoff: f32, wave: u32, extra: bool) -> Result<Sri> {
     if ![8, 16, 32].contains(&tile) {
         return Err(Error::Argument(format!("shading-rate tile size {tile}: use 8, 16 or 32")));
+    }
+    if extra {
+        return Ok(ffx_sri_additional(image, tile, variance_cutoff, wave));
     }
     let (w, h) = (image.width, image.height);
     let mut sri = Sri::uniform(w, h, tile, Rate::R1x1);
@@ -687,6 +699,91 @@ pub fn ffx_sri(image: &crate::image::HdrImage, tile: u32, variance_cutoff: f32, 
         }
     }
     Ok(sri)
+}
+
+/// [`ffx_sri`] as AMD's pass computes it with the additional rates (`FFX_VARIABLESHADING_ADDITIONALSHADINGRATES`),
+/// re-implemented from its public source with its behaviour kept where it departs from its comments, so that the
+/// SRI equals the shader's tile for tile (benches/ffx_lavapipe):
+/// - A thread group of 8 × 8 threads covers 32 × 32 pixels. Each 4 × 4 region of a 10 × 10 grid starting at the
+///   group's corner gets a rate code: the coarsest of 4 × 4, 4 × 2, 2 × 4, 2 × 2, 2 × 1, 1 × 2 whose luminance
+///   range (over the region's 2 × 2 blocks for the last three) is under the cutoff. The vertical delta is computed
+///   as the horizontal one, so 1 × 2 is never chosen (2 × 1 is tried first with the same value). The ranges of the
+///   4-pixel-wide and -tall rates start from a minimum of `variance_cutoff`, not +∞.
+/// - Thread (x, y) takes the smallest code (`D3D12_SHADING_RATE` values compared as numbers) of grid cell
+///   (x + 1, y + 1) and its four neighbours: the grid is read one cell in, 4 pixels right and down of the tiles it
+///   is written to.
+/// - Tiles 16 and 32: the group's tiles gather threads by the parity of their column and row (as the base pass's
+///   tile 8), reduced by a minimum over the first wave only (`wave` lanes), and written transposed.
+/// - Tile 8: the group reduction ANDs into shared words that start at 0, so every tile is 1 × 1.
+pub fn ffx_sri_additional(image: &crate::image::HdrImage, tile: u32, variance_cutoff: f32, wave: u32) -> Sri {
+    let (w, h) = (image.width, image.height);
+    let mut sri = Sri::uniform(w, h, tile, Rate::R1x1);
+    if tile < 16 || w == 0 || h == 0 {
+        return sri;
+    }
+    let lum = |x: i64, y: i64| -> f32 {
+        let (x, y) = (x.clamp(0, i64::from(w) - 1) as usize, y.clamp(0, i64::from(h) - 1) as usize);
+        let c = image.rgb[y * w as usize + x];
+        c.x * 0.30 + c.y * 0.59 + c.z * 0.11
+    };
+    let cut = variance_cutoff;
+    // The rate code of the 4 × 4 region at pixel (x, y) (no motion: AMD's allowance `v` is 0).
+    let region = |x: i64, y: i64| -> u8 {
+        let (mut v2x1, mut v1x2, mut v2x2) = (0.0f32, 0.0f32, 0.0f32);
+        let (mut mm4x2, mut mm2x4, mut mm4x4) = ([(cut, 0.0f32); 2], [(cut, 0.0f32); 2], (cut, 0.0f32));
+        for (by, row) in mm4x2.iter_mut().enumerate() {
+            for (bx, col) in mm2x4.iter_mut().enumerate() {
+                let (px, py) = (x + 2 * bx as i64, y + 2 * by as i64);
+                let (a, b, c, d) = (lum(px, py), lum(px + 1, py), lum(px, py + 1), lum(px + 1, py + 1));
+                let (mn, mx) = (a.min(b).min(c.min(d)), a.max(b).max(c.max(d)));
+                let dx = (a - b).abs().max((c - d).abs()).max(0.0);
+                v2x1 = v2x1.max(dx);
+                v1x2 = v1x2.max(dx);
+                v2x2 = v2x2.max((mx - mn).max(0.0));
+                let widen = |m: &mut (f32, f32)| *m = (m.0.min(mn), m.1.max(mx));
+                widen(row);
+                widen(col);
+                widen(&mut mm4x4);
+            }
+        }
+        let v4x2 = (mm4x2[0].1 - mm4x2[0].0).max(mm4x2[1].1 - mm4x2[1].0).max(0.0);
+        let v2x4 = (mm2x4[0].1 - mm2x4[0].0).max(mm2x4[1].1 - mm2x4[1].0).max(0.0);
+        let v4x4 = (mm4x4.1 - mm4x4.0).max(0.0);
+        let rate = [(v4x4, Rate::R4x4), (v4x2, Rate::R4x2), (v2x4, Rate::R2x4), (v2x2, Rate::R2x2)]
+            .into_iter()
+            .chain([(v2x1, Rate::R2x1), (v1x2, Rate::R1x2)])
+            .find(|&(v, _)| v < cut)
+            .map_or(Rate::R1x1, |(_, r)| r);
+        rate.d3d12()
+    };
+    let blocks = (32 / tile) as usize; // tiles per group side
+    let wave = (wave.max(1) as usize).min(64);
+    let (gw, gh) = ((sri.cols as usize * tile as usize).div_ceil(32), (sri.rows as usize * tile as usize).div_ceil(32));
+    let mut codes = [0u8; 100];
+    for gy in 0..gh {
+        for gx in 0..gw {
+            let (ox, oy) = (gx as i64 * 32, gy as i64 * 32);
+            for (i, c) in codes.iter_mut().enumerate() {
+                *c = region(ox + 4 * (i % 10) as i64, oy + 4 * (i / 10) as i64);
+            }
+            // Per tile of the group, the minimum over the first wave's threads that gather into it.
+            let mut slots = [Rate::R4x4.d3d12(); 4];
+            for g in 0..wave {
+                let (tx, ty) = (g % 8, g / 8);
+                let at = |dx: usize, dy: usize| codes[(ty + dy) * 10 + tx + dx];
+                let own = at(1, 1).min(at(1, 0)).min(at(0, 1)).min(at(2, 1)).min(at(1, 2));
+                let k = (ty & (blocks - 1)) * blocks + (tx & (blocks - 1));
+                slots[k] = slots[k].min(own);
+            }
+            for (k, &code) in slots.iter().enumerate().take(blocks * blocks) {
+                let (cx, cy) = (gx * blocks + k / blocks, gy * blocks + k % blocks);
+                if cx < sri.cols as usize && cy < sri.rows as usize {
+                    sri.rates[cy * sri.cols as usize + cx] = Rate::from_d3d12(code);
+                }
+            }
+        }
+    }
+    sri
 }
 
 /// The coarse pixels of tile (`tx`, `ty`) of `sri` over a `width × height` image: for each, its pixels (row-major
@@ -859,33 +956,76 @@ mod tests {
         }
     }
 
+    /// A `w × h` image whose pixel (x, y) is grey `f(x, y)`.
+    fn grey_image(w: u32, h: u32, f: &dyn Fn(u32, u32) -> f32) -> crate::image::HdrImage {
+        let mut img = crate::image::HdrImage::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                img.rgb[(y * w + x) as usize] = Vec3::splat(f(x, y));
+            }
+        }
+        img
+    }
+
     #[test]
     fn ffx_follows_amds_classification_and_tile_8_grouping() {
-        let image = |w: u32, h: u32, f: &dyn Fn(u32, u32) -> f32| {
-            let mut img = crate::image::HdrImage::new(w, h);
-            for y in 0..h {
-                for x in 0..w {
-                    img.rgb[(y * w + x) as usize] = Vec3::splat(f(x, y));
-                }
-            }
-            img
-        };
+        let image = grey_image;
         let all = |s: &Sri, r: Rate| s.rates.iter().all(|&x| x == r);
         for tile in [8, 16, 32] {
             // Flat: 2×2. Rows alternating (no horizontal delta): 2 wide, 1 tall. Columns alternating: 1×2.
-            assert!(all(&ffx_sri(&image(64, 64, &|_, _| 0.5), tile, 0.015, 64).unwrap(), Rate::R2x2));
-            assert!(all(&ffx_sri(&image(64, 64, &|_, y| (y % 2) as f32), tile, 0.015, 64).unwrap(), Rate::R2x1));
-            assert!(all(&ffx_sri(&image(64, 64, &|x, _| (x % 2) as f32), tile, 0.015, 64).unwrap(), Rate::R1x2));
+            assert!(all(&ffx_sri(&image(64, 64, &|_, _| 0.5), tile, 0.015, 64, false).unwrap(), Rate::R2x2));
+            assert!(all(&ffx_sri(&image(64, 64, &|_, y| (y % 2) as f32), tile, 0.015, 64, false).unwrap(), Rate::R2x1));
+            assert!(all(&ffx_sri(&image(64, 64, &|x, _| (x % 2) as f32), tile, 0.015, 64, false).unwrap(), Rate::R1x2));
             // A checkerboard: full rate.
-            assert!(all(&ffx_sri(&image(64, 64, &|x, y| ((x + y) % 2) as f32), tile, 0.015, 64).unwrap(), Rate::R1x1));
+            assert!(all(
+                &ffx_sri(&image(64, 64, &|x, y| ((x + y) % 2) as f32), tile, 0.015, 64, false).unwrap(),
+                Rate::R1x1
+            ));
         }
         // Tile 8: a 16×16 group's four tiles gather coarse pixels by column and row parity, written transposed.
         // One busy coarse pixel (column 1, row 0) raises itself and its neighbours (columns 0 and 2 of row 0, and
         // column 1 of row 1): every parity class but (odd row, even column), which AMD writes to tile (1, 0). A
         // spatial grouping would have kept tiles (1, 0), (0, 1) and (1, 1) at 2×2.
         let one = image(16, 16, &|x, y| if x / 2 == 1 && y / 2 == 0 { ((x + y) % 2) as f32 } else { 0.5 });
-        let s = ffx_sri(&one, 8, 0.015, 64).unwrap();
+        let s = ffx_sri(&one, 8, 0.015, 64, false).unwrap();
         assert_eq!(s.rates, vec![Rate::R1x1, Rate::R2x2, Rate::R1x1, Rate::R1x1], "{s:?}");
+    }
+
+    #[test]
+    fn ffx_with_additional_rates_follows_amds_pass() {
+        let image = grey_image;
+        let rates = |img: &crate::image::HdrImage, tile: u32, wave: u32| {
+            let s = ffx_sri(img, tile, 0.015, wave, true).unwrap();
+            let mut r = s.rates.clone();
+            r.dedup();
+            r
+        };
+        for tile in [16, 32] {
+            // Dark and flat: 4 × 4. Bright and flat: the 4-pixel rates' ranges start from the cutoff as their
+            // minimum, so 2 × 2 (AMD's pass as written).
+            assert_eq!(rates(&image(64, 64, &|_, _| 0.01), tile, 64), vec![Rate::R4x4]);
+            assert_eq!(rates(&image(64, 64, &|_, _| 0.5), tile, 64), vec![Rate::R2x2]);
+            // Rows alternating (no horizontal delta): 2 wide, 1 tall. Columns alternating: full rate, not 1 × 2
+            // (the pass computes its vertical delta as the horizontal one).
+            assert_eq!(rates(&image(64, 64, &|_, y| (y % 2) as f32), tile, 64), vec![Rate::R2x1]);
+            assert_eq!(rates(&image(64, 64, &|x, _| (x % 2) as f32), tile, 64), vec![Rate::R1x1]);
+            // Dark columns in pairs, 0.01 and 0.025: 4 wide spans a range of the cutoff, 2 × 4 fits.
+            assert_eq!(
+                rates(&image(64, 64, &|x, _| if x / 2 % 2 == 1 { 0.025 } else { 0.01 }), tile, 64),
+                vec![Rate::R2x4]
+            );
+        }
+        // Tile 8: the group's reduction starts from 0, so every tile is full rate whatever the image.
+        assert_eq!(rates(&image(64, 64, &|_, _| 0.01), 8, 64), vec![Rate::R1x1]);
+        // Only the first wave's threads reach the tile: a checkerboard in the lower half of a 32 × 32 group makes it
+        // full rate with 64 lanes, and leaves it 4 × 4 with 8 (the first row of threads reads pixel rows 0 to 11).
+        let lower = image(32, 32, &|x, y| if y >= 16 { ((x + y) % 2) as f32 } else { 0.01 });
+        assert_eq!(rates(&lower, 32, 64), vec![Rate::R1x1]);
+        assert_eq!(rates(&lower, 32, 8), vec![Rate::R4x4]);
+        // The grid is read one cell in: a checkerboard in the group's first 4 rows and columns touches no cell a
+        // thread reads (cells (1, 1) on, and their neighbours (0, 1) and (1, 0) only beside it).
+        let corner = image(32, 32, &|x, y| if x < 4 && y < 4 { ((x + y) % 2) as f32 } else { 0.01 });
+        assert_eq!(rates(&corner, 32, 64), vec![Rate::R4x4]);
     }
 
     #[test]
