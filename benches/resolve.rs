@@ -179,6 +179,14 @@ fn vrs_benches(c: &mut Criterion, gb4: &gbuf::GBuffer, lights: &[gbuf::Light], m
     g.bench_function("sri/gbuffer-preview-16/4x/1280x720", |b| {
         b.iter(|| black_box(gbuffer_sri(gb4, Some(&preview), mask4, 16, false, &Default::default()).unwrap()))
     });
+    // With the previous frame as the preview (the full-rate image, as `ffx` reads it): its luminance as shown, then
+    // the rule.
+    g.bench_function("sri/gbuffer-prev-16/4x/1280x720", |b| {
+        b.iter(|| {
+            let shown = gbuf::resolve::ImagePreview::new(&full_image, Default::default());
+            black_box(gbuffer_sri(gb4, Some(&shown), mask4, 16, false, &Default::default()).unwrap())
+        })
+    });
     g.bench_function("sri/ffx-16/1280x720", |b| {
         b.iter(|| black_box(ffx_sri(&full_image, 16, 0.015, 64, false).unwrap()))
     });

@@ -60,8 +60,9 @@ pub const RULE_SCALES: [f32; 9] = [0.0625, 0.125, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0,
 /// One SRI's answer.
 #[derive(Clone, Debug, Serialize)]
 pub struct VrsRow {
-    /// The generator: `gbuffer` (gbuf's rule), `ffx` (FidelityFX VRS's on the full-rate image), `oracle` (the least
-    /// error against the reference at `gbuffer`'s evaluations) or `gbuffer-max-flip`.
+    /// The generator: `gbuffer` (gbuf's rule, its preview lit from the lights), `ffx` (FidelityFX VRS's on the
+    /// full-rate image), `gbuffer-prev` (gbuf's rule, its preview the full-rate image as a previous frame), `oracle`
+    /// (the least error against the reference at `gbuffer`'s evaluations) or `gbuffer-max-flip`.
     pub generator: String,
     /// Tile size in pixels.
     pub tile: u32,
@@ -211,6 +212,15 @@ pub fn vrs(gb: &GBuffer, lights: &[Light], cfg: &VrsConfig) -> Result<VrsOutput>
         let (ffx, ms) = timed(|| rate::ffx_sri(&full, tile, cfg.ffx_cutoff, cfg.ffx_wave, cfg.extra_rates))?;
         let ffx = ffx.clamped(gb.samples, cfg.extra_rates);
         push(&mut out, measure("ffx", tile, (&ffx, Some(ms)), None)?, ffx);
+        // gbuf's rule with what `ffx` reads as its preview: the full-rate image as a static camera's previous frame
+        // (a renderer's last frame), instead of the lights.
+        if rule.preview > 0.0 {
+            let (prev, ms) = timed(|| {
+                let shown = resolve::ImagePreview::new(&full, tone);
+                rate::gbuffer_sri(gb, Some(&shown), &mask, tile, cfg.extra_rates, &rule)
+            })?;
+            push(&mut out, measure("gbuffer-prev", tile, (&prev, Some(ms)), None)?, prev);
+        }
         // The oracle at gbuf's budget: per tile the rates' errors against the reference and their evaluations.
         let tiles = sri.rates.len();
         let (mut error, mut evals) = (vec![Vec::new(); tiles], vec![Vec::new(); tiles]);

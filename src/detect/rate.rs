@@ -1142,6 +1142,20 @@ mod tests {
         let mean = diff.iter().sum::<f32>() / diff.len() as f32;
         let p99 = diff[diff.len() * 99 / 100];
         assert!(mean < 0.01 && p99 < 0.05, "mean {mean} codes, 99th percentile {p99}");
+        // The lit image itself as the preview (a renderer's previous frame): each pixel's luminance as shown.
+        let from_image = crate::resolve::ImagePreview::new(&image, tone);
+        let mut seen = Band::default();
+        seen.fill(gb, &mask, &Smoothness::default(), Some(&from_image), 16, 0, gb.height);
+        for p in (0..gb.pixel_count()).filter(|&p| band.state[p] == 1) {
+            assert!((seen.preview[p] - shown(image.rgb[p])).abs() < 2e-6, "pixel {p}");
+        }
+        // Either preview gives the rule the same rates on nearly every tile.
+        let rule = Smoothness::default();
+        let lit = gbuffer_sri(gb, Some(&preview), &mask, 16, false, &rule).unwrap();
+        let prev = gbuffer_sri(gb, Some(&from_image), &mask, 16, false, &rule).unwrap();
+        let same = lit.rates.iter().zip(&prev.rates).filter(|(a, b)| a == b).count();
+        assert!(same * 100 >= lit.rates.len() * 98, "{same} of {} tiles", lit.rates.len());
+        assert!(lit.rates.iter().any(|&r| r != Rate::R1x1) && lit.rates.contains(&Rate::R1x1));
     }
 
     #[test]

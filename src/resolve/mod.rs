@@ -41,7 +41,7 @@ pub fn kernel_lanes() -> usize {
     simd::BLOCK
 }
 pub use falloff::{MIN_DISTANCE, MIN_RAMP_FRACTION};
-pub use preview::LightPreview;
+pub use preview::{ImagePreview, LightPreview};
 pub use reference::{check_meaningful, reference, reference_per_sample};
 pub use schedule::Coarse;
 pub use split::{ResolveInput, SplitSamples};

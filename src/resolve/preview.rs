@@ -245,9 +245,7 @@ impl<'a> LightPreview<'a> {
             out.resize(n, 0.0);
             let [r, g, b] = &*sum;
             for ((((&k, r), g), b), &valid) in order.iter().zip(r).zip(g).zip(b).zip(&s.valid) {
-                let y = self.tone.apply(LUMA.x * r + LUMA.y * g + LUMA.z * b);
-                // sRGB's encoding, with the crate's branch-free power.
-                let shown = if y <= 0.003_130_8 { 12.92 * y } else { 1.055 * pow_clamped(y, 1.0 / 2.4) - 0.055 };
+                let shown = shown_luminance(self.tone, Vec3::new(*r, *g, *b));
                 out[k] = if valid { shown } else { 0.0 };
             }
         });
@@ -272,6 +270,41 @@ impl Preview for LightPreview<'_> {
             }
         }
         crate::base::isa::run(Isa::detect(), Pixels { preview: self, p0, at, g, block, out });
+    }
+}
+
+/// The luminance of linear colour `c` as shown: tone mapped by `tone`, sRGB-encoded (the crate's branch-free power).
+#[inline(always)]
+fn shown_luminance(tone: ToneMap, c: Vec3) -> f32 {
+    let y = tone.apply(LUMA.x * c.x + LUMA.y * c.y + LUMA.z * c.z);
+    if y <= 0.003_130_8 {
+        12.92 * y
+    } else {
+        1.055 * pow_clamped(y, 1.0 / 2.4) - 0.055
+    }
+}
+
+/// The rule's preview from a lit image instead of the lights: each pixel's luminance as shown, as a renderer holds
+/// it in its previous frame (the one a static camera gives is the full-rate image; FidelityFX VRS reads the same).
+/// Reading it costs the rule nothing beyond the image; [`LightPreview`] lights every pixel first.
+pub struct ImagePreview {
+    shown: Vec<f32>,
+}
+
+impl ImagePreview {
+    /// The displayed luminance of every pixel of `image` under `tone`.
+    #[must_use]
+    pub fn new(image: &crate::image::HdrImage, tone: ToneMap) -> Self {
+        use rayon::prelude::*;
+        ImagePreview { shown: image.rgb.par_iter().map(|&c| shown_luminance(tone, c)).collect() }
+    }
+}
+
+impl Preview for ImagePreview {
+    fn pixels(&self, p0: usize, at: &[usize], _: &Gathered<'_>, _: usize, out: &mut Vec<f32>) {
+        // An image of another size than the frame previews its missing pixels as black.
+        out.clear();
+        out.extend((p0..p0 + at.len()).map(|p| self.shown.get(p).copied().unwrap_or(0.0)));
     }
 }
 
