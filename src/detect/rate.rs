@@ -623,82 +623,205 @@ pub fn ffx_sri(image: &crate::image::HdrImage, tile: u32, variance_cutoff: f32, 
     if extra {
         return Ok(ffx_sri_additional(image, tile, variance_cutoff, wave));
     }
+    use rayon::prelude::*;
     let (w, h) = (image.width, image.height);
     let mut sri = Sri::uniform(w, h, tile, Rate::R1x1);
-    let lum = |x: i64, y: i64| -> f32 {
-        let (x, y) = (x.clamp(0, i64::from(w) - 1) as usize, y.clamp(0, i64::from(h) - 1) as usize);
-        let c = image.rgb[y * w as usize + x];
-        c.x * 0.30 + c.y * 0.59 + c.z * 0.11
-    };
-    // Per coarse pixel at pixel (x, y): (dx, dy, range) and (min, max).
-    let stats = |x: i64, y: i64| -> ([f32; 3], f32, f32) {
-        let (a, b, c, d) = (lum(x, y), lum(x + 1, y), lum(x, y + 1), lum(x + 1, y + 1));
-        let (mn, mx) = (a.min(b).min(c).min(d), a.max(b).max(c).max(d));
-        ([(a - b).abs().max((c - d).abs()), (a - c).abs().max((b - d).abs()), mx - mn], mn, mx)
-    };
-    let delta = |x: i64, y: i64| -> [f32; 3] {
-        let (var, mn, mx) = stats(x, y);
-        let n = [(x, y - 2), (x - 2, y), (x, y + 2), (x + 2, y)].map(|(a, b)| stats(a, b));
-        let d_min = (mn - n.iter().map(|s| s.1).fold(f32::INFINITY, f32::min)).max(0.0);
-        let d_max = (n.iter().map(|s| s.2).fold(f32::NEG_INFINITY, f32::max) - mx).max(0.0);
-        var.map(|v| (v + d_min + d_max).max(0.0))
-    };
-    let classify = |[x, y, z]: [f32; 3]| -> u8 {
-        let c = variance_cutoff;
-        if z < c {
-            5
-        } else if x > y {
-            if y > c {
-                0
-            } else {
-                1
-            }
-        } else if x > c {
-            0
-        } else {
-            4
-        }
-    };
-    let rate_of = |code: u8| match code {
-        5 => Rate::R2x2,
-        1 => Rate::R1x2,
-        4 => Rate::R2x1,
-        _ => Rate::R1x1,
-    };
-    let max3 = |a: [f32; 3], b: [f32; 3]| [a[0].max(b[0]), a[1].max(b[1]), a[2].max(b[2])];
+    if w == 0 || h == 0 {
+        return Ok(sri);
+    }
     // Threads per group side (a thread per coarse pixel): a group covers 2T × 2T pixels.
     let t = if tile == 32 { 16 } else { 8 };
+    let gw = if tile == 8 { sri.cols.div_ceil(2) } else { sri.cols };
+    // Each coarse pixel's statistics once, from its four pixels' luminances `0.30 R + 0.59 G + 0.11 B` (coordinates
+    // clamped to the image): dx, dy, range, min and max. On a grid one coarse pixel wider than the groups on every
+    // side (the outer ones' neighbours): grid cell (i, j) is the coarse pixel at pixel (2i − 2, 2j − 2). Then each
+    // inner cell's deltas raised by its neighbours' min and max. Planes of one value each, row by row (each row
+    // compiled for the CPU's widest instruction set).
+    // Each row of groups on its own (the two grid rows beside it computed again), so that its planes stay in cache.
+    let nx = (gw * t) as usize + 2;
+    let tu = t as usize;
+    let rows_of = |gy: usize, lum: &mut Vec<f32>, stats: &mut Vec<f32>, deltas: &mut Vec<f32>| {
+        stats.resize(5 * nx * (tu + 2), 0.0);
+        for (k, out) in stats.chunks_mut(5 * nx).enumerate() {
+            let j = (gy * tu + k) as i64;
+            let y = (2 * j - 2).clamp(0, i64::from(h) - 1) as u32;
+            let y1 = (2 * j - 1).clamp(0, i64::from(h) - 1) as u32;
+            crate::base::isa::run(crate::base::isa::Isa::detect(), FfxStats { image, rows: [y, y1], lum, out });
+        }
+        deltas.resize(3 * (nx - 2) * tu, 0.0);
+        for (j, out) in deltas.chunks_mut(3 * (nx - 2)).enumerate() {
+            let rows = [j, j + 1, j + 2].map(|r| &stats[5 * nx * r..5 * nx * (r + 1)]);
+            crate::base::isa::run(crate::base::isa::Isa::detect(), FfxDeltas { rows, out });
+        }
+    };
+    let cw = nx - 2;
+    let classify = |d: [f32; 3]| ffx_classify(d, variance_cutoff);
+    let rate_of = ffx_rate;
+    let max3 = |a: [f32; 3], b: [f32; 3]| [a[0].max(b[0]), a[1].max(b[1]), a[2].max(b[2])];
     let wave = wave.max(1) as usize;
-    let (gw, gh) = if tile == 8 { (sri.cols.div_ceil(2), sri.rows.div_ceil(2)) } else { (sri.cols, sri.rows) };
-    for gy in 0..gh {
-        for gx in 0..gw {
-            let (ox, oy) = (i64::from(gx * 2 * t), i64::from(gy * 2 * t));
-            let deltas: Vec<[f32; 3]> =
-                (0..t * t).map(|g| delta(ox + 2 * i64::from(g % t), oy + 2 * i64::from(g / t))).collect();
+    let cols = sri.cols as usize;
+    // A row of groups writes one row of tiles (two at tile 8).
+    let rows_per_group = if tile == 8 { 2 } else { 1 };
+    let work = || (Vec::new(), Vec::new(), Vec::new(), Vec::with_capacity(tu * tu));
+    sri.rates.par_chunks_mut(cols * rows_per_group).enumerate().for_each_init(work, |buffers, (gy, rates)| {
+        let (lum, stats, planes, deltas) = buffers;
+        rows_of(gy, lum, stats, planes);
+        // The deltas of the coarse pixel at cell (i, j) of this row of groups.
+        let delta = |i: usize, j: usize| -> [f32; 3] {
+            let row = &planes[3 * cw * j..3 * cw * (j + 1)];
+            [row[i], row[cw + i], row[2 * cw + i]]
+        };
+        for gx in 0..gw as usize {
+            let ci = gx * tu;
+            deltas.clear();
+            if tile == 8 || !wave.is_multiple_of(tu) {
+                deltas.extend((0..tu * tu).map(|g| delta(ci + g % tu, g / tu)));
+            }
             if tile == 8 {
                 // Slot k = (ty & 1)·2 + (tx & 1), maxed over the first wave; slot g goes to tile (2gx + g/2, 2gy + g%2).
                 let mut slots = [[0.0f32; 3]; 4];
                 for (g, d) in deltas.iter().enumerate().take(wave) {
-                    let (tx, ty) = (g as u32 % t, g as u32 / t);
-                    let k = ((ty & 1) * 2 + (tx & 1)) as usize;
+                    let (tx, ty) = (g % t as usize, g / t as usize);
+                    let k = (ty & 1) * 2 + (tx & 1);
                     slots[k] = max3(slots[k], *d);
                 }
                 for (g, slot) in slots.iter().enumerate() {
-                    let (cx, cy) = (2 * gx + g as u32 / 2, 2 * gy + g as u32 % 2);
-                    if cx < sri.cols && cy < sri.rows {
-                        sri.rates[(cy * sri.cols + cx) as usize] = rate_of(classify(*slot));
+                    let (cx, cy) = (2 * gx + g / 2, g % 2);
+                    if cx < cols && cy * cols < rates.len() {
+                        rates[cy * cols + cx] = rate_of(classify(*slot));
                     }
                 }
+            } else if wave.is_multiple_of(tu) {
+                // Whole rows of the group per wave: each plane's maximum over their spans.
+                let mut code = 5u8;
+                for r0 in (0..tu).step_by(wave / tu) {
+                    let mut m = [0.0f32; 3];
+                    for j in r0..(r0 + wave / tu).min(tu) {
+                        for (k, m) in m.iter_mut().enumerate() {
+                            let at = 3 * cw * j + k * cw + ci;
+                            *m = planes[at..at + tu].iter().fold(*m, |a, &d| a.max(d));
+                        }
+                    }
+                    code &= classify(m);
+                }
+                rates[gx] = rate_of(code);
             } else {
                 let code = deltas
                     .chunks(wave)
                     .map(|lanes| classify(lanes.iter().fold([0.0f32; 3], |a, &d| max3(a, d))))
                     .fold(5u8, |a, c| a & c);
-                sri.rates[(gy * sri.cols + gx) as usize] = rate_of(code);
+                rates[gx] = rate_of(code);
             }
         }
-    }
+    });
     Ok(sri)
+}
+
+/// AMD's classification of a tile's deltas (dx, dy, range) against the cutoff, as a `D3D12_SHADING_RATE` code of
+/// the base rates: range under it 2 × 2; else the direction of the larger delta stays full rate, the other is coarse
+/// if its delta is under it.
+fn ffx_classify([x, y, z]: [f32; 3], cutoff: f32) -> u8 {
+    if z < cutoff {
+        5
+    } else if x > y {
+        if y > cutoff {
+            0
+        } else {
+            1
+        }
+    } else if x > cutoff {
+        0
+    } else {
+        4
+    }
+}
+
+/// The base rate of an [`ffx_classify`] code (an AND of several).
+fn ffx_rate(code: u8) -> Rate {
+    match code {
+        5 => Rate::R2x2,
+        1 => Rate::R1x2,
+        4 => Rate::R2x1,
+        _ => Rate::R1x1,
+    }
+}
+
+/// One row of [`ffx_sri`]'s grid of coarse pixels: from the luminances of its two rows of pixels (`rows`, already
+/// clamped; columns clamped here), the planes dx, dy, range, min and max, one after the other in `out`.
+struct FfxStats<'a> {
+    image: &'a crate::image::HdrImage,
+    rows: [u32; 2],
+    lum: &'a mut Vec<f32>,
+    out: &'a mut [f32],
+}
+
+impl crate::base::isa::Kernel for FfxStats<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run(self, _: crate::base::isa::Isa) {
+        let nx = self.out.len() / 5;
+        let w = self.image.width as usize;
+        // Pixels −2 .. 2·nx − 2 of each row, the outer ones clamped to the edge.
+        let n = 2 * nx;
+        self.lum.clear();
+        self.lum.resize(2 * n, 0.0);
+        for (r, lum) in self.rows.iter().zip(self.lum.chunks_mut(n)) {
+            let row = &self.image.rgb[*r as usize * w..(*r as usize + 1) * w];
+            let inner = (n - 2).min(w);
+            for (l, c) in lum[2..2 + inner].iter_mut().zip(row) {
+                *l = c.x * 0.30 + c.y * 0.59 + c.z * 0.11;
+            }
+            let (first, last) = (lum[2], lum[1 + inner]);
+            lum[..2].fill(first);
+            lum[2 + inner..].fill(last);
+        }
+        let (l0, l1) = self.lum.split_at(n);
+        let (dx, rest) = self.out.split_at_mut(nx);
+        let (dy, rest) = rest.split_at_mut(nx);
+        let (range, rest) = rest.split_at_mut(nx);
+        let (lo, hi) = rest.split_at_mut(nx);
+        for i in 0..nx {
+            let (a, b, c, d) = (l0[2 * i], l0[2 * i + 1], l1[2 * i], l1[2 * i + 1]);
+            let (mn, mx) = (a.min(b).min(c).min(d), a.max(b).max(c).max(d));
+            dx[i] = (a - b).abs().max((c - d).abs());
+            dy[i] = (a - c).abs().max((b - d).abs());
+            range[i] = mx - mn;
+            (lo[i], hi[i]) = (mn, mx);
+        }
+    }
+}
+
+/// One row of [`ffx_sri`]'s inner coarse pixels: their dx, dy and range raised by how far their min lies above their
+/// four neighbours' smallest min and their max below the neighbours' largest (AMD's guard against burn-in), from
+/// three rows of [`FfxStats`] planes; the three planes one after the other in `out`.
+struct FfxDeltas<'a> {
+    rows: [&'a [f32]; 3],
+    out: &'a mut [f32],
+}
+
+impl crate::base::isa::Kernel for FfxDeltas<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run(self, _: crate::base::isa::Isa) {
+        let cw = self.out.len() / 3;
+        let nx = cw + 2;
+        let plane = |r: usize, k: usize| &self.rows[r][k * nx..(k + 1) * nx];
+        let (up_lo, lo, down_lo) = (plane(0, 3), plane(1, 3), plane(2, 3));
+        let (up_hi, hi, down_hi) = (plane(0, 4), plane(1, 4), plane(2, 4));
+        let var = [plane(1, 0), plane(1, 1), plane(1, 2)];
+        let (ox, rest) = self.out.split_at_mut(cw);
+        let (oy, oz) = rest.split_at_mut(cw);
+        for i in 0..cw {
+            let c = i + 1;
+            // In AMD's order: up, left, down, right.
+            let n_lo = f32::INFINITY.min(up_lo[c]).min(lo[c - 1]).min(down_lo[c]).min(lo[c + 1]);
+            let n_hi = f32::NEG_INFINITY.max(up_hi[c]).max(hi[c - 1]).max(down_hi[c]).max(hi[c + 1]);
+            let (d_min, d_max) = ((lo[c] - n_lo).max(0.0), (n_hi - hi[c]).max(0.0));
+            ox[i] = (var[0][c] + d_min + d_max).max(0.0);
+            oy[i] = (var[1][c] + d_min + d_max).max(0.0);
+            oz[i] = (var[2][c] + d_min + d_max).max(0.0);
+        }
+    }
 }
 
 /// [`ffx_sri`] as AMD's pass computes it with the additional rates (`FFX_VARIABLESHADING_ADDITIONALSHADINGRATES`),
@@ -965,6 +1088,100 @@ mod tests {
             }
         }
         img
+    }
+
+    /// The base pass as first written: every coarse pixel's statistics recomputed from clamped pixel reads for
+    /// itself and each neighbour. What the faster [`ffx_sri`] must equal.
+    fn ffx_naive(image: &crate::image::HdrImage, tile: u32, variance_cutoff: f32, wave: u32) -> Result<Sri> {
+        let (w, h) = (image.width, image.height);
+        let mut sri = Sri::uniform(w, h, tile, Rate::R1x1);
+        let lum = |x: i64, y: i64| -> f32 {
+            let (x, y) = (x.clamp(0, i64::from(w) - 1) as usize, y.clamp(0, i64::from(h) - 1) as usize);
+            let c = image.rgb[y * w as usize + x];
+            c.x * 0.30 + c.y * 0.59 + c.z * 0.11
+        };
+        // Per coarse pixel at pixel (x, y): (dx, dy, range) and (min, max).
+        let stats = |x: i64, y: i64| -> ([f32; 3], f32, f32) {
+            let (a, b, c, d) = (lum(x, y), lum(x + 1, y), lum(x, y + 1), lum(x + 1, y + 1));
+            let (mn, mx) = (a.min(b).min(c).min(d), a.max(b).max(c).max(d));
+            ([(a - b).abs().max((c - d).abs()), (a - c).abs().max((b - d).abs()), mx - mn], mn, mx)
+        };
+        let delta = |x: i64, y: i64| -> [f32; 3] {
+            let (var, mn, mx) = stats(x, y);
+            let n = [(x, y - 2), (x - 2, y), (x, y + 2), (x + 2, y)].map(|(a, b)| stats(a, b));
+            let d_min = (mn - n.iter().map(|s| s.1).fold(f32::INFINITY, f32::min)).max(0.0);
+            let d_max = (n.iter().map(|s| s.2).fold(f32::NEG_INFINITY, f32::max) - mx).max(0.0);
+            var.map(|v| (v + d_min + d_max).max(0.0))
+        };
+        let classify = |d: [f32; 3]| ffx_classify(d, variance_cutoff);
+        let rate_of = ffx_rate;
+        let max3 = |a: [f32; 3], b: [f32; 3]| [a[0].max(b[0]), a[1].max(b[1]), a[2].max(b[2])];
+        // Threads per group side (a thread per coarse pixel): a group covers 2T × 2T pixels.
+        let t = if tile == 32 { 16 } else { 8 };
+        let wave = wave.max(1) as usize;
+        let (gw, gh) = if tile == 8 { (sri.cols.div_ceil(2), sri.rows.div_ceil(2)) } else { (sri.cols, sri.rows) };
+        for gy in 0..gh {
+            for gx in 0..gw {
+                let (ox, oy) = (i64::from(gx * 2 * t), i64::from(gy * 2 * t));
+                let deltas: Vec<[f32; 3]> =
+                    (0..t * t).map(|g| delta(ox + 2 * i64::from(g % t), oy + 2 * i64::from(g / t))).collect();
+                if tile == 8 {
+                    // Slot k = (ty & 1)·2 + (tx & 1), maxed over the first wave; slot g goes to tile (2gx + g/2, 2gy + g%2).
+                    let mut slots = [[0.0f32; 3]; 4];
+                    for (g, d) in deltas.iter().enumerate().take(wave) {
+                        let (tx, ty) = (g as u32 % t, g as u32 / t);
+                        let k = ((ty & 1) * 2 + (tx & 1)) as usize;
+                        slots[k] = max3(slots[k], *d);
+                    }
+                    for (g, slot) in slots.iter().enumerate() {
+                        let (cx, cy) = (2 * gx + g as u32 / 2, 2 * gy + g as u32 % 2);
+                        if cx < sri.cols && cy < sri.rows {
+                            sri.rates[(cy * sri.cols + cx) as usize] = rate_of(classify(*slot));
+                        }
+                    }
+                } else {
+                    let code = deltas
+                        .chunks(wave)
+                        .map(|lanes| classify(lanes.iter().fold([0.0f32; 3], |a, &d| max3(a, d))))
+                        .fold(5u8, |a, c| a & c);
+                    sri.rates[(gy * sri.cols + gx) as usize] = rate_of(code);
+                }
+            }
+        }
+        Ok(sri)
+    }
+
+    #[test]
+    fn ffx_equals_its_first_writing_on_noise_and_ramps() {
+        let mut seed = 7u64;
+        let mut next = move || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 40) as f32 / (1u64 << 24) as f32
+        };
+        for (w, h) in [(1, 1), (17, 9), (64, 48), (101, 67), (130, 33)] {
+            for kind in 0..3 {
+                let mut img = crate::image::HdrImage::new(w, h);
+                for (p, c) in img.rgb.iter_mut().enumerate() {
+                    let (x, y) = ((p as u32 % w) as f32, (p as u32 / w) as f32);
+                    *c = match kind {
+                        0 => Vec3::new(next(), next(), next()),
+                        // Smooth: mostly coarse, with a few busy spots.
+                        1 => Vec3::splat(0.002 * x + 0.001 * y + if next() < 0.01 { 1.0 } else { 0.0 }),
+                        _ => Vec3::splat(if (x as u32 / 3 + y as u32 / 5).is_multiple_of(2) { 0.2 } else { 0.205 }),
+                    };
+                }
+                for tile in [8, 16, 32] {
+                    for wave in [4, 8, 16, 32, 64] {
+                        let fast = ffx_sri(&img, tile, 0.015, wave, false).unwrap();
+                        assert_eq!(
+                            fast,
+                            ffx_naive(&img, tile, 0.015, wave).unwrap(),
+                            "{w}×{h} kind {kind} tile {tile}"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     #[test]
