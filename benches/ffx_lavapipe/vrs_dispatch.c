@@ -7,7 +7,7 @@
 //   vrs_dispatch SPV ENTRY COLOR.f32 WIDTH HEIGHT TILE CUTOFF MOTION_FACTOR OUT.u8 BIND_COLOR,BIND_MOTION,BIND_SRI,BIND_CB WAVE FMT [EXTRA]
 //
 // WAVE > 0 asks for that subgroup size (VK_EXT_subgroup_size_control; full subgroups where the group's width, 8
-// threads, 16 at tile 32, is a multiple of it: lavapipe fills a subgroup along x only, so a wider subgroup holds one
+// threads, 16 at tile 32 of the base build, is a multiple of it: lavapipe fills a subgroup along x only, so a wider subgroup holds one
 // row of threads). 0 takes the driver's: lavapipe 22.3 then reduces over 4 lanes whatever gl_SubgroupSize says.
 // FMT: the SRI image's format, r8 (R8_UINT, as AMD's GLSL declares it) or r32 (R32_UINT: glslang gives HLSL's
 // RWTexture2D<uint> that format, and a storage image's format must match its declaration).
@@ -228,7 +228,8 @@ int main(int argc, char **argv) {
     VkPipelineShaderStageRequiredSubgroupSizeCreateInfo rss = {
         VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_REQUIRED_SUBGROUP_SIZE_CREATE_INFO, NULL, wave};
     VkComputePipelineCreateInfo cpi = {VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
-    uint32_t width = tile == 32 ? 16 : 8; // AMD's FFX_VariableShading_ThreadCount1D
+    // AMD's FFX_VariableShading_ThreadCount1D: 16 at tile 32 of the base build, else 8 (always 8 with EXTRA).
+    uint32_t width = tile == 32 && !(argc == 14 && atoi(argv[13])) ? 16 : 8;
     int full = wave && width % wave == 0;
     cpi.stage = (VkPipelineShaderStageCreateInfo){VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO,
                                                   wave ? &rss : NULL,

@@ -615,7 +615,7 @@ pub fn gbuffer_sri(
 /// transposed), so that the SRI equals the shader's tile for tile.
 ///
 /// With `extra` it is AMD's other build of the pass (`FFX_VARIABLESHADING_ADDITIONALSHADINGRATES`), with the rates
-/// to 4 × 4: [`ffx_sri_additional`].
+/// to 4 × 4, re-implemented with its behaviour kept where it departs from its comments (below, `ffx_sri_additional`).
 pub fn ffx_sri(image: &crate::image::HdrImage, tile: u32, variance_cutoff: f32, wave: u32, extra: bool) -> Result<Sri> {
     if ![8, 16, 32].contains(&tile) {
         return Err(Error::Argument(format!("shading-rate tile size {tile}: use 8, 16 or 32")));
@@ -824,7 +824,7 @@ impl crate::base::isa::Kernel for FfxDeltas<'_> {
     }
 }
 
-/// [`ffx_sri`] as AMD's pass computes it with the additional rates (`FFX_VARIABLESHADING_ADDITIONALSHADINGRATES`),
+/// `ffx_sri` as AMD's pass computes it with the additional rates (`FFX_VARIABLESHADING_ADDITIONALSHADINGRATES`),
 /// re-implemented from its public source with its behaviour kept where it departs from its comments, so that the
 /// SRI equals the shader's tile for tile (benches/ffx_lavapipe):
 /// - A thread group of 8 × 8 threads covers 32 × 32 pixels. Each 4 × 4 region of a 10 × 10 grid starting at the
@@ -836,9 +836,10 @@ impl crate::base::isa::Kernel for FfxDeltas<'_> {
 ///   (x + 1, y + 1) and its four neighbours: the grid is read one cell in, 4 pixels right and down of the tiles it
 ///   is written to.
 /// - Tiles 16 and 32: the group's tiles gather threads by the parity of their column and row (as the base pass's
-///   tile 8), reduced by a minimum over the first wave only (`wave` lanes), and written transposed.
+///   tile 8), each reduced by a minimum over the wave of the thread that writes it (thread k writes tile k: the
+///   first wave for 4 lanes or more), and written transposed.
 /// - Tile 8: the group reduction ANDs into shared words that start at 0, so every tile is 1 × 1.
-pub fn ffx_sri_additional(image: &crate::image::HdrImage, tile: u32, variance_cutoff: f32, wave: u32) -> Sri {
+fn ffx_sri_additional(image: &crate::image::HdrImage, tile: u32, variance_cutoff: f32, wave: u32) -> Sri {
     let (w, h) = (image.width, image.height);
     let mut sri = Sri::uniform(w, h, tile, Rate::R1x1);
     if tile < 16 || w == 0 || h == 0 {
@@ -850,7 +851,7 @@ pub fn ffx_sri_additional(image: &crate::image::HdrImage, tile: u32, variance_cu
         c.x * 0.30 + c.y * 0.59 + c.z * 0.11
     };
     let cut = variance_cutoff;
-    // The rate code of the 4 × 4 region at pixel (x, y) (no motion: AMD's allowance `v` is 0).
+    // The rate code of the 4 × 4 region at pixel (x, y) (with AMD's motion allowance `v` at 0: a static camera).
     let region = |x: i64, y: i64| -> u8 {
         let (mut v2x1, mut v1x2, mut v2x2) = (0.0f32, 0.0f32, 0.0f32);
         let (mut mm4x2, mut mm2x4, mut mm4x4) = ([(cut, 0.0f32); 2], [(cut, 0.0f32); 2], (cut, 0.0f32));
@@ -889,14 +890,19 @@ pub fn ffx_sri_additional(image: &crate::image::HdrImage, tile: u32, variance_cu
             for (i, c) in codes.iter_mut().enumerate() {
                 *c = region(ox + 4 * (i % 10) as i64, oy + 4 * (i / 10) as i64);
             }
-            // Per tile of the group, the minimum over the first wave's threads that gather into it.
-            let mut slots = [Rate::R4x4.d3d12(); 4];
-            for g in 0..wave {
+            // Thread g's code (the smallest of its cell's and its four neighbours') and the tile it gathers into.
+            let thread = |g: usize| {
                 let (tx, ty) = (g % 8, g / 8);
                 let at = |dx: usize, dy: usize| codes[(ty + dy) * 10 + tx + dx];
                 let own = at(1, 1).min(at(1, 0)).min(at(0, 1)).min(at(2, 1)).min(at(1, 2));
-                let k = (ty & (blocks - 1)) * blocks + (tx & (blocks - 1));
-                slots[k] = slots[k].min(own);
+                ((ty & (blocks - 1)) * blocks + (tx & (blocks - 1)), own)
+            };
+            // Tile k is written by thread k: the minimum over its wave's threads that gather into tile k (4 × 4, the
+            // start, where none does).
+            let mut slots = [Rate::R4x4.d3d12(); 4];
+            for (k, slot) in slots.iter_mut().enumerate().take(blocks * blocks) {
+                let lanes = k / wave * wave..(k / wave * wave + wave).min(64);
+                *slot = lanes.map(thread).filter(|&(to, _)| to == k).fold(*slot, |a, (_, c)| a.min(c));
             }
             for (k, &code) in slots.iter().enumerate().take(blocks * blocks) {
                 let (cx, cy) = (gx * blocks + k / blocks, gy * blocks + k % blocks);
@@ -1158,8 +1164,11 @@ mod tests {
             seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             (seed >> 40) as f32 / (1u64 << 24) as f32
         };
-        for (w, h) in [(1, 1), (17, 9), (64, 48), (101, 67), (130, 33)] {
-            for kind in 0..3 {
+        for (w, h) in [(1u32, 1u32), (17, 9), (64, 48), (101, 67), (130, 33)] {
+            // Blocks of 8 × 8 pixels, each flat, striped one way or the other, or noisy, near the cutoff: every
+            // class in one group, and waves that disagree.
+            let blocks: Vec<u32> = (0..(w.div_ceil(8) * h.div_ceil(8))).map(|_| (next() * 4.0) as u32).collect();
+            for kind in 0..4 {
                 let mut img = crate::image::HdrImage::new(w, h);
                 for (p, c) in img.rgb.iter_mut().enumerate() {
                     let (x, y) = ((p as u32 % w) as f32, (p as u32 / w) as f32);
@@ -1167,18 +1176,33 @@ mod tests {
                         0 => Vec3::new(next(), next(), next()),
                         // Smooth: mostly coarse, with a few busy spots.
                         1 => Vec3::splat(0.002 * x + 0.001 * y + if next() < 0.01 { 1.0 } else { 0.0 }),
-                        _ => Vec3::splat(if (x as u32 / 3 + y as u32 / 5).is_multiple_of(2) { 0.2 } else { 0.205 }),
+                        2 => Vec3::splat(if (x as u32 / 3 + y as u32 / 5).is_multiple_of(2) { 0.2 } else { 0.205 }),
+                        _ => {
+                            let (xi, yi) = (x as u32, y as u32);
+                            let a = 0.02 * next();
+                            Vec3::splat(match blocks[((yi / 8) * w.div_ceil(8) + xi / 8) as usize] {
+                                0 => 0.3,
+                                1 => 0.3 + if yi.is_multiple_of(2) { 0.02 } else { 0.0 },
+                                2 => 0.3 + if xi.is_multiple_of(2) { 0.02 } else { 0.0 },
+                                _ => 0.3 + a,
+                            })
+                        }
                     };
                 }
+                let mut seen = std::collections::BTreeSet::new();
                 for tile in [8, 16, 32] {
-                    for wave in [4, 8, 16, 32, 64] {
+                    for wave in [1, 3, 4, 5, 8, 16, 32, 64, 128] {
                         let fast = ffx_sri(&img, tile, 0.015, wave, false).unwrap();
+                        seen.extend(fast.rates.iter().copied());
                         assert_eq!(
                             fast,
                             ffx_naive(&img, tile, 0.015, wave).unwrap(),
                             "{w}×{h} kind {kind} tile {tile}"
                         );
                     }
+                }
+                if kind == 3 && w >= 64 {
+                    assert_eq!(seen.len(), 4, "every base rate occurs: {seen:?}");
                 }
             }
         }
@@ -1239,6 +1263,17 @@ mod tests {
         let lower = image(32, 32, &|x, y| if y >= 16 { ((x + y) % 2) as f32 } else { 0.01 });
         assert_eq!(rates(&lower, 32, 64), vec![Rate::R1x1]);
         assert_eq!(rates(&lower, 32, 8), vec![Rate::R4x4]);
+        // Tile 16: the group's four tiles gather threads by the parity of their column and row, written transposed.
+        // A busy 4 × 4 region at grid cell (3, 2) reaches the threads reading it as their own cell (2, 1) or as a
+        // neighbour ((2, 2), (3, 1), (1, 1), (2, 0)): every parity class but (odd column, even row), tile 1, which
+        // is written to tile (0, 1).
+        let busy = image(32, 32, &|x, y| if x / 4 == 3 && y / 4 == 2 { ((x + y) % 2) as f32 } else { 0.01 });
+        let s = ffx_sri(&busy, 16, 0.015, 64, true).unwrap();
+        assert_eq!(s.rates, vec![Rate::R1x1, Rate::R1x1, Rate::R4x4, Rate::R1x1]);
+        // Waves of 1 lane: tile k takes thread k's own code alone (threads 0 and 1 read dark cells; tiles 2 and 3 get
+        // no thread and stay 4 × 4).
+        let s = ffx_sri(&busy, 16, 0.015, 1, true).unwrap();
+        assert_eq!(s.rates, vec![Rate::R4x4; 4]);
         // The grid is read one cell in: a checkerboard in the group's first 4 rows and columns touches no cell a
         // thread reads (cells (1, 1) on, and their neighbours (0, 1) and (1, 0) only beside it).
         let corner = image(32, 32, &|x, y| if x < 4 && y < 4 { ((x + y) % 2) as f32 } else { 0.01 });

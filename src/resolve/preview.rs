@@ -292,7 +292,8 @@ pub struct ImagePreview {
 }
 
 impl ImagePreview {
-    /// The displayed luminance of every pixel of `image` under `tone`.
+    /// The displayed luminance of every pixel of `image` under `tone` (an image of the frame's size: the rule reads it
+    /// by the frame's pixel index).
     #[must_use]
     pub fn new(image: &crate::image::HdrImage, tone: ToneMap) -> Self {
         use rayon::prelude::*;
@@ -302,7 +303,8 @@ impl ImagePreview {
 
 impl Preview for ImagePreview {
     fn pixels(&self, p0: usize, at: &[usize], _: &Gathered<'_>, _: usize, out: &mut Vec<f32>) {
-        // An image of another size than the frame previews its missing pixels as black.
+        // Pixels are the frame's by flat index: an image of another width misplaces them (the caller passes the
+        // frame's own lit image); those beyond its end preview as black.
         out.clear();
         out.extend((p0..p0 + at.len()).map(|p| self.shown.get(p).copied().unwrap_or(0.0)));
     }
