@@ -62,7 +62,9 @@ enum Command {
     /// Forward, forward MSAA, forward+, deferred, light pre-pass and visibility buffer measured on one frame.
     Pipelines(cli::pipelines::Args),
     /// Shading less than once per pixel: gbuf's shading-rate image from the G-buffer per tile size, the lighting
-    /// evaluations it saves and its error against the full-rate image and the reference.
+    /// evaluations it saves and its error against the full-rate image and the reference, beside AMD FidelityFX VRS's
+    /// (`ffx`), gbuf's rule previewing the full-rate image as a previous frame (`gbuffer-prev`) and the best SRI at
+    /// gbuf's cost (`oracle`).
     Vrs(cli::vrs::Args),
     /// Merge the report.json of several `gbuf report` runs (one per frame) into one report.
     Merge(cli::merge::Args),

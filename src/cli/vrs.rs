@@ -24,7 +24,8 @@ pub struct Args {
     /// lighting times each pixel's own albedo).
     #[arg(long, value_name = "MODE", default_value = "broadcast")]
     pub mode: String,
-    /// Allow the additional rates 2x4, 4x2 and 4x4 (D3D12 `AdditionalShadingRatesSupported`).
+    /// Allow the additional rates 2x4, 4x2 and 4x4 (D3D12 `AdditionalShadingRatesSupported`); `ffx` is then AMD's
+    /// build of its pass with them.
     #[arg(long)]
     pub extra_rates: bool,
     /// Edge detector whose pixels are shaded per sample whatever their tile's rate.
