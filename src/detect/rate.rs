@@ -550,6 +550,12 @@ pub trait Preview: Sync {
     /// whole rows of the frame (0 where that sample is uncovered or has no usable position). `g` holds what the
     /// caller has read at `at` already; `block` is the tile size (pixels are lit a block of columns at a time).
     fn pixels(&self, p0: usize, at: &[usize], g: &Gathered<'_>, block: usize, out: &mut Vec<f32>);
+
+    /// The frame size the preview was made for, when it has one of its own (a lit image's): the rule refuses a frame
+    /// of another size.
+    fn size(&self) -> Option<(u32, u32)> {
+        None
+    }
 }
 
 /// What the rule has read of a band, per pixel at its sample (`at` of [`Preview::pixels`]): the view depth (0 where the
@@ -593,6 +599,9 @@ pub fn gbuffer_sri(
         return Ok(sri);
     }
     let preview = preview.filter(|_| rule.preview > 0.0);
+    if let Some((w, h)) = preview.and_then(|p| p.size()).filter(|&s| s != (gb.width, gb.height)) {
+        return Err(Error::Mismatch(format!("the preview is {w}×{h}, the G-buffer {}×{}", gb.width, gb.height)));
+    }
     sri.rates.par_chunks_mut(cols).enumerate().for_each(|(ty, rates)| {
         let k = BandRates { gb, preview, mask, rule, tile, extra, ty: ty as u32, rates };
         crate::base::isa::run(crate::base::isa::Isa::detect(), k);
@@ -1408,6 +1417,10 @@ mod tests {
         let same = lit.rates.iter().zip(&prev.rates).filter(|(a, b)| a == b).count();
         assert!(same * 100 >= lit.rates.len() * 98, "{same} of {} tiles", lit.rates.len());
         assert!(lit.rates.iter().any(|&r| r != Rate::R1x1) && lit.rates.contains(&Rate::R1x1));
+        // A lit image of another size is refused.
+        let other = crate::resolve::ImagePreview::new(&crate::image::HdrImage::new(gb.width + 1, gb.height), tone);
+        let err = gbuffer_sri(gb, Some(&other), &mask, 16, false, &rule).unwrap_err();
+        assert!(err.to_string().contains("the preview is"), "{err}");
     }
 
     #[test]

@@ -289,24 +289,28 @@ fn shown_luminance(tone: ToneMap, c: Vec3) -> f32 {
 /// Reading it costs the rule nothing beyond the image; [`LightPreview`] lights every pixel first.
 pub struct ImagePreview {
     shown: Vec<f32>,
+    size: (u32, u32),
 }
 
 impl ImagePreview {
-    /// The displayed luminance of every pixel of `image` under `tone` (an image of the frame's size: the rule reads it
-    /// by the frame's pixel index).
+    /// The displayed luminance of every pixel of `image` under `tone` (the rule refuses a frame of another size).
     #[must_use]
     pub fn new(image: &crate::image::HdrImage, tone: ToneMap) -> Self {
         use rayon::prelude::*;
-        ImagePreview { shown: image.rgb.par_iter().map(|&c| shown_luminance(tone, c)).collect() }
+        let shown = image.rgb.par_iter().map(|&c| shown_luminance(tone, c)).collect();
+        ImagePreview { shown, size: (image.width, image.height) }
     }
 }
 
 impl Preview for ImagePreview {
     fn pixels(&self, p0: usize, at: &[usize], _: &Gathered<'_>, _: usize, out: &mut Vec<f32>) {
-        // Pixels are the frame's by flat index: an image of another width misplaces them (the caller passes the
-        // frame's own lit image); those beyond its end preview as black.
+        // By the frame's pixel index (the rule has checked the size; a pixel beyond the image previews as black).
         out.clear();
         out.extend((p0..p0 + at.len()).map(|p| self.shown.get(p).copied().unwrap_or(0.0)));
+    }
+
+    fn size(&self) -> Option<(u32, u32)> {
+        Some(self.size)
     }
 }
 
