@@ -891,9 +891,12 @@ fn ffx_sri_additional(image: &crate::image::HdrImage, tile: u32, variance_cutoff
     };
     let blocks = (32 / tile) as usize; // tiles per group side
     let wave = (wave.max(1) as usize).min(64);
-    let (gw, gh) = ((sri.cols as usize * tile as usize).div_ceil(32), (sri.rows as usize * tile as usize).div_ceil(32));
-    let mut codes = [0u8; 100];
-    for gy in 0..gh {
+    use rayon::prelude::*;
+    let gw = (sri.cols as usize * tile as usize).div_ceil(32);
+    let cols = sri.cols as usize;
+    // A row of groups writes `blocks` rows of tiles: rows of groups in parallel.
+    sri.rates.par_chunks_mut(cols * blocks).enumerate().for_each(|(gy, rates)| {
+        let mut codes = [0u8; 100];
         for gx in 0..gw {
             let (ox, oy) = (gx as i64 * 32, gy as i64 * 32);
             for (i, c) in codes.iter_mut().enumerate() {
@@ -914,13 +917,13 @@ fn ffx_sri_additional(image: &crate::image::HdrImage, tile: u32, variance_cutoff
                 *slot = lanes.map(thread).filter(|&(to, _)| to == k).fold(*slot, |a, (_, c)| a.min(c));
             }
             for (k, &code) in slots.iter().enumerate().take(blocks * blocks) {
-                let (cx, cy) = (gx * blocks + k / blocks, gy * blocks + k % blocks);
-                if cx < sri.cols as usize && cy < sri.rows as usize {
-                    sri.rates[cy * sri.cols as usize + cx] = Rate::from_d3d12(code);
+                let (cx, cy) = (gx * blocks + k / blocks, k % blocks);
+                if cx < cols && cy * cols < rates.len() {
+                    rates[cy * cols + cx] = Rate::from_d3d12(code);
                 }
             }
         }
-    }
+    });
     sri
 }
 
