@@ -190,6 +190,10 @@ fn vrs_benches(c: &mut Criterion, gb4: &gbuf::GBuffer, lights: &[gbuf::Light], m
     g.bench_function("sri/ffx-16/1280x720", |b| {
         b.iter(|| black_box(ffx_sri(&full_image, 16, 0.015, 64, false).unwrap()))
     });
+    // AMD's build of the pass with the additional rates (to 4 × 4).
+    g.bench_function("sri/ffx-extra-16/1280x720", |b| {
+        b.iter(|| black_box(ffx_sri(&full_image, 16, 0.015, 64, true).unwrap()))
+    });
     g.bench_function("full-rate/4x-adaptive/1280x720", |b| {
         b.iter(|| black_box(resolve(gb4, lights, mask4, &tiled).unwrap()))
     });
