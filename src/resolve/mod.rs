@@ -192,7 +192,9 @@ pub fn time_sampled<'a>(
     let mut frame = schedule::Frame::new(reader, packed, mask, &clean.lights, &clean.environment, *cfg, Isa::detect());
     frame.band_stride = TIMING_STRIDE;
     let n = gb.pixel_count();
-    let (mut rgb, mut heat) = (vec![glam::Vec3::ZERO; n], vec![0u32; n]);
+    // Zeroed blocks, not filled ones: the skipped bands' pages are never touched (`vec![Vec3::ZERO; n]` wrote every
+    // one, 33 MB a 1080p × 4 run, most of it for nothing).
+    let (mut rgb, mut heat) = (crate::base::memory::zeroed_vec3(n), vec![0u32; n]);
     let t_prep = t_start.elapsed();
     let t_par = Instant::now();
     schedule::run_tiles(&frame, &mut rgb, &mut heat)?;
