@@ -33,6 +33,32 @@ pub fn zeroed_on_huge_pages<T: Copy + Default>(n: usize) -> Vec<T> {
     v
 }
 
+/// Asks the CPU to load the cache lines holding bytes `a..b` of `base`: into every level when `near` (needed next),
+/// else into L2 and beyond (needed a step later). A hint only: a prefetch never faults, whatever the address, and the
+/// addresses are formed with `wrapping_add`, never claimed in bounds. Nothing on other architectures.
+#[inline(always)]
+pub fn prefetch(base: *const u8, a: usize, b: usize, near: bool) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0, _MM_HINT_T1};
+        let (first, end) = (base.wrapping_add(a), base.wrapping_add(b));
+        let mut line = first.wrapping_sub(first as usize & 63);
+        while line < end {
+            // SAFETY: a prefetch has no effect but on the cache, whatever the address.
+            unsafe {
+                if near {
+                    _mm_prefetch::<_MM_HINT_T0>(line.cast());
+                } else {
+                    _mm_prefetch::<_MM_HINT_T1>(line.cast());
+                }
+            }
+            line = line.wrapping_add(64);
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (base, a, b, near);
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1190,7 +1190,12 @@ fn hrow(
                 let row = &src[(y * w + lo) * 3..(y * w + hi) * 3];
                 // The row two below, which this band's next pass reads: a short stream the hardware prefetcher misses
                 // (the deinterleave below waited on memory for 6% of an HDR-FLIP, Zen 4).
-                prefetch(src.as_ptr().wrapping_add(((y + 2) * w + lo) * 3).cast(), (hi - lo) * 12);
+                crate::base::memory::prefetch(
+                    src.as_ptr().cast(),
+                    ((y + 2) * w + lo) * 12,
+                    ((y + 2) * w + hi) * 12,
+                    true,
+                );
                 for (((p, r0), g0), b0) in row.chunks_exact(3).zip(rr.iter_mut()).zip(gg.iter_mut()).zip(bb.iter_mut())
                 {
                     *r0 = p[0];
@@ -1200,7 +1205,7 @@ fn hrow(
             }
             Pixels::Srgb8(src) => {
                 let row = &src[(y * w + lo) * 3..(y * w + hi) * 3];
-                prefetch(src.as_ptr().wrapping_add(((y + 2) * w + lo) * 3), (hi - lo) * 3);
+                crate::base::memory::prefetch(src.as_ptr(), ((y + 2) * w + lo) * 3, ((y + 2) * w + hi) * 3, true);
                 for (((p, r0), g0), b0) in row.chunks_exact(3).zip(rr.iter_mut()).zip(gg.iter_mut()).zip(bb.iter_mut())
                 {
                     *r0 = f32::from(p[0]) / 255.0;
@@ -1285,25 +1290,6 @@ fn hrow(
         conv_rows::<2, 2>(plane(2), [&ctx.scz1, &ctx.scz2], rp - rs, tws, &mut out[o(HP_CZ1)..o(HP_CZ2) + tws]);
         conv_rows::<3, 2>(plane(3), [&ctx.fdg, &ctx.fddg, &ctx.fg], rp - rf, tws, &mut out[o(HP_DX)..o(HP_G) + tws]);
     }
-}
-
-/// Asks the CPU to load the cache lines of `bytes` bytes from `base` (a hint: no effect but on the cache, whatever the
-/// address).
-#[inline(always)]
-fn prefetch(base: *const u8, bytes: usize) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        let mut line = base.wrapping_sub(base as usize & 63);
-        let end = base.wrapping_add(bytes);
-        while line < end {
-            // SAFETY: a prefetch never faults; `wrapping_add` forms the address without claiming it is in bounds.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>(line.cast()) };
-            line = line.wrapping_add(64);
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (base, bytes);
 }
 
 /// Eight f32 lanes; element-wise code on it compiles to one SIMD register op.

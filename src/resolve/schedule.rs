@@ -378,18 +378,8 @@ fn prefetch_tile(
 ) {
     #[cfg(target_arch = "x86_64")]
     {
-        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T1};
-        /// Prefetches the cache lines holding bytes `a..b` (b > a) from `base`.
-        fn span(base: *const i8, a: usize, b: usize) {
-            let (first, end) = (base.wrapping_add(a), base.wrapping_add(b));
-            let mut line = first.wrapping_sub(first as usize & 63);
-            while line < end {
-                // SAFETY: a prefetch has no effect but on the cache, whatever the address (`wrapping_add` forms it
-                // without claiming it is in bounds).
-                unsafe { _mm_prefetch::<_MM_HINT_T1>(line) };
-                line = line.wrapping_add(64);
-            }
-        }
+        // Into L2 (the next tile's: not needed at once).
+        let span = |base: *const i8, a: usize, b: usize| crate::base::memory::prefetch(base.cast(), a, b, false);
         let gb = rd.gbuffer();
         if w == 0 || h == 0 {
             return;
