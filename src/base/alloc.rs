@@ -8,11 +8,11 @@
 //! `madvise`, so a region only gets them when asked, which this allocator does. Where the kernel has no huge
 //! pages the advice is refused and ignored: the blocks are then ordinary anonymous maps.
 //!
-//! Freed blocks are kept for the next large allocation ([`Cache`]) instead of being returned at once: on the 2-core
-//! Zen 4 KVM guest a fresh page costs 0.25–2.3 ms a MB (the kernel's fault and zeroing), a reused one 0.04 (a
-//! `memset`), and `gbuf report` makes and frees several GB of images, masks, bands and packed frames of a few sizes.
-//! The cache never raises the resident set above what it was: an allocation it cannot serve first returns as many
-//! cached bytes to the system as it maps, and a served one returns the block's unused tail.
+//! Freed blocks are kept for the next large allocation (a cache of at most 16 blocks and 1 GiB) instead of being
+//! returned at once: on the 2-core Zen 4 KVM guest a fresh page costs 0.25–2.3 ms a MB (the kernel's fault and
+//! zeroing), a reused one 0.04 (a `memset`), and `gbuf report` makes and frees several GB of images, masks, bands and
+//! packed frames of a few sizes. The cache never raises the resident set above what it was: an allocation it cannot
+//! serve first returns as many cached bytes to the system as it maps, and a served one returns the block's unused tail.
 //!
 //! Linux only; elsewhere the type forwards everything to [`std::alloc::System`].
 
