@@ -12,7 +12,9 @@
 //! returned at once: on the 2-core Zen 4 KVM guest a fresh page costs 0.25–2.3 ms a MB (the kernel's fault and
 //! zeroing), a reused one 0.04 (a `memset`), and `gbuf report` makes and frees several GB of images, masks, bands and
 //! packed frames of a few sizes. The cache never raises the resident set above what it was: an allocation it cannot
-//! serve first returns as many cached bytes to the system as it maps, and a served one returns the block's unused tail.
+//! serve from a block that fits grows the largest cached block instead (the kernel moves its pages; only the added ones
+//! are fresh), after first returning as many cached bytes to the system as it adds; a served one returns the block's
+//! unused tail.
 //!
 //! Linux only; elsewhere the type forwards everything to [`std::alloc::System`].
 
@@ -36,10 +38,13 @@ struct Cache {
 static CACHE: std::sync::Mutex<Cache> = std::sync::Mutex::new(Cache { blocks: [(0, 0); CACHE_SLOTS], n: 0, bytes: 0 });
 
 impl Cache {
-    /// The smallest cached block of at least `len` bytes, cut to `len` (its tail unmapped); else `None`, after
-    /// unmapping the oldest cached blocks until `len` bytes are returned (or none is left), so that the fresh block
-    /// the caller maps next does not add to the resident set while freed blocks sit here.
-    fn take(&mut self, len: usize) -> Option<*mut u8> {
+    /// A block of `len` bytes made from the cache, and how many of its leading bytes may hold old data (the rest
+    /// are fresh zero pages); `None` when the cache is empty (or the kernel refuses to grow a block). The smallest
+    /// cached block of at least `len` bytes is cut to `len` (its tail unmapped). Failing one, the largest cached
+    /// block is grown to `len` (the kernel moves its pages: only the added ones are fresh), after the oldest other
+    /// blocks are unmapped until as many bytes are returned as it adds, so that the resident set does not grow while
+    /// freed blocks sit here.
+    fn take(&mut self, len: usize) -> Option<(*mut u8, usize)> {
         let best = (0..self.n).filter(|&i| self.blocks[i].1 >= len).min_by_key(|&i| self.blocks[i].1);
         if let Some(i) = best {
             let (addr, have) = self.remove(i);
@@ -48,16 +53,27 @@ impl Cache {
                 // at a multiple of the huge page size (both lengths are).
                 unsafe { os::unmap((addr + len) as *mut u8, have - len) };
             }
-            return Some(addr as *mut u8);
+            return Some((addr as *mut u8, len));
         }
+        let largest = (0..self.n).max_by_key(|&i| self.blocks[i].1)?;
+        let (addr, have) = self.remove(largest);
         let mut returned = 0;
-        while returned < len && self.n > 0 {
-            let (addr, have) = self.remove(0);
+        while returned < len - have && self.n > 0 {
+            let (a, l) = self.remove(0);
             // SAFETY: a whole block this cache owns, unused.
-            unsafe { os::unmap(addr as *mut u8, have) };
-            returned += have;
+            unsafe { os::unmap(a as *mut u8, l) };
+            returned += l;
         }
-        None
+        // SAFETY: a whole block of `map`'s that this cache owns, unused, grown to another multiple of the huge page
+        // size; on failure it is still whole where it was, and released.
+        unsafe {
+            let grown = os::remap(addr as *mut u8, have, len);
+            if grown.is_null() {
+                os::unmap(addr as *mut u8, have);
+                return None;
+            }
+            Some((grown, have))
+        }
     }
 
     /// Keeps a freed block of `len` bytes; false (the caller unmaps it) when it does not fit. Older blocks are
@@ -86,14 +102,11 @@ impl Cache {
     }
 }
 
-/// A mapped block of `len` bytes (a multiple of [`HUGE`]): a cached one, else a fresh map; and whether it is
-/// fresh (zero).
-fn block(len: usize) -> (*mut u8, bool) {
+/// A mapped block of `len` bytes (a multiple of [`HUGE`]): made from the cache, else a fresh map; and how many of
+/// its leading bytes may be non-zero (0 for a fresh map).
+fn block(len: usize) -> (*mut u8, usize) {
     let cached = CACHE.lock().ok().and_then(|mut c| c.take(len));
-    match cached {
-        Some(p) => (p, false),
-        None => (os::map(len), true),
-    }
+    cached.unwrap_or_else(|| (os::map(len), 0))
 }
 
 /// The global allocator that asks for huge pages for large blocks (see the module documentation). Install it with
@@ -246,11 +259,11 @@ unsafe impl GlobalAlloc for LargePages {
 
     unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
         if mapped(layout) {
-            // Anonymous maps are zero; a reused block is cleared.
-            let (p, fresh) = block(rounded(layout.size()));
-            if !fresh && !p.is_null() {
+            // Anonymous maps are zero; the reused part of a block is cleared.
+            let (p, dirty) = block(rounded(layout.size()));
+            if dirty > 0 && !p.is_null() {
                 // SAFETY: a block of at least `layout.size()` bytes that nothing else uses.
-                unsafe { std::ptr::write_bytes(p, 0, layout.size()) };
+                unsafe { std::ptr::write_bytes(p, 0, dirty.min(layout.size())) };
             }
             p
         } else {
@@ -327,11 +340,12 @@ impl LargePages {
 mod tests {
     use super::*;
 
-    /// The cache hands back the smallest freed block that fits, cut to size; a request it cannot serve returns at
-    /// least as many cached bytes as it asks for; a full cache drops its oldest block.
+    /// The cache hands back the smallest freed block that fits, cut to size; failing one it grows its largest block
+    /// (its bytes kept, the added pages zero) after returning at least as many other cached bytes as it adds; a full
+    /// cache drops its oldest block.
     #[test]
     #[cfg(target_os = "linux")]
-    fn the_cache_reuses_the_best_fit_and_never_holds_more_than_it_returns() {
+    fn the_cache_reuses_the_best_fit_grows_the_largest_and_never_holds_more_than_it_returns() {
         let mut c = Cache { blocks: [(0, 0); CACHE_SLOTS], n: 0, bytes: 0 };
         let block = |len: usize| {
             let p = os::map(len);
@@ -344,15 +358,28 @@ mod tests {
         assert!(c.keep(big, 6 * HUGE) && c.keep(small, 2 * HUGE));
         assert_eq!((c.n, c.bytes), (2, 8 * HUGE));
         // The best fit: the small block for a small request, the big one cut for a middling one.
-        assert_eq!(c.take(2 * HUGE), Some(small as *mut u8));
-        assert_eq!(c.take(3 * HUGE), Some(big as *mut u8));
+        assert_eq!(c.take(2 * HUGE), Some((small as *mut u8, 2 * HUGE)));
+        assert_eq!(c.take(3 * HUGE), Some((big as *mut u8, 3 * HUGE)));
         assert_eq!((c.n, c.bytes), (0, 0));
         // SAFETY: the block kept its bytes (it was reused, not remapped), and its cut tail is gone from the count.
         unsafe { assert_eq!(*(big as *const u8).add(3 * HUGE - 1), 0xab) };
-        // A miss returns cached bytes first.
+        // No block fits: the largest grows, and the others go back to the system first.
+        assert_eq!(c.take(HUGE), None, "an empty cache serves nothing");
         assert!(c.keep(small, 2 * HUGE) && c.keep(big, 3 * HUGE));
-        assert_eq!(c.take(4 * HUGE), None);
-        assert_eq!((c.n, c.bytes), (0, 0), "a miss of 4 huge pages returns both blocks (5)");
+        let third = block(HUGE);
+        assert!(c.keep(third, HUGE));
+        let (grown, dirty) = c.take(5 * HUGE).expect("the largest block grows");
+        assert_eq!(dirty, 3 * HUGE, "only the grown block's own bytes may be old");
+        assert_eq!((c.n, c.bytes), (1, HUGE), "growing by 2 huge pages returned the oldest block (2), kept the third");
+        // SAFETY: a block of 5 huge pages this test owns: its first 3 are the old block's, the others fresh.
+        unsafe {
+            assert_eq!(*grown.add(3 * HUGE - 1), 0xab);
+            assert!(std::slice::from_raw_parts(grown.add(3 * HUGE), 2 * HUGE).iter().all(|&b| b == 0));
+            os::unmap(grown, 5 * HUGE);
+        }
+        let (a, l) = c.remove(0);
+        // SAFETY: the third block, released once.
+        unsafe { os::unmap(a as *mut u8, l) };
         let blocks: Vec<usize> = (0..=CACHE_SLOTS).map(|_| block(HUGE)).collect();
         for &b in &blocks {
             assert!(c.keep(b, HUGE));
