@@ -57,8 +57,8 @@ pub struct Frame<'a> {
     pub isa: Isa,
     /// The attributes decoded from packed targets: what the BRDF reads.
     pub packed_reads: Vec<crate::gbuffer::Attribute>,
-    /// Only every `band_stride`-th band of tile rows runs (1: all); the others' outputs are left as they are. For
-    /// estimating a frame's time from a sample of its bands.
+    /// Only every `band_stride`-th band of tile rows runs (1: all), and the outputs hold only those bands, one after
+    /// the other ([`run_tiles`]). For estimating a frame's time from a sample of its bands.
     pub band_stride: u32,
     /// Coarse shading by a shading-rate image (`None`: every pixel at full rate).
     pub coarse: Option<Coarse<'a>>,
@@ -226,9 +226,10 @@ struct Scratch {
 }
 
 /// Runs every tile of `frame`, writing pixel colours into `rgb` and light evaluations per pixel into `heat`
-/// (both row-major, `width × height`). Bands of one tile row run in parallel on the current rayon pool; each band
-/// walks its tiles left to right (fetching the next tile's rows ahead) and owns its rows of the outputs, so the
-/// result does not depend on the thread count.
+/// (both row-major, `width × height`; with a [`Frame::band_stride`] of `s`, only the rows of bands 0, s, 2s, …, one
+/// after the other). Bands of one tile row run in parallel on the current rayon pool; each band walks its tiles left
+/// to right (fetching the next tile's rows ahead) and owns its rows of the outputs, so the result does not depend on
+/// the thread count.
 pub fn run_tiles(frame: &Frame<'_>, rgb: &mut [Vec3], heat: &mut [u32]) -> Result<TileStats> {
     let ts = frame.cfg.tile_size;
     let band_len = (frame.width * ts) as usize;
@@ -239,9 +240,8 @@ pub fn run_tiles(frame: &Frame<'_>, rgb: &mut [Vec3], heat: &mut [u32]) -> Resul
     rgb.par_chunks_mut(band_len)
         .zip(heat.par_chunks_mut(band_len))
         .enumerate()
-        .filter(|(band, _)| band % stride == 0)
-        .map_init(Scratch::default, |sc, (band, (rgb, heat))| {
-            let y0 = band as u32 * ts;
+        .map_init(Scratch::default, |sc, (k, (rgb, heat))| {
+            let y0 = (k * stride) as u32 * ts;
             crate::base::isa::run(frame.isa, BandKernel { frame, y0, sc, rgb, heat })
         })
         .try_reduce(TileStats::default, |a, b| Ok(a.merged(b)))
