@@ -8,16 +8,13 @@
 //! `madvise`, so a region only gets them when asked, which this allocator does. Where the kernel has no huge
 //! pages the advice is refused and ignored: the blocks are then ordinary anonymous maps.
 //!
-//! Freed blocks are kept for the next large allocation (a cache of at most 64 blocks and 256 MiB) instead of being
+//! Freed blocks are kept for the next large allocation (a cache of at most 64 blocks and 1 GiB) instead of being
 //! returned at once: on the 2-core Zen 4 KVM guest a fresh page costs 0.25–2.3 ms a MB (the kernel's fault and
 //! zeroing), a reused one 0.04 (a `memset`), and `gbuf report` makes and frees several GB of images, masks, bands and
-//! packed frames of a few sizes. The smallest cached block that fits is cut to size (its tail stays cached). Failing
-//! one, the block is assembled from the largest cached blocks: the kernel moves their pages onto one reserved range
-//! (`mremap`, no copy), and only what the cache cannot fill is fresh; the pieces return to the cache one by one when it
-//! is freed. Reading a 1080p × 4 EXR frees its decoded channels while the G-buffer's planes are built: assembled from
-//! them, `gbuf resolve` of that frame peaks at 0.84 instead of 1.11 GB. The cache never raises the resident set above
-//! what it was by itself; it does keep freed pages resident while small allocations grow, hence its bound (at 1 GiB the
-//! report peaked 24 MiB higher).
+//! packed frames of a few sizes. The smallest cached block that fits is cut to size (its tail stays cached); failing
+//! one, the largest grows (the kernel moves its pages; only the added ones are fresh) after as many other cached bytes
+//! go back to the system as it adds. So the cache never raises the resident set above what it was by itself, but it
+//! keeps freed pages resident while a phase grows by other means: reading a file runs without it ([`uncached`]).
 //!
 //! Linux only; elsewhere the type forwards everything to [`std::alloc::System`].
 
@@ -29,37 +26,24 @@ pub const LARGE: usize = 4 << 20;
 const HUGE: usize = 2 << 20;
 /// Freed blocks the cache holds at most, and their bytes at most.
 const CACHE_SLOTS: usize = 64;
-const CACHE_BYTES: usize = 256 << 20;
+const CACHE_BYTES: usize = 1 << 30;
 
-/// Blocks the cache has assembled from several and that are in use, at most; and pieces per block, at most.
-const ASSEMBLED: usize = 16;
-const PIECES: usize = 8;
-
-/// Freed mapped blocks (address, length), oldest first, waiting to be reused; and the blocks in use that were
-/// assembled from several, with their pieces' lengths in order (their pages are mappings of their own, which the
-/// kernel moves only one at a time: each returns to the cache as a block of its own).
+/// Freed mapped blocks (address, length), oldest first, waiting to be reused.
 struct Cache {
     blocks: [(usize, usize); CACHE_SLOTS],
     n: usize,
     bytes: usize,
-    assembled: [(usize, [usize; PIECES]); ASSEMBLED],
-    na: usize,
 }
 
-static CACHE: std::sync::Mutex<Cache> = std::sync::Mutex::new(Cache::new());
+static CACHE: std::sync::Mutex<Cache> = std::sync::Mutex::new(Cache { blocks: [(0, 0); CACHE_SLOTS], n: 0, bytes: 0 });
 
 impl Cache {
-    const fn new() -> Cache {
-        Cache { blocks: [(0, 0); CACHE_SLOTS], n: 0, bytes: 0, assembled: [(0, [0; PIECES]); ASSEMBLED], na: 0 }
-    }
-
     /// A block of `len` bytes made from the cache, and how many of its leading bytes may hold old data (the rest
-    /// are fresh zero pages); `None` when the cache is empty (or the kernel refuses a move). The smallest cached
-    /// block of at least `len` bytes is cut to `len` (its tail stays cached). Failing one, the block is assembled
-    /// from the largest cached blocks, their pages moved by the kernel onto one reserved range, the rest of which is
-    /// fresh only when the cache runs out: the resident set does not grow while freed blocks sit here. When too many
-    /// assembled blocks are in use, the largest cached block is grown instead, after the oldest others are unmapped
-    /// until as many bytes are returned as it adds.
+    /// are fresh zero pages); `None` when the cache is empty (or the kernel refuses to grow a block). The smallest
+    /// cached block of at least `len` bytes is cut to `len` (its tail stays cached). Failing one, the largest cached
+    /// block is grown to `len` (the kernel moves its pages: only the added ones are fresh), after the oldest other
+    /// blocks are unmapped until as many bytes are returned as it adds, so that the resident set does not grow while
+    /// freed blocks sit here.
     fn take(&mut self, len: usize) -> Option<(*mut u8, usize)> {
         let best = (0..self.n).filter(|&i| self.blocks[i].1 >= len).min_by_key(|&i| self.blocks[i].1);
         if let Some(i) = best {
@@ -72,12 +56,6 @@ impl Cache {
                 self.bytes += have - len;
             }
             return Some((addr as *mut u8, len));
-        }
-        if self.n == 0 {
-            return None;
-        }
-        if self.na < ASSEMBLED {
-            return self.assemble(len);
         }
         let largest = (0..self.n).max_by_key(|&i| self.blocks[i].1)?;
         let (addr, have) = self.remove(largest);
@@ -98,93 +76,6 @@ impl Cache {
             }
             Some((grown, have))
         }
-    }
-
-    /// [`Cache::take`]'s assembly: the largest cached blocks moved onto a fresh reservation of `len` bytes, one
-    /// after another (the last one cut), until it is full or [`PIECES`]` - 1` are in; the rest opened fresh.
-    fn assemble(&mut self, len: usize) -> Option<(*mut u8, usize)> {
-        let target = os::reserve(len);
-        if target.is_null() {
-            return None;
-        }
-        let (mut pieces, mut np, mut filled) = ([0usize; PIECES], 0, 0);
-        while filled < len && self.n > 0 && np < PIECES - 1 {
-            let i = (0..self.n).max_by_key(|&i| self.blocks[i].1).expect("a cached block");
-            let (addr, have) = self.blocks[i];
-            let part = have.min(len - filled);
-            // SAFETY: the first `part` bytes of a block this cache owns (one mapping, unused), moved onto the part of
-            // our own reservation that nothing has used yet.
-            let moved = unsafe { os::move_to(addr as *mut u8, part, target.add(filled)) };
-            if !moved {
-                // SAFETY: the pieces moved so far and the reservation after the failed range are ours and unused; the
-                // failed range may already be unmapped (and then is not ours), so it is left alone. The block that
-                // did not move is still whole where it was, and stays cached.
-                unsafe {
-                    os::unmap(target, filled);
-                    if filled + part < len {
-                        os::unmap(target.add(filled + part), len - filled - part);
-                    }
-                }
-                return None;
-            }
-            if part == have {
-                self.remove(i);
-            } else {
-                self.blocks[i] = (addr + part, have - part);
-                self.bytes -= part;
-            }
-            pieces[np] = part;
-            np += 1;
-            filled += part;
-        }
-        if filled < len {
-            // SAFETY: the rest of our own reservation, unused.
-            if !unsafe { os::open(target.add(filled), len - filled) } {
-                // SAFETY: all of it ours: the moved pieces and the reservation.
-                unsafe { os::unmap(target, len) };
-                return None;
-            }
-            pieces[np] = len - filled;
-            np += 1;
-        }
-        if np > 1 {
-            self.assembled[self.na] = (target as usize, pieces);
-            self.na += 1;
-        }
-        Some((target, filled))
-    }
-
-    /// Takes back a freed block of `len` bytes: each of its pieces when it was assembled, else itself; what does not
-    /// fit is unmapped.
-    fn release(&mut self, addr: usize, len: usize) {
-        let keep = |c: &mut Cache, a: usize, l: usize| {
-            if !c.keep(a, l) {
-                // SAFETY: a freed block (or a piece of one, one mapping) that nothing uses.
-                unsafe { os::unmap(a as *mut u8, l) };
-            }
-        };
-        let Some(k) = self.forget(addr) else { return keep(self, addr, len) };
-        let mut off = 0;
-        for &piece in k.iter().take_while(|&&p| p > 0) {
-            if off >= len {
-                break;
-            }
-            let l = piece.min(len - off);
-            keep(self, addr + off, l);
-            off += l;
-        }
-        if off < len {
-            keep(self, addr + off, len - off);
-        }
-    }
-
-    /// Drops the record of the assembled block at `addr` (freed, or moved by `realloc`), returning its pieces.
-    fn forget(&mut self, addr: usize) -> Option<[usize; PIECES]> {
-        let k = (0..self.na).find(|&k| self.assembled[k].0 == addr)?;
-        let pieces = self.assembled[k].1;
-        self.assembled.copy_within(k + 1..self.na, k);
-        self.na -= 1;
-        Some(pieces)
     }
 
     /// Keeps a freed block of `len` bytes; false (the caller unmaps it) when it does not fit. Older blocks are
@@ -210,6 +101,40 @@ impl Cache {
         self.n -= 1;
         self.bytes -= b.1;
         b
+    }
+}
+
+/// Runs `f` with nothing freed kept for reuse (the cache emptied first and after): for a phase whose freed blocks
+/// would sit in the cache while it grows, such as reading a file (the decoder's buffers and the file's decoded
+/// channels, freed while the G-buffer's planes are built): with the cache, `gbuf resolve` of a 1080p × 4 EXR peaked
+/// at 0.83–1.11 instead of 0.68 GB. Nested and concurrent calls are fine. Nothing changes where [`LargePages`] is not
+/// the allocator.
+pub fn uncached<R>(f: impl FnOnce() -> R) -> R {
+    /// Ends an [`uncached`] phase, even on unwinding.
+    struct Phase;
+    impl Drop for Phase {
+        fn drop(&mut self) {
+            UNCACHED.fetch_sub(1, std::sync::atomic::Ordering::SeqCst);
+            trim();
+        }
+    }
+    UNCACHED.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+    trim();
+    let _phase = Phase;
+    f()
+}
+
+/// How many [`uncached`] phases are running: while any is, freed blocks are unmapped at once.
+static UNCACHED: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// Returns every cached block to the system.
+fn trim() {
+    if let Ok(mut c) = CACHE.lock() {
+        while c.n > 0 {
+            let (a, l) = c.remove(0);
+            // SAFETY: a whole block the cache owns, unused.
+            unsafe { os::unmap(a as *mut u8, l) };
+        }
     }
 }
 
@@ -331,63 +256,6 @@ mod os {
         target
     }
 
-    /// An inaccessible reservation of `len` bytes (a multiple of [`HUGE`]) at a 2 MiB boundary, for [`move_to`] and
-    /// [`open`]; null when the system refuses.
-    pub fn reserve(len: usize) -> *mut u8 {
-        let Some(over) = len.checked_add(HUGE) else { return std::ptr::null_mut() };
-        // SAFETY: an inaccessible anonymous map at an address the kernel chooses: no existing memory is affected.
-        let raw = unsafe {
-            libc::mmap(std::ptr::null_mut(), over, libc::PROT_NONE, libc::MAP_PRIVATE | libc::MAP_ANONYMOUS, -1, 0)
-        };
-        if raw == libc::MAP_FAILED {
-            return std::ptr::null_mut();
-        }
-        let raw = raw.cast::<u8>();
-        let lead = raw.align_offset(HUGE);
-        // SAFETY: the trimmed ends are parts of the map just made that no one else has seen.
-        unsafe {
-            if lead > 0 {
-                libc::munmap(raw.cast(), lead);
-            }
-            let tail = over - lead - len;
-            if tail > 0 {
-                libc::munmap(raw.add(lead + len).cast(), tail);
-            }
-            raw.add(lead)
-        }
-    }
-
-    /// Moves the `len` mapped bytes at `from` (within one mapping) onto `to` without copying: the kernel moves the
-    /// pages. False when it refuses: `from` is then as it was, and `[to, to + len)` may have been unmapped.
-    ///
-    /// # Safety
-    /// `from..from + len` lies in one of our mappings that nothing uses; `to..to + len` in a reservation of
-    /// [`reserve`]'s that nothing uses.
-    pub unsafe fn move_to(from: *mut u8, len: usize, to: *mut u8) -> bool {
-        // SAFETY: the caller's unused pages moved onto the caller's unused reservation, which they replace.
-        let moved = unsafe {
-            libc::mremap(from.cast(), len, len, libc::MREMAP_MAYMOVE | libc::MREMAP_FIXED, to.cast::<libc::c_void>())
-        };
-        moved != libc::MAP_FAILED
-    }
-
-    /// Makes `[ptr, ptr + len)` of a reservation readable and writable (zero pages, faulted in on first touch) and
-    /// advises huge pages; false when the system refuses.
-    ///
-    /// # Safety
-    /// The range lies in a reservation of [`reserve`]'s that nothing uses.
-    pub unsafe fn open(ptr: *mut u8, len: usize) -> bool {
-        // SAFETY: the caller's own reservation.
-        unsafe {
-            if libc::mprotect(ptr.cast(), len, libc::PROT_READ | libc::PROT_WRITE) != 0 {
-                return false;
-            }
-            // Advice only, as in `map`.
-            libc::madvise(ptr.cast(), len, libc::MADV_HUGEPAGE);
-        }
-        true
-    }
-
     /// Unmaps a block [`map`] returned, of `len` bytes.
     ///
     /// # Safety
@@ -404,15 +272,6 @@ mod os {
         unreachable!("no block is mapped outside Linux")
     }
     pub unsafe fn remap(_: *mut u8, _: usize, _: usize) -> *mut u8 {
-        unreachable!("no block is mapped outside Linux")
-    }
-    pub fn reserve(_: usize) -> *mut u8 {
-        unreachable!("no block is mapped outside Linux")
-    }
-    pub unsafe fn move_to(_: *mut u8, _: usize, _: *mut u8) -> bool {
-        unreachable!("no block is mapped outside Linux")
-    }
-    pub unsafe fn open(_: *mut u8, _: usize) -> bool {
         unreachable!("no block is mapped outside Linux")
     }
     pub unsafe fn unmap(_: *mut u8, _: usize) {
@@ -452,11 +311,12 @@ unsafe impl GlobalAlloc for LargePages {
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
         if mapped(layout) {
             let len = rounded(layout.size());
-            match CACHE.lock() {
-                Ok(mut c) => c.release(ptr as usize, len),
+            let caching = UNCACHED.load(std::sync::atomic::Ordering::Relaxed) == 0;
+            let kept = caching && CACHE.lock().is_ok_and(|mut c| c.keep(ptr as usize, len));
+            if !kept {
                 // SAFETY: `ptr` came from `alloc`/`alloc_zeroed`/`realloc` with this layout, which mapped it with
                 // this rounded length.
-                Err(_) => unsafe { os::unmap(ptr, len) },
+                unsafe { os::unmap(ptr, len) }
             }
         } else {
             // SAFETY: `ptr` came from the system allocator with this layout.
@@ -482,10 +342,6 @@ unsafe impl GlobalAlloc for LargePages {
                     // SAFETY: as below, the general path (allocate, copy, release).
                     unsafe { self.copy_to_new(ptr, layout, new) }
                 } else {
-                    // Resized whole: one mapping now, whatever it was made of.
-                    if let Ok(mut c) = CACHE.lock() {
-                        c.forget(ptr as usize);
-                    }
                     moved
                 }
             }
@@ -521,14 +377,14 @@ impl LargePages {
 mod tests {
     use super::*;
 
-    /// The cache hands back the smallest freed block that fits, cut to size (the tail kept); failing one it assembles
-    /// the block from its largest ones (their bytes kept, the rest zero), which return as pieces; with too many
-    /// assembled blocks in use it grows its largest instead, after returning as many other cached bytes as it adds; a
-    /// full cache drops its oldest block.
+    /// The cache hands back the smallest freed block that fits, cut to size (the tail kept); failing one it grows its
+    /// largest block
+    /// (its bytes kept, the added pages zero) after returning at least as many other cached bytes as it adds; a full
+    /// cache drops its oldest block.
     #[test]
     #[cfg(target_os = "linux")]
-    fn the_cache_reuses_the_best_fit_assembles_or_grows_and_never_holds_more_than_it_returns() {
-        let mut c = Cache::new();
+    fn the_cache_reuses_the_best_fit_grows_the_largest_and_never_holds_more_than_it_returns() {
+        let mut c = Cache { blocks: [(0, 0); CACHE_SLOTS], n: 0, bytes: 0 };
         let block = |len: usize| {
             let p = os::map(len);
             assert!(!p.is_null());
@@ -551,50 +407,23 @@ mod tests {
             assert_eq!(*(big as *const u8).add(6 * HUGE - 1), 0xab);
             os::unmap((big + 3 * HUGE) as *mut u8, 3 * HUGE);
         }
-        // No block fits: the block is assembled from the largest ones, their bytes kept, the rest fresh.
+        // No block fits: the largest grows, and the others go back to the system first.
         assert_eq!(c.take(HUGE), None, "an empty cache serves nothing");
+        assert!(c.keep(small, 2 * HUGE) && c.keep(big, 3 * HUGE));
         let third = block(HUGE);
-        assert!(c.keep(small, 2 * HUGE) && c.keep(big, 3 * HUGE) && c.keep(third, HUGE));
-        let (five, dirty) = c.take(5 * HUGE).expect("assembled");
-        assert_eq!(dirty, 5 * HUGE);
-        assert_eq!((c.n, c.bytes, c.na), (1, HUGE, 1), "the third block stays cached");
-        // SAFETY: a block of 5 huge pages the cache made from the big block's 3 and the small one's 2.
-        unsafe {
-            for at in [0, 3 * HUGE - 1, 3 * HUGE, 5 * HUGE - 1] {
-                assert_eq!(*five.add(at), 0xab, "byte {at}");
-            }
-        }
-        // Freed, it returns as its pieces; a larger request then takes all three and opens the rest fresh.
-        c.release(five as usize, 5 * HUGE);
-        assert_eq!((c.n, c.bytes, c.na), (3, 6 * HUGE, 0));
-        let (eight, dirty) = c.take(8 * HUGE).expect("assembled");
-        assert_eq!(dirty, 6 * HUGE, "only the moved pieces may hold old bytes");
-        assert_eq!((c.n, c.bytes, c.na), (0, 0, 1));
-        // SAFETY: a block of 8 huge pages: 6 moved, 2 fresh.
-        unsafe {
-            assert_eq!(*eight.add(6 * HUGE - 1), 0xab);
-            assert!(std::slice::from_raw_parts(eight.add(6 * HUGE), 2 * HUGE).iter().all(|&b| b == 0));
-            *eight.add(8 * HUGE - 1) = 1;
-        }
-        c.release(eight as usize, 8 * HUGE);
-        assert_eq!((c.n, c.bytes, c.na), (4, 8 * HUGE, 0), "four pieces: 3, 2, 1 and the fresh 2");
-        // With too many assembled blocks in use, the largest grows instead, after the oldest others go back.
-        c.na = ASSEMBLED;
+        assert!(c.keep(third, HUGE));
         let (grown, dirty) = c.take(5 * HUGE).expect("the largest block grows");
         assert_eq!(dirty, 3 * HUGE, "only the grown block's own bytes may be old");
-        assert_eq!((c.n, c.bytes), (2, 3 * HUGE), "growing by 2 huge pages returned the oldest other (2)");
-        c.na = 0;
+        assert_eq!((c.n, c.bytes), (1, HUGE), "growing by 2 huge pages returned the oldest block (2), kept the third");
         // SAFETY: a block of 5 huge pages this test owns: its first 3 are the old block's, the others fresh.
         unsafe {
             assert_eq!(*grown.add(3 * HUGE - 1), 0xab);
             assert!(std::slice::from_raw_parts(grown.add(3 * HUGE), 2 * HUGE).iter().all(|&b| b == 0));
             os::unmap(grown, 5 * HUGE);
         }
-        while c.n > 0 {
-            let (a, l) = c.remove(0);
-            // SAFETY: the cached pieces left, each released once.
-            unsafe { os::unmap(a as *mut u8, l) };
-        }
+        let (a, l) = c.remove(0);
+        // SAFETY: the third block, released once.
+        unsafe { os::unmap(a as *mut u8, l) };
         let blocks: Vec<usize> = (0..=CACHE_SLOTS).map(|_| block(HUGE)).collect();
         for &b in &blocks {
             assert!(c.keep(b, HUGE));
@@ -607,6 +436,33 @@ mod tests {
             // SAFETY: blocks of `os::map`, released once.
             unsafe { os::unmap(a as *mut u8, l) };
         }
+    }
+
+    /// Inside [`uncached`] (nested too) a freed block goes back to the system at once.
+    #[test]
+    #[cfg(target_os = "linux")]
+    fn an_uncached_phase_keeps_nothing() {
+        let layout = Layout::from_size_align(LARGE, 64).unwrap();
+        let cached = |p: *mut u8| {
+            let c = CACHE.lock().unwrap();
+            c.blocks[..c.n].iter().any(|&(a, _)| a == p as usize)
+        };
+        let freed_and_kept = || {
+            let a = LargePages;
+            // SAFETY: a non-zero layout, released once with it.
+            unsafe {
+                let p = a.alloc(layout);
+                assert!(!p.is_null());
+                *p = 1;
+                a.dealloc(p, layout);
+                cached(p)
+            }
+        };
+        uncached(|| {
+            assert!(!freed_and_kept(), "a block freed inside the phase is not kept");
+            uncached(|| assert!(!freed_and_kept(), "nested"));
+            assert!(!freed_and_kept(), "after a nested phase");
+        });
     }
 
     /// Blocks either side of the threshold, grown and shrunk across it, keep their bytes and are released.

@@ -158,7 +158,8 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         ));
     }
     let (side, ignored) = resolve_sidecar(path, opts)?;
-    with_warning(load_with(path, opts, side), ignored)
+    // Nothing the reader frees is kept for reuse: it would stay resident while the planes grow.
+    crate::base::alloc::uncached(|| with_warning(load_with(path, opts, side), ignored))
 }
 
 /// `loaded` with the warning about an ignored JSON first among its warnings.
