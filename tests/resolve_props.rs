@@ -156,6 +156,21 @@ fn last_rows_and_columns_are_shaded_when_the_size_is_not_a_tile_multiple() {
     assert_eq!(r.stats.tiles, 3 * 2);
 }
 
+/// The sampled timing run holds only its bands (every `TIMING_STRIDE`-th): frames whose last sampled band is
+/// partial, whole, or the only one, light without running past the outputs.
+#[test]
+fn sampled_timing_runs_fit_their_bands() {
+    let lights = vec![Light::point(Vec3::new(0.0, 0.0, -1.0), Vec3::ONE, 50.0, f32::INFINITY)];
+    let cfg = ResolveConfig::default();
+    let stride = gbuf::resolve::TIMING_STRIDE;
+    for h in [7, 8 * cfg.tile_size + 5, 9 * cfg.tile_size, 17 * cfg.tile_size + 1] {
+        let gb = fixture::spheres(37, h, 1).unwrap();
+        let mask = gbuf::detect::baselines::none(&gb);
+        let ms = gbuf::resolve::time_sampled(&gb, &lights, &mask, &cfg).unwrap();
+        assert!(ms.is_finite() && ms > 0.0, "height {h} (stride {stride}): {ms} ms");
+    }
+}
+
 fn arb_light() -> impl Strategy<Value = Light> {
     (
         (-6.0f32..6.0, -2.0f32..4.0, -22.0f32..1.0),
