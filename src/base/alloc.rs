@@ -61,10 +61,7 @@ impl Cache {
         let (addr, have) = self.remove(largest);
         let mut returned = 0;
         while returned < len - have && self.n > 0 {
-            let (a, l) = self.remove(0);
-            // SAFETY: a whole block this cache owns, unused.
-            unsafe { os::unmap(a as *mut u8, l) };
-            returned += l;
+            returned += self.unmap_oldest();
         }
         // SAFETY: a whole block of `map`'s that this cache owns, unused, grown to another multiple of the huge page
         // size; on failure it is still whole where it was, and released.
@@ -85,14 +82,20 @@ impl Cache {
             return false;
         }
         while self.n > 0 && (self.n == CACHE_SLOTS || self.bytes + len > CACHE_BYTES) {
-            let (a, l) = self.remove(0);
-            // SAFETY: a whole block this cache owns, unused.
-            unsafe { os::unmap(a as *mut u8, l) };
+            self.unmap_oldest();
         }
         self.blocks[self.n] = (addr, len);
         self.n += 1;
         self.bytes += len;
         true
+    }
+
+    /// Returns the oldest cached block (there is one) to the system; its length.
+    fn unmap_oldest(&mut self) -> usize {
+        let (a, l) = self.remove(0);
+        // SAFETY: a whole block this cache owns, unused.
+        unsafe { os::unmap(a as *mut u8, l) };
+        l
     }
 
     fn remove(&mut self, i: usize) -> (usize, usize) {
@@ -131,9 +134,7 @@ static UNCACHED: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize
 fn trim() {
     if let Ok(mut c) = CACHE.lock() {
         while c.n > 0 {
-            let (a, l) = c.remove(0);
-            // SAFETY: a whole block the cache owns, unused.
-            unsafe { os::unmap(a as *mut u8, l) };
+            c.unmap_oldest();
         }
     }
 }
@@ -378,9 +379,8 @@ mod tests {
     use super::*;
 
     /// The cache hands back the smallest freed block that fits, cut to size (the tail kept); failing one it grows its
-    /// largest block
-    /// (its bytes kept, the added pages zero) after returning at least as many other cached bytes as it adds; a full
-    /// cache drops its oldest block.
+    /// largest block (its bytes kept, the added pages zero) after returning at least as many other cached bytes as it
+    /// adds; a full cache drops its oldest block.
     #[test]
     #[cfg(target_os = "linux")]
     fn the_cache_reuses_the_best_fit_grows_the_largest_and_never_holds_more_than_it_returns() {
