@@ -461,8 +461,12 @@ struct Ctx {
     fg: Vec<f32>,
     fdg: Vec<f32>,
     fddg: Vec<f32>,
-    /// Per tap: [sy, scx, scz1, scz2] and [fg, fdg, fddg].
-    ws: Vec<[f32; 4]>,
+    /// Taps either side of the centre that the Y and Cx filters keep ([`negligible_taps`]: the rest weigh less than
+    /// the f32 rounding of their sums).
+    ryc: usize,
+    /// Per tap: [sy, scx] (the `2 ryc + 1` taps kept), [scz1, scz2] and [fg, fdg, fddg].
+    ws_ycx: Vec<[f32; 2]>,
+    ws_cz: Vec<[f32; 2]>,
     wf: Vec<[f32; 3]>,
     cmax: f32,
     pccmax: f32,
@@ -540,12 +544,16 @@ impl Ctx {
 
         let cmax = max_color_distance();
         let rmax = rs.max(rf);
-        let ws = (0..ns).map(|i| [sy[i], scx[i], scz1[i], scz2[i]]).collect();
+        let ryc = rs - negligible_taps(&sy).min(negligible_taps(&scx));
+        let ws_ycx = (rs - ryc..=rs + ryc).map(|i| [sy[i], scx[i]]).collect();
+        let ws_cz = (0..ns).map(|i| [scz1[i], scz2[i]]).collect();
         let wf = (0..nf).map(|i| [fg[i], fdg[i], fddg[i]]).collect();
         Ctx {
             w,
             h,
-            ws,
+            ryc,
+            ws_ycx,
+            ws_cz,
             wf,
             rs,
             rf,
@@ -562,6 +570,15 @@ impl Ctx {
             pccmax: GPC * cmax,
         }
     }
+}
+
+/// How many taps at each end of the symmetric filter `w` can be left out: those below 2⁻²⁴ of the centre tap. Summed
+/// over a window they change a filtered value by less than its f32 rounding. The CSF's luminance and red-green
+/// filters are about a pixel wide at 67 pixels per degree but span the blue-yellow filter's 21 taps: 8 of them are
+/// dropped (the filters' multiply-adds per pixel 301 → 269). NVIDIA's code sums every tap.
+fn negligible_taps(w: &[f32]) -> usize {
+    let centre = w[w.len() / 2];
+    w.iter().take(w.len() / 2).take_while(|&&v| v < centre * f32::EPSILON / 2.0).count()
 }
 
 /// `cmax`: HyAB distance (after Hunt adjustment, raised to gqc) between pure green and blue.
@@ -1111,12 +1128,16 @@ fn band_features_impl(ctx: &Ctx, img: Pixels<'_>, enc: Encoding, y0: usize, rows
                 *o = ((y + i).saturating_sub(ctx.rf).min(h - 1) % ctx.ring) * row_len;
             }
             assert!(offs_s.iter().chain(&offs_f).all(|&o| o + row_len <= ring.len()));
+            let offs_ycx = &offs_s[ctx.rs - ctx.ryc..ctx.rs + ctx.ryc + 2];
             // acc[row][plane]: Y, Cx, Cz1, Cz2, dx, ddx, dy, ddy.
             let mut c = 0;
             while c < tws {
                 // SAFETY: c < tws ≤ TW in steps of LANES (tws a multiple of COLS, itself of LANES); every offset
                 // + row_len (≥ NH·TW, and every plane here is < NH) ≤ ring.len(), asserted above.
-                let (a, b) = unsafe { vsum2(&ring, &offs_s, c, [HP_Y, HP_CX, HP_CZ1, HP_CZ2], &ctx.ws, [0, 1, 2, 3]) };
+                let (ayc, byc) = unsafe { vsum2(&ring, &offs_ycx, c, [HP_Y, HP_CX], &ctx.ws_ycx, [0, 1]) };
+                // SAFETY: as above.
+                let (az, bz) = unsafe { vsum2(&ring, &offs_s, c, [HP_CZ1, HP_CZ2], &ctx.ws_cz, [0, 1]) };
+                let (a, b) = ([ayc[0], ayc[1], az[0], az[1]], [byc[0], byc[1], bz[0], bz[1]]);
                 // SAFETY: as above.
                 let (fa, fb) = unsafe { vsum2(&ring, &offs_f, c, [HP_DX, HP_DDX, HP_G, HP_G], &ctx.wf, [0, 0, 1, 2]) };
                 for k in 0..4 {
@@ -1285,8 +1306,9 @@ fn hrow(
     for img in 0..imgs.len() {
         let plane = |p: usize| &pad[(img * 4 + p) * pw..(img * 4 + p + 1) * pw];
         let o = |q: usize| (img * 7 + q) * TW;
-        conv_rows::<1, 4>(plane(0), [&ctx.sy], rp - rs, tws, &mut out[o(HP_Y)..o(HP_Y) + tws]);
-        conv_rows::<1, 4>(plane(1), [&ctx.scx], rp - rs, tws, &mut out[o(HP_CX)..o(HP_CX) + tws]);
+        let (kept, ryc) = (rs - ctx.ryc..=rs + ctx.ryc, ctx.ryc);
+        conv_rows::<1, 4>(plane(0), [&ctx.sy[kept.clone()]], rp - ryc, tws, &mut out[o(HP_Y)..o(HP_Y) + tws]);
+        conv_rows::<1, 4>(plane(1), [&ctx.scx[kept]], rp - ryc, tws, &mut out[o(HP_CX)..o(HP_CX) + tws]);
         conv_rows::<2, 2>(plane(2), [&ctx.scz1, &ctx.scz2], rp - rs, tws, &mut out[o(HP_CZ1)..o(HP_CZ2) + tws]);
         conv_rows::<3, 2>(plane(3), [&ctx.fdg, &ctx.fddg, &ctx.fg], rp - rf, tws, &mut out[o(HP_DX)..o(HP_G) + tws]);
     }
@@ -1767,6 +1789,25 @@ mod tests {
         let neg: f32 = c.fddg.iter().filter(|&&v| v < 0.0).sum();
         assert!((pos - 1.0).abs() < 1e-5 && (neg + 1.0).abs() < 1e-5);
         assert!((c.cmax - 41.2).abs() < 0.5, "cmax {}", c.cmax);
+    }
+
+    /// The Y and Cx filters' dropped end taps weigh together less than 2⁻²⁴ of the filter (each filtered value moves
+    /// by less than about one f32 rounding of itself), and no more could be dropped from both; at the default 67
+    /// pixels per degree 6 taps either side are kept of 10. A filter with no negligible tap keeps all.
+    #[test]
+    fn the_luminance_and_red_green_filters_leave_out_only_negligible_taps() {
+        for ppd in [default_ppd(), 20.0, 150.0] {
+            let c = Ctx::new(8, 8, ppd);
+            assert!(c.ryc <= c.rs && c.ws_ycx.len() == 2 * c.ryc + 1, "ppd {ppd}");
+            for w in [&c.sy, &c.scx] {
+                let dropped: f32 = w.iter().take(c.rs - c.ryc).chain(w.iter().skip(c.rs + c.ryc + 1)).sum();
+                assert!(dropped < f32::EPSILON / 2.0, "ppd {ppd}: dropped weight {dropped}");
+            }
+            let needed = |w: &[f32]| w[c.rs - c.ryc] >= w[c.rs] * f32::EPSILON / 2.0;
+            assert!(c.ryc == c.rs || needed(&c.sy) || needed(&c.scx), "ppd {ppd}: more taps could be left out");
+        }
+        assert_eq!(Ctx::new(8, 8, default_ppd()).ryc, 6);
+        assert_eq!(negligible_taps(&[1.0, 2.0, 1.0]), 0);
     }
 
     #[test]
