@@ -1134,7 +1134,7 @@ fn band_features_impl(ctx: &Ctx, img: Pixels<'_>, enc: Encoding, y0: usize, rows
             while c < tws {
                 // SAFETY: c < tws ≤ TW in steps of LANES (tws a multiple of COLS, itself of LANES); every offset
                 // + row_len (≥ NH·TW, and every plane here is < NH) ≤ ring.len(), asserted above.
-                let (ayc, byc) = unsafe { vsum2(&ring, &offs_ycx, c, [HP_Y, HP_CX], &ctx.ws_ycx, [0, 1]) };
+                let (ayc, byc) = unsafe { vsum2(&ring, offs_ycx, c, [HP_Y, HP_CX], &ctx.ws_ycx, [0, 1]) };
                 // SAFETY: as above.
                 let (az, bz) = unsafe { vsum2(&ring, &offs_s, c, [HP_CZ1, HP_CZ2], &ctx.ws_cz, [0, 1]) };
                 let (a, b) = ([ayc[0], ayc[1], az[0], az[1]], [byc[0], byc[1], bz[0], bz[1]]);
