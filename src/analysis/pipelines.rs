@@ -554,18 +554,19 @@ pub fn pipelines_with(
     }
     rows.sort_by_key(|r| Pipeline::ALL.iter().position(|&p| p == r.pipeline));
     let (mut aa, aa_images, mlaa_stats) = m.aa_rows(no_aa, tiled)?;
+    // Only the crop of each image is kept for the pictures, cut now: an image the FLIP batch does not hold (one whose
+    // FLIP is known) is freed before the compressed rows and the batch, the others with the batch.
+    let aa_crop = aa_images.first().map_or((0, 0, 0, 0), |no_aa| aa_crop(no_aa, reference));
+    let aa_images: Vec<HdrImage> = aa_images
+        .into_iter()
+        .map(|i| if (i.width, i.height) == (w, h) { i.crop(aa_crop) } else { HdrImage::new(0, 0) })
+        .collect();
     let mut compressed = m.compressed_rows()?;
     let Measure { flips, .. } = m;
     match cfg.viewing.as_ref() {
         Some(v) => flips.fill(reference, v, &mut rows, &mut aa, &mut compressed),
         None => drop(flips),
     }
-    // The batch is gone: only the crop of each image is kept for the pictures.
-    let aa_crop = aa_images.first().map_or((0, 0, 0, 0), |no_aa| aa_crop(no_aa, reference));
-    let aa_images: Vec<HdrImage> = aa_images
-        .iter()
-        .map(|i| if (i.width, i.height) == (w, h) { i.crop(aa_crop) } else { HdrImage::new(0, 0) })
-        .collect();
     let (rematerialised, rematerialise_error) = match cfg.geometry {
         Some(name) => match rematerialise(name, gb) {
             Ok(r) => (Some(r), None),
