@@ -599,7 +599,9 @@ fn keep_worst_maps(maps: &mut [ErrorMaps], rows: &[Row]) {
 }
 
 /// Rows whose images wait for FLIP, batched so that each reference is filtered once per batch, not once per row.
-const FLIP_BATCH: usize = 8;
+/// Four, not eight: the waiting images (25 MB each at 1080p) were the sweep's peak, the report's since the
+/// pipelines section frees its images early; a second batch filters the references once more.
+const FLIP_BATCH: usize = 4;
 
 /// A row's image waiting for FLIP: against the reference (total error) and the exact G-buffer lit with its
 /// detector (layout error).
