@@ -469,11 +469,11 @@ fn widen_ranges(
     macro_rules! by_components {
         ($tb:literal) => {
             match comps.len() {
-                1 => widen::<$tb, 1>(texels, samples, half, comps, ranges),
-                2 => widen::<$tb, 2>(texels, samples, half, comps, ranges),
-                3 => widen::<$tb, 3>(texels, samples, half, comps, ranges),
-                4 => widen::<$tb, 4>(texels, samples, half, comps, ranges),
-                _ => widen_any(texels, tb, samples, half, comps, ranges),
+                1 => widen::<$tb, 1>(texels, tb, samples, half, comps, ranges),
+                2 => widen::<$tb, 2>(texels, tb, samples, half, comps, ranges),
+                3 => widen::<$tb, 3>(texels, tb, samples, half, comps, ranges),
+                4 => widen::<$tb, 4>(texels, tb, samples, half, comps, ranges),
+                n => unreachable!("a format of {n} components (every format has 1 to 4)"),
             }
         };
     }
@@ -483,53 +483,41 @@ fn widen_ranges(
         4 => by_components!(4),
         8 => by_components!(8),
         16 => by_components!(16),
-        _ => widen_any(texels, tb, samples, half, comps, ranges),
+        _ => by_components!(0),
     }
 }
 
-/// [`widen_ranges`] for texels of `TB` bytes with `NC` components.
+/// [`widen_ranges`] for texels of `TB` bytes (`0`: `tb`, a size chosen at run time) with `NC` components.
 #[inline(always)]
 fn widen<const TB: usize, const NC: usize>(
     texels: &[u8],
+    tb: usize,
     samples: usize,
     half: usize,
     comps: &[(u32, u64)],
     ranges: &mut [(u64, u64)],
 ) {
+    let tb = if TB == 0 { tb } else { TB };
     let comps: [(u32, u64); NC] = std::array::from_fn(|c| comps[c]);
-    for pixel in texels.chunks_exact(samples * TB) {
-        for (s, t) in pixel.chunks_exact(TB).enumerate() {
-            let r: &mut [(u64, u64); NC] =
-                (&mut ranges[(s * 2 + half) * NC..(s * 2 + half + 1) * NC]).try_into().expect("NC ranges");
-            if TB <= 8 {
+    #[inline(always)]
+    fn widen_texel<const NC: usize>(r: &mut [(u64, u64)], comps: &[(u32, u64); NC], shifted: impl Fn(u32) -> u64) {
+        for ((offset, mask), r) in comps.iter().zip(r.iter_mut()) {
+            let v = shifted(*offset) & mask;
+            *r = (r.0.min(v), r.1.max(v));
+        }
+    }
+    for pixel in texels.chunks_exact(samples * tb) {
+        for (s, t) in pixel.chunks_exact(tb).enumerate() {
+            let r = &mut ranges[(s * 2 + half) * NC..(s * 2 + half + 1) * NC];
+            if TB != 0 && TB <= 8 {
+                // A word of at most 8 bytes: 64-bit shifts.
                 let mut word = [0u8; 8];
                 word[..TB.min(8)].copy_from_slice(&t[..TB.min(8)]);
                 let t = u64::from_le_bytes(word);
-                for ((offset, mask), r) in comps.iter().zip(r.iter_mut()) {
-                    let v = t.checked_shr(*offset).unwrap_or(0) & mask;
-                    *r = (r.0.min(v), r.1.max(v));
-                }
+                widen_texel(r, &comps, |offset| t.checked_shr(offset).unwrap_or(0));
             } else {
                 let t = read_texel(t);
-                for ((offset, mask), r) in comps.iter().zip(r.iter_mut()) {
-                    let v = (t >> offset) as u64 & mask;
-                    *r = (r.0.min(v), r.1.max(v));
-                }
-            }
-        }
-    }
-}
-
-/// [`widen_ranges`] for any texel size and component count.
-fn widen_any(texels: &[u8], tb: usize, samples: usize, half: usize, comps: &[(u32, u64)], ranges: &mut [(u64, u64)]) {
-    let nc = comps.len();
-    for pixel in texels.chunks_exact(samples * tb) {
-        for (s, t) in pixel.chunks_exact(tb).enumerate() {
-            let t = read_texel(t);
-            let r = &mut ranges[(s * 2 + half) * nc..(s * 2 + half + 1) * nc];
-            for (&(offset, mask), r) in comps.iter().zip(r.iter_mut()) {
-                let v = (t >> offset) as u64 & mask;
-                *r = (r.0.min(v), r.1.max(v));
+                widen_texel(r, &comps, |offset| (t >> offset) as u64);
             }
         }
     }
@@ -620,6 +608,7 @@ mod tests {
     #[test]
     fn the_fused_dcc_and_ccs_pass_equals_each_model_alone() {
         // Every texel size and component count the pass is specialised for, and a 3-byte texel it is not.
+        assert!(Format::ALL.iter().all(|f| (1..=4).contains(&f.components().len())), "1 to 4 components");
         let mut rng = crate::base::rng::SplitMix64::new(9);
         for (format, w, h, samples) in [
             (Format::Rgba8, 37, 21, 4),
