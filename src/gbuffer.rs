@@ -829,29 +829,104 @@ impl GBuffer {
     /// (Re)computes `position` from `depth` and the camera's ray through each sample (0 on background samples), in
     /// place when the plane exists. Does nothing without depth or camera.
     pub fn fill_position_from_depth(&mut self) {
-        let (Some(cam), Some(depth)) = (self.camera.as_ref(), self.depth.as_ref()) else { return };
-        let rays = cam.ray_caster(self.width, self.height);
-        let (w, s) = (self.width as usize, self.samples as usize);
-        let n = depth.len();
-        let offsets = &self.sample_positions;
-        let pos = self.position.get_or_insert_with(|| crate::base::memory::zeroed_vec3(n));
-        let chunk = (w * s).max(1);
-        pos.par_chunks_mut(chunk)
-            .zip(depth.par_chunks(chunk))
-            .zip(self.coverage.par_chunks(chunk))
-            .enumerate()
-            .for_each(|(y, ((p, d), c))| {
-                for (i, ((p, &d), &c)) in p.iter_mut().zip(d).zip(c).enumerate() {
-                    *p = if c {
-                        let o = offsets[i % s];
-                        let px = Vec2::new((i / s) as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y);
-                        rays.ray(px) * d
-                    } else {
-                        Vec3::ZERO
-                    };
-                }
-            });
+        if self.camera.is_none() || self.depth.is_none() {
+            return;
+        }
+        let n = self.len();
+        let mut pos = self.position.take().unwrap_or_else(|| crate::base::memory::zeroed_vec3(n));
+        self.derive_positions_into(0, &mut pos);
+        self.position = Some(pos);
     }
+
+    /// The positions [`GBuffer::fill_position_from_depth`] writes, as a plane of their own (the G-buffer is left as
+    /// it is); `None` without depth or camera.
+    #[must_use]
+    pub fn derived_positions(&self) -> Option<Vec<Vec3>> {
+        self.camera.as_ref().and(self.depth.as_ref())?;
+        let mut pos = crate::base::memory::zeroed_vec3(self.len());
+        self.derive_positions_into(0, &mut pos);
+        Some(pos)
+    }
+
+    /// [`GBuffer::derived_positions`] of rows `rows` alone; `None` without depth or camera.
+    #[must_use]
+    pub fn derived_positions_of_rows(&self, rows: std::ops::Range<usize>) -> Option<Vec<Vec3>> {
+        self.camera.as_ref().and(self.depth.as_ref())?;
+        let row = self.width as usize * self.samples as usize;
+        let mut pos = crate::base::memory::zeroed_vec3(rows.len() * row);
+        self.derive_positions_into(rows.start, &mut pos);
+        Some(pos)
+    }
+
+    /// Writes the derived positions of the rows from `first_row` on into `pos` (whole rows); nothing without depth or
+    /// camera.
+    fn derive_positions_into(&self, first_row: usize, pos: &mut [Vec3]) {
+        let (Some(cam), Some(depth)) = (self.camera.as_ref(), self.depth.as_ref()) else { return };
+        let chunk = (self.width as usize * self.samples as usize).max(1);
+        let depth = &depth[first_row * chunk..first_row * chunk + pos.len()];
+        let coverage = &self.coverage[first_row * chunk..first_row * chunk + pos.len()];
+        let rays = cam.ray_caster(self.width, self.height);
+        let offsets = &self.sample_positions;
+        pos.par_chunks_mut(chunk).zip(depth.par_chunks(chunk)).zip(coverage.par_chunks(chunk)).enumerate().for_each(
+            |(y, ((p, d), c))| {
+                for (i, p) in p.iter_mut().enumerate() {
+                    *p = derived_position(&rays, offsets, first_row + y, i, d[i], c[i]);
+                }
+            },
+        );
+    }
+
+    /// The view-space position of sample `i`: the position plane's, else the one depth and the camera give
+    /// ([`GBuffer::fill_position_from_depth`]'s bits; `rays` is the camera's [`Camera::ray_caster`] for this frame's
+    /// size); `None` with neither.
+    #[must_use]
+    pub fn position_or_derived(&self, rays: Option<&crate::camera::RayCaster>, i: usize) -> Option<Vec3> {
+        if let Some(p) = &self.position {
+            return Some(p[i]);
+        }
+        let (rays, depth) = (rays?, self.depth.as_ref()?);
+        let row = (self.width as usize * self.samples as usize).max(1);
+        Some(derived_position(rays, &self.sample_positions, i / row, i % row, depth[i], self.coverage[i]))
+    }
+
+    /// Whether the position plane holds exactly what [`GBuffer::fill_position_from_depth`] would write, bit for bit
+    /// (0 on background samples): then it says nothing depth and the camera do not, and a reader that derives
+    /// positions from depth reads the same bits. False without a position plane, depth or camera.
+    #[must_use]
+    pub fn position_is_derived(&self) -> bool {
+        let (Some(cam), Some(depth), Some(pos)) = (self.camera.as_ref(), self.depth.as_ref(), self.position.as_ref())
+        else {
+            return false;
+        };
+        let rays = cam.ray_caster(self.width, self.height);
+        let offsets = &self.sample_positions;
+        let chunk = (self.width as usize * self.samples as usize).max(1);
+        let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+        pos.par_chunks(chunk).zip(depth.par_chunks(chunk)).zip(self.coverage.par_chunks(chunk)).enumerate().all(
+            |(y, ((p, d), c))| {
+                p.iter().enumerate().all(|(i, &p)| bits(p) == bits(derived_position(&rays, offsets, y, i, d[i], c[i])))
+            },
+        )
+    }
+}
+
+/// The position [`GBuffer::fill_position_from_depth`] gives sample `i` of row `y` (an index within the row) at
+/// view depth `depth`: the camera ray through the sample times the depth, 0 at a background sample.
+#[inline]
+fn derived_position(
+    rays: &crate::camera::RayCaster,
+    offsets: &[Vec2],
+    y: usize,
+    i: usize,
+    depth: f32,
+    covered: bool,
+) -> Vec3 {
+    if !covered {
+        return Vec3::ZERO;
+    }
+    let s = offsets.len();
+    let o = offsets[i % s];
+    rays.ray(Vec2::new((i / s) as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y)) * depth
 }
 
 /// Samples per parallel block when deriving depth from position.

@@ -48,6 +48,9 @@ pub fn run_frame(
         clock = std::time::Instant::now();
     };
     let mut needs = needs::analyze(gb);
+    if input.position_derived {
+        needs.count_position_as_derivable();
+    }
     let surface_maps = crate::analysis::surfaces::surface_maps(gb);
     lap("needs analysis");
     let mut out = sweep::sweep(gb, input.lights, cfg, progress)?;
@@ -338,9 +341,15 @@ pub fn run_frames<E: From<crate::Error>>(
     let (mut frames, mut rows, mut files, mut figures) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for i in 0..count {
         let t = std::time::Instant::now();
-        let f = next(i)?;
+        let mut f = next(i)?;
         let load_seconds = t.elapsed().as_secs_f64();
         let here = choose(&f.gbuffer.attributes());
+        // Positions that depth and the camera give bit for bit are not held through the report (95 MB at 1080p × 4):
+        // every reader derives the same bits.
+        let position_derived = f.gbuffer.position_is_derived();
+        if position_derived {
+            f.gbuffer.position = None;
+        }
         match &how.lighting {
             Some(chosen) if i > 0 => {
                 if chosen.brdf != here.brdf {
@@ -361,6 +370,7 @@ pub fn run_frames<E: From<crate::Error>>(
             single: f.single.as_ref(),
             geometry: f.geometry,
             notes: f.notes.clone(),
+            position_derived,
         };
         let prefix =
             if count > 1 { format!("frame{:0w$}_", i + 1, w = count.to_string().len()) } else { String::new() };

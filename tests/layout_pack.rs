@@ -516,3 +516,45 @@ fn roundtrip_matches_tells_lossless_from_lossy_and_sampled_timing_compares_nothi
         assert!(enc.is_finite() && dec.is_finite() && enc >= 0.0 && dec >= 0.0, "stride {stride}: {enc} {dec}");
     }
 }
+
+/// A frame whose positions are what its depth and camera give (`gbuf report` leaves such a plane out) packs to the
+/// same bytes without them: a layout storing positions stores the derived ones, band by band, and a lossless
+/// layout's roundtrip still leaves the frame as it was. The derived positions are the plane's bit for bit, whole,
+/// by rows and sample by sample; a plane that differs in one sample is not derivable.
+#[test]
+fn a_frame_without_the_positions_its_depth_gives_packs_as_with_them() {
+    let gb = synthetic(700, 200, 2, 9); // several packing bands
+    assert!(gb.len() > gbuf::layout::pack::BAND_SAMPLES);
+    assert!(gb.position_is_derived());
+    let mut bare = gb.clone();
+    bare.position = None;
+    assert!(!bare.position_is_derived(), "no plane: nothing to leave out");
+    let bits = |p: &[Vec3]| p.iter().flat_map(|v| v.to_array().map(f32::to_bits)).collect::<Vec<u32>>();
+    let want = bits(gb.position.as_ref().unwrap());
+    assert_eq!(bits(&bare.derived_positions().unwrap()), want);
+    let row = (gb.width * gb.samples) as usize;
+    assert_eq!(bits(&bare.derived_positions_of_rows(37..121).unwrap()), want[37 * row * 3..121 * row * 3]);
+    let rays = gb.camera.unwrap().ray_caster(gb.width, gb.height);
+    assert!((0..gb.len()).all(|i| bits(&[bare.position_or_derived(Some(&rays), i).unwrap()]) == want[3 * i..3 * i + 3]));
+    for layout in Layout::builtins().into_iter().chain(Layout::visibility_builtins()) {
+        let (with, without) = (layout.pack(&gb).unwrap(), layout.pack(&bare).unwrap());
+        for (a, b) in with.targets.iter().zip(&without.targets) {
+            assert!(a.bytes == b.bytes, "{}: target {} differs", layout.name(), a.name);
+        }
+        assert_eq!(with.present, without.present, "{}", layout.name());
+        assert_eq!(
+            layout.roundtrip_matches(&gb).unwrap().0,
+            layout.roundtrip_matches(&bare).unwrap().0,
+            "{}",
+            layout.name()
+        );
+    }
+    let lossless = Layout::by_name("reference-f32").unwrap();
+    assert!(lossless.stores(Attribute::Position) && lossless.roundtrip_matches(&bare).unwrap().0);
+    let back = lossless.unpack(&lossless.pack(&bare).unwrap(), &bare).unwrap();
+    assert_eq!(bits(back.position.as_ref().unwrap()), want);
+    let mut moved = gb.clone();
+    let i = gb.coverage.iter().position(|&c| c).unwrap();
+    moved.position.as_mut().unwrap()[i].x += 1e-3;
+    assert!(!moved.position_is_derived());
+}

@@ -299,6 +299,7 @@ fn a_frame_times_its_steps_outside_the_sweep() {
         single: None,
         geometry: None,
         notes: Vec::new(),
+        position_derived: false,
     };
     let t = std::time::Instant::now();
     let r = gbuf::study::run_frame(&input, &cfg, true, "", &mut |_, _, _| {}).unwrap();
@@ -355,4 +356,66 @@ fn the_frames_loop_lights_every_frame_as_the_first_and_names_them() {
     let failing = |i: usize| -> gbuf::Result<FrameInput> { Err(gbuf::Error::Argument(format!("frame {i} is gone"))) };
     let err = run_frames(1, failing, &cfg, &|_| unreachable!(), &how, &mut |_| {}).unwrap_err();
     assert!(err.to_string().contains("frame 0 is gone"), "{err}");
+}
+
+/// The report leaves out a position plane that depth and the camera give bit for bit (every reader derives the same
+/// bits), and says the same as with it: every row's numbers, the needs analysis (position derivable, not absent),
+/// the visibility buffer's packing and the re-materialisation, including its positions.
+#[test]
+fn a_frame_reports_the_same_without_the_positions_its_depth_gives() {
+    use gbuf::analysis::row::Row;
+    use gbuf::study::{run_frame, run_frames, Assembly, FrameInput};
+    let (gb, lights) = small_room();
+    assert!(gb.position_is_derived(), "the room's positions are its depth along the camera rays");
+    let cfg = one_run(&["reference-f32", "fat-20"], vec![Detector::Lauritzen], FlipRows::Decisive);
+    let how = Assembly::of(&cfg, gbuf::analysis::aggregate::Over::Worst, None, "");
+    let next = |_: usize| -> gbuf::Result<FrameInput> {
+        Ok(FrameInput {
+            name: "room".into(),
+            gbuffer: gb.clone(),
+            lights: lights.clone(),
+            lights_source: "default".into(),
+            single: None,
+            geometry: Some(SceneName::Room),
+            notes: Vec::new(),
+        })
+    };
+    let choose = |a: &[gbuf::gbuffer::Attribute]| gbuf::resolve::Lighting::choose(None, None, a);
+    let (dropped, _) = run_frames(1, next, &cfg, &choose, &how, &mut |_| {}).unwrap();
+    let mut kept_cfg = cfg.clone();
+    kept_cfg.resolve = choose(&gb.attributes()).apply(kept_cfg.resolve);
+    let input = gbuf::analysis::ReportInput {
+        name: "room".into(),
+        gbuffer: &gb,
+        lights: &lights,
+        lights_source: "default".into(),
+        single: None,
+        geometry: Some(SceneName::Room),
+        notes: Vec::new(),
+        position_derived: false,
+    };
+    let kept = run_frame(&input, &kept_cfg, true, "", &mut |_, _, _| {}).unwrap();
+    let untimed = |r: &Row| Row {
+        encode_ms: None,
+        decode_ms: None,
+        detect_ms: None,
+        resolve_ms: None,
+        resolve_pass_ms: None,
+        total_ms: None,
+        timings: Default::default(),
+        pareto: Default::default(),
+        ..r.clone()
+    };
+    assert_eq!(dropped.rows.len(), kept.rows.len());
+    for (a, b) in dropped.rows.iter().zip(&kept.rows) {
+        assert_eq!(untimed(a), untimed(b), "{} × {}", a.layout, a.detector);
+    }
+    let (a, b) = (&dropped.frames[0], &kept.frame);
+    assert_eq!(a.needs, b.needs);
+    assert!(b.needs.derivable.contains(&"position".to_string()) && !b.needs.absent.contains(&"position".to_string()));
+    let (pa, pb) = (a.pipelines.as_ref().unwrap(), b.pipelines.as_ref().unwrap());
+    assert_eq!(pa.visibility_packing, pb.visibility_packing);
+    assert_eq!(pa.rematerialised, pb.rematerialised);
+    let remat = pa.rematerialised.as_ref().unwrap();
+    assert!(remat.attributes.iter().any(|x| x.attribute == "position"), "{remat:?}");
 }

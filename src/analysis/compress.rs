@@ -294,17 +294,12 @@ fn derive(gb: &GBuffer) -> Result<Prepared<'_>> {
     // Positions for the lighting pass: the input's, or derived from depth (one plane; the input is not copied).
     let position: Cow<'_, [Vec3]> = match &gb.position {
         Some(p) => Cow::Borrowed(p),
-        None => {
-            let mut d = gb.shell();
-            d.depth = gb.depth.clone();
-            d.fill_position_from_depth();
-            Cow::Owned(d.position.ok_or_else(|| {
-                Error::Mismatch(
-                    "MSAA G-buffer compression lights its slots: the G-buffer needs positions, or depth with a camera"
-                        .into(),
-                )
-            })?)
-        }
+        None => Cow::Owned(gb.derived_positions().ok_or_else(|| {
+            Error::Mismatch(
+                "MSAA G-buffer compression lights its slots: the G-buffer needs positions, or depth with a camera"
+                    .into(),
+            )
+        })?),
     };
     let depth = detect::depth_plane(gb, Detector::Lauritzen).ok();
     let slope: Vec<f32> = match &depth {

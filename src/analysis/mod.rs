@@ -49,6 +49,10 @@ pub struct ReportInput<'a> {
     /// What the reader said about the frame that every output must repeat (e.g. a packed input has no float
     /// truth: its errors are against the engine's decoded frame).
     pub notes: Vec<String>,
+    /// The frame's position plane was left out of `gbuffer` because depth and the camera give it bit for bit
+    /// ([`GBuffer::position_is_derived`]; every reader then derives the same bits): the needs analysis counts position
+    /// as derivable, not absent.
+    pub position_derived: bool,
 }
 
 /// The lossless measuring baseline among the built-ins: never picked as the layout to prune when another one can

@@ -107,6 +107,16 @@ impl Needs {
         self.constant.iter().any(|n| n == attr.name())
     }
 
+    /// Position counted as derivable rather than absent: for a frame whose position plane was left out because
+    /// depth and the camera give it bit for bit (`ReportInput::position_derived`).
+    pub fn count_position_as_derivable(&mut self) {
+        let name = Attribute::Position.name();
+        self.absent.retain(|a| a != name);
+        if !self.derivable.iter().any(|a| a == name) {
+            self.derivable.push(name.to_string());
+        }
+    }
+
     /// Is `attr` absent from this scene?
     #[must_use]
     pub fn is_absent(&self, attr: Attribute) -> bool {

@@ -415,12 +415,20 @@ enum FlipKey {
 }
 
 /// The images whose FLIP against the reference the pipelines need, each distinct image once, and the rows that
-/// want each: computed in one batch at the end (the reference filtered once per pass). Images equal to a known one
-/// are not computed again.
+/// want each: computed in batches (the reference filtered once per batch), one when the caller flushes and one at
+/// the end. Images equal to a known one are not computed again; an image equal to one an earlier batch measured is
+/// measured again (the same numbers: only time).
 struct FlipBatch<'a> {
     known: &'a [KnownFlip<'a>],
-    images: std::cell::RefCell<Vec<Arc<HdrImage>>>,
+    images: std::cell::RefCell<Vec<Held>>,
     wants: std::cell::RefCell<Vec<(FlipSlot, Option<FlipKey>)>>,
+}
+
+/// A distinct image of a [`FlipBatch`]: waiting for its batch, or measured (its mean LDR- and HDR-FLIP, `None` when
+/// they could not be computed) and let go.
+enum Held {
+    Waiting(Arc<HdrImage>),
+    Measured(Option<(f64, f64)>),
 }
 
 /// An image a stage made, shared with the FLIP batch when the batch keeps it (no copy), and where its FLIP comes
@@ -447,11 +455,15 @@ impl<'a> FlipBatch<'a> {
             return Shared { image: Arc::new(img), key: Some(FlipKey::Known(k)) };
         }
         let mut images = self.images.borrow_mut();
-        if let Some(k) = images.iter().position(|m| same(m)) {
-            return Shared { image: Arc::clone(&images[k]), key: Some(FlipKey::New(k)) };
+        let waiting = images.iter().enumerate().find_map(|(k, m)| match m {
+            Held::Waiting(m) if same(m) => Some((k, Arc::clone(m))),
+            _ => None,
+        });
+        if let Some((k, image)) = waiting {
+            return Shared { image, key: Some(FlipKey::New(k)) };
         }
         let image = Arc::new(img);
-        images.push(Arc::clone(&image));
+        images.push(Held::Waiting(Arc::clone(&image)));
         Shared { image, key: Some(FlipKey::New(images.len() - 1)) }
     }
 
@@ -460,7 +472,29 @@ impl<'a> FlipBatch<'a> {
         self.wants.borrow_mut().push((slot, img.key));
     }
 
-    /// Computes the FLIPs and writes them into the rows' error sets.
+    /// Measures the waiting images in one batch and lets them go (the batch's share of them: a stage may still hold
+    /// its own).
+    fn flush(&self, reference: &HdrImage, viewing: &Viewing) {
+        let mut images = self.images.borrow_mut();
+        let waiting: Vec<(usize, Arc<HdrImage>)> = images
+            .iter()
+            .enumerate()
+            .filter_map(|(k, m)| match m {
+                Held::Waiting(m) => Some((k, Arc::clone(m))),
+                Held::Measured(_) => None,
+            })
+            .collect();
+        if waiting.is_empty() {
+            return;
+        }
+        let tests: Vec<&HdrImage> = waiting.iter().map(|(_, m)| &**m).collect();
+        let results = flip_means(reference, &tests, viewing);
+        for ((k, _), flip) in waiting.iter().zip(results) {
+            images[*k] = Held::Measured(flip);
+        }
+    }
+
+    /// Computes the FLIPs not yet measured and writes them all into the rows' error sets.
     fn fill(
         self,
         reference: &HdrImage,
@@ -469,9 +503,16 @@ impl<'a> FlipBatch<'a> {
         aa: &mut [AaRow],
         compressed: &mut [CompressedRow],
     ) {
-        let images = self.images.into_inner();
-        let tests: Vec<&HdrImage> = images.iter().map(|i| &**i).collect();
-        let results = if tests.is_empty() { Vec::new() } else { flip_means(reference, &tests, viewing) };
+        self.flush(reference, viewing);
+        let results: Vec<Option<(f64, f64)>> = self
+            .images
+            .into_inner()
+            .into_iter()
+            .map(|m| match m {
+                Held::Measured(flip) => flip,
+                Held::Waiting(_) => unreachable!("flushed above"),
+            })
+            .collect();
         for (slot, key) in self.wants.into_inner() {
             let flip = match key {
                 Some(FlipKey::New(k)) => results[k],
@@ -561,6 +602,11 @@ pub fn pipelines_with(
         .into_iter()
         .map(|i| if (i.width, i.height) == (w, h) { i.crop(aa_crop) } else { HdrImage::new(0, 0) })
         .collect();
+    // The images so far are measured before the compressed rows make theirs: one batch of all of them was the
+    // report's peak memory (each 25 MB at 1080p), for one more filtering of the reference.
+    if let Some(v) = cfg.viewing.as_ref() {
+        m.flips.flush(reference, v);
+    }
     let mut compressed = m.compressed_rows()?;
     let Measure { flips, .. } = m;
     match cfg.viewing.as_ref() {
@@ -1051,61 +1097,52 @@ fn covered_pixels(gb: &GBuffer) -> f64 {
 pub fn visibility_packing(gb: &GBuffer, layout: &Layout) -> Result<VisibilityPacking> {
     use crate::gbuffer::Attribute;
     use rayon::prelude::*;
-    /// What one band of rows finds: ID mismatches, the largest relative depth error, and which of depth, primitive
-    /// and object IDs the decoded band holds.
+    /// What the bands find: ID mismatches, the largest relative depth error, and which of depth, primitive and
+    /// object IDs every decoded band holds.
     #[derive(Default)]
-    struct Part {
+    struct Found {
         primitive: u64,
         object: u64,
         depth: f64,
         kept: [bool; 3],
     }
-    // The packed targets decoded band by band (the whole unpacked frame, with the positions derived from its depth,
-    // was the report's largest allocation at its end).
-    let packed = layout.pack(gb)?;
-    let frame = layout.frame(&packed, gb)?;
+    // Packed and decoded band by band: neither the packed frame nor its decoded planes are ever held whole (the
+    // packed frame was the report's largest allocation at its end).
     let only = [Attribute::Depth, Attribute::PrimitiveId, Attribute::ObjectId];
     let row = gb.width as usize * gb.samples as usize;
-    let bands: Vec<std::ops::Range<u32>> = (0..gb.height).step_by(16).map(|y| y..(y + 16).min(gb.height)).collect();
-    let parts = bands
-        .into_par_iter()
-        .map_init(GBuffer::default, |band, rows| -> Result<Part> {
-            frame.decode_rows_only(rows.clone(), band, &only)?;
-            let range = rows.start as usize * row..rows.end as usize * row;
-            let covered = || range.clone().filter(|&i| gb.coverage[i]);
-            let mismatches = |a: Option<&Vec<u32>>, b: Option<&Vec<u32>>| match (a, b) {
-                (Some(a), Some(b)) => covered().filter(|&i| a[i] != b[i - range.start]).count() as u64,
-                (Some(_), None) => covered().count() as u64,
-                _ => 0,
-            };
-            let depth = match (&gb.depth, &band.depth) {
-                (Some(a), Some(b)) => covered()
-                    .map(|i| {
-                        let (x, y) = (f64::from(a[i]), f64::from(b[i - range.start]));
-                        if x == y {
-                            0.0
-                        } else {
-                            (x - y).abs() / x.abs().max(f64::from(f32::MIN_POSITIVE))
-                        }
-                    })
-                    .fold(0.0, f64::max),
-                (Some(_), None) => f64::INFINITY,
-                _ => 0.0,
-            };
-            Ok(Part {
-                primitive: mismatches(gb.primitive_id.as_ref(), band.primitive_id.as_ref()),
-                object: mismatches(gb.object_id.as_ref(), band.object_id.as_ref()),
-                depth,
-                kept: [band.depth.is_some(), band.primitive_id.is_some(), band.object_id.is_some()],
-            })
-        })
-        .collect::<Result<Vec<Part>>>()?;
-    let total = parts.iter().fold(Part { kept: [true; 3], ..Part::default() }, |t, p| Part {
-        primitive: t.primitive + p.primitive,
-        object: t.object + p.object,
-        depth: t.depth.max(p.depth),
-        kept: [t.kept[0] & p.kept[0], t.kept[1] & p.kept[1], t.kept[2] & p.kept[2]],
-    });
+    let mut total = Found { kept: [true; 3], ..Found::default() };
+    layout.each_roundtrip_band(gb, 1, Some(&only), |rows, band| {
+        let range = rows.start as usize * row..rows.end as usize * row;
+        let covered = || range.clone().into_par_iter().filter(|&i| gb.coverage[i]);
+        let mismatches = |a: Option<&Vec<u32>>, b: Option<&Vec<u32>>| match (a, b) {
+            (Some(a), Some(b)) => covered().filter(|&i| a[i] != b[i - range.start]).count() as u64,
+            (Some(_), None) => covered().count() as u64,
+            _ => 0,
+        };
+        let depth = match (&gb.depth, &band.depth) {
+            (Some(a), Some(b)) => covered()
+                .map(|i| {
+                    let (x, y) = (f64::from(a[i]), f64::from(b[i - range.start]));
+                    if x == y {
+                        0.0
+                    } else {
+                        (x - y).abs() / x.abs().max(f64::from(f32::MIN_POSITIVE))
+                    }
+                })
+                .reduce(|| 0.0, f64::max),
+            (Some(_), None) => f64::INFINITY,
+            _ => 0.0,
+        };
+        total.primitive += mismatches(gb.primitive_id.as_ref(), band.primitive_id.as_ref());
+        total.object += mismatches(gb.object_id.as_ref(), band.object_id.as_ref());
+        total.depth = total.depth.max(depth);
+        for (k, plane) in
+            total.kept.iter_mut().zip([band.depth.is_some(), band.primitive_id.is_some(), band.object_id.is_some()])
+        {
+            *k &= plane;
+        }
+        Ok(true)
+    })?;
     let mut missing = Vec::new();
     for ((name, had), kept) in [
         ("depth", gb.depth.is_some()),

@@ -62,8 +62,9 @@ crate::named_enum! {
 }
 
 /// Per-pixel error maps of one layout (row-major; NaN = background pixel: no covered sample). Plain `f32`s, 4 bytes
-/// a pixel rather than an `Option<f32>`'s 8: a 1080p report keeps up to 16 of these maps while a layout's decoded
-/// G-buffer is alive, and they were 200 MB of its peak memory.
+/// a pixel rather than an `Option<f32>`'s 8. Only the [`HEATMAP_LAYOUTS`] layouts with the largest layout error
+/// keep them, and their attribute maps are drawn once the sweep is over ([`attribute_maps`]): while each layout drew
+/// its own beside its packed frame they were a tenth of the report's peak memory.
 #[derive(Clone, Debug)]
 pub struct ErrorMaps {
     /// Layout name.
@@ -345,7 +346,7 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
             (None, Some(d)) => Ok(whole_pass(gb, d, prepared.decode_ms.clone())),
             (None, None) => unreachable!("a layout's input is packed or planes"),
         };
-        let (attribute_errors, mut lmaps, derived, decode_ms) = match measured {
+        let (attribute_errors, derived, decode_ms) = match measured {
             Ok(m) => m,
             Err(e) => {
                 fail_layout(&mut rows, &e);
@@ -361,7 +362,13 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
             attr_row.set_timing("material_table", timing(vec![ms]));
         }
         fill_attribute_errors(&mut attr_row, attribute_errors, derived);
-        lmaps.layout = layout.name().to_string();
+        let mut lmaps = ErrorMaps {
+            layout: layout.name().to_string(),
+            normal_deg: None,
+            depth_rel: None,
+            albedo_abs: None,
+            image_abs: None,
+        };
 
         for (di, &det) in cfg.detectors.iter().enumerate() {
             progress(done, total, Some(Stage::Detect), Some(&format!("{} × {}", layout.name(), det.name())));
@@ -490,6 +497,12 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
         flips.flush(&mut rows, &against, &mut detectors);
     }
     let FlipQueue { worst: worst_flip, shown, .. } = flips;
+    // The kept layouts' attribute maps, now that no packed frame or waiting image shares the memory with them.
+    for i in worst_maps(&maps, &rows) {
+        if let Some(layout) = cfg.layouts.iter().find(|l| l.name() == maps[i].layout) {
+            attribute_maps(gb, layout, &mut maps[i])?;
+        }
+    }
     // Rows took their detector's anti-aliasing error when made, before its FLIP was measured.
     for r in rows.iter_mut().filter(|r| r.aa_error.is_some()) {
         if let Some(d) = detectors.iter().find(|d| d.detector == r.detector) {
@@ -583,6 +596,15 @@ pub const HEATMAP_LAYOUTS: usize = 2;
 /// Drops the per-pixel planes of every layout but the [`HEATMAP_LAYOUTS`] with the largest best layout RMSE (over
 /// their rows); the entries stay, empty.
 fn keep_worst_maps(maps: &mut [ErrorMaps], rows: &[Row]) {
+    let kept = worst_maps(maps, rows);
+    for (_, m) in maps.iter_mut().enumerate().filter(|(i, _)| !kept.contains(i)) {
+        (m.normal_deg, m.depth_rel, m.albedo_abs, m.image_abs) = (None, None, None, None);
+    }
+}
+
+/// The indices of the (at most) [`HEATMAP_LAYOUTS`] maps whose layouts have the largest best layout RMSE over their
+/// rows, among those with a finite one.
+fn worst_maps(maps: &[ErrorMaps], rows: &[Row]) -> Vec<usize> {
     let best = |m: &ErrorMaps| {
         rows.iter().filter(|r| r.layout == m.layout).filter_map(Row::layout_rmse).fold(f64::NAN, f64::min)
     };
@@ -592,10 +614,7 @@ fn keep_worst_maps(maps: &mut [ErrorMaps], rows: &[Row]) {
         (true, true) => b.1.total_cmp(&a.1),
         (x, y) => y.cmp(&x),
     });
-    for &(i, _) in order.iter().skip(HEATMAP_LAYOUTS).chain(order.iter().filter(|(_, e)| !e.is_finite())) {
-        let m = &mut maps[i];
-        (m.normal_deg, m.depth_rel, m.albedo_abs, m.image_abs) = (None, None, None, None);
-    }
+    order.into_iter().take(HEATMAP_LAYOUTS).filter(|(_, e)| e.is_finite()).map(|(i, _)| i).collect()
 }
 
 /// Rows whose images wait for FLIP, batched so that each reference is filtered once per batch, not once per row.
@@ -735,23 +754,21 @@ fn time_sampled_runs<T>(
     Ok((v, Timing::from_ms(ms).expect("at least one run")))
 }
 
-/// Rows per band of [`band_pass`].
-const BAND_ROWS: u32 = 64;
+/// Rows per band of [`band_pass`]: two bands of every plane are alive (the one measured, the next decoded), 18 MB
+/// at 1080p × 4 (64 rows held 72 MB at the report's peak; the statistics do not depend on the band size).
+const BAND_ROWS: u32 = 16;
 
-/// A layout's attribute errors, error maps, whether positions are derived from depth, and each run's decode time
-/// (ms).
-type Measured = (Result<measure::gbuffer::AttributeErrors>, ErrorMaps, bool, Vec<f64>);
+/// A layout's attribute errors, whether positions are derived from depth, and each run's decode time (ms).
+type Measured = (Result<measure::gbuffer::AttributeErrors>, bool, Vec<f64>);
 
-/// The attribute errors, error maps and decode times of a packed frame, decoded band by band against the input
-/// `gb` (the first run of the decode also measures; `runs − 1` more decode every band again, timed only). In the
-/// first run each band is decoded while the one before it is measured: the statistics are carried from band to
-/// band in sample order (the numbers are `compare`'s bit for bit), so the measuring itself stays in order, with the
-/// error maps beside it.
+/// The attribute errors and decode times of a packed frame, decoded band by band against the input `gb` (the first
+/// run of the decode also measures; `runs − 1` more decode every band again, timed only). In the first run each band
+/// is decoded while the one before it is measured: the statistics are carried from band to band in sample order (the
+/// numbers are `compare`'s bit for bit), so the measuring itself stays in order. The error maps are drawn after the
+/// sweep for the layouts that keep them ([`attribute_maps`]).
 fn band_pass(frame: &PackedFrame<'_>, gb: &GBuffer, runs: usize) -> Result<Measured> {
     let mut compare = measure::gbuffer::CompareBands::new(gb)?;
     let mut compared: Result<()> = Ok(());
-    let mut maps =
-        ErrorMaps { layout: String::new(), normal_deg: None, depth_rel: None, albedo_abs: None, image_abs: None };
     let mut decode_ms = Vec::new();
     let row = gb.width as usize * gb.samples as usize;
     let mut derived = false;
@@ -769,14 +786,9 @@ fn band_pass(frame: &PackedFrame<'_>, gb: &GBuffer, runs: usize) -> Result<Measu
         let (decoded, ()) = rayon::join(
             || if b + 1 < bands { timed_decode(b + 1, &mut next) } else { Ok(std::time::Duration::ZERO) },
             || {
-                rayon::join(
-                    || {
-                        if compared.is_ok() {
-                            compared = compare.add(start, &band);
-                        }
-                    },
-                    || error_maps_into(gb, &band, start / gb.samples as usize, &mut maps),
-                );
+                if compared.is_ok() {
+                    compared = compare.add(start, &band);
+                }
                 derived = band.position.is_none() && band.depth.is_some() && band.camera.is_some();
             },
         );
@@ -794,25 +806,62 @@ fn band_pass(frame: &PackedFrame<'_>, gb: &GBuffer, runs: usize) -> Result<Measu
         decode_ms.push(dec.as_secs_f64() * 1e3 * f64::from(bands) / f64::from(bands.div_ceil(stride)));
     }
     let errors = compared.map(|()| compare.finish());
-    Ok((errors, maps, derived, decode_ms))
+    Ok((errors, derived, decode_ms))
 }
 
 /// [`band_pass`] for a whole decoded G-buffer (`decode_ms`: its decode times, measured when it was made).
 fn whole_pass(gb: &GBuffer, decoded: &GBuffer, decode_ms: Vec<f64>) -> Measured {
-    let (errors, maps) = rayon::join(
-        || measure::gbuffer::compare(gb, decoded),
-        || {
-            let mut maps = ErrorMaps {
-                layout: String::new(),
+    let errors = measure::gbuffer::compare(gb, decoded);
+    let derived = decoded.position.is_none() && decoded.depth.is_some() && decoded.camera.is_some();
+    (errors, derived, decode_ms)
+}
+
+/// The per-pixel attribute error maps (normal, depth, albedo) of `layout`'s roundtrip of `gb` into `maps`: the frame
+/// packed and decoded band by band as the lighting reads it ([`Layout::each_roundtrip_band`]), each band measured
+/// against the input. The sweep draws them only for the layouts that keep their maps, once it is over: the maps
+/// (8 MB a plane at 1080p) and the bands they were drawn from were a tenth of the report's peak when every layout
+/// drew its own while its packed frame was alive.
+pub fn attribute_maps(gb: &GBuffer, layout: &Layout, maps: &mut ErrorMaps) -> Result<()> {
+    let only = [Attribute::Normal, Attribute::Depth, Attribute::Albedo];
+    let row_px = gb.width as usize;
+    layout.each_roundtrip_band(gb, 1, Some(&only), |rows, band| {
+        error_maps_into(gb, band, rows.start as usize * row_px, maps);
+        Ok(true)
+    })?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The maps drawn after the sweep, band by band from the packed frame, are those of the whole decoded copy the
+    /// lighting reads, bit for bit (NaN exactly where the other is).
+    #[test]
+    fn attribute_maps_are_the_whole_roundtrips_maps() {
+        let gb = crate::scene::render(crate::scene::SceneName::Room, 300, 200, 4).unwrap();
+        for name in ["fat-20", "lauritzen-15", "minimal-8"] {
+            let layout = Layout::by_name(name).unwrap();
+            let empty = || ErrorMaps {
+                layout: name.into(),
                 normal_deg: None,
                 depth_rel: None,
                 albedo_abs: None,
                 image_abs: None,
             };
-            error_maps_into(gb, decoded, 0, &mut maps);
-            maps
-        },
-    );
-    let derived = decoded.position.is_none() && decoded.depth.is_some() && decoded.camera.is_some();
-    (errors, maps, derived, decode_ms)
+            let mut banded = empty();
+            attribute_maps(&gb, &layout, &mut banded).unwrap();
+            let mut whole = empty();
+            error_maps_into(&gb, &layout.roundtrip_for_lighting(&gb, 1).unwrap().decoded, 0, &mut whole);
+            let bits = |m: &Option<Vec<f32>>| m.as_ref().map(|v| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>());
+            for (a, b) in [
+                (&banded.normal_deg, &whole.normal_deg),
+                (&banded.depth_rel, &whole.depth_rel),
+                (&banded.albedo_abs, &whole.albedo_abs),
+            ] {
+                assert!(a.is_some(), "{name}");
+                assert_eq!(bits(a), bits(b), "{name}");
+            }
+        }
+    }
 }

@@ -137,6 +137,20 @@ enum Src<'a> {
     Absent,
 }
 
+/// Whether `gb` leaves its positions to depth and the camera: no position plane, but both of those.
+fn derives_position(gb: &GBuffer) -> bool {
+    gb.position.is_none() && gb.depth.is_some() && gb.camera.is_some()
+}
+
+/// The source of a position field `slot` from derived positions `p`.
+fn position_source(p: &[Vec3], slot: Slot) -> Src<'_> {
+    match slot {
+        Slot::Whole(Attribute::Position) => Src::V3(p),
+        Slot::Component(Attribute::Position, k) => Src::V3c(p, k),
+        _ => Src::Absent,
+    }
+}
+
 fn source<'a>(gb: &'a GBuffer, slot: Slot, index: &'a [u32]) -> Src<'a> {
     use crate::gbuffer::PlaneRef as P;
     match slot {
@@ -276,7 +290,7 @@ fn load_codes<W: Word, const N: usize>(bytes: &[u8], offset: u32, bits: u32, cod
 /// Packs one target's bytes for the samples from `first` on (a whole row): blocks of whole rows in parallel, each
 /// field through its codec's slice path.
 fn pack_target<W: Word>(
-    fields: &[(&Field, &Coder, Src<'_>)],
+    fields: &[(&Field, &Coder, Src<'_>, usize)],
     clear: W,
     cov: &[bool],
     size: usize,
@@ -291,8 +305,8 @@ fn pack_target<W: Word>(
         let mut words = vec![W::default(); len];
         let mut codes = vec![0u64; len];
         let mut tmp = Vec::with_capacity(len);
-        for (f, coder, src) in fields {
-            encode_block(coder, src, base, &mut codes, &mut tmp);
+        for (f, coder, src, start) in fields {
+            encode_block(coder, src, base - start, &mut codes, &mut tmp);
             W::put_all(&mut words, f.offset, f.bits, &codes);
         }
         // Background samples are a cleared texel.
@@ -476,7 +490,10 @@ impl Layout {
 
     /// Attributes `gb` has that the layout stores.
     fn present(&self, gb: &GBuffer) -> Vec<Attribute> {
-        self.stored_attributes().into_iter().filter(|a| gb.has(*a)).collect()
+        self.stored_attributes()
+            .into_iter()
+            .filter(|&a| gb.has(a) || (a == Attribute::Position && derives_position(gb)))
+            .collect()
     }
 
     /// One empty byte plane per render target.
@@ -499,15 +516,25 @@ impl Layout {
         targets: &mut [TargetPlane],
     ) {
         let row = gb.width as usize * gb.samples as usize;
+        // Positions the layout stores but the G-buffer leaves to its depth and camera: the band's, derived (what a
+        // renderer writing this G-buffer would store).
+        let derived = (self.stored_attributes().contains(&Attribute::Position) && derives_position(gb))
+            .then(|| gb.derived_positions_of_rows(range.start / row.max(1)..range.end / row.max(1)))
+            .flatten();
         for (ti, target) in targets.iter_mut().enumerate() {
             let size = target.format.bytes();
-            let fields: Vec<(&Field, &Coder, Src<'_>)> = self
+            // Each field's source and the sample index its slice starts at (0: a whole plane; the range's start: the
+            // band's derived positions).
+            let fields: Vec<(&Field, &Coder, Src<'_>, usize)> = self
                 .fields()
                 .iter()
                 .zip(coders)
                 .filter(|(f, _)| f.target == ti)
-                .map(|(f, c)| (f, c, source(gb, f.slot, index)))
-                .filter(|(_, _, s)| !matches!(s, Src::Absent))
+                .map(|(f, c)| match (source(gb, f.slot, index), &derived) {
+                    (Src::Absent, Some(p)) => (f, c, position_source(p, f.slot), range.start),
+                    (s, _) => (f, c, s, 0),
+                })
+                .filter(|(_, _, s, _)| !matches!(s, Src::Absent))
                 .collect();
             // Every byte is written by `pack_target`: no clearing needed when the plane is reused.
             target.bytes.resize(range.len() * size, 0);
@@ -815,8 +842,32 @@ impl Layout {
     /// Packs and decodes every `stride`-th band, comparing each with `gb` when `check` (stopping at the first that
     /// differs); returns whether all compared equal and the encode and decode times (ms), scaled to the frame.
     fn roundtrip_bands(&self, gb: &GBuffer, stride: u32, check: bool) -> Result<(bool, f64, f64)> {
+        let mut same = true;
+        let (enc, dec, bands, timed) = self.each_roundtrip_band(gb, stride, None, |rows, out| {
+            let row = gb.width as usize * gb.samples as usize;
+            same = !check || same_planes(gb, rows.start as usize * row..rows.end as usize * row, out);
+            Ok(same)
+        })?;
+        let scale = f64::from(bands) / f64::from(timed);
+        let ms = |d: Duration| d.as_secs_f64() * 1e3 * scale;
+        Ok((same, ms(enc), ms(dec)))
+    }
+
+    /// Packs `gb` with this layout band by band and decodes each band again (all planes, or those of `only` as
+    /// [`PackedFrame::decode_rows_only`] does, depth and position together), without ever holding the frame's packed
+    /// targets or decoded planes whole: `each(rows, band)` sees the frame's rows `rows` as the layout gives them
+    /// back, and stops the walk by returning `false`. Every `stride`-th band is visited. Returns the time spent
+    /// encoding and decoding, the frame's band count and how many bands were visited.
+    pub(crate) fn each_roundtrip_band(
+        &self,
+        gb: &GBuffer,
+        stride: u32,
+        only: Option<&[Attribute]>,
+        mut each: impl FnMut(Range<u32>, &GBuffer) -> Result<bool>,
+    ) -> Result<(Duration, Duration, u32, u32)> {
         gb.validate()?;
         self.check_afrc(gb)?;
+        let only = only.map(with_depth_and_position);
         let coders = self.coders(self.depth_range_for(gb))?;
         let present = self.present(gb);
         let (table, material) = self.material_index(gb);
@@ -827,8 +878,6 @@ impl Layout {
         let row = gb.width as usize * gb.samples as usize;
         let bands = gb.height.div_ceil(rows_per_band).max(1);
         let stride = stride.max(1);
-        let scale = f64::from(bands) / f64::from(bands.div_ceil(stride));
-        let ms = |d: Duration| d.as_secs_f64() * 1e3 * scale;
         for b in (0..bands).step_by(stride as usize) {
             let rows = b * rows_per_band..((b + 1) * rows_per_band).min(gb.height);
             let range = rows.start as usize * row..rows.end as usize * row;
@@ -837,13 +886,13 @@ impl Layout {
             enc += t.elapsed();
             let t = Instant::now();
             let band = Band::of(&targets, 0..range.len(), table.as_ref(), &present);
-            self.decode_band(&band, &coders, gb, rows.clone(), &mut out, None)?;
+            self.decode_band(&band, &coders, gb, rows.clone(), &mut out, only.as_deref())?;
             dec += t.elapsed();
-            if check && !same_planes(gb, range, &out) {
-                return Ok((false, ms(enc), ms(dec)));
+            if !each(rows, &out)? {
+                break;
             }
         }
-        Ok((true, ms(enc), ms(dec)))
+        Ok((enc, dec, bands, bands.div_ceil(stride)))
     }
 
     /// `packed` ready to be decoded a band of rows at a time ([`PackedFrame::decode_rows`]), as a lighting pass
@@ -1070,11 +1119,7 @@ impl<'a> PackedFrame<'a> {
     /// extracted, and their planes are absent), each plane the same as `decode_rows` gives bit for bit. Depth and
     /// position come together (either one is derived from the other).
     pub fn decode_rows_only(&self, rows: Range<u32>, out: &mut GBuffer, only: &[Attribute]) -> Result<()> {
-        let mut only = only.to_vec();
-        if only.iter().any(|a| matches!(a, Attribute::Depth | Attribute::Position)) {
-            only.extend([Attribute::Depth, Attribute::Position]);
-        }
-        self.decode(rows, out, Some(&only))
+        self.decode(rows, out, Some(&with_depth_and_position(only)))
     }
 
     /// Rows `rows` into `out`, every plane or only those of `only`.
@@ -1095,13 +1140,30 @@ impl<'a> PackedFrame<'a> {
     }
 }
 
-/// Whether `band`'s planes are samples `range` of `gb`'s, bit for bit, with the same attributes present.
+/// `only` with depth and position both in when either is (each is derived from the other).
+fn with_depth_and_position(only: &[Attribute]) -> Vec<Attribute> {
+    let mut only = only.to_vec();
+    if only.iter().any(|a| matches!(a, Attribute::Depth | Attribute::Position)) {
+        only.extend([Attribute::Depth, Attribute::Position]);
+    }
+    only
+}
+
+/// Whether `band`'s planes are samples `range` of `gb`'s, bit for bit, with the same attributes present (positions `gb`
+/// leaves to depth and the camera count as present when the band holds the derived ones).
 fn same_planes(gb: &GBuffer, range: Range<usize>, band: &GBuffer) -> bool {
     fn bits<T: bytemuck::Pod>(a: &[T], b: &[T]) -> bool {
         bytemuck::cast_slice::<T, u8>(a) == bytemuck::cast_slice::<T, u8>(b)
     }
     use crate::gbuffer::PlaneRef as P;
-    gb.attributes() == band.attributes()
+    // Positions `gb` leaves to depth and the camera: the band's are the same when they are the derived ones.
+    let row = (gb.width as usize * gb.samples as usize).max(1);
+    let derived = (derives_position(gb) && band.position.is_some())
+        .then(|| gb.derived_positions_of_rows(range.start / row..range.end / row))
+        .flatten();
+    let band_attributes: Vec<Attribute> =
+        band.attributes().into_iter().filter(|&a| !(a == Attribute::Position && derived.is_some())).collect();
+    gb.attributes() == band_attributes
         && gb.attributes().into_iter().all(|a| match (gb.plane(a), band.plane(a)) {
             (Some(P::F32(x)), Some(P::F32(y))) => bits(&x[range.clone()], y),
             (Some(P::Vec2(x)), Some(P::Vec2(y))) => bits(&x[range.clone()], y),
@@ -1109,4 +1171,8 @@ fn same_planes(gb: &GBuffer, range: Range<usize>, band: &GBuffer) -> bool {
             (Some(P::U32(x)), Some(P::U32(y))) => x[range.clone()] == *y,
             _ => false,
         })
+        && match (&derived, &band.position) {
+            (Some(d), Some(p)) => bits(d, p),
+            _ => true,
+        }
 }

@@ -138,8 +138,11 @@ pub fn rematerialise(name: SceneName, gb: &GBuffer) -> Result<Rematerialised> {
     if let Some(p) = &gb.depth {
         agree("depth", &|i, r| f(p[i], r.depth));
     }
-    if let Some(p) = &gb.position {
-        agree("position", &|i, r| v(p[i], r.position));
+    // The input's positions, or those its depth and camera give (what a renderer reading it derives).
+    let rays = gb.camera.map(|c| c.ray_caster(gb.width, gb.height));
+    if gb.position.is_some() || (gb.depth.is_some() && rays.is_some()) {
+        let p = |i: usize| gb.position_or_derived(rays.as_ref(), i).unwrap_or(Vec3::NAN);
+        agree("position", &|i, r| v(p(i), r.position));
     }
     if let Some(p) = &gb.normal {
         agree("normal", &|i, r| v(p[i], r.normal));
