@@ -149,6 +149,15 @@ pub fn run<K: Kernel>(isa: Isa, k: K) -> K::Output {
 mod tests {
     use super::*;
 
+    /// A `GBUF_ISA` cap holds: the dispatch runs no level above it, and every level up to it that the CPU has stays
+    /// available (CI's Miri pass over the portable paths sets `baseline` on an AVX2 build and relies on this).
+    #[test]
+    fn the_environment_caps_the_detected_level() {
+        let Some(cap) = std::env::var(ISA_ENV).ok().and_then(|v| v.parse::<Isa>().ok()) else { return };
+        assert!(Isa::detect() <= cap, "{} above the cap {}", Isa::detect().name(), cap.name());
+        assert_eq!(Isa::detect(), detect_uncached().min(cap));
+    }
+
     #[test]
     fn every_listed_feature_is_known_and_levels_are_ordered() {
         #[cfg(target_arch = "x86_64")]

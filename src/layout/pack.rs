@@ -515,6 +515,20 @@ impl Layout {
         range: Range<usize>,
         targets: &mut [TargetPlane],
     ) {
+        self.pack_samples_of(gb, coders, index, range, targets, None);
+    }
+
+    /// [`Layout::pack_samples`] encoding only the targets `needed` marks (all of them with `None`); the others are
+    /// sized to the range but not written (a decode of only some attributes never reads them).
+    fn pack_samples_of(
+        &self,
+        gb: &GBuffer,
+        coders: &[Coder],
+        index: &[u32],
+        range: Range<usize>,
+        targets: &mut [TargetPlane],
+        needed: Option<&[bool]>,
+    ) {
         let row = gb.width as usize * gb.samples as usize;
         // Positions the layout stores but the G-buffer leaves to its depth and camera: the band's, derived (what a
         // renderer writing this G-buffer would store).
@@ -523,6 +537,10 @@ impl Layout {
             .flatten();
         for (ti, target) in targets.iter_mut().enumerate() {
             let size = target.format.bytes();
+            if needed.is_some_and(|n| !n[ti]) {
+                target.bytes.resize(range.len() * size, 0);
+                continue;
+            }
             // Each field's source and the sample index its slice starts at (0: a whole plane; the range's start: the
             // band's derived positions).
             let fields: Vec<(&Field, &Coder, Src<'_>, usize)> = self
@@ -868,6 +886,18 @@ impl Layout {
         gb.validate()?;
         self.check_afrc(gb)?;
         let only = only.map(with_depth_and_position);
+        // The targets a decode of `only` reads: those with a field of it, or the material index (its table gives
+        // material attributes).
+        let needed: Option<Vec<bool>> = only.as_ref().map(|only| {
+            (0..self.formats().len())
+                .map(|t| {
+                    self.fields().iter().filter(|f| f.target == t).any(|f| match f.slot {
+                        Slot::MaterialIndex => true,
+                        slot => slot.attribute().is_some_and(|a| only.contains(&a)),
+                    })
+                })
+                .collect()
+        });
         let coders = self.coders(self.depth_range_for(gb))?;
         let present = self.present(gb);
         let (table, material) = self.material_index(gb);
@@ -882,7 +912,7 @@ impl Layout {
             let rows = b * rows_per_band..((b + 1) * rows_per_band).min(gb.height);
             let range = rows.start as usize * row..rows.end as usize * row;
             let t = Instant::now();
-            self.pack_samples(gb, &coders, &material, range.clone(), &mut targets);
+            self.pack_samples_of(gb, &coders, &material, range.clone(), &mut targets, needed.as_deref());
             enc += t.elapsed();
             let t = Instant::now();
             let band = Band::of(&targets, 0..range.len(), table.as_ref(), &present);
