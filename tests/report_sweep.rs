@@ -18,6 +18,24 @@ fn small_room() -> (gbuf::GBuffer, Vec<gbuf::Light>) {
     (gb, lights)
 }
 
+/// The room as a report's input, with all its planes (none left out), from `geometry` when given.
+fn room_input<'a>(
+    gb: &'a gbuf::GBuffer,
+    lights: &'a [gbuf::Light],
+    geometry: Option<SceneName>,
+) -> gbuf::analysis::ReportInput<'a> {
+    gbuf::analysis::ReportInput {
+        name: "room".into(),
+        gbuffer: gb,
+        lights,
+        lights_source: "default".into(),
+        single: None,
+        geometry,
+        notes: Vec::new(),
+        position_derived: false,
+    }
+}
+
 /// A sweep of `layouts` × `detectors`, one timing run, default thresholds, resolve and viewing.
 fn one_run(layouts: &[&str], detectors: Vec<Detector>, flip: FlipRows) -> SweepConfig {
     SweepConfig {
@@ -66,7 +84,8 @@ fn sweep_rows_match_layouts_and_lossless_is_exact() {
             "compression models",
             "detect",
             "resolve",
-            "FLIP"
+            "FLIP",
+            "error maps"
         ]
     );
     let staged: f64 = out.stage_seconds.iter().map(|(_, t)| t).sum();
@@ -291,16 +310,7 @@ fn pipelines_take_known_flips_for_equal_images_only() {
 fn a_frame_times_its_steps_outside_the_sweep() {
     let (gb, lights) = small_room();
     let cfg = one_run(&["fat-20"], vec![Detector::Lauritzen], FlipRows::Decisive);
-    let input = gbuf::analysis::ReportInput {
-        name: "room".into(),
-        gbuffer: &gb,
-        lights: &lights,
-        lights_source: "default".into(),
-        single: None,
-        geometry: None,
-        notes: Vec::new(),
-        position_derived: false,
-    };
+    let input = room_input(&gb, &lights, None);
     let t = std::time::Instant::now();
     let r = gbuf::study::run_frame(&input, &cfg, true, "", &mut |_, _, _| {}).unwrap();
     let wall = t.elapsed().as_secs_f64();
@@ -384,16 +394,7 @@ fn a_frame_reports_the_same_without_the_positions_its_depth_gives() {
     let (dropped, _) = run_frames(1, next, &cfg, &choose, &how, &mut |_| {}).unwrap();
     let mut kept_cfg = cfg.clone();
     kept_cfg.resolve = choose(&gb.attributes()).apply(kept_cfg.resolve);
-    let input = gbuf::analysis::ReportInput {
-        name: "room".into(),
-        gbuffer: &gb,
-        lights: &lights,
-        lights_source: "default".into(),
-        single: None,
-        geometry: Some(SceneName::Room),
-        notes: Vec::new(),
-        position_derived: false,
-    };
+    let input = room_input(&gb, &lights, Some(SceneName::Room));
     let kept = run_frame(&input, &kept_cfg, true, "", &mut |_, _, _| {}).unwrap();
     let untimed = |r: &Row| Row {
         encode_ms: None,

@@ -498,6 +498,7 @@ pub fn sweep(gb: &GBuffer, lights: &[Light], cfg: &SweepConfig, outer: Progress<
     }
     let FlipQueue { worst: worst_flip, shown, .. } = flips;
     // The kept layouts' attribute maps, now that no packed frame or waiting image shares the memory with them.
+    progress(done, total, Some(Stage::Maps), None);
     for i in worst_maps(&maps, &rows) {
         if let Some(layout) = cfg.layouts.iter().find(|l| l.name() == maps[i].layout) {
             attribute_maps(gb, layout, &mut maps[i])?;
@@ -569,6 +570,8 @@ crate::named_enum! {
         Resolve => "resolve",
         /// A batch of FLIPs.
         Flip => "FLIP",
+        /// The kept layouts' attribute error maps, drawn after the layouts.
+        Maps => "error maps",
     }
 }
 

@@ -391,7 +391,7 @@ impl Layout {
         let table_ms = material_table.is_some().then(|| t.elapsed().as_secs_f64() * 1e3);
         let mut targets = self.empty_targets();
         let t = Instant::now();
-        self.pack_samples(gb, &coders, &index, 0..gb.len(), &mut targets);
+        self.pack_samples(gb, &coders, &index, 0..gb.len(), &mut targets, None);
         let mut encode_ms = vec![t.elapsed().as_secs_f64() * 1e3];
         let row = (gb.width as usize * gb.samples as usize).max(1);
         let band_len = row * band_rows(row);
@@ -402,7 +402,7 @@ impl Layout {
             let t = Instant::now();
             for b in (0..bands).step_by(stride) {
                 let range = b * band_len..((b + 1) * band_len).min(gb.len());
-                self.pack_samples(gb, &coders, &index, range, &mut scratch);
+                self.pack_samples(gb, &coders, &index, range, &mut scratch, None);
             }
             let sampled = bands.div_ceil(stride);
             encode_ms.push(t.elapsed().as_secs_f64() * 1e3 * bands as f64 / sampled as f64);
@@ -442,7 +442,7 @@ impl Layout {
         };
         for y0 in (0..gb.height).step_by(rows.max(1) as usize) {
             let h = rows.max(1).min(gb.height - y0);
-            self.pack_samples(gb, &coders, &index, y0 as usize * row..(y0 + h) as usize * row, &mut band.targets);
+            self.pack_samples(gb, &coders, &index, y0 as usize * row..(y0 + h) as usize * row, &mut band.targets, None);
             band.height = h;
             each(&band);
         }
@@ -506,21 +506,10 @@ impl Layout {
     }
 
     /// Packs samples `range` (whole rows) of `gb` into `targets`, whose bytes are resized to the range (`index`:
-    /// every sample's material index, empty without indirection).
+    /// every sample's material index, empty without indirection). Only the targets `needed` marks are encoded (all of
+    /// them with `None`); the others are sized to the range but not written (a decode of only some attributes never
+    /// reads them).
     fn pack_samples(
-        &self,
-        gb: &GBuffer,
-        coders: &[Coder],
-        index: &[u32],
-        range: Range<usize>,
-        targets: &mut [TargetPlane],
-    ) {
-        self.pack_samples_of(gb, coders, index, range, targets, None);
-    }
-
-    /// [`Layout::pack_samples`] encoding only the targets `needed` marks (all of them with `None`); the others are
-    /// sized to the range but not written (a decode of only some attributes never reads them).
-    fn pack_samples_of(
         &self,
         gb: &GBuffer,
         coders: &[Coder],
@@ -787,7 +776,7 @@ impl Layout {
             while start < gb.len() {
                 let range = start..(start + band_len).min(gb.len());
                 let t = Instant::now();
-                self.pack_samples(gb, &coders, &material, range.clone(), &mut targets);
+                self.pack_samples(gb, &coders, &material, range.clone(), &mut targets, None);
                 enc += t.elapsed();
                 let t = Instant::now();
                 let band = Band::of(&targets, 0..range.len(), table.as_ref(), &present);
@@ -876,7 +865,7 @@ impl Layout {
     /// targets or decoded planes whole: `each(rows, band)` sees the frame's rows `rows` as the layout gives them
     /// back, and stops the walk by returning `false`. Every `stride`-th band is visited. Returns the time spent
     /// encoding and decoding, the frame's band count and how many bands were visited.
-    pub(crate) fn each_roundtrip_band(
+    pub fn each_roundtrip_band(
         &self,
         gb: &GBuffer,
         stride: u32,
@@ -912,7 +901,7 @@ impl Layout {
             let rows = b * rows_per_band..((b + 1) * rows_per_band).min(gb.height);
             let range = rows.start as usize * row..rows.end as usize * row;
             let t = Instant::now();
-            self.pack_samples_of(gb, &coders, &material, range.clone(), &mut targets, needed.as_deref());
+            self.pack_samples(gb, &coders, &material, range.clone(), &mut targets, needed.as_deref());
             enc += t.elapsed();
             let t = Instant::now();
             let band = Band::of(&targets, 0..range.len(), table.as_ref(), &present);
