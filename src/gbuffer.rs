@@ -889,6 +889,13 @@ impl GBuffer {
         Some(derived_position(rays, &self.sample_positions, i / row, i % row, depth[i], self.coverage[i]))
     }
 
+    /// Whether this G-buffer leaves its positions to depth and the camera: no position plane, but both of those (every
+    /// reader then derives [`GBuffer::fill_position_from_depth`]'s bits).
+    #[must_use]
+    pub fn derives_position(&self) -> bool {
+        self.position.is_none() && self.depth.is_some() && self.camera.is_some()
+    }
+
     /// Whether the position plane holds exactly what [`GBuffer::fill_position_from_depth`] would write, bit for bit
     /// (0 on background samples): then it says nothing depth and the camera do not, and a reader that derives
     /// positions from depth reads the same bits. False without a position plane, depth or camera.

@@ -792,7 +792,7 @@ fn band_pass(frame: &PackedFrame<'_>, gb: &GBuffer, runs: usize) -> Result<Measu
                 if compared.is_ok() {
                     compared = compare.add(start, &band);
                 }
-                derived = band.position.is_none() && band.depth.is_some() && band.camera.is_some();
+                derived = band.derives_position();
             },
         );
         dec += decoded?;
@@ -815,7 +815,7 @@ fn band_pass(frame: &PackedFrame<'_>, gb: &GBuffer, runs: usize) -> Result<Measu
 /// [`band_pass`] for a whole decoded G-buffer (`decode_ms`: its decode times, measured when it was made).
 fn whole_pass(gb: &GBuffer, decoded: &GBuffer, decode_ms: Vec<f64>) -> Measured {
     let errors = measure::gbuffer::compare(gb, decoded);
-    let derived = decoded.position.is_none() && decoded.depth.is_some() && decoded.camera.is_some();
+    let derived = decoded.derives_position();
     (errors, derived, decode_ms)
 }
 

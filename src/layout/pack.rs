@@ -137,11 +137,6 @@ enum Src<'a> {
     Absent,
 }
 
-/// Whether `gb` leaves its positions to depth and the camera: no position plane, but both of those.
-fn derives_position(gb: &GBuffer) -> bool {
-    gb.position.is_none() && gb.depth.is_some() && gb.camera.is_some()
-}
-
 /// The source of a position field `slot` from derived positions `p`.
 fn position_source(p: &[Vec3], slot: Slot) -> Src<'_> {
     match slot {
@@ -492,7 +487,7 @@ impl Layout {
     fn present(&self, gb: &GBuffer) -> Vec<Attribute> {
         self.stored_attributes()
             .into_iter()
-            .filter(|&a| gb.has(a) || (a == Attribute::Position && derives_position(gb)))
+            .filter(|&a| gb.has(a) || (a == Attribute::Position && gb.derives_position()))
             .collect()
     }
 
@@ -519,9 +514,13 @@ impl Layout {
         needed: Option<&[bool]>,
     ) {
         let row = gb.width as usize * gb.samples as usize;
-        // Positions the layout stores but the G-buffer leaves to its depth and camera: the band's, derived (what a
-        // renderer writing this G-buffer would store).
-        let derived = (self.stored_attributes().contains(&Attribute::Position) && derives_position(gb))
+        // Positions a target to be encoded stores but the G-buffer leaves to its depth and camera: the band's, derived
+        // (what a renderer writing this G-buffer would store).
+        let encodes_position = self
+            .fields()
+            .iter()
+            .any(|f| f.slot.attribute() == Some(Attribute::Position) && needed.is_none_or(|n| n[f.target]));
+        let derived = (encodes_position && gb.derives_position())
             .then(|| gb.derived_positions_of_rows(range.start / row.max(1)..range.end / row.max(1)))
             .flatten();
         for (ti, target) in targets.iter_mut().enumerate() {
@@ -1177,7 +1176,7 @@ fn same_planes(gb: &GBuffer, range: Range<usize>, band: &GBuffer) -> bool {
     use crate::gbuffer::PlaneRef as P;
     // Positions `gb` leaves to depth and the camera: the band's are the same when they are the derived ones.
     let row = (gb.width as usize * gb.samples as usize).max(1);
-    let derived = (derives_position(gb) && band.position.is_some())
+    let derived = (gb.derives_position() && band.position.is_some())
         .then(|| gb.derived_positions_of_rows(range.start / row..range.end / row))
         .flatten();
     let band_attributes: Vec<Attribute> =
